@@ -1,0 +1,28 @@
+// The taxel grid: an n x n lattice of square cells in the skin's tangent plane
+// at the pad's pole (pad frame x, y), centred on the pole.
+#ifndef MJTOUCH_CORE_GRID_H_
+#define MJTOUCH_CORE_GRID_H_
+
+#include <cstddef>
+
+namespace mjtouch {
+
+struct TaxelGrid {
+  int n = 0;           // cells per side
+  double pitch_m = 0;  // cell side
+
+  size_t Size() const { return static_cast<size_t>(n) * n; }
+  // Centre of cell index i along one axis (pad frame, m).
+  double Centre(int i) const { return (i - 0.5 * (n - 1)) * pitch_m; }
+  double Area() const { return pitch_m * pitch_m; }
+  double HalfExtent() const { return 0.5 * n * pitch_m; }
+  // Nearest cell index to coordinate x_m (clamped).
+  int Nearest(double x_m) const {
+    int i = static_cast<int>(x_m / pitch_m + 0.5 * (n - 1) + 0.5 + 1e6) - 1000000;
+    return i < 0 ? 0 : (i >= n ? n - 1 : i);
+  }
+};
+
+}  // namespace mjtouch
+
+#endif  // MJTOUCH_CORE_GRID_H_

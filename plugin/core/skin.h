@@ -1,0 +1,135 @@
+// The whole tactile pipeline for one fingertip, independent of MuJoCo:
+//   surface.h   (stage 1) skin and counter-surface geometry -> gap per taxel
+//   pressure.h  (stage 2) gap + contact force -> pressure and shear tractions
+//   kernel.h    (stage 3) tractions -> stress tensor at receptor sites
+//   receptors.h (stage 4) stress -> SA1 / RA / PC spikes
+// SkinModel is immutable and shared by every MjData of a model; the per-step
+// mutable state lives in a caller-owned double array (MuJoCo plugin_state) and
+// scratch buffers in a Workspace (MuJoCo plugin_data).
+#ifndef MJTOUCH_CORE_SKIN_H_
+#define MJTOUCH_CORE_SKIN_H_
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "grid.h"
+#include "kernel.h"
+#include "pressure.h"
+#include "receptors.h"
+#include "surface.h"
+
+namespace mjtouch {
+
+// Output blocks, in sensordata order.
+enum OutputBlock { kOutSpikes = 0, kOutStress, kOutVoltage, kOutForce, kOutPressure, kNumOutputs };
+const char* OutputName(int block);
+constexpr int kForceBlockSize = 4;  // normal, tangential x, y (N, pad frame), approach (m)
+
+struct ClassConfig {
+  bool present = true;
+  double density_per_cm2 = 0;
+  double depth_m = 0;
+  Quantity quantity = Quantity::kCompressiveSzz;
+};
+
+struct SkinConfig {
+  TaxelGrid grid{128, 1e-4};
+  PadGeometry pad;  // filled by the caller (MuJoCo: the pad geom's size)
+  Ridges ridges;
+  double stiffness_pa_per_m = 2e7;  // Winkler foundation
+  double poisson = 0.48;            // homogeneous skin (Shao 2010 epidermis)
+  bool shear = true;
+  double population_radius_m = 5e-3;  // receptors within this distance of the pole
+  bool radius_is_default = false;    // unset: fitted to the grid and pad
+  ClassConfig classes[kNumClasses];
+  ReceptorParams receptor;
+  bool outputs[kNumOutputs] = {true, true, false, true, false};
+
+  SkinConfig();
+};
+
+// Parse the MJCF config attributes through `get` (returns "" when unset).
+// Returns false with a message naming the attribute and its valid range.
+using AttributeGetter = std::function<std::string(const char* key)>;
+bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* error);
+// Pad-dependent checks and defaults; call after cfg->pad is set and before
+// PlaceReceptors (idempotent).
+bool FinalizeSkinConfig(SkinConfig* cfg, std::string* error);
+// All attribute keys, for plugin registration.
+const std::vector<const char*>& SkinAttributeKeys();
+
+constexpr int kStateHeader = 4;
+
+struct ReceptorSite {
+  ReceptorClass cls;
+  int i, j;           // taxel cell above the site
+  double x_m, y_m;    // pad frame (cell centre)
+  double depth_m;
+  int depth_index;    // kernel table
+};
+
+class SkinModel {
+ public:
+  // Validates geometry, places receptors, builds kernel tables. Cached: equal
+  // configurations share one instance.
+  static std::shared_ptr<const SkinModel> Build(const SkinConfig& cfg, std::string* error);
+  // Receptor layout and output sizes without building tables (for MuJoCo's
+  // nstate / nsensordata callbacks).
+  static std::vector<ReceptorSite> PlaceReceptors(const SkinConfig& cfg);
+  // Header (approach, valid, last time, valid), per-receptor membranes, and the
+  // last step's spike counts and voltages (re-output on repeated calls).
+  static int StateSize(int nreceptor) {
+    return kStateHeader + nreceptor * (kReceptorStateSize + 2);
+  }
+  static int OutputSize(const SkinConfig& cfg, int nreceptor);
+  static int BlockSize(const SkinConfig& cfg, int nreceptor, int block);
+
+  const SkinConfig& config() const { return cfg_; }
+  const std::vector<ReceptorSite>& receptors() const { return sites_; }
+  const std::vector<double>& skin_z() const { return skin_z_; }
+  const KernelTables* kernel() const { return kernel_.get(); }
+  int state_size() const { return StateSize(static_cast<int>(sites_.size())); }
+  int output_size() const { return OutputSize(cfg_, static_cast<int>(sites_.size())); }
+  std::string Describe() const;
+  // Stress components that class c's receptor quantity needs.
+  const std::array<bool, kNumStress>& wanted(int c) const { return want_[c]; }
+
+ private:
+  SkinConfig cfg_;
+  std::vector<ReceptorSite> sites_;
+  std::vector<double> skin_z_;
+  std::shared_ptr<const KernelTables> kernel_;
+  std::vector<std::array<bool, kNumStress>> want_;  // per class
+};
+
+// Per-step inputs from the physics engine (all in world frame except forces).
+struct StepInput {
+  Pose pad_pose;
+  std::vector<CounterSurface> surfaces;
+  double normal_force_n = 0;   // total contact force on the pad along pad +z
+  double shear_x_n = 0, shear_y_n = 0;  // along pad x, y
+  bool in_contact = false;
+};
+
+// Scratch owned per simulation (no state that outlives a step).
+struct Workspace {
+  std::vector<double> gap, coverage;
+  TractionField traction;
+  std::vector<double> quantity;  // per receptor
+};
+
+// Reset the state array to its initial value.
+void ResetState(const SkinModel& model, double* state);
+
+// Run the pipeline at simulation time time_s: receptors integrate over the
+// time elapsed since the previous call (none on the first call or a repeated
+// call at the same time). Writes the enabled output blocks to `out` (length
+// model.output_size()) and updates `state`.
+void Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
+          Workspace* ws, double* out);
+
+}  // namespace mjtouch
+
+#endif  // MJTOUCH_CORE_SKIN_H_

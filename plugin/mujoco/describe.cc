@@ -1,0 +1,54 @@
+// Describes an mjtouch.skin instance of a compiled model as JSON (output
+// blocks, receptor sites), so Python reads sensordata by name.
+#include <cstdio>
+#include <cstring>
+#include <sstream>
+#include <string>
+
+#include <mujoco/mujoco.h>
+
+#include "skin_plugin.h"
+
+extern "C" __attribute__((visibility("default"))) int mjtouch_describe(const mjModel* m,
+                                                                      int instance, char* buf,
+                                                                      int len) {
+  using namespace mjtouch;
+  SkinConfig cfg;
+  int sensor, pad;
+  std::string error;
+  std::ostringstream js;
+  js.precision(17);
+  if (!SkinPlugin::ReadConfig(m, instance, &cfg, &sensor, &pad, &error)) {
+    js << "{\"error\": \"" << error << "\"}";
+  } else {
+    const auto sites = SkinModel::PlaceReceptors(cfg);
+    const int nrec = static_cast<int>(sites.size());
+    js << "{\"sensor_id\": " << sensor << ", \"sensor_adr\": " << m->sensor_adr[sensor]
+       << ", \"pad_geom\": " << pad << ", \"nx\": " << cfg.grid.n
+       << ", \"pitch_m\": " << cfg.grid.pitch_m << ", \"blocks\": [";
+    int offset = 0;
+    bool first = true;
+    for (int b = 0; b < kNumOutputs; ++b) {
+      const int size = SkinModel::BlockSize(cfg, nrec, b);
+      if (!size) continue;
+      js << (first ? "" : ", ") << "{\"name\": \"" << OutputName(b) << "\", \"offset\": "
+         << offset << ", \"size\": " << size << "}";
+      offset += size;
+      first = false;
+    }
+    js << "], \"receptors\": [";
+    for (int r = 0; r < nrec; ++r) {
+      const auto& s = sites[r];
+      js << (r ? ", " : "") << "[\"" << ClassName(s.cls) << "\", " << s.x_m << ", " << s.y_m
+         << ", " << s.depth_m << "]";
+    }
+    js << "], \"quantity\": [";
+    for (int c = 0; c < kNumClasses; ++c)
+      js << (c ? ", " : "") << "\"" << QuantityName(cfg.classes[c].quantity) << "\"";
+    js << "]}";
+  }
+  const std::string s = js.str();
+  if (static_cast<int>(s.size()) + 1 > len) return static_cast<int>(s.size()) + 1;
+  std::memcpy(buf, s.c_str(), s.size() + 1);
+  return 0;
+}

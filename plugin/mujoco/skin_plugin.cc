@@ -1,0 +1,291 @@
+#include "skin_plugin.h"
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+namespace mjtouch {
+namespace {
+
+std::string Config(const mjModel* m, int instance, const char* key) {
+  const char* v = mj_getPluginConfig(m, instance, key);
+  return v ? v : "";
+}
+
+void CopyPose(const mjtNum* pos, const mjtNum* mat, Pose* p) {
+  for (int k = 0; k < 3; ++k) p->pos[k] = pos[k];
+  for (int k = 0; k < 9; ++k) p->mat[k] = mat[k];
+}
+
+// A counter-surface for geom g facing the point `toward` (world). Planes,
+// boxes and height fields are rendered exactly; any other geom by its
+// tangent plane at the contact (pos, normal from the pad into the geom).
+CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mjtNum toward[3],
+                              const mjtNum* contact_pos, const mjtNum* normal_into_geom) {
+  CounterSurface s;
+  s.id = g;
+  const mjtNum* gpos = d->geom_xpos + 3 * g;
+  const mjtNum* gmat = d->geom_xmat + 9 * g;
+  const mjtNum* size = m->geom_size + 3 * g;
+  switch (m->geom_type[g]) {
+    case mjGEOM_PLANE:
+      s.type = CounterSurface::Type::kPlane;
+      CopyPose(gpos, gmat, &s.pose);
+      return s;
+    case mjGEOM_HFIELD: {
+      const int h = m->geom_dataid[g];
+      s.type = CounterSurface::Type::kHeightField;
+      CopyPose(gpos, gmat, &s.pose);
+      s.half_x_m = m->hfield_size[4 * h + 0];
+      s.half_y_m = m->hfield_size[4 * h + 1];
+      s.elevation_m = m->hfield_size[4 * h + 2];
+      s.nrow = m->hfield_nrow[h];
+      s.ncol = m->hfield_ncol[h];
+      s.samples = m->hfield_data + m->hfield_adr[h];
+      return s;
+    }
+    case mjGEOM_BOX: {
+      // The face whose outward normal points most towards `toward`.
+      mjtNum rel[3], loc[3];
+      mju_sub3(rel, toward, gpos);
+      mju_mulMatTVec3(loc, gmat, rel);
+      int axis = 0;
+      mjtNum best = -1;
+      for (int a = 0; a < 3; ++a) {
+        const mjtNum score = std::abs(loc[a]) / size[a];
+        if (score > best) { best = score; axis = a; }
+      }
+      const mjtNum sign = loc[axis] >= 0 ? 1 : -1;
+      // Face frame columns (x', y', z') in box coordinates, right-handed,
+      // z' = sign * e_axis.
+      const int ax = (axis + 1) % 3, ay = (axis + 2) % 3;
+      mjtNum F[9] = {0};  // row-major, columns are x', y', z'
+      F[3 * ax + 0] = 1;
+      F[3 * ay + 1] = sign;
+      F[3 * axis + 2] = sign;
+      mjtNum world[9];
+      mju_mulMatMat(world, gmat, F, 3, 3, 3);
+      mjtNum offset[3] = {0, 0, 0}, woff[3];
+      offset[axis] = sign * size[axis];
+      mju_mulMatVec3(woff, gmat, offset);
+      s.type = CounterSurface::Type::kRectangle;
+      for (int k = 0; k < 3; ++k) s.pose.pos[k] = gpos[k] + woff[k];
+      for (int k = 0; k < 9; ++k) s.pose.mat[k] = world[k];
+      s.half_x_m = size[ax];
+      s.half_y_m = size[ay];
+      return s;
+    }
+    default: {
+      // Tangent plane: local z = -normal (outward from the geom, towards pad).
+      mjtNum z[3] = {-normal_into_geom[0], -normal_into_geom[1], -normal_into_geom[2]};
+      mjtNum quat[4];
+      mju_quatZ2Vec(quat, z);
+      mjtNum mat[9];
+      mju_quat2Mat(mat, quat);
+      s.type = CounterSurface::Type::kPlane;
+      CopyPose(contact_pos, mat, &s.pose);
+      return s;
+    }
+  }
+}
+
+}  // namespace
+
+bool SkinPlugin::ParseConfig(const mjModel* m, int instance, SkinConfig* cfg,
+                             std::string* error) {
+  return ParseSkinConfig([&](const char* key) { return Config(m, instance, key); }, cfg, error);
+}
+
+bool SkinPlugin::ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int* sensor_id,
+                            int* pad_geom, std::string* error) {
+  *sensor_id = -1;
+  for (int i = 0; i < m->nsensor; ++i) {
+    if (m->sensor_type[i] == mjSENS_PLUGIN && m->sensor_plugin[i] == instance) {
+      *sensor_id = i;
+      break;
+    }
+  }
+  if (*sensor_id < 0) {
+    *error = "mjtouch.skin: the plugin instance has no <sensor><plugin .../></sensor>";
+    return false;
+  }
+  if (m->sensor_objtype[*sensor_id] != mjOBJ_GEOM) {
+    *error = "mjtouch.skin: the sensor must name the fingertip pad with objtype=\"geom\" "
+             "objname=\"...\"";
+    return false;
+  }
+  *pad_geom = m->sensor_objid[*sensor_id];
+  const int g = *pad_geom;
+  const mjtNum* size = m->geom_size + 3 * g;
+  switch (m->geom_type[g]) {
+    case mjGEOM_SPHERE:
+      cfg->pad.shape = PadShape::kSphere;
+      cfg->pad.semi_axes_m[0] = cfg->pad.semi_axes_m[1] = cfg->pad.semi_axes_m[2] = size[0];
+      break;
+    case mjGEOM_ELLIPSOID:
+      cfg->pad.shape = PadShape::kEllipsoid;
+      for (int k = 0; k < 3; ++k) cfg->pad.semi_axes_m[k] = size[k];
+      break;
+    default: {
+      const char* name = mj_id2name(m, mjOBJ_GEOM, g);
+      *error = std::string("mjtouch.skin: pad geom '") + (name ? name : "?") +
+               "' must be a sphere or an ellipsoid";
+      return false;
+    }
+  }
+  return ParseConfig(m, instance, cfg, error) && FinalizeSkinConfig(cfg, error);
+}
+
+SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
+  SkinConfig cfg;
+  int sensor_id, pad;
+  std::string error;
+  if (!ReadConfig(m, instance, &cfg, &sensor_id, &pad, &error)) {
+    mju_warning("%s", error.c_str());
+    return nullptr;
+  }
+  // Texture geoms: rendered whenever the pad touches anything.
+  std::vector<int> textures;
+  std::istringstream words(Config(m, instance, "texture"));
+  std::string name;
+  while (words >> name) {
+    const int g = mj_name2id(m, mjOBJ_GEOM, name.c_str());
+    if (g < 0) {
+      mju_warning("mjtouch.skin: attribute `texture` names geom '%s', which does not exist",
+                  name.c_str());
+      return nullptr;
+    }
+    const int type = m->geom_type[g];
+    if (type != mjGEOM_HFIELD && type != mjGEOM_PLANE && type != mjGEOM_BOX) {
+      mju_warning("mjtouch.skin: attribute `texture` geom '%s' must be an hfield, plane or box",
+                  name.c_str());
+      return nullptr;
+    }
+    textures.push_back(g);
+  }
+  auto model = SkinModel::Build(cfg, &error);
+  if (!model) {
+    mju_warning("%s", error.c_str());
+    return nullptr;
+  }
+  if (model->output_size() != m->sensor_dim[sensor_id] ||
+      model->state_size() != m->plugin_statenum[instance]) {
+    mju_error("mjtouch.skin: internal error: layout changed between compile and init");
+  }
+  auto* p = new SkinPlugin();
+  p->model_ = std::move(model);
+  p->sensor_id_ = sensor_id;
+  p->pad_geom_ = pad;
+  p->pad_body_ = m->body_weldid[m->geom_bodyid[pad]];
+  p->texture_geoms_ = std::move(textures);
+  return p;
+}
+
+void SkinPlugin::Reset(const mjModel* m, mjtNum* plugin_state, int instance) {
+  ResetState(*model_, plugin_state);
+}
+
+void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
+  StepInput& in = input_;
+  in.surfaces.clear();
+  in.in_contact = false;
+  const int pad = pad_geom_;
+  const mjtNum* ppos = d->geom_xpos + 3 * pad;
+  const mjtNum* pmat = d->geom_xmat + 9 * pad;
+  CopyPose(ppos, pmat, &in.pad_pose);
+  mjtNum total[3] = {0, 0, 0};
+  for (int i = 0; i < d->ncon; ++i) {
+    const mjContact& c = d->contact[i];
+    if (c.exclude || c.efc_address < 0) continue;
+    int other;
+    if (c.geom[0] == pad) other = c.geom[1];
+    else if (c.geom[1] == pad) other = c.geom[0];
+    else continue;
+    if (other < 0) continue;
+    // mj_contactForce: contact frame (normal first); the normal points from
+    // geom[0] to geom[1], so the force on geom[1] is +frame^T f.
+    mjtNum f_local[6], f_world[3];
+    mj_contactForce(m, d, i, f_local);
+    mju_mulMatTVec3(f_world, c.frame, f_local);
+    const mjtNum sign = (c.geom[1] == pad) ? 1 : -1;
+    mju_addToScl3(total, f_world, sign);
+    in.in_contact = true;
+    // Normal from the pad into the other geom.
+    mjtNum n_into[3] = {c.frame[0] * -sign, c.frame[1] * -sign, c.frame[2] * -sign};
+    bool seen = false;
+    for (const auto& s : in.surfaces) seen = seen || s.id == other;
+    if (!seen) in.surfaces.push_back(SurfaceForGeom(m, d, other, ppos, c.pos, n_into));
+  }
+  if (in.in_contact) {
+    for (int g : texture_geoms_) {
+      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos));
+    }
+  }
+  // Force on the pad in the pad frame (columns of the row-major xmat).
+  in.shear_x_n = total[0] * pmat[0] + total[1] * pmat[3] + total[2] * pmat[6];
+  in.shear_y_n = total[0] * pmat[1] + total[1] * pmat[4] + total[2] * pmat[7];
+  in.normal_force_n = total[0] * pmat[2] + total[1] * pmat[5] + total[2] * pmat[8];
+}
+
+void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {
+  GatherInput(m, d);
+  mjtNum* state = d->plugin_state + m->plugin_stateadr[instance];
+  mjtNum* out = d->sensordata + m->sensor_adr[sensor_id_];
+  Step(*model_, input_, d->time, state, &workspace_, out);
+}
+
+void SkinPlugin::RegisterPlugin() {
+  mjpPlugin plugin;
+  mjp_defaultPlugin(&plugin);
+  plugin.name = kName;
+  plugin.capabilityflags |= mjPLUGIN_SENSOR;
+  const auto& keys = SkinAttributeKeys();
+  plugin.nattribute = static_cast<int>(keys.size());
+  plugin.attributes = keys.data();
+  // Contact forces are known only after the constraint solver.
+  plugin.needstage = mjSTAGE_ACC;
+
+  plugin.nstate = +[](const mjModel* m, int instance) {
+    SkinConfig cfg;
+    std::string error;
+    if (!ParseConfig(m, instance, &cfg, &error)) return 0;
+    return SkinModel::StateSize(static_cast<int>(SkinModel::PlaceReceptors(cfg).size()));
+  };
+  plugin.nsensordata = +[](const mjModel* m, int instance, int sensor_id) {
+    SkinConfig cfg;
+    std::string error;
+    if (!ParseConfig(m, instance, &cfg, &error)) return 0;
+    return SkinModel::OutputSize(cfg, static_cast<int>(SkinModel::PlaceReceptors(cfg).size()));
+  };
+  plugin.init = +[](const mjModel* m, mjData* d, int instance) {
+    SkinPlugin* p = SkinPlugin::Create(m, d, instance);
+    if (!p) return -1;
+    d->plugin_data[instance] = reinterpret_cast<uintptr_t>(p);
+    p->Reset(m, d->plugin_state + m->plugin_stateadr[instance], instance);
+    return 0;
+  };
+  plugin.destroy = +[](mjData* d, int instance) {
+    delete reinterpret_cast<SkinPlugin*>(d->plugin_data[instance]);
+    d->plugin_data[instance] = 0;
+  };
+  // Each MjData owns its scratch; the shared SkinModel is reference counted.
+  plugin.copy = +[](mjData* dest, const mjModel* m, const mjData* src, int instance) {
+    auto* from = reinterpret_cast<SkinPlugin*>(src->plugin_data[instance]);
+    auto* to = reinterpret_cast<SkinPlugin*>(dest->plugin_data[instance]);
+    if (from && to && from != to) {
+      to->input_ = from->input_;
+      to->workspace_ = from->workspace_;
+    }
+  };
+  plugin.reset = +[](const mjModel* m, mjtNum* plugin_state, void* plugin_data, int instance) {
+    auto* p = reinterpret_cast<SkinPlugin*>(plugin_data);
+    if (p) p->Reset(m, plugin_state, instance);
+  };
+  plugin.compute = +[](const mjModel* m, mjData* d, int instance, int capability_bit) {
+    auto* p = reinterpret_cast<SkinPlugin*>(d->plugin_data[instance]);
+    if (p) p->Compute(m, d, instance);
+  };
+  mjp_registerPlugin(&plugin);
+}
+
+}  // namespace mjtouch

@@ -1,0 +1,51 @@
+// MuJoCo adapter for the mjtouch.skin sensor plugin: reads the pad geom, the
+// counter-surfaces and MuJoCo's contact forces into a mjtouch::StepInput, runs
+// the pure-C++ pipeline (plugin/core/skin.h) and writes sensordata.
+#ifndef MJTOUCH_MUJOCO_SKIN_PLUGIN_H_
+#define MJTOUCH_MUJOCO_SKIN_PLUGIN_H_
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "../core/skin.h"
+
+namespace mjtouch {
+
+class SkinPlugin {
+ public:
+  static constexpr const char* kName = "mjtouch.skin";
+
+  // Validates every attribute and the model; returns null after mju_warning
+  // with a message naming the attribute and its valid range.
+  static SkinPlugin* Create(const mjModel* m, mjData* d, int instance);
+  static void RegisterPlugin();
+  // Attributes alone (all that output and state sizes depend on): MuJoCo
+  // asks for those sizes before the sensor's object is resolved.
+  static bool ParseConfig(const mjModel* m, int instance, SkinConfig* cfg, std::string* error);
+  // Attributes plus the pad geometry, for a compiled model.
+  static bool ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int* sensor_id,
+                         int* pad_geom, std::string* error);
+
+  void Reset(const mjModel* m, mjtNum* plugin_state, int instance);
+  void Compute(const mjModel* m, mjData* d, int instance);
+  const SkinModel& model() const { return *model_; }
+
+ private:
+  SkinPlugin() = default;
+  void GatherInput(const mjModel* m, const mjData* d);
+
+  std::shared_ptr<const SkinModel> model_;
+  int sensor_id_ = -1;
+  int pad_geom_ = -1;
+  int pad_body_ = -1;
+  std::vector<int> texture_geoms_;
+  StepInput input_;
+  Workspace workspace_;
+};
+
+}  // namespace mjtouch
+
+#endif  // MJTOUCH_MUJOCO_SKIN_PLUGIN_H_
