@@ -42,7 +42,10 @@ struct SA1Params {
 // threshold 1. Membrane time constant in the 3-9 ms range of TouchSim
 // (Saal et al. 2017) gives the tens-of-Hz best frequency.
 struct RAParams {
-  double gain_s_per_pa = 2.0e-5;  // 1 / (|dq/dt| at threshold, Pa/s)
+  // 1 / (|dq/dt| at threshold): 1e4 Pa/s, i.e. ~50 Pa at 30 Hz, which is
+  // ~5 um of skin indentation at 0.5 N (~10 Pa/um): RA thresholds are
+  // ~10 um at 20-40 Hz (Johansson et al. 1982). Provisional, see issue 5.
+  double gain_s_per_pa = 1.0e-4;
   double tau_s = 5e-3;
   double refractory_s = 1e-3;
 };
@@ -51,7 +54,9 @@ struct RAParams {
 // high-pass of dq/dt (an acceleration-like stage standing in for the
 // lamellar capsule's band-pass), short membrane time constant (~1-2 ms).
 struct PCParams {
-  double gain_s_per_pa = 1.0e-5;  // 1 / (filtered |dq/dt| at threshold)
+  // 1 / (filtered |dq/dt| at threshold): 1e3 Pa/s, ~0.6 Pa at 250 Hz, i.e.
+  // ~0.06 um (PC thresholds: tens of nm at 200-300 Hz). Provisional.
+  double gain_s_per_pa = 1.0e-3;
   double highpass_hz = 150.0;
   double tau_s = 1.5e-3;
   double refractory_s = 1e-3;

@@ -5,6 +5,7 @@
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -15,6 +16,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kGoldenAngle = 2.39996322972865332;  // pi (3 - sqrt 5)
 // Kernel tables above this size are refused (shared per model, float32).
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr double kDefaultRadius = 5e-3;  // receptor population, m
 constexpr double kMaxTableBytes = 1024.0 * 1024.0 * 1024.0;
 
@@ -463,13 +465,35 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
   TractionField& tf = ws->traction;
   bool touching = false;
   if (in.in_contact && in.normal_force_n > 0.0 && !in.surfaces.empty()) {
-    RenderGap(cfg.grid, model.skin_z(), in.pad_pose, in.surfaces, &ws->gap, &ws->coverage);
-    const double guess = state[1] > 0.0 ? state[0] : std::nan("");
+    // Warm start: the last step's indentation depth (approach minus smallest
+    // gap) bounds which cells can touch; cells provably above 1.5x that
+    // depth are not rendered. If the solved contact reaches the cull level,
+    // render everything and solve again, so the result is exact either way.
+    const bool warm = state[1] > 0.0;
+    const double depth_prev = state[0];
+    const double cull_rel = warm ? 1.5 * depth_prev + 20e-6 : kInfinity;
+    const double cull = RenderGap(cfg.grid, model.skin_z(), in.pad_pose, in.surfaces, cull_rel,
+                                  &ws->gap, &ws->coverage);
+    double gmin = kInfinity;
+    for (size_t i = 0; i < ws->gap.size(); ++i)
+      if (ws->coverage[i] > 0.0) gmin = std::min(gmin, ws->gap[i]);
+    const double guess = warm ? gmin + depth_prev : std::nan("");
     touching = WinklerPressure(cfg.grid, ws->gap, ws->coverage, cfg.stiffness_pa_per_m,
                                in.normal_force_n, guess, &tf);
+    if (touching && tf.approach_m >= cull) {
+      RenderGap(cfg.grid, model.skin_z(), in.pad_pose, in.surfaces, kInfinity, &ws->gap,
+                &ws->coverage);
+      touching = WinklerPressure(cfg.grid, ws->gap, ws->coverage, cfg.stiffness_pa_per_m,
+                                 in.normal_force_n, std::nan(""), &tf);
+    }
+    if (touching) {
+      gmin = kInfinity;
+      for (size_t i = 0; i < ws->gap.size(); ++i)
+        if (ws->coverage[i] > 0.0) gmin = std::min(gmin, ws->gap[i]);
+      state[0] = tf.approach_m - gmin;
+    }
   }
   if (touching) {
-    state[0] = tf.approach_m;
     state[1] = 1.0;
     if (cfg.shear) UniformSlipShear(cfg.grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
     const KernelTables* kt = model.kernel();
@@ -520,7 +544,7 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
     cursor[0] = touching ? in.normal_force_n : 0.0;
     cursor[1] = touching ? in.shear_x_n : 0.0;
     cursor[2] = touching ? in.shear_y_n : 0.0;
-    cursor[3] = touching ? tf.approach_m : 0.0;
+    cursor[3] = touching ? state[0] : 0.0;  // indentation depth
     cursor += kForceBlockSize;
   }
   if (cfg.outputs[kOutPressure]) {

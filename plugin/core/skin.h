@@ -25,7 +25,7 @@ namespace mjtouch {
 // Output blocks, in sensordata order.
 enum OutputBlock { kOutSpikes = 0, kOutStress, kOutVoltage, kOutForce, kOutPressure, kNumOutputs };
 const char* OutputName(int block);
-constexpr int kForceBlockSize = 4;  // normal, tangential x, y (N, pad frame), approach (m)
+constexpr int kForceBlockSize = 4;  // normal, tangential x, y (N, pad frame), indentation (m)
 
 struct ClassConfig {
   bool present = true;

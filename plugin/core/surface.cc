@@ -88,16 +88,51 @@ std::vector<double> SkinSurface(const TaxelGrid& grid, const PadGeometry& pad,
   return z;
 }
 
+std::vector<double> HeightFieldRowPrefix(int nrow, int ncol, const float* samples) {
+  std::vector<double> prefix(static_cast<size_t>(nrow) * ncol, 0.0);
+  for (int r = 0; r < nrow; ++r) {
+    const float* h = samples + static_cast<size_t>(r) * ncol;
+    double* P = prefix.data() + static_cast<size_t>(r) * ncol;
+    for (int c = 1; c < ncol; ++c) P[c] = P[c - 1] + 0.5 * (double(h[c - 1]) + h[c]);
+  }
+  return prefix;
+}
+
+namespace {
+
+// Integral from 0 to s (grid units, 0 <= s <= ncol - 1) of row r's linear
+// interpolant, from the running integrals.
+double RowIntegral(const CounterSurface& s, int r, double x) {
+  const float* h = s.samples + static_cast<size_t>(r) * s.ncol;
+  const double* P = s.row_prefix + static_cast<size_t>(r) * s.ncol;
+  int c = static_cast<int>(x);
+  c = std::clamp(c, 0, s.ncol - 2);
+  const double f = x - c;
+  return P[c] + f * h[c] + 0.5 * f * f * (double(h[c + 1]) - h[c]);
+}
+
+}  // namespace
+
 double HeightFieldBoxMean(const CounterSurface& s, double x0, double x1,
                           double y0, double y1) {
   constexpr int kMaxW = 64;
   double wx[kMaxW], wy[kMaxW];
   const double scx = (s.ncol - 1) / (2.0 * s.half_x_m);
   const double scy = (s.nrow - 1) / (2.0 * s.half_y_m);
-  const int c0 = HatWeights((x0 + s.half_x_m) * scx, (x1 + s.half_x_m) * scx,
-                            s.ncol, wx, kMaxW);
   const int r0 = HatWeights((y0 + s.half_y_m) * scy, (y1 + s.half_y_m) * scy,
                             s.nrow, wy, kMaxW);
+  double sx0 = std::clamp((x0 + s.half_x_m) * scx, 0.0, s.ncol - 1.0);
+  double sx1 = std::clamp((x1 + s.half_x_m) * scx, 0.0, s.ncol - 1.0);
+  if (s.row_prefix && sx1 - sx0 > 1e-6) {
+    const double inv = 1.0 / (sx1 - sx0);
+    double mean = 0.0;
+    for (int r = 0; r < kMaxW && r0 + r < s.nrow; ++r) {
+      if (wy[r] == 0.0) continue;
+      mean += wy[r] * (RowIntegral(s, r0 + r, sx1) - RowIntegral(s, r0 + r, sx0)) * inv;
+    }
+    return s.elevation_m * mean;
+  }
+  const int c0 = HatWeights(sx0, sx1, s.ncol, wx, kMaxW);
   double mean = 0.0;
   for (int r = 0; r < kMaxW && r0 + r < s.nrow; ++r) {
     if (wy[r] == 0.0) continue;
@@ -109,31 +144,59 @@ double HeightFieldBoxMean(const CounterSurface& s, double x0, double x1,
   return s.elevation_m * mean;
 }
 
-void RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
-               const Pose& pad, const std::vector<CounterSurface>& surfaces,
-               std::vector<double>* gap_m, std::vector<double>* coverage) {
+double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
+                 const Pose& pad, const std::vector<CounterSurface>& surfaces,
+                 double cull_above_m, std::vector<double>* gap_m,
+                 std::vector<double>* coverage) {
   const size_t N = grid.Size();
   gap_m->assign(N, kInf);
   coverage->assign(N, 0.0);
   const double h = grid.pitch_m;
-  for (const CounterSurface& s : surfaces) {
+  struct Frame {
+    double R[9], t[3], hx, hy;
+  };
+  std::vector<Frame> frames(surfaces.size());
+  for (size_t k = 0; k < surfaces.size(); ++k) {
+    const CounterSurface& s = surfaces[k];
+    Frame& F = frames[k];
     // R = S^T P maps pad-frame vectors into the surface frame.
-    double R[9];
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c)
-        R[3 * r + c] = s.pose.mat[0 + r] * pad.mat[0 + c] +
-                       s.pose.mat[3 + r] * pad.mat[3 + c] +
-                       s.pose.mat[6 + r] * pad.mat[6 + c];
-    double t[3];  // pad origin in the surface frame
-    for (int r = 0; r < 3; ++r) {
-      t[r] = 0.0;
-      for (int c = 0; c < 3; ++c)
-        t[r] += s.pose.mat[3 * c + r] * (pad.pos[c] - s.pose.pos[c]);
+        F.R[3 * r + c] = s.pose.mat[0 + r] * pad.mat[0 + c] +
+                         s.pose.mat[3 + r] * pad.mat[3 + c] +
+                         s.pose.mat[6 + r] * pad.mat[6 + c];
+    for (int r = 0; r < 3; ++r) {  // pad origin in the surface frame
+      F.t[r] = 0.0;
+      for (int c = 0; c < 3; ++c) F.t[r] += s.pose.mat[3 * c + r] * (pad.pos[c] - s.pose.pos[c]);
     }
     // Axis-aligned half extents of a cell's footprint in the surface frame.
-    const double hx = 0.5 * h * (std::abs(R[0]) + std::abs(R[1]));
-    const double hy = 0.5 * h * (std::abs(R[3]) + std::abs(R[4]));
-    const double area = 4.0 * hx * hy;
+    F.hx = 0.5 * h * (std::abs(F.R[0]) + std::abs(F.R[1]));
+    F.hy = 0.5 * h * (std::abs(F.R[3]) + std::abs(F.R[4]));
+  }
+  // Lower bound of every cell's gap (surface's highest point): the cull level
+  // is relative to the smallest.
+  double cull = kInf;
+  if (std::isfinite(cull_above_m)) {
+    double lb_min = kInf;
+    for (size_t k = 0; k < surfaces.size(); ++k) {
+      const Frame& F = frames[k];
+      for (int j = 0; j < grid.n; ++j) {
+        const double v = grid.Centre(j);
+        for (int i = 0; i < grid.n; ++i) {
+          const double z = skin_z[static_cast<size_t>(j) * grid.n + i];
+          if (!std::isfinite(z)) continue;
+          const double qz = F.t[2] + F.R[6] * grid.Centre(i) + F.R[7] * v + F.R[8] * z;
+          lb_min = std::min(lb_min, qz - surfaces[k].max_height_m);
+        }
+      }
+    }
+    cull = lb_min + cull_above_m;
+  }
+  for (size_t k = 0; k < surfaces.size(); ++k) {
+    const CounterSurface& s = surfaces[k];
+    const Frame& F = frames[k];
+    const double* R = F.R;
+    const double area = 4.0 * F.hx * F.hy;
     for (int j = 0; j < grid.n; ++j) {
       const double v = grid.Centre(j);
       for (int i = 0; i < grid.n; ++i) {
@@ -141,20 +204,21 @@ void RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
         const double z = skin_z[idx];
         if (!std::isfinite(z)) continue;
         const double u = grid.Centre(i);
-        const double qx = t[0] + R[0] * u + R[1] * v + R[2] * z;
-        const double qy = t[1] + R[3] * u + R[4] * v + R[5] * z;
-        const double qz = t[2] + R[6] * u + R[7] * v + R[8] * z;
+        const double qz = F.t[2] + R[6] * u + R[7] * v + R[8] * z;
+        if (qz - s.max_height_m > cull) continue;
+        const double qx = F.t[0] + R[0] * u + R[1] * v + R[2] * z;
+        const double qy = F.t[1] + R[3] * u + R[4] * v + R[5] * z;
         double cov = 1.0, gap = qz;
         if (s.type != CounterSurface::Type::kPlane) {
-          const double ox = Overlap1D(qx - hx, qx + hx, -s.half_x_m, s.half_x_m);
-          const double oy = Overlap1D(qy - hy, qy + hy, -s.half_y_m, s.half_y_m);
+          const double ox = Overlap1D(qx - F.hx, qx + F.hx, -s.half_x_m, s.half_x_m);
+          const double oy = Overlap1D(qy - F.hy, qy + F.hy, -s.half_y_m, s.half_y_m);
           cov = area > 0 ? ox * oy / area : 0.0;
           if (cov <= 0.0) continue;
           if (s.type == CounterSurface::Type::kHeightField) {
-            const double x0 = std::max(qx - hx, -s.half_x_m);
-            const double x1 = std::min(qx + hx, s.half_x_m);
-            const double y0 = std::max(qy - hy, -s.half_y_m);
-            const double y1 = std::min(qy + hy, s.half_y_m);
+            const double x0 = std::max(qx - F.hx, -s.half_x_m);
+            const double x1 = std::min(qx + F.hx, s.half_x_m);
+            const double y0 = std::max(qy - F.hy, -s.half_y_m);
+            const double y1 = std::min(qy + F.hy, s.half_y_m);
             gap = qz - HeightFieldBoxMean(s, x0, x1, y0, y1);
           }
         }
@@ -165,6 +229,7 @@ void RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
       }
     }
   }
+  return cull;
 }
 
 }  // namespace mjtouch

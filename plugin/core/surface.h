@@ -57,15 +57,28 @@ struct CounterSurface {
   int nrow = 0, ncol = 0;
   const float* samples = nullptr;
   double elevation_m = 0;
+  // Optional per-row running integrals of the samples (HeightFieldRowPrefix):
+  // makes a cell average O(rows) instead of O(rows x columns).
+  const double* row_prefix = nullptr;
+  double max_height_m = 0;  // highest point above the local z = 0 plane
   int id = -1;  // caller's tag (e.g. MuJoCo geom id)
 };
 
 // Gap (m) between each taxel cell of the skin (pad at pose `pad_pose`) and the
 // nearest counter-surface, measured along each surface's normal; `coverage`
 // is the fraction of the cell over a surface (0: no surface, gap = +inf).
-void RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
-               const Pose& pad_pose, const std::vector<CounterSurface>& surfaces,
-               std::vector<double>* gap_m, std::vector<double>* coverage);
+// Cells whose gap is provably above `cull_above_m` (relative to the smallest
+// lower bound of any cell) are skipped and left at +inf: pass +inf to render
+// all. Returns the absolute cull level used (+inf if none), so a caller whose
+// contact reaches above it can render again without culling.
+double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
+                 const Pose& pad_pose, const std::vector<CounterSurface>& surfaces,
+                 double cull_above_m, std::vector<double>* gap_m,
+                 std::vector<double>* coverage);
+
+// Running integrals along x of each row of a height field's samples (grid
+// units, trapezoid rule, which is exact for the linear interpolant).
+std::vector<double> HeightFieldRowPrefix(int nrow, int ncol, const float* samples);
 
 // Exact average of a bilinear height field over the axis-aligned box
 // [x0, x1] x [y0, y1] (surface frame), exposed for tests.

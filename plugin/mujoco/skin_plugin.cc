@@ -1,5 +1,6 @@
 #include "skin_plugin.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -21,7 +22,8 @@ void CopyPose(const mjtNum* pos, const mjtNum* mat, Pose* p) {
 // boxes and height fields are rendered exactly; any other geom by its
 // tangent plane at the contact (pos, normal from the pad into the geom).
 CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mjtNum toward[3],
-                              const mjtNum* contact_pos, const mjtNum* normal_into_geom) {
+                              const mjtNum* contact_pos, const mjtNum* normal_into_geom,
+                              const HeightFieldCache* cache) {
   CounterSurface s;
   s.id = g;
   const mjtNum* gpos = d->geom_xpos + 3 * g;
@@ -42,6 +44,12 @@ CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mj
       s.nrow = m->hfield_nrow[h];
       s.ncol = m->hfield_ncol[h];
       s.samples = m->hfield_data + m->hfield_adr[h];
+      if (cache) {
+        s.row_prefix = cache->prefix.data();
+        s.max_height_m = s.elevation_m * cache->max_sample;
+      } else {
+        s.max_height_m = s.elevation_m;  // samples are normalised to [0, 1]
+      }
       return s;
     }
     case mjGEOM_BOX: {
@@ -214,17 +222,33 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     mjtNum n_into[3] = {c.frame[0] * -sign, c.frame[1] * -sign, c.frame[2] * -sign};
     bool seen = false;
     for (const auto& s : in.surfaces) seen = seen || s.id == other;
-    if (!seen) in.surfaces.push_back(SurfaceForGeom(m, d, other, ppos, c.pos, n_into));
+    if (!seen) {
+      in.surfaces.push_back(SurfaceForGeom(m, d, other, ppos, c.pos, n_into, HeightField(m, other)));
+    }
   }
   if (in.in_contact) {
     for (int g : texture_geoms_) {
-      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos));
+      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos, HeightField(m, g)));
     }
   }
   // Force on the pad in the pad frame (columns of the row-major xmat).
   in.shear_x_n = total[0] * pmat[0] + total[1] * pmat[3] + total[2] * pmat[6];
   in.shear_y_n = total[0] * pmat[1] + total[1] * pmat[4] + total[2] * pmat[7];
   in.normal_force_n = total[0] * pmat[2] + total[1] * pmat[5] + total[2] * pmat[8];
+}
+
+const HeightFieldCache* SkinPlugin::HeightField(const mjModel* m, int geom) {
+  if (m->geom_type[geom] != mjGEOM_HFIELD) return nullptr;
+  const int h = m->geom_dataid[geom];
+  auto it = hfields_.find(h);
+  if (it != hfields_.end()) return &it->second;
+  HeightFieldCache& c = hfields_[h];
+  const float* samples = m->hfield_data + m->hfield_adr[h];
+  c.prefix = HeightFieldRowPrefix(m->hfield_nrow[h], m->hfield_ncol[h], samples);
+  c.max_sample = 0;
+  for (int k = 0; k < m->hfield_nrow[h] * m->hfield_ncol[h]; ++k)
+    c.max_sample = std::max<double>(c.max_sample, samples[k]);
+  return &c;
 }
 
 void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {

@@ -4,6 +4,7 @@
 #ifndef MJTOUCH_MUJOCO_SKIN_PLUGIN_H_
 #define MJTOUCH_MUJOCO_SKIN_PLUGIN_H_
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,6 +14,12 @@
 #include "../core/skin.h"
 
 namespace mjtouch {
+
+// Per-height-field running integrals (see HeightFieldRowPrefix).
+struct HeightFieldCache {
+  std::vector<double> prefix;
+  double max_sample = 0;
+};
 
 class SkinPlugin {
  public:
@@ -36,6 +43,7 @@ class SkinPlugin {
  private:
   SkinPlugin() = default;
   void GatherInput(const mjModel* m, const mjData* d);
+  const HeightFieldCache* HeightField(const mjModel* m, int geom);
 
   std::shared_ptr<const SkinModel> model_;
   int sensor_id_ = -1;
@@ -44,6 +52,7 @@ class SkinPlugin {
   std::vector<int> texture_geoms_;
   StepInput input_;
   Workspace workspace_;
+  std::map<int, HeightFieldCache> hfields_;  // by hfield id, built on first use
 };
 
 }  // namespace mjtouch

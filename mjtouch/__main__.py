@@ -1,0 +1,3 @@
+from mjtouch.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,164 @@
+"""Command line: ``python -m mjtouch slide`` (also the ``mjtouch`` script)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+import numpy as np
+
+
+def _positive_float(name):
+    def parse(s):
+        try:
+            v = float(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number, got {s!r}")
+        if not (np.isfinite(v) and v > 0):
+            raise argparse.ArgumentTypeError(f"{name} must be a positive number, got {s}")
+        return v
+    return parse
+
+
+def _slide_parser(sub):
+    p = sub.add_parser("slide", help="ridged fingertip pressed on a plate and slid; prints "
+                                     "spike rates and stress spectral peaks vs V/D and V/lambda")
+    p.add_argument("--texture", choices=["grating", "flat"], default="grating")
+    p.add_argument("--period", type=_positive_float("--period"), default=1.0e-3,
+                   help="texture spatial period D (m), default 1e-3")
+    p.add_argument("--plateau", type=_positive_float("--plateau"), default=None,
+                   help="grating plateau width (m), default period/2")
+    p.add_argument("--height", type=_positive_float("--height"), default=0.1e-3,
+                   help="grating height (m), default 1e-4")
+    p.add_argument("--speed", type=_positive_float("--speed"), default=0.025,
+                   help="sliding speed V (m/s), default 0.025")
+    p.add_argument("--force", type=_positive_float("--force"), default=0.5,
+                   help="normal force (N), default 0.5")
+    p.add_argument("--ridges", action=argparse.BooleanOptionalAction, default=True,
+                   help="fingerprint ridges on the skin (default on)")
+    p.add_argument("--ridge-pitch", type=_positive_float("--ridge-pitch"), default=0.45e-3,
+                   help="ridge pitch lambda (m), default 4.5e-4")
+    p.add_argument("--duration", type=_positive_float("--duration"), default=1.0,
+                   help="sliding time (s), default 1")
+    p.add_argument("--dt", type=_positive_float("--dt"), default=1e-4,
+                   help="simulation timestep (s), default 1e-4")
+    p.add_argument("--nx", type=int, default=128, help="taxels per side, default 128")
+    p.add_argument("--pitch", type=_positive_float("--pitch"), default=1e-4,
+                   help="taxel pitch (m), default 1e-4")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed (the pipeline is deterministic; reserved for noisy receptors "
+                        "and random textures)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--plot", metavar="FILE", help="write a PNG of the spectrum and raster")
+    return p
+
+
+def slide(args) -> dict:
+    from mjtouch import analysis, rollout, scenes
+
+    tip = scenes.Fingertip(ridges=args.ridges, ridge_pitch_m=args.ridge_pitch, nx=args.nx,
+                           pitch_m=args.pitch)
+    texture = scenes.Texture(kind=args.texture, period_m=args.period, plateau_m=args.plateau,
+                             height_m=args.height)
+    # the plate must hold the whole slide with margin for the contact patch
+    texture.length_m = max(texture.length_m, 2 * (args.speed * args.duration) + 0.02)
+    protocol = scenes.Protocol(force_n=args.force, speed_m_s=args.speed, timestep_s=args.dt)
+    t0 = time.perf_counter()
+    res = rollout.run_slide(tip, texture, protocol, duration_s=args.duration)
+    wall = time.perf_counter() - t0
+    w = res.window()
+    dt = res.dt
+    rates = analysis.rates_hz(res.spikes[w], dt, res.layout.classes)
+    f, p = analysis.stress_spectrum(res.stress[w], dt)
+    peaks = analysis.spectral_peaks(f, p, n=6, fmin_hz=5.0, fmax_hz=min(1000.0, 0.5 / dt))
+    expected = {"texture": args.speed / args.period if args.texture == "grating" else None,
+                "ridges": args.speed / args.ridge_pitch if args.ridges else None}
+    power_expected = {k: (analysis.power_at(f, p, v) if v else None) for k, v in expected.items()}
+    fn = res.force[w, 0]
+    out = {
+        "rates_hz": rates,
+        "peaks_hz": peaks,
+        "expected_hz": expected,
+        "power_at_expected": power_expected,
+        "speed_m_s": args.speed,
+        "period_m": args.period,
+        "ridge_pitch_m": args.ridge_pitch,
+        "ridges": args.ridges,
+        "texture": args.texture,
+        "force_n": args.force,
+        "duration_s": args.duration,
+        "dt_s": dt,
+        "fft_bin_hz": float(f[1] - f[0]),
+        "normal_force_mean_n": float(fn.mean()),
+        "receptors": {c: int((res.layout.classes == c).sum()) for c in ("SA1", "RA", "PC")},
+        "wall_s": wall,
+        "seed": args.seed,
+    }
+    if args.plot:
+        _plot(args.plot, res, f, p, expected, w)
+    return out
+
+
+def _plot(path, res, f, p, expected, w):
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'")
+    fig, (a, b) = plt.subplots(2, 1, figsize=(8, 7))
+    a.semilogy(f[1:], p[1:], lw=0.8)
+    for name, v in expected.items():
+        if v:
+            a.axvline(v, ls="--", c="r" if name == "texture" else "g", label=f"{name} {v:.1f} Hz")
+    a.set_xlim(0, min(600, f[-1]))
+    a.set_xlabel("frequency (Hz)")
+    a.set_ylabel("stress power (Pa$^2$)")
+    a.legend()
+    t = res.time_s[w]
+    spikes = res.spikes[w]
+    colors = {"SA1": "tab:blue", "RA": "tab:orange", "PC": "tab:green"}
+    for r in range(spikes.shape[1]):
+        ts = t[spikes[:, r] > 0]
+        b.plot(ts, np.full_like(ts, r), "|", ms=2, c=colors[res.layout.classes[r]])
+    b.set_xlabel("time (s)")
+    b.set_ylabel("receptor (SA1, RA, PC)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def _print_human(o: dict) -> None:
+    print(f"mjtouch slide: {o['texture']} texture, D = {o['period_m'] * 1e3:.3g} mm, "
+          f"V = {o['speed_m_s'] * 1e3:.3g} mm/s, F = {o['force_n']:.3g} N, "
+          f"ridges {'on' if o['ridges'] else 'off'} (lambda = {o['ridge_pitch_m'] * 1e3:.3g} mm), "
+          f"{o['duration_s']:.3g} s sliding (wall {o['wall_s']:.1f} s)")
+    print("firing rates (Hz):  " + "  ".join(f"{k} {v:.1f}" for k, v in o["rates_hz"].items())
+          + "   receptors: " + " ".join(f"{k} {v}" for k, v in o["receptors"].items()))
+    e = o["expected_hz"]
+    print("expected:  V/D = " + (f"{e['texture']:.2f} Hz" if e["texture"] else "-")
+          + "   V/lambda = " + (f"{e['ridges']:.2f} Hz" if e["ridges"] else "-")
+          + f"   (FFT bin {o['fft_bin_hz']:.2f} Hz)")
+    print("stress spectral peaks (Hz, strongest first): "
+          + ", ".join(f"{x:.2f}" for x in o["peaks_hz"]))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="mjtouch", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    _slide_parser(sub)
+    args = parser.parse_args(argv)
+    if args.command == "slide":
+        if not 4 <= args.nx <= 512:
+            parser.error(f"--nx {args.nx} is out of range; valid range [4, 512]")
+        try:
+            out = slide(args)
+        except ValueError as e:
+            print(f"mjtouch: error: {e}", file=sys.stderr)
+            return 2
+        if args.json:
+            print(json.dumps(out))
+        else:
+            _print_human(out)
+    return 0

@@ -1,0 +1,78 @@
+"""Running sliding scenes and collecting spikes, stress and forces."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+
+import mujoco
+import mujoco.rollout
+import numpy as np
+
+from mjtouch import scenes
+from mjtouch.sensor import SkinLayout
+
+
+@dataclasses.dataclass
+class SlideResult:
+    time_s: np.ndarray  # (nstep,)
+    spikes: np.ndarray  # (nstep, nrec) spike counts per step
+    stress: np.ndarray  # (nstep, nrec) receptor quantity, Pa
+    force: np.ndarray  # (nstep, 4) normal, tangential x, y (N), approach (m)
+    finger_x_m: np.ndarray  # (nstep,) fingertip x
+    layout: SkinLayout
+    tip: scenes.Fingertip
+    texture: scenes.Texture
+    protocol: scenes.Protocol
+    slide_start_s: float
+
+    @property
+    def dt(self) -> float:
+        return self.protocol.timestep_s
+
+    def window(self, settle_s: float = 0.1) -> slice:
+        """Steps of steady sliding: from slide start + settle_s to the end."""
+        start = int(round((self.slide_start_s + settle_s) / self.dt))
+        return slice(min(start, len(self.time_s) - 1), len(self.time_s))
+
+
+def run_slide(tip: scenes.Fingertip | None = None, texture: scenes.Texture | None = None,
+              protocol: scenes.Protocol | None = None, duration_s: float = 1.0,
+              nthread: int | None = None) -> SlideResult:
+    """Press the fingertip onto the plate, then slide it for duration_s."""
+    tip = tip or scenes.Fingertip()
+    texture = texture or scenes.Texture()
+    protocol = protocol or scenes.Protocol()
+    if not 0 < duration_s <= 60:
+        raise ValueError(f"duration_s = {duration_s} is out of range; valid range (0, 60] s")
+    travel = protocol.speed_m_s * duration_s
+    if travel > texture.length_m / 2:
+        raise ValueError(f"sliding {travel * 1e3:.1f} mm exceeds the plate's usable half length "
+                         f"({texture.length_m / 2 * 1e3:.1f} mm); lengthen the texture or shorten "
+                         "the run")
+    model = mujoco.MjModel.from_xml_string(scenes.scene_xml(tip, texture, protocol))
+    data = mujoco.MjData(model)
+    layout = SkinLayout.from_model(model)
+    ctrl = scenes.controls(protocol, duration_s)
+    return _collect(model, data, layout, ctrl, tip, texture, protocol)
+
+
+def _collect(model, data, layout, ctrl, tip, texture, protocol) -> SlideResult:
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state0 = np.empty(mujoco.mj_stateSize(model, spec))
+    mujoco.mj_getState(model, data, state0, spec)
+    state, sensordata = mujoco.rollout.rollout(model, data, state0[None], ctrl[None])
+    state, sensordata = state[0], sensordata[0]
+    # state: time, qpos (slide_x, press_z), ...
+    time = state[:, 0]
+    spikes = layout.block(sensordata, "spikes").astype(np.int32)
+    stress = layout.block(sensordata, "stress")
+    force = layout.block(sensordata, "force")
+    return SlideResult(
+        time_s=time, spikes=spikes, stress=stress, force=force,
+        finger_x_m=state[:, 1].copy(), layout=layout, tip=tip, texture=texture,
+        protocol=protocol, slide_start_s=protocol.press_s)
+
+
+def default_threads() -> int:
+    return max(1, min(os.cpu_count() or 1, 8))

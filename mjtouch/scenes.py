@@ -1,0 +1,309 @@
+"""MJCF builders: the ridged fingertip, textured plates and sliding scenes.
+
+The fingertip is a smooth ellipsoid pad that MuJoCo collides with a flat,
+colliding plate proxy; MuJoCo supplies the motion and the total contact force.
+The fine texture is a non-colliding height field (``contype=0``) that only
+the ``mjtouch.skin`` plugin renders against, so a fine texture costs nothing in
+MuJoCo's collision (a colliding fine height field costs ~3 ms per step).
+The skin's fingerprint ridges are rendered by the plugin too.
+
+``write_models(dir)`` regenerates the committed files in ``models/``; a test
+checks they are in sync with these builders.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import pathlib
+from typing import Literal
+
+import numpy as np
+
+TextureKind = Literal["grating", "flat"]
+
+
+@dataclasses.dataclass
+class Fingertip:
+    """Human index fingertip pad (Shao et al. 2010: 20 x 14 mm ellipse)."""
+
+    semi_axes_m: tuple[float, float, float] = (0.008, 0.007, 0.007)
+    mass_kg: float = 0.02
+    ridges: bool = True
+    ridge_pitch_m: float = 0.45e-3  # Shao et al. 2010
+    ridge_height_m: float = 0.05e-3  # Shao et al. 2010 (ridge relief)
+    ridge_angle_deg: float = 0.0  # 0: ridges perpendicular to sliding (x)
+    nx: int = 128  # taxels per side
+    pitch_m: float = 1e-4  # taxel pitch: 4.5 taxels per ridge
+    friction: float = 0.5
+    # Any further mjtouch.skin attributes (key -> value string).
+    skin: dict[str, str] = dataclasses.field(default_factory=dict)
+
+    def validate(self) -> None:
+        _positive("semi_axes_m", *self.semi_axes_m)
+        _positive("mass_kg", self.mass_kg)
+        _positive("ridge_pitch_m", self.ridge_pitch_m)
+        _positive("ridge_height_m", self.ridge_height_m)
+        _positive("pitch_m", self.pitch_m)
+        if not (4 <= int(self.nx) <= 512):
+            raise ValueError(f"nx = {self.nx} is out of range; valid range [4, 512]")
+        if not 0 <= self.friction <= 10:
+            raise ValueError(f"friction = {self.friction} is out of range; valid range [0, 10]")
+
+
+@dataclasses.dataclass
+class Texture:
+    """A plate texture. ``grating``: raised plateaux of width ``plateau_m`` every
+    ``period_m`` along x, ``height_m`` tall, edges rounded over ``edge_m``."""
+
+    kind: TextureKind = "grating"
+    period_m: float = 1.0e-3
+    plateau_m: float | None = None  # default: half the period
+    height_m: float = 0.1e-3
+    edge_m: float = 0.05e-3
+    length_m: float = 0.08
+    width_m: float = 0.03
+    resolution_m: float = 2e-5  # height-field sample spacing along x
+
+    def validate(self) -> None:
+        if self.kind not in ("grating", "flat"):
+            raise ValueError(f"texture kind {self.kind!r} is not one of 'grating', 'flat'")
+        _positive("period_m", self.period_m)
+        _positive("height_m", self.height_m)
+        _positive("length_m", self.length_m)
+        _positive("width_m", self.width_m)
+        _positive("resolution_m", self.resolution_m)
+        plateau = self.plateau
+        if not 0 < plateau < self.period_m:
+            raise ValueError(
+                f"plateau_m = {plateau} is out of range; valid range (0, period_m = {self.period_m})")
+        if not 0 <= self.edge_m <= min(plateau, self.period_m - plateau) / 2:
+            raise ValueError(f"edge_m = {self.edge_m} is out of range; valid range "
+                             f"[0, {min(plateau, self.period_m - plateau) / 2}]")
+        if self.kind == "grating" and self.period_m < 4 * self.resolution_m:
+            raise ValueError(f"period_m = {self.period_m} needs at least 4 height-field samples; "
+                             f"lower resolution_m (now {self.resolution_m})")
+        ncol = self.ncol
+        if ncol > 200_000:
+            raise ValueError(f"texture needs {ncol} height-field columns; valid up to 200000 "
+                             "(shorten length_m or coarsen resolution_m)")
+
+    @property
+    def plateau(self) -> float:
+        return self.period_m / 2 if self.plateau_m is None else self.plateau_m
+
+    @property
+    def ncol(self) -> int:
+        return int(round(self.length_m / self.resolution_m)) + 1
+
+    def profile(self, x_m: np.ndarray) -> np.ndarray:
+        """Height (m) along x: plateaux centred on x = k * period."""
+        if self.kind == "flat":
+            return np.zeros_like(x_m)
+        D, w, e = self.period_m, self.plateau, self.edge_m
+        # distance from the nearest plateau centre
+        u = np.abs((x_m + 0.5 * D) % D - 0.5 * D)
+        h = np.where(u <= w / 2 - e, 1.0, 0.0)
+        if e > 0:
+            ramp = (u > w / 2 - e) & (u < w / 2 + e)
+            s = (u[ramp] - (w / 2 - e)) / (2 * e)  # 0..1 across the edge
+            h[ramp] = 0.5 * (1 + np.cos(math.pi * s))
+        return self.height_m * h
+
+
+@dataclasses.dataclass
+class Protocol:
+    """Press with a set normal force, then slide at a set speed along +x."""
+
+    force_n: float = 0.5
+    speed_m_s: float = 0.025
+    press_s: float = 0.15  # press and settle before sliding
+    timestep_s: float = 1e-4
+
+    def validate(self) -> None:
+        if not 0 < self.force_n <= 100:
+            raise ValueError(f"force_n = {self.force_n} is out of range; valid range (0, 100] N")
+        if not 0 <= self.speed_m_s <= 2:
+            raise ValueError(f"speed_m_s = {self.speed_m_s} is out of range; valid range [0, 2] m/s")
+        if not 1e-6 <= self.timestep_s <= 5e-3:
+            raise ValueError(f"timestep_s = {self.timestep_s} is out of range; valid [1e-6, 5e-3] s")
+        if not 0.02 <= self.press_s <= 10:
+            raise ValueError(f"press_s = {self.press_s} is out of range; valid [0.02, 10] s")
+
+
+def _positive(name: str, *values: float) -> None:
+    for v in values:
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ValueError(f"{name} = {v!r} must be a positive finite number")
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.9g}"
+
+
+def skin_config(tip: Fingertip, texture_geom: str | None) -> dict[str, str]:
+    cfg = {
+        "nx": str(int(tip.nx)),
+        "pitch": _fmt(tip.pitch_m),
+        "ridges": "true" if tip.ridges else "false",
+        "ridge_pitch": _fmt(tip.ridge_pitch_m),
+        "ridge_height": _fmt(tip.ridge_height_m),
+        "ridge_angle": _fmt(tip.ridge_angle_deg),
+    }
+    if texture_geom:
+        cfg["texture"] = texture_geom
+    cfg.update(tip.skin)
+    return cfg
+
+
+@dataclasses.dataclass
+class Fragment:
+    """Pieces of MJCF that a part contributes to each top-level section."""
+
+    extension: str = ""
+    asset: str = ""
+    worldbody: str = ""
+    actuator: str = ""
+    sensor: str = ""
+
+    def standalone(self, model_name: str) -> str:
+        """The part as its own file, for <include>."""
+        return _document(model_name, [self])
+
+
+# Where the fingertip starts: above the plate's left quarter, so a slide of up
+# to half the plate's length stays on the texture.
+def _start_x(texture_length_m: float) -> float:
+    return -texture_length_m / 4
+
+
+def fingertip_fragment(tip: Fingertip, texture_geom: str | None = "texture",
+                       start_x_m: float = -0.02) -> Fragment:
+    """The fingertip: slide joints in x (sliding) and z (pressing), the pad
+    geom, its actuators and the skin sensor plugin instance."""
+    tip.validate()
+    a, b, c = tip.semi_axes_m
+    z0 = c + 3e-4  # pad 0.3 mm above the plate
+    cfg = skin_config(tip, texture_geom)
+    config = "\n".join(f'        <config key="{k}" value="{v}"/>' for k, v in cfg.items())
+    return Fragment(
+        extension='    <plugin plugin="mjtouch.skin"/>\n',
+        worldbody=f"""    <body name="finger" pos="{_fmt(start_x_m)} 0 {_fmt(z0)}" gravcomp="1">
+      <joint name="slide_x" type="slide" axis="1 0 0" damping="2"/>
+      <joint name="press_z" type="slide" axis="0 0 1" damping="2"/>
+      <geom name="pad" type="ellipsoid" size="{_fmt(a)} {_fmt(b)} {_fmt(c)}" mass="{_fmt(tip.mass_kg)}"
+            friction="{_fmt(tip.friction)} 0.005 0.0001" solref="0.004 1" solimp="0.95 0.99 0.001"
+            rgba="0.93 0.72 0.62 1"/>
+    </body>
+""",
+        # intvelocity: ctrl is the sliding speed (m/s), integrated into a
+        # position setpoint, so the mean speed is exact despite friction.
+        actuator="""    <intvelocity name="slide" joint="slide_x" kp="2000" actrange="-0.04 0.04" ctrlrange="-2 2"/>
+    <motor name="press" joint="press_z" ctrlrange="-100 0"/>
+""",
+        sensor=f"""    <plugin name="skin" plugin="mjtouch.skin" objtype="geom" objname="pad">
+{config}
+    </plugin>
+""")
+
+
+def plate_fragment(texture: Texture) -> Fragment:
+    """A plate: a colliding flat box proxy (MuJoCo's contact) and a
+    non-colliding geom named ``texture`` that the skin renders against."""
+    texture.validate()
+    L, W = texture.length_m, texture.width_m
+    proxy = (f'    <geom name="plate" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.002" '
+             f'pos="0 0 -0.002" friction="0.5 0.005 0.0001" rgba="0.55 0.6 0.65 1"/>\n')
+    if texture.kind == "flat":
+        return Fragment(worldbody=proxy + (
+            f'    <geom name="texture" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.002" '
+            'pos="0 0 -0.002" contype="0" conaffinity="0" group="1" rgba="0 0 0 0"/>\n'))
+    x = np.linspace(-L / 2, L / 2, texture.ncol)
+    row = texture.profile(x) / texture.height_m
+    elevation = " ".join(f"{v:.4g}" for v in np.concatenate([row, row]))
+    asset = (f'    <hfield name="texture" nrow="2" ncol="{texture.ncol}" '
+             f'size="{_fmt(L / 2)} {_fmt(W / 2)} {_fmt(texture.height_m)} 0.001"\n'
+             f'            elevation="{elevation}"/>\n')
+    body = proxy + ('    <geom name="texture" type="hfield" hfield="texture" contype="0" '
+                    'conaffinity="0" group="1" rgba="0.45 0.5 0.55 1"/>\n')
+    return Fragment(asset=asset, worldbody=body)
+
+
+def _options(protocol: Protocol) -> str:
+    return (f'  <option timestep="{_fmt(protocol.timestep_s)}" integrator="implicitfast" '
+            'cone="elliptic"/>\n')
+
+
+def _document(model_name: str, parts: list[Fragment], head: str = "",
+              includes: list[str] = ()) -> str:
+    out = [f'<mujoco model="{model_name}">\n']
+    out += [f'  <include file="{f}"/>\n' for f in includes]
+    out.append(head)
+    for section in ("extension", "asset", "worldbody", "actuator", "sensor"):
+        body = "".join(getattr(p, section) for p in parts)
+        if section == "worldbody" and head:
+            body = '    <light pos="0 0 0.3" dir="0 0 -1"/>\n' + body
+        if body:
+            out.append(f"  <{section}>\n{body}  </{section}>\n")
+    out.append("</mujoco>\n")
+    return "".join(out)
+
+
+def scene_xml(tip: Fingertip | None = None, texture: Texture | None = None,
+              protocol: Protocol | None = None, model_name: str = "mjtouch_slide") -> str:
+    """A complete single-file MJCF scene: fingertip over a plate."""
+    tip = tip or Fingertip()
+    texture = texture or Texture()
+    protocol = protocol or Protocol()
+    protocol.validate()
+    parts = [plate_fragment(texture),
+             fingertip_fragment(tip, "texture", _start_x(texture.length_m))]
+    return _document(model_name, parts, head=_options(protocol))
+
+
+def controls(protocol: Protocol, duration_s: float) -> np.ndarray:
+    """Open-loop controls (nstep x 2: slide speed, press force) for press then slide."""
+    n_press = int(round(protocol.press_s / protocol.timestep_s))
+    n_slide = int(round(duration_s / protocol.timestep_s))
+    ctrl = np.zeros((n_press + n_slide, 2))
+    ctrl[:, 1] = -protocol.force_n
+    ctrl[n_press:, 0] = protocol.speed_m_s
+    return ctrl
+
+
+def write_models(directory: str | pathlib.Path) -> list[pathlib.Path]:
+    """Regenerate the committed MJCF files in ``models/``: parts (fingertips,
+    plates) and scenes that include them."""
+    d = pathlib.Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    texture = Texture()
+    x0 = _start_x(texture.length_m)
+    files = {
+        "fingertip.xml": fingertip_fragment(Fingertip(), "texture", x0).standalone("fingertip"),
+        "fingertip_smooth.xml": fingertip_fragment(Fingertip(ridges=False), "texture",
+                                                   x0).standalone("fingertip_smooth"),
+        "plate_grating.xml": plate_fragment(texture).standalone("plate_grating"),
+        "plate_flat.xml": plate_fragment(Texture(kind="flat")).standalone("plate_flat"),
+    }
+    head = _options(Protocol())
+    for scene, parts in {
+        "slide_grating.xml": ["plate_grating.xml", "fingertip.xml"],
+        "slide_grating_smooth.xml": ["plate_grating.xml", "fingertip_smooth.xml"],
+        "slide_flat.xml": ["plate_flat.xml", "fingertip.xml"],
+    }.items():
+        files[scene] = _document(scene[:-4], [Fragment()], head=head, includes=parts)
+    paths = []
+    for name, xml in files.items():
+        p = d / name
+        p.write_text(xml)
+        paths.append(p)
+    return paths
+
+
+def models_dir() -> pathlib.Path:
+    """The models/ folder: installed with the package, or the source tree's."""
+    here = pathlib.Path(__file__).resolve().parent
+    for cand in (here / "models", here.parent / "models"):
+        if cand.is_dir():
+            return cand
+    raise FileNotFoundError("mjtouch models/ folder not found")
