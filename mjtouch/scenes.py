@@ -141,7 +141,11 @@ def _fmt(x: float) -> str:
     return f"{x:.9g}"
 
 
-def skin_config(tip: Fingertip, texture_geom: str | None) -> dict[str, str]:
+# Non-colliding geoms in this group are textures that the skin renders.
+TEXTURE_GROUP = 3
+
+
+def skin_config(tip: Fingertip) -> dict[str, str]:
     cfg = {
         "nx": str(int(tip.nx)),
         "pitch": _fmt(tip.pitch_m),
@@ -150,8 +154,7 @@ def skin_config(tip: Fingertip, texture_geom: str | None) -> dict[str, str]:
         "ridge_height": _fmt(tip.ridge_height_m),
         "ridge_angle": _fmt(tip.ridge_angle_deg),
     }
-    if texture_geom:
-        cfg["texture"] = texture_geom
+    cfg["texture_group"] = str(TEXTURE_GROUP)
     cfg.update(tip.skin)
     return cfg
 
@@ -177,14 +180,13 @@ def _start_x(texture_length_m: float) -> float:
     return -texture_length_m / 4
 
 
-def fingertip_fragment(tip: Fingertip, texture_geom: str | None = "texture",
-                       start_x_m: float = -0.02) -> Fragment:
+def fingertip_fragment(tip: Fingertip, start_x_m: float = -0.02) -> Fragment:
     """The fingertip: slide joints in x (sliding) and z (pressing), the pad
     geom, its actuators and the skin sensor plugin instance."""
     tip.validate()
     a, b, c = tip.semi_axes_m
     z0 = c + 3e-4  # pad 0.3 mm above the plate
-    cfg = skin_config(tip, texture_geom)
+    cfg = skin_config(tip)
     config = "\n".join(f'        <config key="{k}" value="{v}"/>' for k, v in cfg.items())
     return Fragment(
         extension='    <plugin plugin="mjtouch.skin"/>\n',
@@ -217,7 +219,7 @@ def plate_fragment(texture: Texture) -> Fragment:
     if texture.kind == "flat":
         return Fragment(worldbody=proxy + (
             f'    <geom name="texture" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.002" '
-            'pos="0 0 -0.002" contype="0" conaffinity="0" group="1" rgba="0 0 0 0"/>\n'))
+            f'pos="0 0 -0.002" contype="0" conaffinity="0" group="{TEXTURE_GROUP}" rgba="0 0 0 0"/>\n'))
     x = np.linspace(-L / 2, L / 2, texture.ncol)
     row = texture.profile(x) / texture.height_m
     elevation = " ".join(f"{v:.4g}" for v in np.concatenate([row, row]))
@@ -225,7 +227,7 @@ def plate_fragment(texture: Texture) -> Fragment:
              f'size="{_fmt(L / 2)} {_fmt(W / 2)} {_fmt(texture.height_m)} 0.001"\n'
              f'            elevation="{elevation}"/>\n')
     body = proxy + ('    <geom name="texture" type="hfield" hfield="texture" contype="0" '
-                    'conaffinity="0" group="1" rgba="0.45 0.5 0.55 1"/>\n')
+                    f'conaffinity="0" group="{TEXTURE_GROUP}" rgba="0.45 0.5 0.55 1"/>\n')
     return Fragment(asset=asset, worldbody=body)
 
 
@@ -257,7 +259,7 @@ def scene_xml(tip: Fingertip | None = None, texture: Texture | None = None,
     protocol = protocol or Protocol()
     protocol.validate()
     parts = [plate_fragment(texture),
-             fingertip_fragment(tip, "texture", _start_x(texture.length_m))]
+             fingertip_fragment(tip, _start_x(texture.length_m))]
     return _document(model_name, parts, head=_options(protocol))
 
 
@@ -279,8 +281,8 @@ def write_models(directory: str | pathlib.Path) -> list[pathlib.Path]:
     texture = Texture()
     x0 = _start_x(texture.length_m)
     files = {
-        "fingertip.xml": fingertip_fragment(Fingertip(), "texture", x0).standalone("fingertip"),
-        "fingertip_smooth.xml": fingertip_fragment(Fingertip(ridges=False), "texture",
+        "fingertip.xml": fingertip_fragment(Fingertip(), x0).standalone("fingertip"),
+        "fingertip_smooth.xml": fingertip_fragment(Fingertip(ridges=False),
                                                    x0).standalone("fingertip_smooth"),
         "plate_grating.xml": plate_fragment(texture).standalone("plate_grating"),
         "plate_flat.xml": plate_fragment(Texture(kind="flat")).standalone("plate_flat"),

@@ -18,8 +18,9 @@ constexpr double kGaussW[4] = {0.3478548451374538, 0.6521451548625461,
 
 }  // namespace
 
-// Johnson, Contact Mechanics (1985), eq. 3.21: normal point force P = 1 N into
-// the solid at the origin. (1 - z/rho) / r^2 is written 1 / (rho (rho + z)),
+// Boussinesq: normal point force P = 1 N into the solid at the origin, the
+// polar solution of Johnson, Contact Mechanics (1985), eq. 3.21, rotated to
+// Cartesian axes (s_xy = (s_rr - s_tt) cos sin). (1 - z/rho) / r^2 is written 1 / (rho (rho + z)),
 // which is exact and has no cancellation on the axis.
 Stress6 HalfSpace::Boussinesq(double x, double y, double z) const {
   const double r2 = x * x + y * y;
@@ -38,7 +39,7 @@ Stress6 HalfSpace::Boussinesq(double x, double y, double z) const {
                    3.0 * z * x * x / rho5);
     s[kSyy] = c * (b * inv_r2 * (a * (y * y - x * x) + z * x * x / rho3) -
                    3.0 * z * y * y / rho5);
-    s[kSxy] = c * (b * inv_r2 * (a * x * y - x * y * z / rho3) -
+    s[kSxy] = c * (b * inv_r2 * (2.0 * a * x * y - x * y * z / rho3) -
                    3.0 * x * y * z / rho5);
   } else {
     s[kSxx] = s[kSyy] = b / (4.0 * kPi * z * z);
@@ -92,13 +93,13 @@ Stress6 HalfSpace::CerrutiY(double x, double y, double z) const {
 
 Stress6 HalfSpace::CellStress(SurfaceLoad load, double x, double y, double z,
                               double h) const {
-  // Composite Gauss: split the cell so that every sub-cell is smaller than
-  // its distance to the receptor; 4x4 points per sub-cell then converge to
-  // ~1e-7 relative.
+  // Composite Gauss: split the cell so that every sub-cell is at most a third
+  // of its distance to the receptor; 4x4 points per sub-cell then converge
+  // to ~1e-7 relative.
   const double dx = std::max(0.0, std::abs(x) - 0.5 * h);
   const double dy = std::max(0.0, std::abs(y) - 0.5 * h);
   const double dmin = std::sqrt(dx * dx + dy * dy + z * z);
-  const int m = std::clamp(static_cast<int>(std::ceil(1.5 * h / dmin)), 1, 64);
+  const int m = std::clamp(static_cast<int>(std::ceil(3.0 * h / dmin)), 1, 64);
   const double hs = h / m;
   Stress6 acc{};
   for (int a = 0; a < m; ++a) {

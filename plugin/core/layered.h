@@ -15,17 +15,19 @@
 // form (see SurfaceCompliance).
 //
 // Real space. Transfer functions at one receptor depth are tabulated on 1024
-// log-spaced k, then:
-//  - LatticeTable: cell-area loading (h^2 sinc(kx h/2) sinc(ky h/2)), folded
-//    onto the lattice's Brillouin zone (aliases summed), inverse DFT on a
-//    zero-padded period N >= 4 n (parity-reduced cosine/sine sums). In the top
-//    layer the homogeneous half-space part (kernel.cc HalfSpace, exact, real
-//    space) is subtracted first, so the transformed remainder is smooth
-//    (decays like exp(-k (2 h1 - z))) and needs no aliases for usual pitches.
-//  - CellStress / PointStress / DiscStress: radial Hankel integrals (orders
-//    0-3) by panel Gauss-Legendre quadrature; CellStress integrates the point
-//    response over the cell by Gauss quadrature (top layer: half-space part
-//    exact, as above).
+// log-spaced k (cubic in ln k; exact k = 0 value, linear below the first
+// point), then radial Hankel transforms (orders 0-3, panel Gauss-Legendre)
+// give the point-force response as 11 radial functions:
+//  - LatticeTable: the radial functions are tabulated on a stretched r grid
+//    and integrated over each source cell (uniform traction on the cell,
+//    never a point force) by Gauss quadrature, in real space, so the slowly
+//    decaying in-plane tails (1/r^2, 1/r^3) have no periodic images. In the
+//    top layer the homogeneous half-space part (kernel.cc HalfSpace, exact
+//    closed form, adaptive cell quadrature) is subtracted first, so what is
+//    transformed is smooth on the scale 2 h1 - z.
+//  - CellStress / PointStress / DiscStress: the same, with the Hankel
+//    integrals done directly at each quadrature point (no r table): an
+//    independent path used to check LatticeTable.
 //
 // Interfaces. s_xx, s_yy, s_xy jump across an interface (s_zz, s_xz, s_yz do
 // not). A receptor whose depth is within 1e-9 of the stack depth of an
@@ -129,8 +131,9 @@ class LayeredSubstrate : public Substrate {
   // Surface normal displacement (m per Pa of pressure) at the centre of cell
   // (i, j) from unit pressure on cell (i + di, j + dj) of an n x n lattice of
   // pitch pitch_m: table[(dj + n - 1) * L + (di + n - 1)], L = 2 n - 1 (the
-  // LatticeTable layout with one slab). Periodic images are avoided: the
-  // 1/r part is Love's closed form, the rest is DFT'd on a padded period.
+  // LatticeTable layout with one slab). The 1/r part (top layer) and the
+  // base's long-wave part are closed forms over the cell; the remainder goes
+  // the radial route.
   void SurfaceComplianceTable(double pitch_m, int n,
                               std::vector<float>* table) const;
 
@@ -165,6 +168,12 @@ class LayeredSubstrate : public Substrate {
   // that layer's top face; -1 when invalid.
   int Locate(double z_m, InterfaceSide side, double* local_m) const;
   void Solve(double k, Solution* sol) const;
+  struct Tab;
+  void TabulateTransfer(int layer, double local_m, double z_m, bool subtract,
+                        double k_lo, double k_hi, Tab* tab) const;
+  double DecayLength(int layer, double z_m) const;
+  double LowK(double z_m) const;
+
   LayerTransfer Evaluate(const Solution& sol, double k, int layer,
                          double local_m) const;
 

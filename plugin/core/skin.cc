@@ -194,7 +194,7 @@ SkinConfig::SkinConfig() {
 
 const std::vector<const char*>& SkinAttributeKeys() {
   static const std::vector<const char*> keys = {
-      "texture", "nx", "pitch", "ridges", "ridge_pitch", "ridge_height", "ridge_angle",
+      "texture", "texture_group", "nx", "pitch", "ridges", "ridge_pitch", "ridge_height", "ridge_angle",
       "stiffness", "poisson", "shear", "classes", "density", "depth", "quantity", "radius",
       "outputs", "sa1_merkel", "sa1_k0", "sa1_k1", "sa1_i0", "sa1_c", "sa1_r", "sa1_vth",
       "ra_gain", "ra_tau", "pc_gain", "pc_tau", "pc_highpass", "refractory"};
@@ -204,6 +204,7 @@ const std::vector<const char*>& SkinAttributeKeys() {
 bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* error) {
   Reader r(get, error);
   r.Integer("nx", &cfg->grid.n, 4, 512);
+  r.Integer("texture_group", &cfg->texture_group, 0, 5);
   r.Number("pitch", &cfg->grid.pitch_m, 0, true, 1e-2, false, "m");
   r.Bool("ridges", &cfg->ridges.enabled);
   r.Number("ridge_pitch", &cfg->ridges.pitch_m, 0, true, 1e-2, false, "m");

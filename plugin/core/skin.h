@@ -41,6 +41,7 @@ struct SkinConfig {
   double stiffness_pa_per_m = 2e7;  // Winkler foundation
   double poisson = 0.48;            // homogeneous skin (Shao 2010 epidermis)
   bool shear = true;
+  int texture_group = -1;  // non-colliding geoms in this group are textures (-1: none)
   double population_radius_m = 5e-3;  // receptors within this distance of the pole
   bool radius_is_default = false;    // unset: fitted to the grid and pad
   ClassConfig classes[kNumClasses];

@@ -152,8 +152,13 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
     mju_warning("%s", error.c_str());
     return nullptr;
   }
-  // Texture geoms: rendered whenever the pad touches anything.
+  // Texture geoms, rendered whenever the pad touches anything: named by
+  // `texture`, and/or every non-colliding geom in `texture_group`.
   std::vector<int> textures;
+  auto renderable = [&](int g) {
+    const int type = m->geom_type[g];
+    return type == mjGEOM_HFIELD || type == mjGEOM_PLANE || type == mjGEOM_BOX;
+  };
   std::istringstream words(Config(m, instance, "texture"));
   std::string name;
   while (words >> name) {
@@ -163,13 +168,26 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
                   name.c_str());
       return nullptr;
     }
-    const int type = m->geom_type[g];
-    if (type != mjGEOM_HFIELD && type != mjGEOM_PLANE && type != mjGEOM_BOX) {
+    if (!renderable(g)) {
       mju_warning("mjtouch.skin: attribute `texture` geom '%s' must be an hfield, plane or box",
                   name.c_str());
       return nullptr;
     }
     textures.push_back(g);
+  }
+  if (cfg.texture_group >= 0) {
+    for (int g = 0; g < m->ngeom; ++g) {
+      if (m->geom_group[g] != cfg.texture_group || m->geom_contype[g] || m->geom_conaffinity[g])
+        continue;
+      if (!renderable(g)) {
+        const char* gname = mj_id2name(m, mjOBJ_GEOM, g);
+        mju_warning("mjtouch.skin: geom '%s' in `texture_group` %d must be an hfield, plane or "
+                    "box (or move it to another group)", gname ? gname : "(unnamed)",
+                    cfg.texture_group);
+        return nullptr;
+      }
+      if (std::find(textures.begin(), textures.end(), g) == textures.end()) textures.push_back(g);
+    }
   }
   auto model = SkinModel::Build(cfg, &error);
   if (!model) {

@@ -1,0 +1,85 @@
+"""Plugin state survives mj_copyData, mj_resetData and threaded rollouts."""
+
+import mujoco
+import mujoco.rollout
+import numpy as np
+
+from mjtouch import scenes
+
+from conftest import fast_tip
+
+
+def _model():
+    proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
+    xml = scenes.scene_xml(fast_tip(), scenes.Texture(period_m=0.6e-3), proto)
+    return mujoco.MjModel.from_xml_string(xml), proto
+
+
+def _run(m, d, n, speed=0.03):
+    out = np.empty((n, m.nsensordata))
+    for k in range(n):
+        d.ctrl[:] = [speed if d.time > 0.05 else 0.0, -0.5]
+        mujoco.mj_step(m, d)
+        out[k] = d.sensordata
+    return out
+
+
+def test_copy_data_mid_run_continues_identically():
+    m, _ = _model()
+    d = mujoco.MjData(m)
+    _run(m, d, 400)
+    d2 = mujoco.MjData(m)
+    mujoco.mj_copyData(d2, m, d)
+    a = _run(m, d, 300)
+    b = _run(m, d2, 300)
+    assert np.array_equal(a, b)
+    assert a[:, :].any()  # something nonzero was compared
+
+
+def test_reset_data_mid_run_repeats_from_start():
+    m, _ = _model()
+    d = mujoco.MjData(m)
+    first = _run(m, d, 500)
+    mujoco.mj_resetData(m, d)
+    second = _run(m, d, 500)
+    assert np.array_equal(first, second)
+
+
+def test_repeated_forward_does_not_advance_receptors():
+    m, _ = _model()
+    d = mujoco.MjData(m)
+    _run(m, d, 450)
+    # mj_step leaves time one step past its sensor evaluation: the first
+    # mj_forward evaluates at the new time (a real advance), later ones at
+    # the same time must change nothing.
+    mujoco.mj_forward(m, d)
+    state = d.plugin_state.copy()
+    sd = d.sensordata.copy()
+    mujoco.mj_forward(m, d)
+    mujoco.mj_forward(m, d)
+    assert np.array_equal(d.plugin_state, state)
+    assert np.array_equal(d.sensordata, sd)
+
+
+def test_rollout_one_and_two_threads_bit_identical():
+    m, proto = _model()
+    ctrl = scenes.controls(proto, 0.06)
+    speeds = np.array([0.02, 0.03, 0.04, 0.05])
+    controls = np.repeat(ctrl[None], len(speeds), axis=0)
+    controls[:, int(round(proto.press_s / proto.timestep_s)):, 0] = speeds[:, None]
+    d = mujoco.MjData(m)
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    s0 = np.empty(mujoco.mj_stateSize(m, spec))
+    mujoco.mj_getState(m, d, s0, spec)
+    s0 = np.repeat(s0[None], len(speeds), axis=0)
+    _, one = mujoco.rollout.rollout(m, mujoco.MjData(m), s0, controls)
+    _, two = mujoco.rollout.rollout(m, [mujoco.MjData(m), mujoco.MjData(m)], s0, controls)
+    assert np.array_equal(one, two)
+    # and each batch entry equals a serial mj_step run
+    d = mujoco.MjData(m)
+    serial = np.empty_like(one[2])
+    for k in range(controls.shape[1]):
+        d.ctrl[:] = controls[2, k]
+        mujoco.mj_step(m, d)
+        serial[k] = d.sensordata
+    assert np.array_equal(serial, one[2])

@@ -1,0 +1,116 @@
+"""Plugin registration, the committed models, and the sensordata layout."""
+
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+
+import mujoco
+import numpy as np
+import pytest
+
+import mjtouch
+from mjtouch import scenes
+from mjtouch.sensor import SkinLayout
+
+from conftest import MODELS, REPO, assert_no_warnings, pad_scene
+
+SCENES = sorted(p.name for p in MODELS.glob("slide_*.xml"))
+ALL_MODELS = sorted(p.name for p in MODELS.glob("*.xml"))
+
+
+def test_plain_import_mujoco_registers_plugin():
+    # A fresh interpreter that imports only mujoco: the `mujoco.plugins`
+    # entry point must register mjtouch.skin.
+    code = ("import mujoco; m = mujoco.MjModel.from_xml_path(%r); "
+            "print(m.nplugin, m.nsensordata)" % str(MODELS / "slide_flat.xml"))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=tempfile.gettempdir(), timeout=120)
+    assert out.returncode == 0, out.stderr
+    nplugin, nsensordata = map(int, out.stdout.split())
+    assert nplugin == 1 and nsensordata > 0
+
+
+def test_library_found_and_version_pinned():
+    assert mjtouch.library_path().is_file()
+    assert mujoco.__version__ == mjtouch.MUJOCO_VERSION
+    lib = mjtouch._loader.load()
+    assert lib.mjtouch_built_mujoco_version() == mujoco.mj_version()
+
+
+def test_committed_models_match_builders():
+    with tempfile.TemporaryDirectory() as tmp:
+        written = scenes.write_models(tmp)
+        for p in written:
+            committed = MODELS / p.name
+            assert committed.is_file(), f"models/{p.name} missing; run scenes.write_models"
+            assert committed.read_text() == p.read_text(), (
+                f"models/{p.name} is out of date; regenerate with "
+                "python -c 'import mjtouch.scenes as s; s.write_models(\"models\")'")
+
+
+@pytest.mark.parametrize("name", ALL_MODELS)
+def test_every_model_compiles(name):
+    if name.startswith(("plate_",)):
+        # parts without the fingertip compile on their own
+        mujoco.MjModel.from_xml_path(str(MODELS / name))
+        return
+    m = mujoco.MjModel.from_xml_path(str(MODELS / name))
+    assert m.nplugin >= 1
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_scene_steps_one_second_pressed_without_warnings(name):
+    m = mujoco.MjModel.from_xml_path(str(MODELS / name))
+    d = mujoco.MjData(m)
+    layout = SkinLayout.from_model(m)
+    d.ctrl[m.actuator("press").id] = -0.5
+    steps = int(round(1.0 / m.opt.timestep))
+    fn = np.empty(steps)
+    for k in range(steps):
+        mujoco.mj_step(m, d)
+        fn[k] = layout.block(d.sensordata, "force")[0]
+    assert_no_warnings(d)
+    assert np.all(np.isfinite(d.sensordata))
+    # quasi-static press: the plugin's normal force settles at the command
+    # (gravity compensated); 1% allows the contact's residual settling.
+    assert abs(fn[-1000:].mean() - 0.5) < 5e-3
+
+
+def test_layout_blocks_and_receptors():
+    m = mujoco.MjModel.from_xml_string(pad_scene({"outputs": "spikes stress voltage force pressure"}))
+    layout = SkinLayout.from_model(m)
+    nrec = len(layout.classes)
+    assert nrec > 0 and set(layout.classes) == {"SA1", "RA", "PC"}
+    sizes = {k: s.stop - s.start for k, s in layout.blocks.items()}
+    assert sizes == {"spikes": nrec, "stress": nrec, "voltage": nrec, "force": 4,
+                     "pressure": layout.nx ** 2}
+    assert layout.size == m.nsensordata
+    # densities (per cm^2) times the population disc's area
+    r = np.hypot(layout.positions_m[:, 0], layout.positions_m[:, 1])
+    radius = 48 * 1.5e-4 / 2 - 1.5e-4
+    assert r.max() <= radius + 1.5e-4
+    area_cm2 = np.pi * radius**2 * 1e4
+    for cls, density in (("SA1", 70), ("RA", 140), ("PC", 21)):
+        assert (layout.classes == cls).sum() == round(density * area_cm2)
+
+
+def test_force_on_pad_is_weight_at_rest():
+    m = mujoco.MjModel.from_xml_string(pad_scene({"outputs": "force pressure"}))
+    d = mujoco.MjData(m)
+    layout = SkinLayout.from_model(m)
+    for _ in range(2500):
+        mujoco.mj_step(m, d)
+    f = layout.block(d.sensordata, "force")
+    weight = 0.05 * 9.81
+    assert abs(f[0] - weight) < 1e-3 * weight
+    # sum of p * A equals the normal force to round-off (float32 pressures)
+    p = layout.block(d.sensordata, "pressure")
+    assert abs(p.sum() * layout.pitch_m**2 - f[0]) < 1e-6 * f[0]
+
+
+def test_missing_plugin_library_gives_clear_error(monkeypatch, tmp_path):
+    monkeypatch.setattr(mjtouch._loader, "_candidates", lambda: [tmp_path / "libmjtouch.so"])
+    with pytest.raises(mjtouch.PluginNotBuiltError, match="was not found.*pip install"):
+        mjtouch._loader.library_path()
