@@ -141,6 +141,15 @@ def _fmt(x: float) -> str:
     return f"{x:.9g}"
 
 
+# MuJoCo contact of the pad. A stiffer impedance (solimp 0.95-0.99) makes
+# MuJoCo's elliptic friction cone inflate the normal force while sliding: the
+# pad chatters at 100-600 Hz and lifts off (0.08 N rms at 40 mm/s). With
+# these values the normal force is steady to < 1e-4 relative from 10 mm/s to
+# 1 m/s (measured in tests/test_scenes_contact.py).
+CONTACT_SOLREF = "0.01 1"
+CONTACT_SOLIMP = "0.5 0.9 0.001"
+SLIDE_KP = 2e4  # N/m, sliding servo stiffness
+
 # Non-colliding geoms in this group are textures that the skin renders.
 TEXTURE_GROUP = 3
 
@@ -180,27 +189,30 @@ def _start_x(texture_length_m: float) -> float:
     return -texture_length_m / 4
 
 
-def fingertip_fragment(tip: Fingertip, start_x_m: float = -0.02) -> Fragment:
+def fingertip_fragment(tip: Fingertip, start_x_m: float = -0.02,
+                       travel_m: float = 0.04) -> Fragment:
     """The fingertip: slide joints in x (sliding) and z (pressing), the pad
     geom, its actuators and the skin sensor plugin instance."""
     tip.validate()
     a, b, c = tip.semi_axes_m
     z0 = c + 3e-4  # pad 0.3 mm above the plate
     cfg = skin_config(tip)
+    slide_damping = 2 * math.sqrt(SLIDE_KP * tip.mass_kg)
     config = "\n".join(f'        <config key="{k}" value="{v}"/>' for k, v in cfg.items())
     return Fragment(
         extension='    <plugin plugin="mjtouch.skin"/>\n',
         worldbody=f"""    <body name="finger" pos="{_fmt(start_x_m)} 0 {_fmt(z0)}" gravcomp="1">
-      <joint name="slide_x" type="slide" axis="1 0 0" damping="2"/>
+      <joint name="slide_x" type="slide" axis="1 0 0" damping="{_fmt(slide_damping)}"/>
       <joint name="press_z" type="slide" axis="0 0 1" damping="2"/>
       <geom name="pad" type="ellipsoid" size="{_fmt(a)} {_fmt(b)} {_fmt(c)}" mass="{_fmt(tip.mass_kg)}"
-            friction="{_fmt(tip.friction)} 0.005 0.0001" solref="0.004 1" solimp="0.95 0.99 0.001"
+            friction="{_fmt(tip.friction)} 0.005 0.0001" solref="{CONTACT_SOLREF}" solimp="{CONTACT_SOLIMP}"
             rgba="0.93 0.72 0.62 1"/>
     </body>
 """,
         # intvelocity: ctrl is the sliding speed (m/s), integrated into a
-        # position setpoint, so the mean speed is exact despite friction.
-        actuator="""    <intvelocity name="slide" joint="slide_x" kp="2000" actrange="-0.04 0.04" ctrlrange="-2 2"/>
+        # position setpoint, so the mean speed is exact despite friction;
+        # stiff and critically damped (joint damping) so it does not ring.
+        actuator=f"""    <intvelocity name="slide" joint="slide_x" kp="{_fmt(SLIDE_KP)}" actrange="{_fmt(-travel_m)} {_fmt(travel_m)}" ctrlrange="-2 2"/>
     <motor name="press" joint="press_z" ctrlrange="-100 0"/>
 """,
         sensor=f"""    <plugin name="skin" plugin="mjtouch.skin" objtype="geom" objname="pad">
@@ -259,7 +271,7 @@ def scene_xml(tip: Fingertip | None = None, texture: Texture | None = None,
     protocol = protocol or Protocol()
     protocol.validate()
     parts = [plate_fragment(texture),
-             fingertip_fragment(tip, _start_x(texture.length_m))]
+             fingertip_fragment(tip, _start_x(texture.length_m), texture.length_m)]
     return _document(model_name, parts, head=_options(protocol))
 
 
@@ -281,9 +293,10 @@ def write_models(directory: str | pathlib.Path) -> list[pathlib.Path]:
     texture = Texture()
     x0 = _start_x(texture.length_m)
     files = {
-        "fingertip.xml": fingertip_fragment(Fingertip(), x0).standalone("fingertip"),
-        "fingertip_smooth.xml": fingertip_fragment(Fingertip(ridges=False),
-                                                   x0).standalone("fingertip_smooth"),
+        "fingertip.xml": fingertip_fragment(Fingertip(), x0, texture.length_m).standalone(
+            "fingertip"),
+        "fingertip_smooth.xml": fingertip_fragment(Fingertip(ridges=False), x0,
+                                                   texture.length_m).standalone("fingertip_smooth"),
         "plate_grating.xml": plate_fragment(texture).standalone("plate_grating"),
         "plate_flat.xml": plate_fragment(Texture(kind="flat")).standalone("plate_flat"),
     }

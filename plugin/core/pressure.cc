@@ -48,6 +48,22 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
     if (!(next < c)) break;
     c = next;
   }
+  // Recompute c in closed form from the converged contact set, in a fixed
+  // order, so the result does not depend on the warm start (bit-identical
+  // outputs whatever the history): c = (target + sum cov g) / sum cov.
+  for (int pass = 0; pass < 4; ++pass) {
+    double sum_cov = 0.0, sum_cov_g = 0.0;
+    for (size_t i = 0; i < N; ++i) {
+      if (cov[i] > 0.0 && c - gap[i] > 0.0) {
+        sum_cov += cov[i];
+        sum_cov_g += cov[i] * gap[i];
+      }
+    }
+    if (!(sum_cov > 0.0)) break;
+    const double next = (target + sum_cov_g) / sum_cov;
+    if (next == c) break;
+    c = next;
+  }
   // Exact normalisation removes the last round-off of the solve.
   double total = 0.0;
   for (size_t i = 0; i < N; ++i) {

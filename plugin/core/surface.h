@@ -26,7 +26,7 @@ enum class RidgeProfile { kSine };
 struct Ridges {
   bool enabled = true;
   double pitch_m = 0.45e-3;   // ridge period (Shao et al. 2010)
-  double height_m = 0.1e-3;   // crest-to-valley relief
+  double height_m = 0.05e-3;  // crest-to-valley relief (Shao et al. 2010)
   double angle_rad = 0.0;     // ridge lines vs pad y axis (0: perpendicular to x)
   RidgeProfile profile = RidgeProfile::kSine;
 };

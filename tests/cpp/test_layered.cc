@@ -505,6 +505,111 @@ void TestValidation() {
   Report(ok, "validation, depth checks, material, strain and SED",
          "last message: " + err);
 }
+
+// Values for tests/layered_oracle.py (independent numpy/scipy computation):
+// disc loads and transfer functions on two stacks.
+void Dump(const char* path) {
+  FILE* f = std::fopen(path, "w");
+  if (!f) {
+    Report(false, "dump", path);
+    return;
+  }
+  struct Stack {
+    const char* name;
+    std::vector<ElasticLayer> layers;
+    LayeredBase base;
+  };
+  const Stack stacks[] = {
+      {"shao_bone", LayeredSubstrate::ShaoFingertipLayers(),
+       LayeredSubstrate::ShaoFingertipBase()},
+      {"two_layers_halfspace",
+       {{0.4e-3, 100e3, 0.3}, {0.3e-3, 20e3, 0.49}},
+       LayeredBase{false, 40e3, 0.35}}};
+  const char* load_names[] = {"pressure", "shear_x", "shear_y"};
+  std::fprintf(f, "{\"cases\": [\n");
+  for (size_t c = 0; c < 2; ++c) {
+    const Stack& st = stacks[c];
+    auto s = Make(st.layers, st.base);
+    std::fprintf(f, "%s{\"name\": \"%s\", \"layers\": [", c ? ",\n" : "",
+                 st.name);
+    for (size_t i = 0; i < st.layers.size(); ++i)
+      std::fprintf(f, "%s[%.17g, %.17g, %.17g]", i ? ", " : "",
+                   st.layers[i].thickness_m, st.layers[i].young_pa,
+                   st.layers[i].poisson);
+    if (st.base.rigid)
+      std::fprintf(f, "], \"base\": null,\n \"disc\": [");
+    else
+      std::fprintf(f, "], \"base\": [%.17g, %.17g],\n \"disc\": [",
+                   st.base.young_pa, st.base.poisson);
+    const double zi = st.layers[0].thickness_m;
+    const struct { double z; bool upper; } depths[] = {
+        {0.2e-3, true}, {zi, true}, {zi, false}, {2.5e-3, true}};
+    const double pts[][2] = {{0, 0}, {0.5e-3, 0.3e-3}, {-2e-3, 1e-3}};
+    bool first = true;
+    for (const auto& d : depths)
+      for (const auto& p : pts)
+        for (int load = 0; load < kNumLoads; ++load) {
+          const Stress6 v = s->DiscStress(
+              static_cast<SurfaceLoad>(load), p[0], p[1], d.z, 1e-3,
+              d.upper ? InterfaceSide::kUpper : InterfaceSide::kLower);
+          std::fprintf(f,
+                       "%s\n  {\"load\": \"%s\", \"x\": %.17g, \"y\": %.17g, "
+                       "\"z\": %.17g, \"radius\": 1e-3, \"upper\": %s, "
+                       "\"stress\": [%.17g, %.17g, %.17g, %.17g, %.17g, %.17g]}",
+                       first ? "" : ",", load_names[load], p[0], p[1], d.z,
+                       d.upper ? "true" : "false", v[0], v[1], v[2], v[3], v[4],
+                       v[5]);
+          first = false;
+        }
+    std::fprintf(f, "],\n \"cell\": [");
+    first = true;
+    for (const auto& d : depths)
+      for (const auto& p : pts)
+        for (int load = 0; load < kNumLoads; ++load) {
+          // Lattice table entries (pitch 0.2 mm, n = 16) at the receptor
+          // offset nearest to p, as the plugin uses them.
+          const int di = -static_cast<int>(std::lround(p[0] / 0.2e-3));
+          const int dj = -static_cast<int>(std::lround(p[1] / 0.2e-3));
+          std::vector<float> t;
+          s->LatticeTable(d.z, 0.2e-3, 16, kAll,
+                          d.upper ? InterfaceSide::kUpper : InterfaceSide::kLower,
+                          &t);
+          std::fprintf(f,
+                       "%s\n  {\"load\": \"%s\", \"x\": %.17g, \"y\": %.17g, "
+                       "\"z\": %.17g, \"pitch\": 2e-4, \"upper\": %s, "
+                       "\"stress\": [",
+                       first ? "" : ",", load_names[load], -di * 0.2e-3,
+                       -dj * 0.2e-3, d.z, d.upper ? "true" : "false");
+          for (int comp = 0; comp < kNumStress; ++comp)
+            std::fprintf(f, "%s%.9g", comp ? ", " : "",
+                         TableAt(t, 16, load, comp, di, dj));
+          std::fprintf(f, "]}");
+          first = false;
+        }
+    std::fprintf(f, "],\n \"transfer\": [");
+    first = true;
+    for (const auto& d : depths)
+      for (double k : {10.0, 1e3, 1e4, 1e5}) {
+        const LayerTransfer t = s->TransferAt(
+            k, d.z, d.upper ? InterfaceSide::kUpper : InterfaceSide::kLower);
+        std::fprintf(
+            f,
+            "%s\n  {\"k\": %.17g, \"z\": %.17g, \"upper\": %s, \"values\": "
+            "{\"p_xixi\": %.17g, \"p_etaeta\": %.17g, \"p_zz\": %.17g, "
+            "\"p_xiz\": %.17g, \"q_xixi\": %.17g, \"q_etaeta\": %.17g, "
+            "\"q_zz\": %.17g, \"q_xiz\": %.17g, \"a_etaz\": %.17g, "
+            "\"a_xieta\": %.17g}}",
+            first ? "" : ",", k, d.z, d.upper ? "true" : "false", t.p_xixi,
+            t.p_etaeta, t.p_zz, t.p_xiz, t.q_xixi, t.q_etaeta, t.q_zz, t.q_xiz,
+            t.a_etaz, t.a_xieta);
+        first = false;
+      }
+    std::fprintf(f, "]}");
+  }
+  std::fprintf(f, "\n]}\n");
+  std::fclose(f);
+  Report(true, "dump", F("wrote %s", path));
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -522,8 +627,7 @@ int main(int argc, char** argv) {
   TestThinTopLayer();
   TestValidation();
   TestBuildTime();
-  (void)argc;
-  (void)argv;
+  if (argc > 2 && std::strcmp(argv[1], "--dump") == 0) Dump(argv[2]);
   std::printf("%s: %d failure(s), %.1f s\n", g_failures ? "FAIL" : "PASS",
               g_failures, Seconds(t0));
   return g_failures ? 1 : 0;

@@ -1,0 +1,51 @@
+"""The main job's command line."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "mjtouch", *args], capture_output=True,
+                          text=True, timeout=600)
+
+
+def test_slide_json_keys_and_peak():
+    out = run("slide", "--json", "--duration", "0.4", "--nx", "64", "--pitch", "1.5e-4",
+              "--dt", "2e-4", "--speed", "0.03", "--period", "1e-3")
+    assert out.returncode == 0, out.stderr
+    o = json.loads(out.stdout)
+    for key in ("rates_hz", "peaks_hz", "expected_hz", "speed_m_s", "period_m",
+                "ridge_pitch_m", "duration_s"):
+        assert key in o
+    assert set(o["rates_hz"]) == {"SA1", "RA", "PC"}
+    assert o["expected_hz"]["texture"] == pytest.approx(30.0)
+    assert o["expected_hz"]["ridges"] == pytest.approx(0.03 / 0.45e-3)
+    assert abs(o["peaks_hz"][0] - 30.0) <= o["fft_bin_hz"]
+    assert all(np.isfinite(v) for v in o["rates_hz"].values())
+
+
+def test_slide_human_output_and_plot(tmp_path):
+    png = tmp_path / "s.png"
+    out = run("slide", "--duration", "0.2", "--nx", "48", "--pitch", "1.5e-4", "--dt", "2e-4",
+              "--no-ridges", "--plot", str(png))
+    assert out.returncode == 0, out.stderr
+    assert "V/D" in out.stdout and "firing rates" in out.stdout
+    assert png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args,msg", [
+    (["--speed", "-1"], "--speed must be a positive number"),
+    (["--nx", "2"], "--nx 2 is out of range"),
+    (["--texture", "wood"], "invalid choice"),
+    (["--dt", "0.1"], "timestep_s"),
+])
+def test_slide_bad_arguments(args, msg):
+    out = run("slide", "--duration", "0.1", *args)
+    assert out.returncode != 0
+    assert msg in out.stderr
+
+
+import numpy as np  # noqa: E402
