@@ -21,7 +21,9 @@
 //  - LatticeTable: the radial functions are tabulated on a stretched r grid
 //    and integrated over each source cell (uniform traction on the cell,
 //    never a point force) by Gauss quadrature, in real space, so the slowly
-//    decaying in-plane tails (1/r^2, 1/r^3) have no periodic images. In the
+//    decaying in-plane tails (1/r^2, 1/r^3) have no periodic images (a
+//    zero-padded periodic FFT with a 4 n period left 1e-2 errors at mm
+//    depths through those images). In the
 //    top layer the homogeneous half-space part (kernel.cc HalfSpace, exact
 //    closed form, adaptive cell quadrature) is subtracted first, so what is
 //    transformed is smooth on the scale 2 h1 - z.
@@ -30,7 +32,7 @@
 //    independent path used to check LatticeTable.
 //
 // Interfaces. s_xx, s_yy, s_xy jump across an interface (s_zz, s_xz, s_yz do
-// not). A receptor whose depth is within 1e-9 of the stack depth of an
+// not). A receptor whose depth is within 1e-9 x (stack depth) of an
 // interface is evaluated on the side chosen at creation: kUpper (default: the
 // layer above, e.g. the basal epidermis for Merkel cells at the
 // epidermis/dermis interface) or kLower. The explicit-side overloads override.
@@ -106,7 +108,8 @@ class LayeredSubstrate : public Substrate {
   static std::vector<ElasticLayer> ShaoFingertipLayers();
   static LayeredBase ShaoFingertipBase();
 
-  // Substrate interface (interface side: the one chosen at creation).
+  // Substrate interface (interface side: the one chosen at creation). A depth
+  // that CheckDepth rejects gives NaN stresses (NaN-filled tables).
   Stress6 CellStress(SurfaceLoad load, double x_m, double y_m, double z_m,
                      double pitch_m) const override;
   void LatticeTable(double z_m, double pitch_m, int n,
