@@ -50,7 +50,7 @@ def run_slide(tip: scenes.Fingertip | None = None, texture: scenes.Texture | Non
         raise ValueError(f"sliding {travel * 1e3:.1f} mm exceeds the plate's usable half length "
                          f"({texture.length_m / 2 * 1e3:.1f} mm); lengthen the texture or shorten "
                          "the run")
-    model = mujoco.MjModel.from_xml_string(scenes.scene_xml(tip, texture, protocol))
+    model = scenes.build_model(tip, texture, protocol)
     data = mujoco.MjData(model)
     layout = SkinLayout.from_model(model)
     ctrl = scenes.controls(protocol, duration_s)

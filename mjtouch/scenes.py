@@ -18,9 +18,12 @@ import math
 import pathlib
 from typing import Literal
 
+import mujoco
 import numpy as np
 
-TextureKind = Literal["grating", "flat"]
+from mjtouch import textures
+
+TextureKind = Literal["grating", "random", "dots", "flat"]
 
 
 @dataclasses.dataclass
@@ -53,8 +56,17 @@ class Fingertip:
 
 @dataclasses.dataclass
 class Texture:
-    """A plate texture. ``grating``: raised plateaux of width ``plateau_m`` every
-    ``period_m`` along x, ``height_m`` tall, edges rounded over ``edge_m``."""
+    """A plate texture (see :mod:`mjtouch.textures`).
+
+    - ``grating``: raised plateaux of width ``plateau_m`` every ``period_m``
+      along x, ``height_m`` tall, edges rounded over ``edge_m``;
+    - ``random``: isotropic Gaussian roughness of RMS height ``rms_m`` and
+      Gaussian correlation length ``corr_length_m`` (seeded by ``seed``);
+    - ``dots``: hexagonal array of spherical-cap dots (``dot_spacing_m``,
+      ``dot_radius_m``, ``height_m``);
+    - ``flat``: no texture.
+    Gratings are 1D (a 2-row height field, inline in MJCF); random and dot
+    textures are 2D height fields set through MjSpec (:func:`build_model`)."""
 
     kind: TextureKind = "grating"
     period_m: float = 1.0e-3
@@ -63,30 +75,42 @@ class Texture:
     edge_m: float = 0.05e-3
     length_m: float = 0.08
     width_m: float = 0.03
-    resolution_m: float = 2e-5  # height-field sample spacing along x
+    resolution_m: float = 2e-5  # height-field sample spacing
+    rms_m: float = 20e-6
+    corr_length_m: float = 100e-6
+    dot_spacing_m: float = 2.5e-3
+    dot_radius_m: float = 0.6e-3
+    seed: int = 0
 
     def validate(self) -> None:
-        if self.kind not in ("grating", "flat"):
-            raise ValueError(f"texture kind {self.kind!r} is not one of 'grating', 'flat'")
-        _positive("period_m", self.period_m)
+        if self.kind not in ("grating", "flat", "random", "dots"):
+            raise ValueError(f"texture kind {self.kind!r} is not one of "
+                             "'grating', 'random', 'dots', 'flat'")
         _positive("height_m", self.height_m)
         _positive("length_m", self.length_m)
         _positive("width_m", self.width_m)
         _positive("resolution_m", self.resolution_m)
-        plateau = self.plateau
-        if not 0 < plateau < self.period_m:
-            raise ValueError(
-                f"plateau_m = {plateau} is out of range; valid range (0, period_m = {self.period_m})")
-        if not 0 <= self.edge_m <= min(plateau, self.period_m - plateau) / 2:
-            raise ValueError(f"edge_m = {self.edge_m} is out of range; valid range "
-                             f"[0, {min(plateau, self.period_m - plateau) / 2}]")
-        if self.kind == "grating" and self.period_m < 4 * self.resolution_m:
-            raise ValueError(f"period_m = {self.period_m} needs at least 4 height-field samples; "
-                             f"lower resolution_m (now {self.resolution_m})")
-        ncol = self.ncol
-        if ncol > 200_000:
-            raise ValueError(f"texture needs {ncol} height-field columns; valid up to 200000 "
-                             "(shorten length_m or coarsen resolution_m)")
+        if self.kind == "grating":
+            _positive("period_m", self.period_m)
+            plateau = self.plateau
+            if not 0 < plateau < self.period_m:
+                raise ValueError(f"plateau_m = {plateau} is out of range; valid range "
+                                 f"(0, period_m = {self.period_m})")
+            if not 0 <= self.edge_m <= min(plateau, self.period_m - plateau) / 2:
+                raise ValueError(f"edge_m = {self.edge_m} is out of range; valid range "
+                                 f"[0, {min(plateau, self.period_m - plateau) / 2}]")
+            if self.period_m < 4 * self.resolution_m:
+                raise ValueError(f"period_m = {self.period_m} needs at least 4 height-field "
+                                 f"samples; lower resolution_m (now {self.resolution_m})")
+        if self.kind == "random":
+            _positive("rms_m", self.rms_m)
+            _positive("corr_length_m", self.corr_length_m)
+        if self.kind == "dots":
+            _positive("dot_spacing_m", self.dot_spacing_m)
+            _positive("dot_radius_m", self.dot_radius_m)
+        if self.kind != "flat" and self.nrow * self.ncol > 8_000_000:
+            raise ValueError(f"texture needs {self.nrow} x {self.ncol} height-field samples; "
+                             "valid up to 8e6 (shrink the plate or coarsen resolution_m)")
 
     @property
     def plateau(self) -> float:
@@ -96,19 +120,31 @@ class Texture:
     def ncol(self) -> int:
         return int(round(self.length_m / self.resolution_m)) + 1
 
+    @property
+    def nrow(self) -> int:
+        if self.kind in ("grating", "flat"):
+            return 2
+        return int(round(self.width_m / self.resolution_m)) + 1
+
     def profile(self, x_m: np.ndarray) -> np.ndarray:
-        """Height (m) along x: plateaux centred on x = k * period."""
+        """Height (m) along x of a grating: plateaux centred on x = k * period."""
         if self.kind == "flat":
             return np.zeros_like(x_m)
-        D, w, e = self.period_m, self.plateau, self.edge_m
-        # distance from the nearest plateau centre
-        u = np.abs((x_m + 0.5 * D) % D - 0.5 * D)
-        h = np.where(u <= w / 2 - e, 1.0, 0.0)
-        if e > 0:
-            ramp = (u > w / 2 - e) & (u < w / 2 + e)
-            s = (u[ramp] - (w / 2 - e)) / (2 * e)  # 0..1 across the edge
-            h[ramp] = 0.5 * (1 + np.cos(math.pi * s))
-        return self.height_m * h
+        if self.kind != "grating":
+            raise ValueError("profile() is for gratings; use heights()")
+        return textures.grating(x_m, self.period_m, self.plateau, self.height_m, self.edge_m)
+
+    def heights(self) -> np.ndarray:
+        """Height map (m), nrow x ncol, MuJoCo height-field order."""
+        x = np.linspace(-self.length_m / 2, self.length_m / 2, self.ncol)
+        if self.kind in ("grating", "flat"):
+            return np.tile(self.profile(x), (2, 1))
+        if self.kind == "random":
+            h = textures.random_rough(self.nrow, self.ncol, self.resolution_m, self.rms_m,
+                                      corr_length_m=self.corr_length_m, seed=self.seed)
+            return h - h.min()
+        y = np.linspace(-self.width_m / 2, self.width_m / 2, self.nrow)
+        return textures.dots(x, y, self.dot_spacing_m, self.dot_radius_m, self.height_m)
 
 
 @dataclasses.dataclass
@@ -223,7 +259,9 @@ def fingertip_fragment(tip: Fingertip, start_x_m: float = -0.02,
 
 def plate_fragment(texture: Texture) -> Fragment:
     """A plate: a colliding flat box proxy (MuJoCo's contact) and a
-    non-colliding geom named ``texture`` that the skin renders against."""
+    non-colliding geom named ``texture`` that the skin renders against.
+    2D textures declare the height field without data: :func:`build_model`
+    fills it."""
     texture.validate()
     L, W = texture.length_m, texture.width_m
     proxy = (f'    <geom name="plate" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.002" '
@@ -232,15 +270,39 @@ def plate_fragment(texture: Texture) -> Fragment:
         return Fragment(worldbody=proxy + (
             f'    <geom name="texture" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.002" '
             f'pos="0 0 -0.002" contype="0" conaffinity="0" group="{TEXTURE_GROUP}" rgba="0 0 0 0"/>\n'))
-    x = np.linspace(-L / 2, L / 2, texture.ncol)
-    row = texture.profile(x) / texture.height_m
-    elevation = " ".join(f"{v:.4g}" for v in np.concatenate([row, row]))
-    asset = (f'    <hfield name="texture" nrow="2" ncol="{texture.ncol}" '
-             f'size="{_fmt(L / 2)} {_fmt(W / 2)} {_fmt(texture.height_m)} 0.001"\n'
-             f'            elevation="{elevation}"/>\n')
+    relief = _relief(texture)
+    data = ""
+    if texture.nrow == 2:
+        h = texture.heights()
+        data = ("\n            elevation=\"" + " ".join(f"{v:.4g}" for v in (h / relief).ravel())
+                + "\"")
+    asset = (f'    <hfield name="texture" nrow="{texture.nrow}" ncol="{texture.ncol}" '
+             f'size="{_fmt(L / 2)} {_fmt(W / 2)} {_fmt(relief)} 0.001"{data}/>\n')
     body = proxy + ('    <geom name="texture" type="hfield" hfield="texture" contype="0" '
                     f'conaffinity="0" group="{TEXTURE_GROUP}" rgba="0.45 0.5 0.55 1"/>\n')
     return Fragment(asset=asset, worldbody=body)
+
+
+def _relief(texture: Texture) -> float:
+    """Peak-to-valley height of the texture (the height field's elevation)."""
+    if texture.kind in ("grating", "dots"):
+        return texture.height_m
+    h = texture.heights()
+    return float(h.max() - h.min())
+
+
+def build_model(tip: Fingertip | None = None, texture: Texture | None = None,
+                protocol: Protocol | None = None) -> mujoco.MjModel:
+    """Compile a scene; 2D textures' height data are set through MjSpec
+    (a million-sample height field does not belong in XML text)."""
+    texture = texture or Texture()
+    xml = scene_xml(tip, texture, protocol)
+    if texture.kind == "flat" or texture.nrow == 2:
+        return mujoco.MjModel.from_xml_string(xml)
+    spec = mujoco.MjSpec.from_string(xml)
+    h = texture.heights()
+    spec.hfields[0].userdata = (h.ravel() / (h.max() - h.min())).tolist()
+    return spec.compile()
 
 
 def _options(protocol: Protocol) -> str:

@@ -32,6 +32,7 @@ int HatWeights(double s0, double s1, int count, double* w, int max_w) {
     const double f = s0 - c;
     w[0] = 1.0 - f;
     w[1] = f;
+    for (int k = 2; k < max_w; ++k) w[k] = 0.0;
     return c;
   }
   const int c0 = std::max(0, static_cast<int>(std::floor(s0)));

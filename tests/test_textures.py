@@ -1,0 +1,122 @@
+"""Texture generators and the height-field convention the skin relies on."""
+
+import mujoco
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from mjtouch import core, scenes, textures
+
+
+def test_hfield_orientation_matches_mujoco_ray():
+    # An asymmetric height field: the skin's reading at (x, y) must equal the
+    # height MuJoCo's own ray cast hits there (rows along y, columns along x).
+    nrow, ncol = 7, 11
+    rng = np.random.default_rng(3)
+    data = rng.random((nrow, ncol))
+    data[0, 0], data[-1, -1] = 0.0, 1.0  # MuJoCo normalises to [0, 1]
+    rx, ry, hz = 0.01, 0.006, 0.002
+    xml = f"""<mujoco><asset><hfield name="h" nrow="{nrow}" ncol="{ncol}" size="{rx} {ry} {hz} 0.001"
+      elevation="{' '.join(map(str, data.ravel()))}"/></asset>
+      <worldbody><geom type="hfield" hfield="h" pos="0.1 -0.2 0.3"/></worldbody></mujoco>"""
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    samples = m.hfield_data.reshape(nrow, ncol)
+    geomid = np.array([-1], dtype=np.int32)
+    for x, y in [(-0.007, 0.004), (0.003, -0.005), (0.0081, 0.0012), (-0.0099, -0.0059)]:
+        dist = mujoco.mj_ray(m, d, np.array([0.1 + x, -0.2 + y, 1.0]), np.array([0, 0, -1.0]),
+                             None, 1, -1, geomid)
+        ray_height = 1.0 - dist - 0.3
+        ours = core.hfield_box_mean(samples, rx, ry, hz, x, x, y, y)
+        # MuJoCo triangulates each cell (two planes); the skin's bilinear
+        # interpolant agrees with it at the samples and differs inside a cell
+        # by at most the cell's twist |h00 - h10 - h01 + h11| / 4.
+        c = (x + rx) / (2 * rx) * (ncol - 1)
+        r = (y + ry) / (2 * ry) * (nrow - 1)
+        c0, r0 = min(int(c), ncol - 2), min(int(r), nrow - 2)
+        twist = abs(samples[r0, c0] - samples[r0, c0 + 1] - samples[r0 + 1, c0]
+                    + samples[r0 + 1, c0 + 1]) * hz / 4
+        assert abs(ours - ray_height) <= twist + 1e-9, (x, y, ours, ray_height)
+
+
+def test_hfield_box_mean_is_exact_integral():
+    rng = np.random.default_rng(0)
+    s = rng.random((5, 9)).astype(np.float32)
+    rx, ry, hz = 0.004, 0.002, 1e-3
+    x0, x1, y0, y1 = -0.0031, 0.0017, -0.0013, 0.0009
+    # fine midpoint quadrature of the bilinear interpolant
+    n = 800
+    xs = x0 + (np.arange(n) + 0.5) * (x1 - x0) / n
+    ys = y0 + (np.arange(n) + 0.5) * (y1 - y0) / n
+    cx = (xs + rx) / (2 * rx) * 8
+    ry_ = (ys + ry) / (2 * ry) * 4
+    c0 = np.minimum(cx.astype(int), 7)
+    r0 = np.minimum(ry_.astype(int), 3)
+    fx, fy = cx - c0, ry_ - r0
+    S = s.astype(float)
+    H = ((1 - fy)[:, None] * ((1 - fx) * S[r0][:, c0] + fx * S[r0][:, c0 + 1])
+         + fy[:, None] * ((1 - fx) * S[r0 + 1][:, c0] + fx * S[r0 + 1][:, c0 + 1]))
+    expect = hz * H.mean()
+    # midpoint rule error ~ (1/n)^2 of the second derivative (piecewise
+    # linear: kinks only) -> ~1e-6 relative here
+    assert_allclose(core.hfield_box_mean(s, rx, ry, hz, x0, x1, y0, y1), expect, rtol=2e-5)
+
+
+def test_grating_profile_geometry():
+    x = np.linspace(-5e-3, 5e-3, 100001)
+    h = textures.grating(x, 1e-3, 0.4e-3, 1e-4, edge_m=0.05e-3)
+    assert h.max() == pytest.approx(1e-4) and h.min() == 0.0
+    # duty cycle: the raised-cosine edge is symmetric about the nominal edge,
+    # so the mean height is plateau / period exactly
+    assert h.mean() / 1e-4 == pytest.approx(0.4, abs=2e-4)
+    # periodic with period D
+    assert_allclose(textures.grating(x + 1e-3, 1e-3, 0.4e-3, 1e-4, 0.05e-3), h, atol=1e-12)
+
+
+def test_random_rough_rms_and_correlation_length():
+    res, l, rms = 5e-6, 50e-6, 3e-6
+    h = textures.random_rough(512, 512, res, rms, corr_length_m=l, seed=1)
+    assert h.std() == pytest.approx(rms, rel=1e-12)
+    # autocorrelation exp(-r^2 / l^2): at r = l it is 1/e (periodic estimate;
+    # sampling error of a 512^2 map with ~50^2 correlation areas ~ a few %)
+    F = np.fft.rfft2(h)
+    acf = np.fft.irfft2(np.abs(F) ** 2, s=h.shape)
+    acf /= acf[0, 0]
+    k = int(round(l / res))
+    assert acf[0, k] == pytest.approx(np.exp(-1), abs=0.05)
+    assert acf[k, 0] == pytest.approx(np.exp(-1), abs=0.05)
+    # deterministic per seed, different across seeds
+    assert np.array_equal(h, textures.random_rough(512, 512, res, rms, corr_length_m=l, seed=1))
+    assert not np.array_equal(h, textures.random_rough(512, 512, res, rms, corr_length_m=l, seed=2))
+
+
+def test_dots_are_spherical_caps_on_a_lattice():
+    x = np.linspace(-2e-3, 2e-3, 801)
+    y = np.linspace(-2e-3, 2e-3, 801)
+    h = textures.dots(x, y, 1e-3, 0.3e-3, 0.1e-3, lattice="square")
+    assert h.max() == pytest.approx(1e-4, rel=1e-6)
+    # fraction covered by dots: pi a^2 / spacing^2
+    assert (h > 0).mean() == pytest.approx(np.pi * 0.3**2, abs=0.01)
+
+
+def test_2d_texture_model_holds_the_heights():
+    tex = scenes.Texture(kind="random", length_m=0.02, width_m=0.01, resolution_m=5e-5,
+                         rms_m=10e-6, corr_length_m=2e-4, seed=4)
+    m = scenes.build_model(scenes.Fingertip(nx=32, pitch_m=2e-4), tex, scenes.Protocol())
+    h = tex.heights()
+    assert (m.hfield_nrow[0], m.hfield_ncol[0]) == h.shape
+    relief = h.max() - h.min()
+    assert m.hfield_size[0][2] == pytest.approx(relief)
+    assert_allclose(m.hfield_data.reshape(h.shape) * relief, h, atol=1e-7 * relief)
+
+
+@pytest.mark.parametrize("kw,msg", [
+    (dict(kind="wood"), "not one of"),
+    (dict(kind="random", rms_m=-1), "rms_m"),
+    (dict(kind="grating", plateau_m=2e-3), "plateau_m"),
+    (dict(kind="dots", dot_radius_m=0), "dot_radius_m"),
+])
+def test_bad_texture_parameters(kw, msg):
+    with pytest.raises(ValueError, match=msg):
+        scenes.Texture(**kw).validate()
