@@ -25,13 +25,21 @@ def _positive_float(name):
 def _slide_parser(sub):
     p = sub.add_parser("slide", help="ridged fingertip pressed on a plate and slid; prints "
                                      "spike rates and stress spectral peaks vs V/D and V/lambda")
-    p.add_argument("--texture", choices=["grating", "flat"], default="grating")
+    p.add_argument("--texture", choices=["grating", "random", "dots", "flat"], default="grating")
     p.add_argument("--period", type=_positive_float("--period"), default=1.0e-3,
                    help="texture spatial period D (m), default 1e-3")
     p.add_argument("--plateau", type=_positive_float("--plateau"), default=None,
                    help="grating plateau width (m), default period/2")
     p.add_argument("--height", type=_positive_float("--height"), default=0.1e-3,
                    help="grating height (m), default 1e-4")
+    p.add_argument("--rms", type=_positive_float("--rms"), default=20e-6,
+                   help="random texture: RMS height (m), default 2e-5")
+    p.add_argument("--corr-length", type=_positive_float("--corr-length"), default=60e-6,
+                   help="random texture: Gaussian correlation length (m), default 6e-5")
+    p.add_argument("--dot-spacing", type=_positive_float("--dot-spacing"), default=2.5e-3,
+                   help="dots texture: hexagonal lattice spacing (m), default 2.5e-3")
+    p.add_argument("--dot-radius", type=_positive_float("--dot-radius"), default=0.6e-3,
+                   help="dots texture: dot base radius (m), default 6e-4")
     p.add_argument("--speed", type=_positive_float("--speed"), default=0.025,
                    help="sliding speed V (m/s), default 0.025")
     p.add_argument("--force", type=_positive_float("--force"), default=0.5,
@@ -48,8 +56,7 @@ def _slide_parser(sub):
     p.add_argument("--pitch", type=_positive_float("--pitch"), default=1e-4,
                    help="taxel pitch (m), default 1e-4")
     p.add_argument("--seed", type=int, default=0,
-                   help="seed (the pipeline is deterministic; reserved for noisy receptors "
-                        "and random textures)")
+                   help="seed of the random texture (the pipeline itself is deterministic)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="write a PNG of the spectrum and raster")
     return p
@@ -61,9 +68,16 @@ def slide(args) -> dict:
     tip = scenes.Fingertip(ridges=args.ridges, ridge_pitch_m=args.ridge_pitch, nx=args.nx,
                            pitch_m=args.pitch)
     texture = scenes.Texture(kind=args.texture, period_m=args.period, plateau_m=args.plateau,
-                             height_m=args.height)
-    # the plate must hold the whole slide with margin for the contact patch
-    texture.length_m = max(texture.length_m, 2 * (args.speed * args.duration) + 0.02)
+                             height_m=args.height, rms_m=args.rms,
+                             corr_length_m=args.corr_length, dot_spacing_m=args.dot_spacing,
+                             dot_radius_m=args.dot_radius, seed=args.seed)
+    # the plate must hold the whole slide with margin for the contact patch;
+    # 2D textures are sized to the slide to keep the height field small
+    need = 2 * (args.speed * args.duration) + 0.02
+    if args.texture in ("random", "dots"):
+        texture.length_m, texture.width_m = need, 0.016
+    else:
+        texture.length_m = max(texture.length_m, need)
     protocol = scenes.Protocol(force_n=args.force, speed_m_s=args.speed, timestep_s=args.dt)
     t0 = time.perf_counter()
     res = rollout.run_slide(tip, texture, protocol, duration_s=args.duration)
@@ -73,7 +87,8 @@ def slide(args) -> dict:
     rates = analysis.rates_hz(res.spikes[w], dt, res.layout.classes)
     f, p = analysis.stress_spectrum(res.stress[w], dt)
     peaks = analysis.spectral_peaks(f, p, n=6, fmin_hz=5.0, fmax_hz=min(1000.0, 0.5 / dt))
-    expected = {"texture": args.speed / args.period if args.texture == "grating" else None,
+    periodic = {"grating": args.period, "dots": args.dot_spacing}.get(args.texture)
+    expected = {"texture": args.speed / periodic if periodic else None,
                 "ridges": args.speed / args.ridge_pitch if args.ridges else None}
     power_expected = {k: (analysis.power_at(f, p, v) if v else None) for k, v in expected.items()}
     fn = res.force[w, 0]
@@ -83,7 +98,7 @@ def slide(args) -> dict:
         "expected_hz": expected,
         "power_at_expected": power_expected,
         "speed_m_s": args.speed,
-        "period_m": args.period,
+        "period_m": periodic,
         "ridge_pitch_m": args.ridge_pitch,
         "ridges": args.ridges,
         "texture": args.texture,

@@ -54,8 +54,7 @@ def grating(period_m: float = 1e-3, **kw) -> scenes.Texture:
 
 def random_texture(rms_m: float = 20e-6, corr_length_m: float = 60e-6, seed: int = 0,
                    **kw) -> scenes.Texture:
-    kw.setdefault("length_m", 0.045)
-    kw.setdefault("width_m", 0.016)
+    kw.setdefault("width_m", 0.016)  # length: sized to the slide by slide_spectrum
     return scenes.Texture(kind="random", rms_m=rms_m, corr_length_m=corr_length_m, seed=seed, **kw)
 
 
@@ -70,7 +69,11 @@ def slide_spectrum(texture: scenes.Texture | None = None, speed_m_s: float = 0.0
     tip = tip or scenes.Fingertip(nx=64, pitch_m=1.5e-4, ridges=ridges)
     proto = scenes.Protocol(force_n=force_n, speed_m_s=speed_m_s, timestep_s=timestep_s,
                             press_s=0.1)
-    res = rollout.run_slide(tip, texture or grating(), proto, duration_s=duration_s)
+    texture = texture or grating()
+    need = 2 * speed_m_s * duration_s + 0.02  # slide + contact patch margin
+    if texture.length_m < need:
+        texture = dataclasses.replace(texture, length_m=need)
+    res = rollout.run_slide(tip, texture, proto, duration_s=duration_s)
     w = res.window(settle_s)
     stress = res.stress[w]
     if site != "all":
