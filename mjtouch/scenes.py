@@ -177,14 +177,30 @@ def _fmt(x: float) -> str:
     return f"{x:.9g}"
 
 
-# MuJoCo contact of the pad. A stiffer impedance (solimp 0.95-0.99) makes
-# MuJoCo's elliptic friction cone inflate the normal force while sliding: the
-# pad chatters at 100-600 Hz and lifts off (0.08 N rms at 40 mm/s). With
-# these values the normal force is steady to < 1e-4 relative from 10 mm/s to
-# 1 m/s (measured in tests/test_scenes_contact.py).
+# MuJoCo contact of the pad (with anything). A stiff impedance (solimp
+# 0.95-0.99) makes MuJoCo's elliptic friction cone inflate the normal force
+# while sliding: the pad chatters at 100-600 Hz and lifts off (0.08 N rms at
+# 40 mm/s, measured).
 CONTACT_SOLREF = "0.01 1"
 CONTACT_SOLIMP = "0.5 0.9 0.001"
+# Pad-plate pair: impedance rising from 0.5 to 0.9999 over 4 mm stiffens like
+# a fingertip (~1.6 mm at 0.5 N, ~3 mm at 50 N) and never lets the pad through.
+PAIR_SOLIMP = "0.5 0.9999 0.004 0.5 2"
+# Soft constraints make friction rate dependent: its reference acceleration
+# grows as slip speed / solreffriction time constant. Too stiff for the slip
+# speed and the cone inflates the normal force (chatter, lift-off); too soft
+# and friction stays below mu * F_n (viscous). tau_f = 5 m V / F_n puts the
+# friction demand just past saturation: Coulomb friction (F_t = mu F_n) with
+# a steady normal force from 10 mm/s to 1 m/s and 0.05 to 50 N (measured:
+# tests/test_hard_cases.py).
+FRICTION_TAU_PER_MV_F = 5.0
 SLIDE_KP = 2e4  # N/m, sliding servo stiffness
+
+
+def friction_timeconst(tip: "Fingertip", protocol: "Protocol") -> float:
+    """solreffriction time constant (s) for sliding at protocol speed/force."""
+    tau = FRICTION_TAU_PER_MV_F * tip.mass_kg * protocol.speed_m_s / protocol.force_n
+    return max(tau, 2 * protocol.timestep_s)
 
 # Non-colliding geoms in this group are textures that the skin renders.
 TEXTURE_GROUP = 3
@@ -213,6 +229,7 @@ class Fragment:
     worldbody: str = ""
     actuator: str = ""
     sensor: str = ""
+    contact: str = ""
 
     def standalone(self, model_name: str) -> str:
         """The part as its own file, for <include>."""
@@ -264,12 +281,13 @@ def plate_fragment(texture: Texture) -> Fragment:
     fills it."""
     texture.validate()
     L, W = texture.length_m, texture.width_m
-    proxy = (f'    <geom name="plate" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.002" '
-             f'pos="0 0 -0.002" friction="0.5 0.005 0.0001" rgba="0.55 0.6 0.65 1"/>\n')
+    # 1 cm thick: a hard press (50 N) sinks ~3 mm into MuJoCo's soft contact
+    proxy = (f'    <geom name="plate" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.01" '
+             f'pos="0 0 -0.01" friction="0.5 0.005 0.0001" rgba="0.55 0.6 0.65 1"/>\n')
     if texture.kind == "flat":
         return Fragment(worldbody=proxy + (
-            f'    <geom name="texture" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.002" '
-            f'pos="0 0 -0.002" contype="0" conaffinity="0" group="{TEXTURE_GROUP}" rgba="0 0 0 0"/>\n'))
+            f'    <geom name="texture" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.01" '
+            f'pos="0 0 -0.01" contype="0" conaffinity="0" group="{TEXTURE_GROUP}" rgba="0 0 0 0"/>\n'))
     relief = _relief(texture)
     data = ""
     if texture.nrow == 2:
@@ -315,7 +333,7 @@ def _document(model_name: str, parts: list[Fragment], head: str = "",
     out = [f'<mujoco model="{model_name}">\n']
     out += [f'  <include file="{f}"/>\n' for f in includes]
     out.append(head)
-    for section in ("extension", "asset", "worldbody", "actuator", "sensor"):
+    for section in ("extension", "asset", "worldbody", "contact", "actuator", "sensor"):
         body = "".join(getattr(p, section) for p in parts)
         if section == "worldbody" and head:
             body = '    <light pos="0 0 0.3" dir="0 0 -1"/>\n' + body
@@ -333,8 +351,18 @@ def scene_xml(tip: Fingertip | None = None, texture: Texture | None = None,
     protocol = protocol or Protocol()
     protocol.validate()
     parts = [plate_fragment(texture),
-             fingertip_fragment(tip, _start_x(texture.length_m), texture.length_m)]
+             fingertip_fragment(tip, _start_x(texture.length_m), texture.length_m),
+             pad_plate_contact(tip, protocol)]
     return _document(model_name, parts, head=_options(protocol))
+
+
+def pad_plate_contact(tip: Fingertip, protocol: Protocol) -> Fragment:
+    """The pad-plate contact pair, its friction tuned to the protocol."""
+    mu = _fmt(tip.friction)
+    return Fragment(contact=(
+        f'    <pair geom1="pad" geom2="plate" condim="3" friction="{mu} {mu} 0.005 0.0001 0.0001"\n'
+        f'          solref="{CONTACT_SOLREF}" solimp="{PAIR_SOLIMP}" '
+        f'solreffriction="{_fmt(friction_timeconst(tip, protocol))} 1"/>\n'))
 
 
 def controls(protocol: Protocol, duration_s: float) -> np.ndarray:
@@ -363,12 +391,13 @@ def write_models(directory: str | pathlib.Path) -> list[pathlib.Path]:
         "plate_flat.xml": plate_fragment(Texture(kind="flat")).standalone("plate_flat"),
     }
     head = _options(Protocol())
+    contact = pad_plate_contact(Fingertip(), Protocol())
     for scene, parts in {
         "slide_grating.xml": ["plate_grating.xml", "fingertip.xml"],
         "slide_grating_smooth.xml": ["plate_grating.xml", "fingertip_smooth.xml"],
         "slide_flat.xml": ["plate_flat.xml", "fingertip.xml"],
     }.items():
-        files[scene] = _document(scene[:-4], [Fragment()], head=head, includes=parts)
+        files[scene] = _document(scene[:-4], [contact], head=head, includes=parts)
     paths = []
     for name, xml in files.items():
         p = d / name
