@@ -144,6 +144,170 @@ class Reader {
   bool ok_ = true;
 };
 
+// The elastic skin: `skin` (layered | halfspace), `layers` ("thickness E nu"
+// groups separated by ';' or ','; m, Pa, -), `base` (rigid | "E nu"),
+// `interface_side` (upper | lower), `stress_method` (auto | direct | fft).
+void ParseElasticSkin(Reader& r, SkinConfig* cfg) {
+  constexpr double kMaxThicknessM = 1.0, kMaxYoungPa = 1e12;
+  constexpr size_t kMaxLayers = 64;  // LayeredSubstrate::Create's limit
+  const std::string method = r.Raw("stress_method");
+  if (!method.empty() && !ParseStressMethod(method, &cfg->stress_method))
+    r.Fail(Fmt("attribute `stress_method` = '%s' is not one of: auto direct fft", method.c_str()));
+  const std::string skin = r.Raw("skin");
+  if (skin == "layered") {
+    cfg->layered = true;
+  } else if (skin == "halfspace") {
+    cfg->layered = false;
+  } else if (!skin.empty()) {
+    r.Fail(Fmt("attribute `skin` = '%s' is not one of: layered halfspace", skin.c_str()));
+  }
+  if (!r.ok()) return;
+  if (!cfg->layered) {
+    for (const char* key : {"layers", "base", "interface_side"}) {
+      if (!r.Raw(key).empty()) {
+        r.Fail(Fmt("attribute `%s` applies to skin=\"layered\" only (skin is \"halfspace\")", key));
+        return;
+      }
+    }
+    return;
+  }
+  if (!r.Raw("poisson").empty()) {
+    r.Fail("attribute `poisson` applies to skin=\"halfspace\" only; the layered skin takes its "
+           "Poisson's ratios from `layers` (and `base`)");
+    return;
+  }
+  // One number of a layer or of the base, with its valid range.
+  auto number = [&](const char* key, const std::string& what, const std::string& word, double lo,
+                    double hi, const char* units, double* v) {
+    double x;
+    if (!ToDouble(word, &x) || x <= lo || x > hi) {
+      r.Fail(Fmt("attribute `%s`: %s = '%s' is out of range; valid range (%g, %g] %s", key,
+                 what.c_str(), word.c_str(), lo, hi, units));
+      return false;
+    }
+    *v = x;
+    return true;
+  };
+  const std::string layers = r.Raw("layers");
+  if (!layers.empty()) {
+    std::string text = layers;
+    for (char& ch : text)
+      if (ch == ';' || ch == ',') ch = '\n';
+    std::istringstream groups(text);
+    std::string group;
+    std::vector<ElasticLayer> stack;
+    while (std::getline(groups, group)) {
+      const auto w = Words(group);
+      if (w.empty()) continue;
+      const int k = static_cast<int>(stack.size()) + 1;
+      if (w.size() != 3) {
+        r.Fail(Fmt("attribute `layers`: layer %d ('%s') needs 3 numbers: thickness (m), Young's "
+                   "modulus E (Pa), Poisson's ratio nu; layers are separated by ';'",
+                   k, Trim(group).c_str()));
+        return;
+      }
+      ElasticLayer l;
+      if (!number("layers", Fmt("layer %d thickness", k), w[0], 0, kMaxThicknessM, "m",
+                  &l.thickness_m) ||
+          !number("layers", Fmt("layer %d E", k), w[1], 0, kMaxYoungPa, "Pa", &l.young_pa) ||
+          !number("layers", Fmt("layer %d nu", k), w[2], -1, 0.5, "", &l.poisson))
+        return;
+      stack.push_back(l);
+    }
+    if (stack.empty()) {
+      r.Fail("attribute `layers` has no layer (empty stack); valid: 1 to 64 groups 'thickness E "
+             "nu' (m, Pa, -) separated by ';'");
+      return;
+    }
+    if (stack.size() > kMaxLayers) {
+      r.Fail(Fmt("attribute `layers` has %d layers; valid: 1 to 64",
+                 static_cast<int>(stack.size())));
+      return;
+    }
+    cfg->layers = stack;
+  }
+  const std::string base = r.Raw("base");
+  if (base == "rigid") {
+    cfg->base = LayeredBase{};
+  } else if (!base.empty()) {
+    const auto w = Words(base);
+    LayeredBase b;
+    b.rigid = false;
+    if (w.size() != 2) {
+      r.Fail(Fmt("attribute `base` = '%s' must be 'rigid' (bone) or 'E nu' (an elastic "
+                 "half-space: E in (0, %g] Pa, nu in (-1, 0.5])", base.c_str(), kMaxYoungPa));
+      return;
+    }
+    if (!number("base", "E", w[0], 0, kMaxYoungPa, "Pa", &b.young_pa) ||
+        !number("base", "nu", w[1], -1, 0.5, "", &b.poisson))
+      return;
+    cfg->base = b;
+  }
+  const std::string side = r.Raw("interface_side");
+  if (side == "upper") {
+    cfg->interface_side = InterfaceSide::kUpper;
+  } else if (side == "lower") {
+    cfg->interface_side = InterfaceSide::kLower;
+  } else if (!side.empty()) {
+    r.Fail(Fmt("attribute `interface_side` = '%s' is not one of: upper lower", side.c_str()));
+  }
+}
+
+bool NeedsMaterial(Quantity q) {
+  return q == Quantity::kStrainEnergy || q == Quantity::kCompressiveStrain;
+}
+
+// Receptor quantity from the stress; strain and SED from the material at the
+// receptor (the layer's E and nu).
+double QuantityAt(Quantity q, const Stress6& stress, const Material& m) {
+  switch (q) {
+    case Quantity::kStrainEnergy: return StrainEnergyDensity(stress, m);
+    case Quantity::kCompressiveStrain: {
+      const Stress6 strain = StrainFromStress(stress, m);
+      return ReceptorQuantity(Quantity::kMaxCompressive, strain.data());
+    }
+    default: return ReceptorQuantity(q, stress.data());
+  }
+}
+
+// Receptor depths inside the elastic skin; strain and SED need a material.
+bool CheckElasticSkin(const SkinConfig& cfg, std::string* error) {
+  std::unique_ptr<LayeredSubstrate> sub;
+  if (cfg.layered) {
+    std::string why;
+    sub = LayeredSubstrate::Create(cfg.layers, cfg.base, cfg.interface_side, &why);
+    if (!sub) {
+      *error = "mjtouch.skin: attribute `layers` / `base`: " + why;
+      return false;
+    }
+  }
+  for (int c = 0; c < kNumClasses; ++c) {
+    const ClassConfig& k = cfg.classes[c];
+    if (!k.present) continue;
+    const char* name = ClassName(static_cast<ReceptorClass>(c));
+    if (!sub) {
+      if (NeedsMaterial(k.quantity)) {
+        *error = Fmt("mjtouch.skin: attribute `quantity`: '%s' for %s needs skin=\"layered\" (a "
+                     "homogeneous half-space skin has no Young's modulus); valid with "
+                     "skin=\"halfspace\": szz maxcomp vonmises maxshear",
+                     QuantityName(k.quantity), name);
+        return false;
+      }
+      continue;
+    }
+    const std::string why = sub->CheckDepth(k.depth_m, cfg.interface_side);
+    if (!why.empty()) {
+      const bool upper = cfg.interface_side == InterfaceSide::kUpper;
+      *error = Fmt("mjtouch.skin: attribute `depth` entry %d (%s, %g m) is outside the elastic "
+                   "skin (%s); valid range (0, %g%s m for these `layers` over a rigid `base`%s",
+                   c + 1, name, k.depth_m, why.c_str(), sub->stack_depth_m(), upper ? "]" : ")",
+                   upper ? "" : " with interface_side=\"lower\"");
+      return false;
+    }
+  }
+  return true;
+}
+
 std::array<bool, kNumStress> ComponentsFor(Quantity q) {
   std::array<bool, kNumStress> w{};
   if (q == Quantity::kCompressiveSzz) {
@@ -160,7 +324,8 @@ std::string CacheKey(const SkinConfig& c) {
   s << c.grid.n << ' ' << c.grid.pitch_m << ' ' << static_cast<int>(c.pad.shape) << ' '
     << c.pad.semi_axes_m[0] << ' ' << c.pad.semi_axes_m[1] << ' ' << c.pad.semi_axes_m[2]
     << ' ' << c.ridges.enabled << ' ' << c.ridges.pitch_m << ' ' << c.ridges.height_m << ' '
-    << c.ridges.angle_rad << ' ' << c.stiffness_pa_per_m << ' ' << c.poisson << ' '
+    << c.ridges.angle_rad << ' ' << static_cast<int>(c.pressure_model) << ' ' << c.young_pa
+    << ' ' << c.tolerance << ' ' << c.stiffness_pa_per_m << ' ' << c.poisson << ' '
     << c.shear << ' ' << c.population_radius_m;
   for (const auto& k : c.classes)
     s << ' ' << k.present << ' ' << k.density_per_cm2 << ' ' << k.depth_m << ' '
@@ -173,6 +338,10 @@ std::string CacheKey(const SkinConfig& c) {
     << r.ra.refractory_s << ' ' << r.pc.gain_s_per_pa << ' ' << r.pc.highpass_hz << ' '
     << r.pc.tau_s << ' ' << r.pc.refractory_s;
   for (bool o : c.outputs) s << ' ' << o;
+  s << " skin " << c.layered << ' ' << c.base.rigid << ' ' << c.base.young_pa << ' '
+    << c.base.poisson << ' ' << static_cast<int>(c.interface_side) << ' '
+    << static_cast<int>(c.stress_method);
+  for (const auto& l : c.layers) s << ' ' << l.thickness_m << ' ' << l.young_pa << ' ' << l.poisson;
   return s.str();
 }
 
@@ -195,9 +364,10 @@ SkinConfig::SkinConfig() {
 const std::vector<const char*>& SkinAttributeKeys() {
   static const std::vector<const char*> keys = {
       "texture", "texture_group", "nx", "pitch", "ridges", "ridge_pitch", "ridge_height", "ridge_angle",
-      "stiffness", "poisson", "shear", "classes", "density", "depth", "quantity", "radius",
+      "pressure", "young", "tolerance", "stiffness", "poisson", "shear", "classes", "density", "depth", "quantity", "radius",
       "outputs", "sa1_merkel", "sa1_k0", "sa1_k1", "sa1_i0", "sa1_c", "sa1_r", "sa1_vth",
-      "ra_gain", "ra_tau", "pc_gain", "pc_tau", "pc_highpass", "refractory"};
+      "ra_gain", "ra_tau", "pc_gain", "pc_tau", "pc_highpass", "refractory", "visual",
+      "skin", "layers", "base", "interface_side", "stress_method"};
   return keys;
 }
 
@@ -212,9 +382,28 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
   double angle_deg = cfg->ridges.angle_rad * 180.0 / kPi;
   r.Number("ridge_angle", &angle_deg, -180, false, 180, false, "deg");
   cfg->ridges.angle_rad = angle_deg * kPi / 180.0;
+  const std::string pressure = r.Raw("pressure");
+  if (!pressure.empty() && !ParsePressureModel(pressure, &cfg->pressure_model)) {
+    r.Fail(Fmt("attribute `pressure` = '%s' is not a pressure model; valid: contacts winkler "
+               "elastic", pressure.c_str()));
+  }
+  r.Number("young", &cfg->young_pa, 0, true, 1e10, false, "Pa");
+  r.Number("tolerance", &cfg->tolerance, 0, true, 0.1, false, "");
   r.Number("stiffness", &cfg->stiffness_pa_per_m, 0, true, 1e12, false, "Pa/m");
   r.Number("poisson", &cfg->poisson, -1, true, 0.5, false, "");
   r.Bool("shear", &cfg->shear);
+  const std::string visual = r.Raw("visual");
+  if (!visual.empty()) {
+    static const char* kVisual[] = {"none", "pad", "above", "both"};
+    int k = -1;
+    for (int v = 0; v < 4; ++v)
+      if (visual == kVisual[v]) k = v;
+    if (k < 0) {
+      r.Fail(Fmt("attribute `visual` = '%s' is not one of: none pad above both", visual.c_str()));
+    } else {
+      cfg->visual = static_cast<VisualMode>(k);
+    }
+  }
   // Unset radius: 5 mm, shrunk to fit the grid and the pad (see SkinModel::Build).
   cfg->population_radius_m = -1.0;
   r.Number("radius", &cfg->population_radius_m, 0, false, 0.1, false, "m");
@@ -249,12 +438,14 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
   if (!quantity.empty()) {
     const auto w = Words(quantity);
     if (w.size() != kNumClasses) {
-      r.Fail("attribute `quantity` needs 3 names (SA1 RA PC); valid: szz maxcomp vonmises maxshear");
+      r.Fail("attribute `quantity` needs 3 names (SA1 RA PC); valid: szz maxcomp vonmises maxshear "
+             "sed strain");
     } else {
       for (int c = 0; c < kNumClasses && r.ok(); ++c) {
         if (!ParseQuantity(w[c], &cfg->classes[c].quantity)) {
           r.Fail(Fmt("attribute `quantity`: unknown quantity '%s' for %s; valid: szz maxcomp "
-                     "vonmises maxshear", w[c].c_str(), ClassName(static_cast<ReceptorClass>(c))));
+                     "vonmises maxshear sed strain", w[c].c_str(),
+                     ClassName(static_cast<ReceptorClass>(c))));
         }
       }
     }
@@ -305,7 +496,9 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
   double refractory = p.sa1.refractory_s;
   r.Number("refractory", &refractory, 0, true, 1, false, "s");
   p.sa1.refractory_s = p.ra.refractory_s = p.pc.refractory_s = refractory;
+  if (r.ok()) ParseElasticSkin(r, cfg);
   if (!r.ok()) return false;
+  if (!CheckElasticSkin(*cfg, error)) return false;
 
   // Cross-attribute checks.
   const double half = cfg->grid.HalfExtent();
@@ -427,9 +620,56 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
   }
   for (int c = 0; c < kNumClasses; ++c)
     model->want_.push_back(ComponentsFor(cfg.classes[c].quantity));
+  // The elastic skin, and the material at each class's depth.
+  if (!CheckElasticSkin(cfg, error)) return nullptr;
+  if (cfg.layered) {
+    std::string why;
+    std::shared_ptr<LayeredSubstrate> layered =
+        LayeredSubstrate::Create(cfg.layers, cfg.base, cfg.interface_side, &why);
+    if (!layered) {
+      *error = "mjtouch.skin: attribute `layers` / `base`: " + why;
+      return nullptr;
+    }
+    for (int c = 0; c < kNumClasses; ++c)
+      model->material_[c] = layered->MaterialAt(cfg.classes[c].depth_m,
+                                                cfg.interface_side == InterfaceSide::kUpper);
+    model->layered_ = layered.get();
+    model->substrate_ = std::move(layered);
+  } else {
+    model->substrate_ = std::make_shared<HalfSpace>(cfg.poisson);
+  }
+  for (const auto& s : model->sites_)
+    model->stress_sites_.push_back({s.i, s.j, s.depth_index, model->want_[static_cast<int>(s.cls)]});
   if (need_stress && !depths.empty()) {
-    HalfSpace half_space(cfg.poisson);
-    model->kernel_ = BuildKernelTables(half_space, cfg.grid.n, cfg.grid.pitch_m, depths, comps);
+    model->kernel_ = BuildKernelTables(*model->substrate_, cfg.grid.n, cfg.grid.pitch_m, depths,
+                                       comps);
+    // FFT spectra only where the FFT path can win (for the widest possible
+    // contact, every cell active) and fits in memory.
+    constexpr double kMaxSpectraBytes = 256.0 * 1024 * 1024;
+    const KernelTables& kt = *model->kernel_;
+    const double bytes = KernelSpectraBytes(kt, model->stress_sites_);
+    const StressCost widest =
+        EstimateStressCost(kt, model->stress_sites_, cfg.grid.n * cfg.grid.n, cfg.shear);
+    if (cfg.stress_method == StressMethod::kFft && bytes > kMaxSpectraBytes) {
+      *error = Fmt("mjtouch.skin: attribute `stress_method` = fft needs %.0f MiB of kernel spectra "
+                   "at nx = %d; the limit is %.0f MiB (use auto or direct)", bytes / 1048576.0,
+                   cfg.grid.n, kMaxSpectraBytes / 1048576.0);
+      return nullptr;
+    }
+    const bool fft = cfg.stress_method == StressMethod::kFft ||
+                     (cfg.stress_method == StressMethod::kAuto && bytes <= kMaxSpectraBytes &&
+                      widest.fft_s < widest.direct_s);
+    if (fft) model->spectra_ = BuildKernelSpectra(kt, model->stress_sites_);
+  }
+  if (cfg.pressure_model == PressureModel::kElastic) {
+    // Surface compliance of the skin: homogeneous half-space (young,
+    // poisson). For the layered skin the same table comes from
+    // LayeredSubstrate::SurfaceComplianceTable(pitch, n, &compliance).
+    std::vector<float> compliance;
+    HalfSpaceSurfaceComplianceTable(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m, cfg.grid.n,
+                                    &compliance);
+    model->elastic_ = std::make_shared<ElasticContact>(cfg.grid.n, cfg.grid.pitch_m,
+                                                       std::move(compliance));
   }
   cache[key] = model;
   return model;
@@ -438,9 +678,14 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
 std::string SkinModel::Describe() const {
   int count[kNumClasses] = {0, 0, 0};
   for (const auto& s : sites_) count[static_cast<int>(s.cls)]++;
-  return Fmt("mjtouch.skin: %dx%d taxels at %.3g mm, %d SA1 / %d RA / %d PC, kernel %.3f s",
-             cfg_.grid.n, cfg_.grid.n, cfg_.grid.pitch_m * 1e3, count[0], count[1], count[2],
-             kernel_ ? kernel_->build_seconds : 0.0);
+  return Fmt("mjtouch.skin: %dx%d taxels at %.3g mm, %d SA1 / %d RA / %d PC, kernel %.3f s "
+             "(%s%s)", cfg_.grid.n, cfg_.grid.n, cfg_.grid.pitch_m * 1e3, count[0], count[1],
+             count[2], kernel_build_seconds(), substrate_->Describe().c_str(),
+             spectra_ ? "; FFT spectra built" : "");
+}
+
+double SkinModel::kernel_build_seconds() const {
+  return (kernel_ ? kernel_->build_seconds : 0.0) + (spectra_ ? spectra_->build_seconds : 0.0);
 }
 
 void ResetState(const SkinModel& model, double* state) {
@@ -465,52 +710,22 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
   ws->quantity.assign(nrec, 0.0);
   TractionField& tf = ws->traction;
   bool touching = false;
-  if (in.in_contact && in.normal_force_n > 0.0 && !in.surfaces.empty()) {
-    // Warm start: the last step's indentation depth (approach minus smallest
-    // gap) bounds which cells can touch; cells provably above 1.5x that
-    // depth are not rendered. If the solved contact reaches the cull level,
-    // render everything and solve again, so the result is exact either way.
-    const bool warm = state[1] > 0.0;
-    const double depth_prev = state[0];
-    const double cull_rel = warm ? 1.5 * depth_prev + 20e-6 : kInfinity;
-    const double cull = RenderGap(cfg.grid, model.skin_z(), in.pad_pose, in.surfaces, cull_rel,
-                                  &ws->gap, &ws->coverage);
-    double gmin = kInfinity;
-    for (size_t i = 0; i < ws->gap.size(); ++i)
-      if (ws->coverage[i] > 0.0) gmin = std::min(gmin, ws->gap[i]);
-    const double guess = warm ? gmin + depth_prev : std::nan("");
-    touching = WinklerPressure(cfg.grid, ws->gap, ws->coverage, cfg.stiffness_pa_per_m,
-                               in.normal_force_n, guess, &tf);
-    if (touching && tf.approach_m >= cull) {
-      RenderGap(cfg.grid, model.skin_z(), in.pad_pose, in.surfaces, kInfinity, &ws->gap,
-                &ws->coverage);
-      touching = WinklerPressure(cfg.grid, ws->gap, ws->coverage, cfg.stiffness_pa_per_m,
-                                 in.normal_force_n, std::nan(""), &tf);
-    }
-    if (touching) {
-      gmin = kInfinity;
-      for (size_t i = 0; i < ws->gap.size(); ++i)
-        if (ws->coverage[i] > 0.0) gmin = std::min(gmin, ws->gap[i]);
-      state[0] = tf.approach_m - gmin;
-    }
-  }
+  // Stages 1-2: gap and tractions (skin_traction.cc).
+  touching = ComputeTraction(model, in, state, ws);
   if (touching) {
-    state[1] = 1.0;
-    if (cfg.shear) UniformSlipShear(cfg.grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
     const KernelTables* kt = model.kernel();
     if (kt) {
+      // Direct summation or FFT convolution, whichever is cheaper this step.
+      ws->stress.resize(nrec);
+      ws->last_stress_method = ComputeStresses(
+          *kt, model.spectra(), cfg.stress_method, model.stress_sites(), tf.runs,
+          tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
+          cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data());
       for (int r = 0; r < nrec; ++r) {
-        const ReceptorSite& s = sites[r];
-        const int c = static_cast<int>(s.cls);
-        Stress6 sig;
-        StressAtReceptor(*kt, s.depth_index, s.i, s.j, tf.runs, tf.pressure.data(),
-                         cfg.shear ? tf.shear_x.data() : nullptr,
-                         cfg.shear ? tf.shear_y.data() : nullptr, model.wanted(c), &sig);
-        ws->quantity[r] = ReceptorQuantity(cfg.classes[c].quantity, sig.data());
+        const int c = static_cast<int>(sites[r].cls);
+        ws->quantity[r] = QuantityAt(cfg.classes[c].quantity, ws->stress[r], model.material(c));
       }
     }
-  } else {
-    state[1] = 0.0;
   }
 
   // Receptors advance every step (membranes decay without contact).
@@ -550,7 +765,7 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
   }
   if (cfg.outputs[kOutPressure]) {
     const size_t N = cfg.grid.Size();
-    for (size_t i = 0; i < N; ++i) cursor[i] = touching ? tf.pressure[i] : 0.0;
+    for (size_t i = 0; i < N; ++i) cursor[i] = touching ? tf.pressure_pa[i] : 0.0;
     cursor += N;
   }
 }

@@ -16,8 +16,11 @@
 
 #include "grid.h"
 #include "kernel.h"
+#include "layered.h"
+#include "contact_solver.h"
 #include "pressure.h"
 #include "receptors.h"
+#include "stress_field.h"
 #include "surface.h"
 
 namespace mjtouch {
@@ -26,6 +29,9 @@ namespace mjtouch {
 enum OutputBlock { kOutSpikes = 0, kOutStress, kOutVoltage, kOutForce, kOutPressure, kNumOutputs };
 const char* OutputName(int block);
 constexpr int kForceBlockSize = 4;  // normal, tangential x, y (N, pad frame), indentation (m)
+
+// `visual` attribute: none, pad (on the skin), above (a copy over the pad), both.
+enum class VisualMode { kNone = 0, kPad, kAbove, kBoth };
 
 struct ClassConfig {
   bool present = true;
@@ -38,8 +44,19 @@ struct SkinConfig {
   TaxelGrid grid{128, 1e-4};
   PadGeometry pad;  // filled by the caller (MuJoCo: the pad geom's size)
   Ridges ridges;
+  PressureModel pressure_model = PressureModel::kWinkler;  // `pressure`
   double stiffness_pa_per_m = 2e7;  // Winkler foundation
+  double young_pa = 8e4;            // `elastic`: homogeneous skin (Shao 2010 epidermis)
+  double tolerance = 1e-6;          // `elastic`: relative L1 pressure change per iteration
   double poisson = 0.48;            // homogeneous skin (Shao 2010 epidermis)
+  // Elastic skin: a layered stack (`skin` = layered: `layers` over `base`,
+  // default the Shao et al. 2010 fingertip) or a homogeneous half-space
+  // (`skin` = halfspace, `poisson`).
+  bool layered = true;
+  std::vector<ElasticLayer> layers = LayeredSubstrate::ShaoFingertipLayers();
+  LayeredBase base = LayeredSubstrate::ShaoFingertipBase();
+  InterfaceSide interface_side = InterfaceSide::kUpper;
+  StressMethod stress_method = StressMethod::kAuto;  // `stress_method`
   bool shear = true;
   int texture_group = -1;  // non-colliding geoms in this group are textures (-1: none)
   double population_radius_m = 5e-3;  // receptors within this distance of the pole
@@ -47,6 +64,9 @@ struct SkinConfig {
   ClassConfig classes[kNumClasses];
   ReceptorParams receptor;
   bool outputs[kNumOutputs] = {true, true, false, true, false};
+  // Where the MuJoCo adapter draws the pressure heatmap and receptor flashes
+  // (drawing only: not part of the physics, nor of the kernel cache key).
+  VisualMode visual = VisualMode::kBoth;
 
   SkinConfig();
 };
@@ -61,7 +81,8 @@ bool FinalizeSkinConfig(SkinConfig* cfg, std::string* error);
 // All attribute keys, for plugin registration.
 const std::vector<const char*>& SkinAttributeKeys();
 
-constexpr int kStateHeader = 4;
+// Header: contact depth, contact valid, last time, time valid, contact level.
+constexpr int kStateHeader = 5;
 
 struct ReceptorSite {
   ReceptorClass cls;
@@ -91,6 +112,19 @@ class SkinModel {
   const std::vector<ReceptorSite>& receptors() const { return sites_; }
   const std::vector<double>& skin_z() const { return skin_z_; }
   const KernelTables* kernel() const { return kernel_.get(); }
+  const ElasticContact* elastic() const { return elastic_.get(); }
+  // The elastic skin (HalfSpace or LayeredSubstrate), its FFT spectra (null
+  // unless the FFT path can pay off), the receptor sites as the stress stage
+  // sees them, and the material at each class's depth (for `sed`, `strain`;
+  // zero for a half-space skin, which has no Young's modulus).
+  const Substrate& substrate() const { return *substrate_; }
+  const LayeredSubstrate* layered() const { return layered_; }
+  const KernelSpectra* spectra() const { return spectra_.get(); }
+  const std::vector<StressSite>& stress_sites() const { return stress_sites_; }
+  const Material& material(int c) const { return material_[c]; }
+  // Seconds spent building the kernel tables (and FFT spectra), once per
+  // configuration (cached: shared by every MjData of a model).
+  double kernel_build_seconds() const;
   int state_size() const { return StateSize(static_cast<int>(sites_.size())); }
   int output_size() const { return OutputSize(cfg_, static_cast<int>(sites_.size())); }
   std::string Describe() const;
@@ -102,6 +136,12 @@ class SkinModel {
   std::vector<ReceptorSite> sites_;
   std::vector<double> skin_z_;
   std::shared_ptr<const KernelTables> kernel_;
+  std::shared_ptr<const ElasticContact> elastic_;  // `elastic` model only
+  std::shared_ptr<const Substrate> substrate_;
+  const LayeredSubstrate* layered_ = nullptr;  // substrate_ if layered
+  std::shared_ptr<const KernelSpectra> spectra_;
+  std::vector<StressSite> stress_sites_;
+  Material material_[kNumClasses];
   std::vector<std::array<bool, kNumStress>> want_;  // per class
 };
 
@@ -112,6 +152,7 @@ struct StepInput {
   double normal_force_n = 0;   // total contact force on the pad along pad +z
   double shear_x_n = 0, shear_y_n = 0;  // along pad x, y
   bool in_contact = false;
+  std::vector<ContactPoint> contacts;  // MuJoCo's contacts on the pad (pad frame)
 };
 
 // Scratch owned per simulation (no state that outlives a step).
@@ -119,7 +160,23 @@ struct Workspace {
   std::vector<double> gap, coverage;
   TractionField traction;
   std::vector<double> quantity;  // per receptor
+  ElasticWork elastic;
+  std::vector<double> pressure_guess;  // `elastic` initial guess, n*n
+  std::vector<Stress6> stress;   // per receptor, Pa
+  StressScratch stress_scratch;
+  StressMethod last_stress_method = StressMethod::kDirect;
 };
+
+// The last step's spike count per receptor (nreceptor values inside `state`).
+inline const double* LastSpikes(const SkinModel& model, const double* state) {
+  return state + kStateHeader + model.receptors().size() * kReceptorStateSize;
+}
+
+// Stages 1-2 for one step (skin_traction.cc): render the gap and solve the
+// tractions into ws->traction with the configured pressure model. Reads and
+// updates the state header (contact depth, level, valid). Returns whether
+// the skin touches.
+bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state, Workspace* ws);
 
 // Reset the state array to its initial value.
 void ResetState(const SkinModel& model, double* state);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <sstream>
 
 namespace mjtouch {
@@ -204,11 +205,15 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
   p->pad_geom_ = pad;
   p->pad_body_ = m->body_weldid[m->geom_bodyid[pad]];
   p->texture_geoms_ = std::move(textures);
+  p->visual_ = cfg.visual;
   return p;
 }
 
 void SkinPlugin::Reset(const mjModel* m, mjtNum* plugin_state, int instance) {
   ResetState(*model_, plugin_state);
+  touching_ = false;
+  last_spike_time_s_.assign(model_->receptors().size(),
+                            -std::numeric_limits<double>::infinity());
 }
 
 void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
@@ -274,6 +279,11 @@ void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {
   mjtNum* state = d->plugin_state + m->plugin_stateadr[instance];
   mjtNum* out = d->sensordata + m->sensor_adr[sensor_id_];
   Step(*model_, input_, d->time, state, &workspace_, out);
+  // For drawing only: whether the field is live, and when each receptor last fired.
+  touching_ = state[1] > 0.0;
+  const double* spikes = LastSpikes(*model_, state);
+  for (size_t r = 0; r < last_spike_time_s_.size(); ++r)
+    if (spikes[r] > 0) last_spike_time_s_[r] = d->time;
 }
 
 void SkinPlugin::RegisterPlugin() {
@@ -317,6 +327,8 @@ void SkinPlugin::RegisterPlugin() {
     if (from && to && from != to) {
       to->input_ = from->input_;
       to->workspace_ = from->workspace_;
+      to->touching_ = from->touching_;
+      to->last_spike_time_s_ = from->last_spike_time_s_;
     }
   };
   plugin.reset = +[](const mjModel* m, mjtNum* plugin_state, void* plugin_data, int instance) {
@@ -326,6 +338,11 @@ void SkinPlugin::RegisterPlugin() {
   plugin.compute = +[](const mjModel* m, mjData* d, int instance, int capability_bit) {
     auto* p = reinterpret_cast<SkinPlugin*>(d->plugin_data[instance]);
     if (p) p->Compute(m, d, instance);
+  };
+  plugin.visualize = +[](const mjModel* m, mjData* d, const mjvOption* opt, mjvScene* scn,
+                         int instance) {
+    auto* p = reinterpret_cast<const SkinPlugin*>(d->plugin_data[instance]);
+    if (p) p->Visualize(m, d, opt, scn, instance);
   };
   mjp_registerPlugin(&plugin);
 }

@@ -38,6 +38,11 @@ class SkinPlugin {
 
   void Reset(const mjModel* m, mjtNum* plugin_state, int instance);
   void Compute(const mjModel* m, mjData* d, int instance);
+  // Draws the last pressure field as a heatmap (on the pad's skin and/or a
+  // copy above the pad, per the `visual` attribute) and receptor sites that
+  // flash for kFlashS after each spike (visualize.cc).
+  void Visualize(const mjModel* m, mjData* d, const mjvOption* opt, mjvScene* scn,
+                 int instance) const;
   const SkinModel& model() const { return *model_; }
 
  private:
@@ -53,6 +58,11 @@ class SkinPlugin {
   StepInput input_;
   Workspace workspace_;
   std::map<int, HeightFieldCache> hfields_;  // by hfield id, built on first use
+  // Drawing only (never read by the physics): the `visual` attribute, the
+  // contact state of the last evaluation and each receptor's last spike time.
+  VisualMode visual_ = VisualMode::kBoth;
+  bool touching_ = false;
+  std::vector<double> last_spike_time_s_;  // s, per receptor; -inf: none yet
 };
 
 }  // namespace mjtouch
