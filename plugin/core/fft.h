@@ -64,6 +64,15 @@ class Fft2D {
   // x < cols only (im may be null). No 1/(nx ny) factor.
   void Inverse(double* spec_re, double* spec_im, int rows, int cols, double* re, double* im,
                int stride, std::vector<double>* scratch) const;
+  // The same with row stride nx (arrays of the full transform size).
+  void Forward(const double* re, const double* im, int rows, int cols, double* spec_re,
+               double* spec_im, std::vector<double>* scratch) const {
+    Forward(re, im, nx_, rows, cols, spec_re, spec_im, scratch);
+  }
+  void Inverse(double* spec_re, double* spec_im, int rows, int cols, double* re, double* im,
+               std::vector<double>* scratch) const {
+    Inverse(spec_re, spec_im, rows, cols, re, im, nx_, scratch);
+  }
 
  private:
   int nx_, ny_;

@@ -1,9 +1,16 @@
 // Stage 2: contact pressure and shear traction on the taxel grid, consistent
 // with MuJoCo's contact force: the sum of pressure * cell area equals the
-// normal force and the sum of shear * cell area the tangential force.
+// normal force and the sum of shear * cell area the tangential force (to
+// round-off, in double precision). Three pressure models, an accuracy
+// ladder chosen per scene by the `pressure` attribute:
+//   contacts  MuJoCo's contact points splatted onto the grid (no geometry);
+//   winkler   elastic foundation: p proportional to the local overlap;
+//   elastic   boundary-element contact on the skin's surface compliance
+//             (contact_solver.h).
 #ifndef MJTOUCH_CORE_PRESSURE_H_
 #define MJTOUCH_CORE_PRESSURE_H_
 
+#include <string>
 #include <vector>
 
 #include "grid.h"
@@ -11,14 +18,35 @@
 
 namespace mjtouch {
 
+enum class PressureModel { kContacts = 0, kWinkler, kElastic };
+const char* PressureModelName(PressureModel m);
+bool ParsePressureModel(const std::string& name, PressureModel* m);
+
 struct TractionField {
-  std::vector<float> pressure;  // Pa, n*n, into the skin
-  std::vector<float> shear_x;   // Pa, n*n, along pad x
-  std::vector<float> shear_y;   // Pa, n*n, along pad y
-  ActiveRuns runs;              // cells with nonzero pressure, by grid row
+  std::vector<double> pressure_pa;  // Pa, n*n, into the skin (the output)
+  std::vector<double> shear_x_pa;   // Pa, n*n, along pad x
+  std::vector<double> shear_y_pa;   // Pa, n*n, along pad y
+  // float copies for the stress kernel (kernel.h)
+  std::vector<float> pressure, shear_x, shear_y;
+  ActiveRuns runs;              // cells with nonzero traction, by grid row
   double approach_m = 0;        // solved rigid approach of the pad
   int active_cells = 0;
 };
+
+// A MuJoCo contact on the pad, in the pad frame: position (m) and the force
+// on the pad (N; z along the pad's +z, i.e. pressing into the skin).
+struct ContactPoint {
+  double x_m = 0, y_m = 0;
+  double force_n[3] = {0, 0, 0};
+};
+
+// `contacts` model: each contact's force spread bilinearly onto the four
+// cells around its position (clamped into the grid), divided by the cell
+// area: pressure from the force's pad-z component, shear from its pad-x/y
+// components. Sums equal the contacts' total force exactly. Returns false
+// if the total normal force is not positive.
+bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& contacts,
+                   TractionField* out);
 
 // Winkler (elastic foundation) pressure p = k * coverage * max(c - gap, 0),
 // with the approach c solved so that sum(p * A) = normal_force_n exactly (up
@@ -30,10 +58,22 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap_m,
                      double normal_force_n, double approach_guess_m,
                      TractionField* out);
 
-// Full-slip shear traction: q = p * (F_t / F_n), so that sum(q * A) equals the
-// tangential force (ft_x, ft_y) (N, pad frame) exactly.
+// Full-slip Coulomb shear: q = p * (F_t / F_n) along the direction of
+// MuJoCo's friction force (for a rigid pad in gross slip the local slip
+// direction is the same everywhere), so that sum(q * A) equals the
+// tangential force (ft_x, ft_y) (N, pad frame) to round-off.
 void UniformSlipShear(const TaxelGrid& grid, double normal_force_n, double ft_x_n,
                       double ft_y_n, TractionField* field);
+
+// Set pressure_pa from a double field (n*n), zero where not positive.
+void SetPressure(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
+                 TractionField* out);
+// Scale pressure_pa (and shear) so that sum * A equals normal_force_n
+// exactly up to round-off; returns false if the sum is not positive.
+bool NormalizeLoad(const TaxelGrid& grid, double normal_force_n, TractionField* out);
+// Fill the float copies and the active runs (cells with any traction)
+// from the double fields; shear may be absent (empty vectors).
+void FinishTraction(const TaxelGrid& grid, TractionField* out);
 
 }  // namespace mjtouch
 

@@ -219,6 +219,7 @@ void SkinPlugin::Reset(const mjModel* m, mjtNum* plugin_state, int instance) {
 void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
   StepInput& in = input_;
   in.surfaces.clear();
+  in.contacts.clear();
   in.in_contact = false;
   const int pad = pad_geom_;
   const mjtNum* ppos = d->geom_xpos + 3 * pad;
@@ -241,6 +242,18 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     const mjtNum sign = (c.geom[1] == pad) ? 1 : -1;
     mju_addToScl3(total, f_world, sign);
     in.in_contact = true;
+    {  // the contact in the pad frame, for the `contacts` pressure model
+      mjtNum rel[3], loc[3], f_pad[3];
+      mju_sub3(rel, c.pos, ppos);
+      mju_mulMatTVec3(loc, pmat, rel);
+      mju_scl3(f_world, f_world, sign);
+      mju_mulMatTVec3(f_pad, pmat, f_world);
+      ContactPoint cp;
+      cp.x_m = loc[0];
+      cp.y_m = loc[1];
+      for (int k = 0; k < 3; ++k) cp.force_n[k] = f_pad[k];
+      in.contacts.push_back(cp);
+    }
     // Normal from the pad into the other geom.
     mjtNum n_into[3] = {c.frame[0] * -sign, c.frame[1] * -sign, c.frame[2] * -sign};
     bool seen = false;
