@@ -120,4 +120,8 @@ def _declare(lib: ctypes.CDLL) -> None:
         ctypes.c_char_p, ctypes.c_int, c_double_p, ctypes.c_int, ctypes.c_double, c_double_p,
         c_double_p, ctypes.c_char_p, ctypes.c_int]
     lib.mjtouch_check_config.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_int]
+    lib.mjtouch_surface_compliance.argtypes = [ctypes.c_double] * 3 + [ctypes.c_int, c_float_p]
+    lib.mjtouch_elastic_pressure.argtypes = [
+        ctypes.c_int, ctypes.c_int, ctypes.c_double, c_double_p, ctypes.c_double, ctypes.c_double,
+        ctypes.c_double, ctypes.c_int, ctypes.c_double, ctypes.c_int, c_double_p, c_double_p]
     lib.mjtouch_describe.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_int]
