@@ -1,0 +1,86 @@
+// Stage 3, per step: the stress tensor at receptor sites from the surface
+// tractions, through the lattice tables of kernel.h, by either path:
+//  - direct summation over the active cells (StressAtReceptor): cost
+//    ~ receptors x components x loads x active cells;
+//  - FFT convolution of the whole grid with each table (zero padded to
+//    N >= 2n - 1, so no wrap-around; fft.h): cost ~ N^2 log N per transform,
+//    independent of the contact size, and only the wanted components.
+// ComputeStresses picks the cheaper one per step from a cost model whose
+// constants were measured (examples/bench_kernel.py); the choice depends on
+// the inputs only, so runs stay deterministic. Pure C++: no MuJoCo types.
+#ifndef MJTOUCH_CORE_STRESS_FIELD_H_
+#define MJTOUCH_CORE_STRESS_FIELD_H_
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fft.h"
+#include "kernel.h"
+
+namespace mjtouch {
+
+enum class StressMethod { kAuto = 0, kDirect = 1, kFft = 2 };
+const char* StressMethodName(StressMethod m);
+bool ParseStressMethod(const std::string& s, StressMethod* m);
+
+// One receptor site: taxel cell above it, its depth's table, and the stress
+// components its receptor quantity needs.
+struct StressSite {
+  int i = 0, j = 0;
+  int depth_index = 0;
+  std::array<bool, kNumStress> want{};
+};
+
+// Spectra of the flipped lattice tables (float, split re / im), per depth and
+// (load, component) that some site wants. Shared read-only like the tables.
+struct KernelSpectra {
+  int n = 0;      // taxel grid
+  int fft_n = 0;  // padded size, >= 2 n - 1
+  std::unique_ptr<Fft2D> fft;
+  // [depth][load * kNumStress + comp]: re, im (fft->spectrum_size() each), or
+  // empty where no site wants the component.
+  std::vector<std::vector<std::vector<float>>> re, im;
+  std::vector<std::array<bool, kNumStress>> want;  // per depth
+  double build_seconds = 0;
+};
+
+// Components wanted at each depth (union over the sites).
+std::vector<std::array<bool, kNumStress>> WantedPerDepth(const KernelTables& kt,
+                                                         const std::vector<StressSite>& sites);
+
+std::shared_ptr<const KernelSpectra> BuildKernelSpectra(const KernelTables& kt,
+                                                        const std::vector<StressSite>& sites);
+
+// Bytes that BuildKernelSpectra would allocate.
+double KernelSpectraBytes(const KernelTables& kt, const std::vector<StressSite>& sites);
+
+// Estimated seconds per evaluation of each path (one core).
+struct StressCost {
+  double direct_s = 0, fft_s = 0;
+};
+StressCost EstimateStressCost(const KernelTables& kt, const std::vector<StressSite>& sites,
+                              int active_cells, bool shear);
+
+// Per-simulation scratch (no state that outlives a call).
+struct StressScratch {
+  std::vector<double> in_re, in_im, spec_re[3], spec_im[3], out_re, out_im, fft;
+};
+
+// Stress (Pa) at every site into out[site]. pressure / shear arrays: n*n,
+// row-major (j * n + i); shear may be null (both or neither). runs: the
+// cells with nonzero traction (direct path). kAuto picks by cost; kFft falls
+// back to direct when spectra is null. Returns the path taken.
+StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectra,
+                             StressMethod method, const std::vector<StressSite>& sites,
+                             const ActiveRuns& runs, const float* pressure, const float* shear_x,
+                             const float* shear_y, StressScratch* scratch, Stress6* out);
+
+// Active row runs of the cells where any traction is nonzero.
+void FindActiveRuns(int n, const float* pressure, const float* shear_x, const float* shear_y,
+                    ActiveRuns* runs);
+
+}  // namespace mjtouch
+
+#endif  // MJTOUCH_CORE_STRESS_FIELD_H_
