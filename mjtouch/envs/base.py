@@ -1,0 +1,272 @@
+"""Shared machinery of the mjtouch Gymnasium environments.
+
+A :class:`TouchEnv` owns one MuJoCo model with an ``mjtouch.skin`` fingertip
+and advances it one control step at a time with :func:`mujoco.rollout`
+(``frame_skip`` physics steps, open-loop inputs held over the control step),
+so that a batch of environments can be advanced the same way in one threaded
+call (:class:`mjtouch.envs.vector.RolloutVectorEnv`) with bit-identical
+results. Every control step starts the constraint solver's warm start from
+zero, in both paths, which is what makes them identical.
+
+Task logic lives in three hooks a subclass implements:
+``_task_reset`` (sample the episode, return the user inputs' template),
+``_inputs`` (action -> per-step inputs, or None to end without physics) and
+``_outcome`` (sensordata and states of the step -> reward, termination, info).
+
+Touch observations (documented per environment):
+
+- ``touch``: spike counts of each class (SA1, RA, PC) summed over the class's
+  receptors and the control step (``touch="counts"``), or the mean firing
+  rate per receptor in Hz (``touch="rates"``);
+- ``contact``: the skin's force block averaged over the control step:
+  normal force and tangential force along pad x and y (N);
+- ``pressure`` (only with ``pressure_image=p``): the taxel pressure at the
+  end of the control step, averaged into p x p blocks (kPa), row-major.
+
+``touch="none"`` builds the scene without the skin plugin (and these blocks
+from the observation): the same task with MuJoCo alone, the baseline for
+the benchmark and for showing what touch adds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import gymnasium as gym
+import mujoco
+import mujoco.rollout
+import numpy as np
+
+from mjtouch.sensor import CLASSES, SkinLayout
+
+TOUCH_MODES = ("counts", "rates", "none")
+FULLPHYSICS = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
+
+
+@dataclasses.dataclass(frozen=True)
+class ObsBlock:
+    name: str
+    size: int
+    units: str
+    meaning: str
+    low: float = -np.inf  # lower bound of every entry (upper: +inf)
+
+
+def check_choice(name: str, value: Any, choices: tuple) -> None:
+    if value not in choices:
+        raise ValueError(f"{name} = {value!r} is not one of {', '.join(map(repr, choices))}")
+
+
+def check_range(name: str, value: float, lo: float, hi: float, units: str = "") -> None:
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and lo <= value <= hi):
+        raise ValueError(f"{name} = {value!r} is out of range; valid range [{lo:g}, {hi:g}] {units}"
+                         .rstrip())
+
+
+class TouchEnv(gym.Env):
+    """Base class: a skin scene advanced by ``mujoco.rollout`` per control step."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
+
+    def __init__(self, xml: str, *, touch: str, pressure_image: int, frame_skip: int,
+                 user_spec: int, render_mode: str | None, render_size: tuple[int, int]):
+        check_choice("touch", touch, TOUCH_MODES)
+        if render_mode is not None:
+            check_choice("render_mode", render_mode, tuple(self.metadata["render_modes"]))
+        self.touch = touch
+        self.render_mode = render_mode
+        self._render_size = render_size
+        self.model = mujoco.MjModel.from_xml_string(xml)
+        self.data = mujoco.MjData(self.model)
+        self.frame_skip = int(frame_skip)
+        self.control_dt_s = self.frame_skip * self.model.opt.timestep
+        self.user_spec = int(user_spec)
+        self.nuser = mujoco.mj_stateSize(self.model, self.user_spec)
+        self.layout: SkinLayout | None = None
+        self._class_masks: list[np.ndarray] = []
+        self.pressure_image = int(pressure_image)
+        if touch != "none":
+            self.layout = SkinLayout.from_model(self.model)
+            self._class_masks = [self.layout.mask(c) for c in CLASSES]
+            if self.pressure_image:
+                nx = self.layout.nx
+                if "pressure" not in self.layout.blocks:
+                    raise ValueError("pressure_image needs the skin's `pressure` output block")
+                if self.pressure_image < 0 or nx % self.pressure_image:
+                    raise ValueError(f"pressure_image = {pressure_image} must divide the skin's "
+                                     f"nx = {nx} (e.g. {nx // 4}, {nx // 8})")
+        elif self.pressure_image:
+            raise ValueError('pressure_image needs touch; with touch="none" it must be 0')
+        self._runner = mujoco.rollout.Rollout(nthread=0)
+        self._zero_warmstart = np.zeros((1, self.model.nv))
+        self._state = np.zeros(mujoco.mj_stateSize(self.model, FULLPHYSICS))
+        self._renderer = None
+        self._blocks: list[ObsBlock] = []
+
+    # ----- observation layout ---------------------------------------------
+    def _touch_blocks(self) -> list[ObsBlock]:
+        if self.touch == "none":
+            return []
+        unit = "spikes" if self.touch == "counts" else "Hz"
+        what = ("spike count per class (SA1, RA, PC), summed over the class's receptors and the "
+                "control step" if self.touch == "counts" else
+                "mean firing rate per receptor of each class (SA1, RA, PC) over the control step")
+        blocks = [ObsBlock("touch", 3, unit, what, low=0.0),
+                  ObsBlock("contact", 3, "N", "skin force, mean over the control step: normal, "
+                           "tangential along pad x, along pad y")]
+        if self.pressure_image:
+            p = self.pressure_image
+            blocks.append(ObsBlock("pressure", p * p, "kPa",
+                                   f"taxel pressure at the end of the step, {p} x {p} block means",
+                                   low=0.0))
+        return blocks
+
+    def _set_blocks(self, blocks: list[ObsBlock]) -> None:
+        self._blocks = blocks
+        self.observation_blocks: dict[str, slice] = {}
+        start = 0
+        for b in blocks:
+            self.observation_blocks[b.name] = slice(start, start + b.size)
+            start += b.size
+        low = np.concatenate([np.full(b.size, b.low) for b in blocks])
+        self.observation_space = gym.spaces.Box(low, np.inf, (start,), np.float64)
+
+    def describe_observation(self) -> str:
+        """A table of the observation blocks (name, slice, units, meaning)."""
+        rows = [f"{'block':10s} {'slice':>9s}  {'units':7s} meaning"]
+        for b in self._blocks:
+            s = self.observation_blocks[b.name]
+            rows.append(f"{b.name:10s} {f'{s.start}:{s.stop}':>9s}  {b.units:7s} {b.meaning}")
+        return "\n".join(rows)
+
+    def split_observation(self, obs: np.ndarray) -> dict[str, np.ndarray]:
+        return {k: obs[..., s] for k, s in self.observation_blocks.items()}
+
+    def _touch_features(self, sensordata: np.ndarray | None) -> list[np.ndarray]:
+        if self.touch == "none":
+            return []
+        lay = self.layout
+        if sensordata is None:  # before the first step: no spikes, no force yet
+            out = [np.zeros(3), np.zeros(3)]
+            if self.pressure_image:
+                out.append(np.zeros(self.pressure_image ** 2))
+            return out
+        per_receptor = lay.block(sensordata, "spikes").sum(axis=0)
+        counts = np.array([per_receptor[m].sum() for m in self._class_masks])
+        if self.touch == "rates":
+            n = np.array([max(1, int(m.sum())) for m in self._class_masks])
+            counts = counts / (n * self.control_dt_s)
+        force = lay.block(sensordata, "force")[:, :3].mean(axis=0)
+        out = [counts, force]
+        if self.pressure_image:
+            nx, p = lay.nx, self.pressure_image
+            img = lay.block(sensordata[-1], "pressure").reshape(p, nx // p, p, nx // p)
+            out.append(img.mean(axis=(1, 3)).ravel() * 1e-3)
+        return out
+
+    # ----- physics ---------------------------------------------------------
+    def _initial_state(self, physics_state: np.ndarray) -> np.ndarray:
+        """A full-physics state at time 0 with the given physics (qpos, qvel,
+        act) and a fresh skin (plugin state reset)."""
+        mujoco.mj_resetData(self.model, self.data)
+        mujoco.mj_setState(self.model, self.data, physics_state, mujoco.mjtState.mjSTATE_PHYSICS)
+        state = np.empty_like(self._state)
+        mujoco.mj_getState(self.model, self.data, state, FULLPHYSICS)
+        return state
+
+    def _physics_state(self) -> np.ndarray:
+        spec = mujoco.mjtState.mjSTATE_PHYSICS
+        out = np.empty(mujoco.mj_stateSize(self.model, spec))
+        mujoco.mj_getState(self.model, self.data, out, spec)
+        return out
+
+    def _advance(self, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        states, sensordata = self._runner.rollout(
+            self.model, self.data, self._state[None], inputs[None], control_spec=self.user_spec,
+            initial_warmstart=self._zero_warmstart)
+        return states[0], sensordata[0]
+
+    def _qpos(self, state: np.ndarray, joint: str) -> float:
+        return float(state[1 + self.model.jnt_qposadr[self.model.joint(joint).id]])
+
+    def _qvel(self, state: np.ndarray, joint: str) -> float:
+        return float(state[1 + self.model.nq + self.model.jnt_dofadr[self.model.joint(joint).id]])
+
+    # ----- task hooks ------------------------------------------------------
+    def _task_reset(self, options: dict | None) -> None:
+        raise NotImplementedError
+
+    def _inputs(self, action: np.ndarray) -> np.ndarray | None:
+        raise NotImplementedError
+
+    def _outcome(self, states: np.ndarray | None, sensordata: np.ndarray | None,
+                 action: np.ndarray) -> tuple[np.ndarray, float, bool, dict]:
+        raise NotImplementedError
+
+    def _observe(self, states: np.ndarray | None, sensordata: np.ndarray | None) -> np.ndarray:
+        raise NotImplementedError
+
+    # ----- gymnasium API ---------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        self._task_reset(options)
+        obs = self._observe(None, None)
+        if self.render_mode is not None:
+            self._sync_render_data()
+        return obs, self._reset_info()
+
+    def _reset_info(self) -> dict:
+        return {}
+
+    def _check_action(self, action) -> np.ndarray:
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != self.action_space.shape:
+            raise ValueError(f"action has shape {a.shape}; expected {self.action_space.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action {a} is not finite")
+        return np.clip(a, self.action_space.low, self.action_space.high)
+
+    def step(self, action):
+        a = self._check_action(action)
+        inputs = self._inputs(a)
+        if inputs is None:
+            return self._finish(None, None, a)
+        states, sensordata = self._advance(inputs)
+        return self._finish(states, sensordata, a)
+
+    def _finish(self, states, sensordata, action):
+        if states is not None:
+            self._state = states[-1].copy()
+        obs, reward, terminated, info = self._outcome(states, sensordata, action)
+        return obs, float(reward), bool(terminated), False, info
+
+    # ----- rendering -------------------------------------------------------
+    def _sync_render_data(self) -> None:
+        mujoco.mj_setState(self.model, self.data, self._state, FULLPHYSICS)
+        mujoco.mj_forward(self.model, self.data)
+
+    def _camera(self) -> mujoco.MjvCamera:
+        cam = mujoco.MjvCamera()
+        mujoco.mjv_defaultFreeCamera(self.model, cam)
+        return cam
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn("render() called without render_mode; pass render_mode='rgb_array'")
+            return None
+        if self._renderer is None:
+            h, w = self._render_size
+            self._renderer = mujoco.Renderer(self.model, h, w)
+        self._sync_render_data()
+        self._renderer.update_scene(self.data, self._camera())
+        return self._renderer.render()
+
+    def close(self):
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        if self._runner is not None:
+            self._runner.close()
+            self._runner = None

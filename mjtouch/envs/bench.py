@@ -1,0 +1,109 @@
+"""Environment steps per second, with and without touch.
+
+``python -m mjtouch.envs.bench [--env ID] [--num-envs N] [--steps S]``
+
+Measures, in this process and on this machine:
+
+- one environment stepped alone, with touch (``touch="counts"``) and without
+  (``touch="none"``: the same scene without the skin plugin): the ratio is
+  what the skin costs;
+- N environments in :class:`~mjtouch.envs.vector.RolloutVectorEnv` (one
+  threaded ``mujoco.rollout`` call per control step) and in Gymnasium's
+  ``SyncVectorEnv``, with touch.
+
+Random actions (TextureExplore never commits, so episodes run to the limit).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import mjtouch.envs  # noqa: F401  (registers the ids)
+
+
+def _actions(space: gym.Space, n: int, env_id: str, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    a = rng.uniform(space.low, space.high, (n,) + space.shape).astype(space.dtype)
+    if "TextureExplore" in env_id:
+        a[..., 2] = -1.0  # never commit: episodes run to the time limit
+    return a
+
+
+def single_steps_per_s(env_id: str, steps: int, seed: int = 0, **kwargs) -> float:
+    env = gym.make(env_id, **kwargs)
+    actions = _actions(env.action_space, steps, env_id, seed)
+    env.reset(seed=seed)
+    t0 = time.perf_counter()
+    for a in actions:
+        _, _, term, trunc, _ = env.step(a)
+        if term or trunc:
+            env.reset()
+    wall = time.perf_counter() - t0
+    env.close()
+    return steps / wall
+
+
+def vector_steps_per_s(env_id: str, num_envs: int, steps: int, mode: str, seed: int = 0,
+                       **kwargs) -> float:
+    """Env steps per second (num_envs x vector steps / wall)."""
+    venv = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode=mode, **kwargs)
+    actions = _actions(venv.action_space, steps, env_id, seed)
+    venv.reset(seed=seed)
+    t0 = time.perf_counter()
+    for a in actions:
+        venv.step(a)
+    wall = time.perf_counter() - t0
+    venv.close()
+    return num_envs * steps / wall
+
+
+def benchmark(env_id: str = "mjtouch/TextureExplore-v0", num_envs: int = 4, steps: int = 200,
+              seed: int = 0) -> dict:
+    if steps < 1 or num_envs < 1:
+        raise ValueError(f"steps = {steps} and num_envs = {num_envs} must be >= 1")
+    touch = single_steps_per_s(env_id, steps, seed)
+    none = single_steps_per_s(env_id, steps, seed, touch="none")
+    vec_steps = max(1, steps // num_envs)
+    rollout = vector_steps_per_s(env_id, num_envs, vec_steps, "vector_entry_point", seed)
+    sync = vector_steps_per_s(env_id, num_envs, vec_steps, "sync", seed)
+    return {
+        "env": env_id,
+        "single_touch_steps_per_s": touch,
+        "single_no_touch_steps_per_s": none,
+        "touch_over_no_touch": touch / none,
+        "num_envs": num_envs,
+        "rollout_vector_steps_per_s": rollout,
+        "sync_vector_steps_per_s": sync,
+        "rollout_over_sync": rollout / sync,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m mjtouch.envs.bench", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--env", default="mjtouch/TextureExplore-v0", choices=sorted(mjtouch.envs.ENV_IDS))
+    p.add_argument("--num-envs", type=int, default=4)
+    p.add_argument("--steps", type=int, default=200, help="env steps per measurement")
+    p.add_argument("--json", action="store_true")
+    args = p.parse_args(argv)
+    r = benchmark(args.env, args.num_envs, args.steps)
+    if args.json:
+        print(json.dumps(r))
+        return 0
+    print(f"{r['env']}: env steps per second (control step 10 ms, {args.steps} steps each)")
+    print(f"  single env, touch      {r['single_touch_steps_per_s']:10.1f}")
+    print(f"  single env, no touch   {r['single_no_touch_steps_per_s']:10.1f}   "
+          f"(touch / no touch = {r['touch_over_no_touch']:.4f})")
+    print(f"  {r['num_envs']} envs, rollout      {r['rollout_vector_steps_per_s']:10.1f}")
+    print(f"  {r['num_envs']} envs, sync         {r['sync_vector_steps_per_s']:10.1f}   "
+          f"(rollout / sync = {r['rollout_over_sync']:.2f})")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,228 @@
+"""``mjtouch/SlipHold-v0``: hold an object with as little force as possible.
+
+The fingertip pinches a block against a frictionless wall; gravity and an
+external load pull the block down, and only the friction at the fingertip
+holds it: it holds while the load stays under mu x grip force. Each episode
+draws the friction coefficient mu, a base load, and a rise of the load over
+a random interval at a random time (an object being filled, say). Neither is observed: the skin must tell
+when the object starts to slip (the tangential force approaching mu x normal
+force, and the burst of RA/PC spikes as the block's textured face slides over
+the skin). Without touch the only safe policy is the worst-case grip.
+
+Action (Box, [-1, 1]): grip force, -1 -> ``force_range_n[0]``, +1 -> ``force_range_n[1]`` (N).
+
+Observation (Box, float64), blocks in this order (``env.unwrapped.describe_observation()``):
+
+| block | size | units | meaning |
+|---|---|---|---|
+| ``grip`` | 3 | m, m/s, N | fingertip position (towards the wall, from its start), velocity, grip force applied |
+| ``touch`` | 3 | spikes or Hz | SA1, RA, PC spike counts over the control step (or rates) |
+| ``contact`` | 3 | N | skin force (normal; tangential along pad x = up, along pad y), mean over the step |
+| ``pressure`` | p*p | kPa | optional, ``pressure_image=p``: end-of-step pressure, p x p |
+
+``touch="none"``: only ``grip`` (the skin is not in the scene).
+
+Reward per control step: ``-force_cost * grip force (N) - slip_cost * slip (mm)``
+(slip: how far the block moved down in the step). The episode terminates
+with ``-drop_penalty`` when the block has slipped ``drop_m`` below where it
+started, and is truncated by the time limit (100 control steps = 1 s).
+"""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+
+from mjtouch import scenes
+from mjtouch.envs.base import ObsBlock, TouchEnv, check_range
+from mjtouch.envs.texture_explore import env_fingertip
+
+BLOCK_HALF_M = (0.01, 0.015, 0.02)  # the held block's half sizes (x: towards the wall)
+BLOCK_MASS_KG = 0.02
+GRATING_PERIOD_M = 1e-3  # ridges across the block's face, perpendicular to slip
+PAD_FRICTION = 0.1  # below every block friction, so the block's sets the contact's
+
+
+def slip_hold_xml(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3,
+                  skin: bool = True) -> str:
+    """A block between the fingertip pad (pressing along +x) and a wall."""
+    tip = tip or env_fingertip()
+    tip.validate()
+    a, b, c = tip.semi_axes_m
+    bx, by, bz = BLOCK_HALF_M
+    length = 2 * bz + 0.02
+    tex = scenes.Texture(period_m=GRATING_PERIOD_M, length_m=length, resolution_m=5e-5)
+    x = np.linspace(-length / 2, length / 2, tex.ncol)
+    row = tex.profile(x) / tex.height_m
+    elevation = " ".join(f"{v:.4g}" for v in np.concatenate([row, row]))
+    cfg = scenes.skin_config(tip)
+    config = "\n".join(f'        <config key="{k}" value="{v}"/>' for k, v in cfg.items())
+    # The finger's frame: pad -z (the skin) along world +x, pad x along world +z.
+    return f"""<mujoco model="mjtouch_slip_hold">
+  <!-- impratio: stiff friction, so a held block creeps < 0.1 mm/s (MuJoCo's
+       soft friction otherwise lets it slide at ~mm/s under any grip) -->
+  <option timestep="{timestep_s:.9g}" integrator="implicitfast" cone="elliptic" impratio="100"/>
+  <visual><global offwidth="640" offheight="480"/></visual>
+{'  <extension><plugin plugin="mjtouch.skin"/></extension>' if skin else ''}
+  <asset>
+    <hfield name="face" nrow="2" ncol="{tex.ncol}" size="{length / 2:.9g} {by:.9g} {tex.height_m:.9g} 0.001"
+            elevation="{elevation}"/>
+  </asset>
+  <worldbody>
+    <light pos="0 -0.3 0.3" dir="0 1 -1"/>
+    <geom name="wall" type="box" size="0.005 0.03 0.04" pos="{bx + 0.005:.9g} 0 0"
+          priority="2" condim="1" rgba="0.55 0.6 0.65 1"/>
+    <body name="object" pos="0 0 0">
+      <joint name="object_x" type="slide" axis="1 0 0" damping="0.1"/>
+      <joint name="object_z" type="slide" axis="0 0 1"/>
+      <geom name="object" type="box" size="{bx:.9g} {by:.9g} {bz:.9g}" mass="{BLOCK_MASS_KG}"
+            friction="0.5 0.005 0.0001" rgba="0.3 0.5 0.8 1"/>
+      <geom name="face" type="hfield" hfield="face" pos="{-bx:.9g} 0 0" euler="0 -90 0"
+            contype="0" conaffinity="0" group="{scenes.TEXTURE_GROUP}" rgba="0.25 0.4 0.7 1"/>
+    </body>
+    <body name="finger" pos="{-(bx + c + 3e-4):.9g} 0 0" euler="0 -90 0" gravcomp="1">
+      <joint name="grip" type="slide" axis="0 0 -1" damping="2"/>
+      <geom name="pad" type="ellipsoid" size="{a:.9g} {b:.9g} {c:.9g}" mass="{tip.mass_kg:.9g}"
+            friction="{PAD_FRICTION} 0.005 0.0001" solref="{scenes.CONTACT_SOLREF}"
+            solimp="{scenes.CONTACT_SOLIMP}" rgba="0.93 0.72 0.62 1"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor name="grip" joint="grip" ctrlrange="0 5"/>
+  </actuator>
+{f'''  <sensor>
+    <plugin name="skin" plugin="mjtouch.skin" objtype="geom" objname="pad">
+{config}
+    </plugin>
+  </sensor>''' if skin else ''}
+</mujoco>
+"""
+
+
+class SlipHoldEnv(TouchEnv):
+    __doc__ = __doc__
+
+    def __init__(self, *, touch: str = "counts", pressure_image: int = 0,
+                 force_range_n=(0.05, 2.0), friction_range=(0.5, 1.0),
+                 base_load_range_n=(0.0, 0.1), rise_load_range_n=(0.1, 0.4),
+                 rise_start_range_s=(0.2, 0.6), rise_time_range_s=(0.1, 0.3), control_dt_s: float = 0.01,
+                 timestep_s: float = 1e-3, force_cost: float = 0.01, slip_cost: float = 0.1,
+                 drop_m: float = 5e-3, drop_penalty: float = 5.0, settle_force_n: float = 1.5,
+                 render_mode: str | None = None, render_size=(480, 640)):
+        def pair(name, v, lo, hi, units):
+            v0, v1 = (float(x) for x in v)
+            check_range(f"{name}[0]", v0, lo, hi, units)
+            check_range(f"{name}[1]", v1, v0, hi, units)
+            return v0, v1
+        self.force_range_n = pair("force_range_n", force_range_n, 0.0, 5.0, "N")
+        self.friction_range = pair("friction_range", friction_range, 2 * PAD_FRICTION, 2.0, "")
+        self.base_load_range_n = pair("base_load_range_n", base_load_range_n, 0.0, 2.0, "N")
+        self.rise_load_range_n = pair("rise_load_range_n", rise_load_range_n, 0.0, 2.0, "N")
+        self.rise_start_range_s = pair("rise_start_range_s", rise_start_range_s, 0.0, 100.0, "s")
+        self.rise_time_range_s = pair("rise_time_range_s", rise_time_range_s, 1e-3, 100.0, "s")
+        check_range("timestep_s", timestep_s, 1e-4, 2e-3, "s")
+        check_range("control_dt_s", control_dt_s, timestep_s, 0.1, "s")
+        check_range("force_cost", force_cost, 0.0, 100.0)
+        check_range("slip_cost", slip_cost, 0.0, 100.0)
+        check_range("drop_m", drop_m, 1e-4, 0.02, "m")
+        check_range("drop_penalty", drop_penalty, 0.0, 1e3)
+        check_range("settle_force_n", settle_force_n, 0.1, 5.0, "N")
+        frame_skip = round(control_dt_s / timestep_s)
+        if not math.isclose(frame_skip * timestep_s, control_dt_s, rel_tol=1e-9):
+            raise ValueError(f"control_dt_s = {control_dt_s} must be a multiple of timestep_s = "
+                             f"{timestep_s}")
+        outputs = "spikes force pressure" if pressure_image else "spikes force"
+        xml = slip_hold_xml(env_fingertip(outputs=outputs), timestep_s, skin=touch != "none")
+        spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED
+        super().__init__(xml, touch=touch, pressure_image=pressure_image, frame_skip=frame_skip,
+                         user_spec=int(spec), render_mode=render_mode, render_size=render_size)
+        self.force_cost, self.slip_cost = float(force_cost), float(slip_cost)
+        self.drop_m, self.drop_penalty = float(drop_m), float(drop_penalty)
+        self.settle_force_n = float(settle_force_n)
+        m = self.model
+        self._object_body = m.body("object").id
+        self._object_geom = m.geom("object").id
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+        self._set_blocks([ObsBlock("grip", 3, "m, m/s, N", "fingertip position towards the wall "
+                                   "(from its start), velocity, grip force applied")]
+                         + self._touch_blocks())
+        self._settled = self._settle()
+        self._z0 = self._qpos(np.concatenate([[0.0], self._settled]), "object_z")
+        self._x0 = self._qpos(np.concatenate([[0.0], self._settled]), "grip")
+        self.friction = self.friction_range[1]
+        self._load = (0.0, 0.0, 0.0, 1.0)  # N, N, s, s: base, rise, rise start, rise time
+        self._grip = self.settle_force_n
+
+    def _settle(self, duration_s: float = 0.2) -> np.ndarray:
+        """Physics state with the block gripped at settle_force_n, at rest."""
+        m, d = self.model, self.data
+        m.geom_friction[self._object_geom, 0] = self.friction_range[1]
+        mujoco.mj_resetData(m, d)
+        d.ctrl[:] = self.settle_force_n
+        for _ in range(round(duration_s / m.opt.timestep)):
+            mujoco.mj_step(m, d)
+        return self._physics_state()
+
+    def load_n(self, time_s: np.ndarray | float) -> np.ndarray:
+        """External load on the block (N, downwards) at time_s; gravity comes on top."""
+        base, rise, t0, duration = self._load
+        return base + rise * np.clip((np.asarray(time_s) - t0) / duration, 0.0, 1.0)
+
+    def _task_reset(self, options):
+        if options:
+            raise ValueError(f"unknown reset options {sorted(options)}; SlipHold takes none")
+        rng = self.np_random
+        self.friction = float(rng.uniform(*self.friction_range))
+        self._load = (float(rng.uniform(*self.base_load_range_n)),
+                      float(rng.uniform(*self.rise_load_range_n)),
+                      float(rng.uniform(*self.rise_start_range_s)),
+                      float(rng.uniform(*self.rise_time_range_s)))
+        self.model.geom_friction[self._object_geom, 0] = self.friction
+        self._state = self._initial_state(self._settled)
+        self._grip = self.settle_force_n
+        self._z_last = self._z0
+
+    def _reset_info(self) -> dict:
+        return self._info(0.0)
+
+    def _info(self, slip_m: float) -> dict:
+        t = float(self._state[0])
+        return {"friction": self.friction, "load_n": float(self.load_n(t)),
+                "total_load_n": float(self.load_n(t)) + BLOCK_MASS_KG * -self.model.opt.gravity[2],
+                "grip_force_n": self._grip, "slip_m": slip_m,
+                "object_drop_m": self._z0 - self._qpos(self._state, "object_z")}
+
+    def _inputs(self, a: np.ndarray) -> np.ndarray:
+        lo, hi = self.force_range_n
+        self._grip = lo + 0.5 * (float(a[0]) + 1.0) * (hi - lo)
+        m = self.model
+        t = self._state[0] + m.opt.timestep * np.arange(self.frame_skip)
+        xfrc = np.zeros((self.frame_skip, m.nbody, 6))
+        xfrc[:, self._object_body, 2] = -self.load_n(t)
+        ctrl = np.full((self.frame_skip, m.nu), self._grip)
+        return np.concatenate([ctrl, xfrc.reshape(self.frame_skip, -1)], axis=1)
+
+    def _observe(self, states, sensordata) -> np.ndarray:
+        s = self._state
+        grip = [self._qpos(s, "grip") - self._x0, self._qvel(s, "grip"), self._grip]
+        return np.concatenate([grip, *self._touch_features(sensordata)])
+
+    def _outcome(self, states, sensordata, a):
+        z_end = self._qpos(self._state, "object_z")
+        slip = max(0.0, self._z_last - z_end)  # how far the block moved down this step
+        self._z_last = z_end
+        reward = -self.force_cost * self._grip - self.slip_cost * slip * 1e3
+        terminated = self._z0 - z_end >= self.drop_m
+        if terminated:
+            reward -= self.drop_penalty
+        return self._observe(states, sensordata), reward, terminated, self._info(slip)
+
+    def _camera(self) -> mujoco.MjvCamera:
+        cam = mujoco.MjvCamera()
+        cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+        cam.lookat[:] = [-0.006, 0.0, 0.0]
+        cam.distance, cam.elevation, cam.azimuth = 0.07, -20.0, 60.0
+        return cam

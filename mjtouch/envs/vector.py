@@ -1,0 +1,136 @@
+"""Batched stepping over ``mujoco.rollout`` threads.
+
+:class:`RolloutVectorEnv` holds N environments of one class and advances all
+that need physics in a single threaded ``mujoco.rollout`` call per control
+step; task logic (actions to inputs, observations, rewards) runs per
+environment in Python. Each environment's results are bit-identical to
+stepping it alone (both paths start every control step from the same state
+with a zero solver warm start). It is the registered ``vector_entry_point``,
+so ``gymnasium.make_vec("mjtouch/TextureExplore-v0", num_envs=8)`` returns it;
+``vectorization_mode="sync"`` or ``"async"`` give Gymnasium's own.
+
+Autoreset follows Gymnasium's default (``AutoresetMode.NEXT_STEP``): the step
+after an episode ends resets that environment and returns its first
+observation with reward 0.
+"""
+
+from __future__ import annotations
+
+import os
+
+import gymnasium as gym
+import mujoco
+import mujoco.rollout
+import numpy as np
+from gymnasium.vector import AutoresetMode
+from gymnasium.vector.utils import batch_space
+
+from mjtouch.envs.base import TouchEnv
+
+
+class RolloutVectorEnv(gym.vector.VectorEnv):
+    def __init__(self, env_cls: type[TouchEnv], num_envs: int, *,
+                 max_episode_steps: int | None = None, nthread: int | None = None, **env_kwargs):
+        if not (isinstance(num_envs, int) and num_envs >= 1):
+            raise ValueError(f"num_envs = {num_envs!r} must be a positive integer")
+        if max_episode_steps is not None and max_episode_steps < 1:
+            raise ValueError(f"max_episode_steps = {max_episode_steps} must be >= 1 or None")
+        if env_kwargs.get("render_mode") is not None:
+            raise ValueError("RolloutVectorEnv does not render; render a single environment")
+        env_kwargs.pop("render_mode", None)
+        if nthread is None:
+            nthread = min(num_envs, os.cpu_count() or 1)
+        if not (isinstance(nthread, int) and nthread >= 0):
+            raise ValueError(f"nthread = {nthread!r} must be a non-negative integer")
+        self.envs = [env_cls(**env_kwargs) for _ in range(num_envs)]
+        e0 = self.envs[0]
+        self.num_envs = num_envs
+        self.single_observation_space = e0.observation_space
+        self.single_action_space = e0.action_space
+        self.observation_space = batch_space(e0.observation_space, num_envs)
+        self.action_space = batch_space(e0.action_space, num_envs)
+        self.metadata = {**e0.metadata, "autoreset_mode": AutoresetMode.NEXT_STEP}
+        self.render_mode = None
+        self.max_episode_steps = max_episode_steps
+        self.nthread = nthread
+        self._pool = mujoco.rollout.Rollout(nthread=nthread)
+        self._datas = [mujoco.MjData(e0.model) for _ in range(max(1, nthread))]
+        self._elapsed = np.zeros(num_envs, dtype=np.int64)
+        self._autoreset = np.zeros(num_envs, dtype=bool)
+
+    def reset(self, *, seed=None, options=None):
+        if seed is None:
+            seeds = [None] * self.num_envs
+        elif isinstance(seed, (int, np.integer)):
+            seeds = [int(seed) + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"{len(seeds)} seeds for {self.num_envs} environments")
+        obs, infos = [], {}
+        for i, (env, s) in enumerate(zip(self.envs, seeds)):
+            o, info = env.reset(seed=s, options=options)
+            obs.append(o)
+            infos = self._add_info(infos, info, i)
+        self._elapsed[:] = 0
+        self._autoreset[:] = False
+        return np.stack(obs), infos
+
+    def step(self, actions):
+        actions = np.asarray(actions)
+        n = self.num_envs
+        if actions.shape[0] != n:
+            raise ValueError(f"actions has {actions.shape[0]} rows for {n} environments")
+        obs = np.zeros((n,) + self.single_observation_space.shape)
+        rewards = np.zeros(n)
+        terminated = np.zeros(n, dtype=bool)
+        truncated = np.zeros(n, dtype=bool)
+        infos: dict = {}
+        batch = []  # (env index, inputs, clipped action)
+        results = {}
+        for i, env in enumerate(self.envs):
+            if self._autoreset[i]:
+                o, info = env.reset()
+                obs[i] = o
+                self._elapsed[i] = 0
+                infos = self._add_info(infos, info, i)
+                continue
+            a = env._check_action(actions[i])
+            inputs = env._inputs(a)
+            if inputs is None:
+                results[i] = env._finish(None, None, a)
+            else:
+                batch.append((i, inputs, a))
+        if batch:
+            envs = [self.envs[i] for i, _, _ in batch]
+            states, sensordata = self._pool.rollout(
+                [e.model for e in envs], self._datas, np.stack([e._state for e in envs]),
+                np.stack([u for _, u, _ in batch]), control_spec=envs[0].user_spec,
+                initial_warmstart=np.zeros((len(batch), envs[0].model.nv)))
+            for k, (i, _, a) in enumerate(batch):
+                results[i] = self.envs[i]._finish(states[k], sensordata[k], a)
+        for i, (o, r, term, trunc, info) in results.items():
+            self._elapsed[i] += 1
+            if self.max_episode_steps is not None and self._elapsed[i] >= self.max_episode_steps:
+                trunc = True
+            obs[i], rewards[i], terminated[i], truncated[i] = o, r, term, trunc
+            infos = self._add_info(infos, info, i)
+        self._autoreset = terminated | truncated
+        return obs, rewards, terminated, truncated, infos
+
+    def close_extras(self, **kwargs):
+        for env in self.envs:
+            env.close()
+        if self._pool is not None:
+            self._pool.close()
+            self._pool = None
+
+
+def texture_explore_vec(num_envs: int = 1, **kwargs) -> RolloutVectorEnv:
+    from mjtouch.envs.texture_explore import TextureExploreEnv
+    return RolloutVectorEnv(TextureExploreEnv, num_envs, **kwargs)
+
+
+def slip_hold_vec(num_envs: int = 1, **kwargs) -> RolloutVectorEnv:
+    from mjtouch.envs.slip_hold import SlipHoldEnv
+    return RolloutVectorEnv(SlipHoldEnv, num_envs, **kwargs)
