@@ -25,9 +25,13 @@ CASES = [
     ({"sa1_c": "-1e-12"}, "`sa1_c`", "(0, 1]"),
     ({"refractory": "0"}, "`refractory`", "(0, 1]"),
     ({"texture": "nonexistent"}, "`texture`", "does not exist"),
-    ({"texture": "plate_sphere"}, "`texture`", "must be an hfield, plane or box"),
+    ({"texture": "pad"}, "`texture` geom 'pad'", "moves with the pad"),
     ({"texture_group": "9"}, "`texture_group`", "[0, 5]"),
-    ({"texture_group": "0"}, "'plate_sphere' in `texture_group` 0", "must be an hfield, plane or box"),
+    ({"nx": "1024"}, "`nx`", "[4, 512]"),
+    ({"pressure": "fem"}, "`pressure`", "valid: contacts winkler elastic"),
+    ({"young": "0"}, "`young`", "(0, 1e+10]"),
+    ({"tolerance": "0"}, "`tolerance`", "(0, 0.1]"),
+    ({"ridge_profile": "zigzag"}, "`ridge_profile`", "valid: sine triangle square"),
 ]
 
 
@@ -45,9 +49,25 @@ def test_unknown_attribute_fails_at_compile():
         mujoco.MjModel.from_xml_string(pad_scene({"bogus": "1"}))
 
 
-def test_pad_must_be_sphere_or_ellipsoid():
-    with pytest.raises(ValueError, match="must be a sphere or an ellipsoid"):
-        mujoco.MjModel.from_xml_string(pad_scene(pad='type="box" size="0.008 0.007 0.007"'))
+def test_pad_must_be_sphere_ellipsoid_capsule_or_box():
+    with pytest.raises(ValueError, match="must be a sphere, ellipsoid, capsule or box"):
+        mujoco.MjModel.from_xml_string(pad_scene(pad='type="cylinder" size="0.008 0.007"'))
+
+
+def test_sdf_texture_cannot_be_rendered():
+    # an sdf geom (MuJoCo's torus plugin) in the texture group: no geometry
+    # the skin can query
+    torus = ('<plugin plugin="mujoco.sdf.torus"><instance name="torus">'
+             '<config key="radius1" value="0.01"/><config key="radius2" value="0.003"/>'
+             '</instance></plugin>')
+    xml = pad_scene({"texture_group": "2"}, extra=(
+        '<geom name="knob" type="sdf" mesh="torus" group="2" contype="0" conaffinity="0" '
+        'pos="0.03 0 0.01"><plugin instance="torus"/></geom>'))
+    xml = xml.replace('<extension><plugin plugin="mjtouch.skin"/></extension>',
+                      f'<extension><plugin plugin="mjtouch.skin"/>{torus}</extension>'
+                      '<asset><mesh name="torus"><plugin instance="torus"/></mesh></asset>')
+    with pytest.raises(ValueError, match="geom 'knob' in `texture_group` 2 cannot be rendered"):
+        mujoco.MjModel.from_xml_string(xml)
 
 
 def test_sensor_must_name_a_geom():

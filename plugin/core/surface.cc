@@ -52,16 +52,108 @@ double Overlap1D(double a0, double a1, double b0, double b1) {
 
 }  // namespace
 
+const char* RidgeProfileName(RidgeProfile p) {
+  switch (p) {
+    case RidgeProfile::kSine: return "sine";
+    case RidgeProfile::kTriangle: return "triangle";
+    default: return "square";
+  }
+}
+
+bool ParseRidgeProfile(const std::string& name, RidgeProfile* p) {
+  for (RidgeProfile v : {RidgeProfile::kSine, RidgeProfile::kTriangle, RidgeProfile::kSquare}) {
+    if (name == RidgeProfileName(v)) {
+      *p = v;
+      return true;
+    }
+  }
+  return false;
+}
+
+double RidgeRelief(const Ridges& r, double s) {
+  const double L = r.pitch_m, H = r.height_m;
+  const double f = s - L * std::round(s / L);  // in [-L/2, L/2], crest at 0
+  switch (r.profile) {
+    case RidgeProfile::kSine: return 0.5 * H * std::cos(2.0 * kPi * s / L);
+    case RidgeProfile::kTriangle: return 0.5 * H * (1.0 - 4.0 * std::abs(f) / L);
+    default: return std::abs(f) < 0.25 * L ? 0.5 * H : -0.5 * H;
+  }
+}
+
+double RidgeCellMean(const Ridges& r, double sc, double h) {
+  // Over a square cell, s = s_c + S1 + S2 with S1, S2 uniform of widths
+  // h |cos|, h |sin|: the density of s - s_c is a trapezoid.
+  const double w1 = h * std::abs(std::cos(r.angle_rad)), w2 = h * std::abs(std::sin(r.angle_rad));
+  const double L = r.pitch_m;
+  if (r.profile == RidgeProfile::kSine) {
+    const double k = 2.0 * kPi / L;
+    return 0.5 * r.height_m * std::cos(k * sc) * Sinc(0.5 * k * w1) * Sinc(0.5 * k * w2);
+  }
+  const double A = std::max(w1, w2), B = std::min(w1, w2);
+  const double W = 0.5 * (A + B), flat = 0.5 * (A - B);
+  if (!(A > 0.0)) return RidgeRelief(r, sc);
+  auto density = [&](double s) {
+    const double as = std::abs(s);
+    if (as <= flat || !(B > 1e-15 * A)) return as <= W ? 1.0 / A : 0.0;
+    return as < W ? (W - as) / (A * B) : 0.0;
+  };
+  // Knots: the density's corners and the profile's kinks / jumps.
+  double knots[64];
+  int nk = 0;
+  knots[nk++] = -W;
+  knots[nk++] = W;
+  if (B > 1e-15 * A) {
+    knots[nk++] = -flat;
+    knots[nk++] = flat;
+  }
+  const double step = 0.5 * L;  // triangle: crests and valleys; square: jumps at +-L/4
+  const double offset = r.profile == RidgeProfile::kTriangle ? 0.0 : 0.25 * L;
+  for (double m = std::ceil((sc - W - offset) / step); nk < 64; m += 1.0) {
+    const double s = m * step + offset - sc;
+    if (s > W) break;
+    if (s > -W) knots[nk++] = s;
+  }
+  std::sort(knots, knots + nk);
+  const double g = 0.5 / std::sqrt(3.0);
+  double mean = 0.0;
+  for (int k = 0; k + 1 < nk; ++k) {
+    const double a = knots[k], b = knots[k + 1], len = b - a;
+    if (!(len > 0.0)) continue;
+    const double mid = 0.5 * (a + b);
+    for (double x : {mid - g * len, mid + g * len})
+      mean += 0.5 * len * density(x) * RidgeRelief(r, sc + x);
+  }
+  return mean;
+}
+
 std::vector<double> SkinSurface(const TaxelGrid& grid, const PadGeometry& pad,
                                 const Ridges& ridges) {
   std::vector<double> z(grid.Size(), kInf);
-  const double a = pad.semi_axes_m[0], b = pad.semi_axes_m[1], c = pad.semi_axes_m[2];
+  const double* ax = pad.semi_axes_m;
+  // Shape of the touching side as a height field z(x, y) <= 0 in the pad
+  // frame; false outside its footprint.
+  auto shape = [&](double x, double y, double* zz) {
+    switch (pad.shape) {
+      case PadShape::kBox:
+        if (std::abs(x) > ax[0] || std::abs(y) > ax[1]) return false;
+        *zz = -ax[2];
+        return true;
+      case PadShape::kCapsule: {  // -z end cap: hemisphere of radius ax[0]
+        const double r = ax[0], t = 1.0 - (x * x + y * y) / (r * r);
+        if (t <= 0.0) return false;
+        *zz = -(ax[2] - r) - r * std::sqrt(t);
+        return true;
+      }
+      default: {
+        const double t = 1.0 - (x * x) / (ax[0] * ax[0]) - (y * y) / (ax[1] * ax[1]);
+        if (t <= 0.0) return false;
+        *zz = -ax[2] * std::sqrt(t);
+        return true;
+      }
+    }
+  };
   const double h = grid.pitch_m;
-  // Ridge relief -(H/2) cos(k . r) averaged over the cell: the cell mean of
-  // cos(k . r) is cos(k . r_c) sinc(kx h / 2) sinc(ky h / 2), exactly.
-  const double k = 2.0 * kPi / ridges.pitch_m;
-  const double kx = k * std::cos(ridges.angle_rad), ky = k * std::sin(ridges.angle_rad);
-  const double cell_gain = Sinc(0.5 * kx * h) * Sinc(0.5 * ky * h);
+  const double ca = std::cos(ridges.angle_rad), sa = std::sin(ridges.angle_rad);
   // Two-point Gauss per axis for the smooth pad shape.
   const double g = 0.5 * h / std::sqrt(3.0);
   for (int j = 0; j < grid.n; ++j) {
@@ -70,19 +162,16 @@ std::vector<double> SkinSurface(const TaxelGrid& grid, const PadGeometry& pad,
       const double u = grid.Centre(i);
       double sum = 0.0;
       bool inside = true;
-      for (int sa = -1; sa <= 1 && inside; sa += 2) {
-        for (int sb = -1; sb <= 1; sb += 2) {
-          const double x = u + sa * g, y = v + sb * g;
-          const double t = 1.0 - (x * x) / (a * a) - (y * y) / (b * b);
-          if (t <= 0.0) { inside = false; break; }
-          sum += -c * std::sqrt(t);
+      for (int sx = -1; sx <= 1 && inside; sx += 2) {
+        for (int sy = -1; sy <= 1; sy += 2) {
+          double zz;
+          if (!shape(u + sx * g, v + sy * g, &zz)) { inside = false; break; }
+          sum += zz;
         }
       }
       if (!inside) continue;
       double zz = 0.25 * sum;
-      if (ridges.enabled) {
-        zz -= 0.5 * ridges.height_m * std::cos(kx * u + ky * v) * cell_gain;
-      }
+      if (ridges.enabled) zz -= RidgeCellMean(ridges, ca * u + sa * v, h);
       z[static_cast<size_t>(j) * grid.n + i] = zz;
     }
   }
@@ -145,16 +234,115 @@ double HeightFieldBoxMean(const CounterSurface& s, double x0, double x1,
   return s.elevation_m * mean;
 }
 
+namespace {
+
+bool IsLineType(CounterSurface::Type t) {
+  using T = CounterSurface::Type;
+  return t == T::kSphere || t == T::kEllipsoid || t == T::kCapsule || t == T::kCylinder ||
+         t == T::kRay;
+}
+
+// Interval of s where a s^2 + b s + c <= 0 (a > 0).
+bool Quadratic(double a, double b, double c, double* lo, double* hi) {
+  const double disc = b * b - 4.0 * a * c;
+  if (disc < 0.0) return false;
+  const double sq = std::sqrt(disc);
+  *lo = (-b - sq) / (2.0 * a);
+  *hi = (-b + sq) / (2.0 * a);
+  return true;
+}
+
+bool SphereInterval(const double o[3], const double d[3], double r, double* lo, double* hi) {
+  return Quadratic(d[0] * d[0] + d[1] * d[1] + d[2] * d[2],
+                   2.0 * (o[0] * d[0] + o[1] * d[1] + o[2] * d[2]),
+                   o[0] * o[0] + o[1] * o[1] + o[2] * o[2] - r * r, lo, hi);
+}
+
+// Finite cylinder of radius r, axis local z in [-hh, hh].
+bool CylinderInterval(const double o[3], const double d[3], double r, double hh, double* lo,
+                      double* hi) {
+  const double a = d[0] * d[0] + d[1] * d[1];
+  const double c = o[0] * o[0] + o[1] * o[1] - r * r;
+  double l = -kInf, u = kInf;
+  if (a > 1e-24) {
+    if (!Quadratic(a, 2.0 * (o[0] * d[0] + o[1] * d[1]), c, &l, &u)) return false;
+  } else if (c > 0.0) {
+    return false;
+  }
+  if (std::abs(d[2]) > 1e-12) {
+    double z0 = (-hh - o[2]) / d[2], z1 = (hh - o[2]) / d[2];
+    if (z0 > z1) std::swap(z0, z1);
+    l = std::max(l, z0);
+    u = std::min(u, z1);
+  } else if (std::abs(o[2]) > hh) {
+    return false;
+  }
+  if (!(l <= u)) return false;
+  *lo = l;
+  *hi = u;
+  return true;
+}
+
+// The convex body's extent along the line o + s d (local frame).
+bool LineInterval(const CounterSurface& s, const double o[3], const double d[3], double* lo,
+                  double* hi) {
+  using T = CounterSurface::Type;
+  switch (s.type) {
+    case T::kSphere: return SphereInterval(o, d, s.size_m[0], lo, hi);
+    case T::kEllipsoid: {
+      double os[3], ds[3];
+      for (int k = 0; k < 3; ++k) {
+        os[k] = o[k] / s.size_m[k];
+        ds[k] = d[k] / s.size_m[k];
+      }
+      return SphereInterval(os, ds, 1.0, lo, hi);
+    }
+    case T::kCylinder: return CylinderInterval(o, d, s.size_m[0], s.size_m[1], lo, hi);
+    case T::kCapsule: {
+      // Convex: the union of the pieces' intervals is one interval.
+      double l = kInf, u = -kInf, a, b;
+      if (CylinderInterval(o, d, s.size_m[0], s.size_m[1], &a, &b)) { l = a; u = b; }
+      for (double zc : {-s.size_m[1], s.size_m[1]}) {
+        const double oc[3] = {o[0], o[1], o[2] - zc};
+        if (SphereInterval(oc, d, s.size_m[0], &a, &b)) {
+          l = std::min(l, a);
+          u = std::max(u, b);
+        }
+      }
+      if (!(l <= u)) return false;
+      *lo = l;
+      *hi = u;
+      return true;
+    }
+    default: return false;
+  }
+}
+
+}  // namespace
+
+double BoundRadius(const CounterSurface& s) {
+  using T = CounterSurface::Type;
+  switch (s.type) {
+    case T::kSphere: return s.size_m[0];
+    case T::kEllipsoid: return std::max({s.size_m[0], s.size_m[1], s.size_m[2]});
+    case T::kCapsule: return s.size_m[0] + s.size_m[1];
+    case T::kCylinder: return std::hypot(s.size_m[0], s.size_m[1]);
+    default: return s.bound_radius_m;
+  }
+}
+
 double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  const Pose& pad, const std::vector<CounterSurface>& surfaces,
                  double cull_above_m, std::vector<double>* gap_m,
-                 std::vector<double>* coverage) {
+                 std::vector<double>* coverage, bool area_average) {
   const size_t N = grid.Size();
   gap_m->assign(N, kInf);
   coverage->assign(N, 0.0);
   const double h = grid.pitch_m;
   struct Frame {
     double R[9], t[3], hx, hy;
+    double centre_pad[3];  // surface origin in the pad frame (line types)
+    double radius;         // bounding sphere (line types)
   };
   std::vector<Frame> frames(surfaces.size());
   for (size_t k = 0; k < surfaces.size(); ++k) {
@@ -170,34 +358,56 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
       F.t[r] = 0.0;
       for (int c = 0; c < 3; ++c) F.t[r] += s.pose.mat[3 * c + r] * (pad.pos[c] - s.pose.pos[c]);
     }
+    for (int c = 0; c < 3; ++c) {  // -R^T t
+      F.centre_pad[c] = 0.0;
+      for (int r = 0; r < 3; ++r) F.centre_pad[c] -= F.R[3 * r + c] * F.t[r];
+    }
+    F.radius = BoundRadius(s);
     // Axis-aligned half extents of a cell's footprint in the surface frame.
     F.hx = 0.5 * h * (std::abs(F.R[0]) + std::abs(F.R[1]));
     F.hy = 0.5 * h * (std::abs(F.R[3]) + std::abs(F.R[4]));
   }
-  // Lower bound of every cell's gap (surface's highest point): the cull level
-  // is relative to the smallest.
+  // Lower bound of a cell's gap to surface k (+inf: cannot touch). Face
+  // types: the surface's highest point; line types: the top of the bounding
+  // sphere on the cell's line.
+  auto lower_bound = [&](size_t k, double u, double v, double z) {
+    const Frame& F = frames[k];
+    if (IsLineType(surfaces[k].type)) {
+      const double dx = u - F.centre_pad[0], dy = v - F.centre_pad[1];
+      const double e = F.radius + h;  // the whole cell, not only its centre
+      const double q = e * e - dx * dx - dy * dy;
+      if (q < 0.0) return kInf;
+      return z - (F.centre_pad[2] + std::sqrt(q));
+    }
+    const double qz = F.t[2] + F.R[6] * u + F.R[7] * v + F.R[8] * z;
+    return qz - surfaces[k].max_height_m;
+  };
+  // The cull level is relative to the smallest lower bound of any cell.
   double cull = kInf;
   if (std::isfinite(cull_above_m)) {
     double lb_min = kInf;
     for (size_t k = 0; k < surfaces.size(); ++k) {
-      const Frame& F = frames[k];
       for (int j = 0; j < grid.n; ++j) {
         const double v = grid.Centre(j);
         for (int i = 0; i < grid.n; ++i) {
           const double z = skin_z[static_cast<size_t>(j) * grid.n + i];
           if (!std::isfinite(z)) continue;
-          const double qz = F.t[2] + F.R[6] * grid.Centre(i) + F.R[7] * v + F.R[8] * z;
-          lb_min = std::min(lb_min, qz - surfaces[k].max_height_m);
+          lb_min = std::min(lb_min, lower_bound(k, grid.Centre(i), v, z));
         }
       }
     }
     cull = lb_min + cull_above_m;
   }
+  const double g = area_average ? 0.5 * h / std::sqrt(3.0) : 0.0;
   for (size_t k = 0; k < surfaces.size(); ++k) {
     const CounterSurface& s = surfaces[k];
     const Frame& F = frames[k];
     const double* R = F.R;
     const double area = 4.0 * F.hx * F.hy;
+    const bool line = IsLineType(s.type);
+    // The pad's z axis in the surface frame, and in the world (kRay).
+    const double d_loc[3] = {R[2], R[5], R[8]};
+    const double d_world[3] = {-pad.mat[2], -pad.mat[5], -pad.mat[8]};
     for (int j = 0; j < grid.n; ++j) {
       const double v = grid.Centre(j);
       for (int i = 0; i < grid.n; ++i) {
@@ -205,22 +415,60 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
         const double z = skin_z[idx];
         if (!std::isfinite(z)) continue;
         const double u = grid.Centre(i);
-        const double qz = F.t[2] + R[6] * u + R[7] * v + R[8] * z;
-        if (qz - s.max_height_m > cull) continue;
-        const double qx = F.t[0] + R[0] * u + R[1] * v + R[2] * z;
-        const double qy = F.t[1] + R[3] * u + R[4] * v + R[5] * z;
-        double cov = 1.0, gap = qz;
-        if (s.type != CounterSurface::Type::kPlane) {
-          const double ox = Overlap1D(qx - F.hx, qx + F.hx, -s.half_x_m, s.half_x_m);
-          const double oy = Overlap1D(qy - F.hy, qy + F.hy, -s.half_y_m, s.half_y_m);
-          cov = area > 0 ? ox * oy / area : 0.0;
-          if (cov <= 0.0) continue;
-          if (s.type == CounterSurface::Type::kHeightField) {
-            const double x0 = std::max(qx - F.hx, -s.half_x_m);
-            const double x1 = std::min(qx + F.hx, s.half_x_m);
-            const double y0 = std::max(qy - F.hy, -s.half_y_m);
-            const double y1 = std::min(qy + F.hy, s.half_y_m);
-            gap = qz - HeightFieldBoxMean(s, x0, x1, y0, y1);
+        if (lower_bound(k, u, v, z) > cull) continue;
+        double cov = 1.0, gap;
+        if (line) {
+          if (s.type == CounterSurface::Type::kRay) {
+            // One ray down the pad's -z axis from the pad's centre plane.
+            double o[3];
+            for (int r = 0; r < 3; ++r)
+              o[r] = pad.pos[r] + pad.mat[3 * r + 0] * u + pad.mat[3 * r + 1] * v;
+            const double dist = s.ray ? s.ray(o, d_world) : -1.0;
+            if (!(dist >= 0.0)) continue;
+            gap = z + dist;
+          } else {
+            double top_sum = 0.0;
+            int hits = 0;
+            const int np = area_average ? 2 : 1;
+            for (int a = 0; a < np; ++a) {
+              for (int b = 0; b < np; ++b) {
+                const double x = u + (area_average ? (a ? g : -g) : 0.0);
+                const double y = v + (area_average ? (b ? g : -g) : 0.0);
+                const double o[3] = {F.t[0] + R[0] * x + R[1] * y, F.t[1] + R[3] * x + R[4] * y,
+                                     F.t[2] + R[6] * x + R[7] * y};
+                double lo, hi;
+                if (LineInterval(s, o, d_loc, &lo, &hi)) {
+                  top_sum += hi;
+                  ++hits;
+                }
+              }
+            }
+            if (hits == 0) continue;
+            cov = static_cast<double>(hits) / (np * np);
+            gap = z - top_sum / hits;
+          }
+        } else {
+          const double qz = F.t[2] + R[6] * u + R[7] * v + R[8] * z;
+          const double qx = F.t[0] + R[0] * u + R[1] * v + R[2] * z;
+          const double qy = F.t[1] + R[3] * u + R[4] * v + R[5] * z;
+          gap = qz;
+          if (s.type != CounterSurface::Type::kPlane) {
+            const double hx = area_average ? F.hx : 0.0, hy = area_average ? F.hy : 0.0;
+            if (area_average) {
+              const double ox = Overlap1D(qx - hx, qx + hx, -s.half_x_m, s.half_x_m);
+              const double oy = Overlap1D(qy - hy, qy + hy, -s.half_y_m, s.half_y_m);
+              cov = area > 0 ? ox * oy / area : 0.0;
+            } else {
+              cov = (std::abs(qx) <= s.half_x_m && std::abs(qy) <= s.half_y_m) ? 1.0 : 0.0;
+            }
+            if (cov <= 0.0) continue;
+            if (s.type == CounterSurface::Type::kHeightField) {
+              const double x0 = std::max(qx - hx, -s.half_x_m);
+              const double x1 = std::min(qx + hx, s.half_x_m);
+              const double y0 = std::max(qy - hy, -s.half_y_m);
+              const double y1 = std::min(qy + hy, s.half_y_m);
+              gap = qz - HeightFieldBoxMean(s, x0, x1, y0, y1);
+            }
           }
         }
         if (gap < (*gap_m)[idx]) {

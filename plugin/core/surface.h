@@ -6,6 +6,7 @@
 #ifndef MJTOUCH_CORE_SURFACE_H_
 #define MJTOUCH_CORE_SURFACE_H_
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -13,15 +14,24 @@
 
 namespace mjtouch {
 
-// Pad shape in its own frame; the skin that touches is the -z pole.
-enum class PadShape { kSphere, kEllipsoid };
+// Pad shape in its own frame (the fingertip geom's); the skin that touches
+// is the -z side: the pole of a sphere or ellipsoid, the -z end cap of a
+// capsule (a hemisphere), the -z face of a box.
+enum class PadShape { kSphere, kEllipsoid, kCapsule, kBox };
 
 struct PadGeometry {
   PadShape shape = PadShape::kEllipsoid;
-  double semi_axes_m[3] = {0, 0, 0};  // x, y, z (sphere: all equal)
+  // Half extents along x, y, z: sphere (r, r, r), ellipsoid (a, b, c),
+  // capsule (r, r, r + half length), box (MuJoCo's size).
+  double semi_axes_m[3] = {0, 0, 0};
 };
 
-enum class RidgeProfile { kSine };
+// Ridge relief across the ridge direction s (period pitch, crest at s = 0,
+// mean zero): sine (H/2) cos(2 pi s / pitch); triangle (sharp crests and
+// valleys, linear flanks); square (crests of width pitch / 2, flat).
+enum class RidgeProfile { kSine = 0, kTriangle, kSquare };
+const char* RidgeProfileName(RidgeProfile p);
+bool ParseRidgeProfile(const std::string& name, RidgeProfile* p);
 
 struct Ridges {
   bool enabled = true;
@@ -32,10 +42,21 @@ struct Ridges {
 };
 
 // Cell-averaged skin surface height z (pad frame, m) at every taxel; +inf
-// where the cell lies outside the pad's footprint. Ridges protrude towards -z
-// around the pad's mean surface.
+// where the cell lies outside the pad's footprint (a cell is inside if its
+// four 2x2 Gauss points are). Ridges protrude towards -z around the pad's
+// mean surface. The pad shape is averaged by 2x2 Gauss quadrature (smooth);
+// the ridge relief exactly: sine in closed form (cell mean of cos(k.r) is
+// cos(k.r_c) sinc(k_x h/2) sinc(k_y h/2)), the piecewise-linear profiles by
+// integrating them against the cell's projection onto the ridge direction
+// (a trapezoid density) piece by piece with 2-point Gauss, exact for the
+// piecewise-quadratic product.
 std::vector<double> SkinSurface(const TaxelGrid& grid, const PadGeometry& pad,
                                 const Ridges& ridges);
+
+// Ridge relief (m, protrusion positive) at s, and its exact mean over the
+// cell of side h at s_c for ridges at angle_rad (exposed for tests).
+double RidgeRelief(const Ridges& ridges, double s_m);
+double RidgeCellMean(const Ridges& ridges, double s_centre_m, double h_m);
 
 // Rigid transform, local -> world: world = pos + mat * local (mat row-major).
 struct Pose {
@@ -43,14 +64,32 @@ struct Pose {
   double mat[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
 };
 
-// A counter-surface described in its own frame, whose local +z is the outward
-// normal of the face that the skin touches.
+// A counter-surface described in its own frame.
+//  - kPlane, kRectangle, kHeightField: local +z is the outward normal of the
+//    face the skin touches; the gap is measured along it, and a cell's
+//    coverage of a rectangle or height field is its exact overlap fraction.
+//  - kSphere, kEllipsoid, kCapsule, kCylinder (MuJoCo's geom frames and
+//    sizes) and kRay (any geom, through a ray query, e.g. MuJoCo meshes):
+//    the gap is measured along the pad's z axis, from the skin down to the
+//    body's top where the cell's line (pad frame x, y fixed) meets it;
+//    analytic bodies are averaged over the cell at 2x2 Gauss points
+//    (coverage: the fraction that hit), kRay samples the cell centre.
 struct CounterSurface {
-  enum class Type { kPlane, kRectangle, kHeightField };
+  enum class Type { kPlane, kRectangle, kHeightField, kSphere, kEllipsoid, kCapsule, kCylinder,
+                    kRay };
   Type type = Type::kPlane;
   Pose pose;
   // kRectangle: half sizes of the face (x, y); kPlane ignores them.
   double half_x_m = 0, half_y_m = 0;
+  // kSphere (r), kEllipsoid (a, b, c), kCapsule / kCylinder (r, half length
+  // of the axis along local z): MuJoCo's geom size.
+  double size_m[3] = {0, 0, 0};
+  // kRay: distance along the unit direction `dir` (world) from `origin` to
+  // the first surface hit, or < 0 for none. Must be thread-compatible.
+  std::function<double(const double origin[3], const double dir[3])> ray;
+  // kRay (and the analytic bodies, filled by the renderer): radius of a
+  // sphere about the local origin that contains the body (culling, misses).
+  double bound_radius_m = 0;
   // kHeightField (MuJoCo semantics): nrow x ncol samples in [0, 1], row r at
   // y = -half_y + 2 half_y r / (nrow - 1), column c at x likewise;
   // height = elevation_m * sample.
@@ -71,10 +110,16 @@ struct CounterSurface {
 // lower bound of any cell) are skipped and left at +inf: pass +inf to render
 // all. Returns the absolute cull level used (+inf if none), so a caller whose
 // contact reaches above it can render again without culling.
+// `area_average` = false samples each cell at its centre instead (point
+// sampling; for tests that show what the averaging removes).
 double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  const Pose& pad_pose, const std::vector<CounterSurface>& surfaces,
                  double cull_above_m, std::vector<double>* gap_m,
-                 std::vector<double>* coverage);
+                 std::vector<double>* coverage, bool area_average = true);
+
+// Radius of a sphere about the surface's origin containing the body
+// (analytic bodies from size_m; kRay: bound_radius_m).
+double BoundRadius(const CounterSurface& s);
 
 // Running integrals along x of each row of a height field's samples (grid
 // units, trapezoid rule, which is exact for the linear interpolant).

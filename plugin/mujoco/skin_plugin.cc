@@ -20,8 +20,10 @@ void CopyPose(const mjtNum* pos, const mjtNum* mat, Pose* p) {
 }
 
 // A counter-surface for geom g facing the point `toward` (world). Planes,
-// boxes and height fields are rendered exactly; any other geom by its
-// tangent plane at the contact (pos, normal from the pad into the geom).
+// boxes, height fields, spheres, capsules, cylinders and ellipsoids are
+// rendered from their exact geometry; meshes through MuJoCo's ray query
+// (mj_rayMesh, the mesh's triangles); anything else (sdf) by its tangent
+// plane at the contact (pos, normal from the pad into the geom).
 CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mjtNum toward[3],
                               const mjtNum* contact_pos, const mjtNum* normal_into_geom,
                               const HeightFieldCache* cache) {
@@ -84,6 +86,26 @@ CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mj
       s.half_y_m = size[ay];
       return s;
     }
+    case mjGEOM_SPHERE:
+    case mjGEOM_CAPSULE:
+    case mjGEOM_CYLINDER:
+    case mjGEOM_ELLIPSOID:
+      s.type = m->geom_type[g] == mjGEOM_SPHERE     ? CounterSurface::Type::kSphere
+               : m->geom_type[g] == mjGEOM_CAPSULE  ? CounterSurface::Type::kCapsule
+               : m->geom_type[g] == mjGEOM_CYLINDER ? CounterSurface::Type::kCylinder
+                                                    : CounterSurface::Type::kEllipsoid;
+      CopyPose(gpos, gmat, &s.pose);
+      for (int k = 0; k < 3; ++k) s.size_m[k] = size[k];
+      return s;
+    case mjGEOM_MESH:
+      s.type = CounterSurface::Type::kRay;
+      CopyPose(gpos, gmat, &s.pose);
+      s.bound_radius_m = m->geom_rbound[g];
+      s.ray = [m, d, g](const double origin[3], const double dir[3]) {
+        mjtNum pnt[3] = {origin[0], origin[1], origin[2]}, vec[3] = {dir[0], dir[1], dir[2]};
+        return static_cast<double>(mj_rayMesh(m, d, g, pnt, vec, nullptr));
+      };
+      return s;
     default: {
       // Tangent plane: local z = -normal (outward from the geom, towards pad).
       mjtNum z[3] = {-normal_into_geom[0], -normal_into_geom[1], -normal_into_geom[2]};
@@ -135,10 +157,19 @@ bool SkinPlugin::ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int
       cfg->pad.shape = PadShape::kEllipsoid;
       for (int k = 0; k < 3; ++k) cfg->pad.semi_axes_m[k] = size[k];
       break;
+    case mjGEOM_CAPSULE:  // the -z end cap touches
+      cfg->pad.shape = PadShape::kCapsule;
+      cfg->pad.semi_axes_m[0] = cfg->pad.semi_axes_m[1] = size[0];
+      cfg->pad.semi_axes_m[2] = size[0] + size[1];
+      break;
+    case mjGEOM_BOX:  // the -z face touches
+      cfg->pad.shape = PadShape::kBox;
+      for (int k = 0; k < 3; ++k) cfg->pad.semi_axes_m[k] = size[k];
+      break;
     default: {
       const char* name = mj_id2name(m, mjOBJ_GEOM, g);
       *error = std::string("mjtouch.skin: pad geom '") + (name ? name : "?") +
-               "' must be a sphere or an ellipsoid";
+               "' must be a sphere, ellipsoid, capsule or box";
       return false;
     }
   }
@@ -156,10 +187,11 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
   // Texture geoms, rendered whenever the pad touches anything: named by
   // `texture`, and/or every non-colliding geom in `texture_group`.
   std::vector<int> textures;
-  auto renderable = [&](int g) {
-    const int type = m->geom_type[g];
-    return type == mjGEOM_HFIELD || type == mjGEOM_PLANE || type == mjGEOM_BOX;
-  };
+  // Every geom type but sdf (no geometry the plugin can query), and not the
+  // pad's own body.
+  const int pad_body = m->body_weldid[m->geom_bodyid[pad]];
+  auto renderable = [&](int g) { return m->geom_type[g] != mjGEOM_SDF; };
+  auto on_pad = [&](int g) { return m->body_weldid[m->geom_bodyid[g]] == pad_body; };
   std::istringstream words(Config(m, instance, "texture"));
   std::string name;
   while (words >> name) {
@@ -170,20 +202,28 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
       return nullptr;
     }
     if (!renderable(g)) {
-      mju_warning("mjtouch.skin: attribute `texture` geom '%s' must be an hfield, plane or box",
+      mju_warning("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: an "
+                  "sdf geom; valid: plane, hfield, sphere, capsule, ellipsoid, cylinder, box, mesh",
                   name.c_str());
+      return nullptr;
+    }
+    if (on_pad(g)) {
+      mju_warning("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: it "
+                  "moves with the pad (same body)", name.c_str());
       return nullptr;
     }
     textures.push_back(g);
   }
   if (cfg.texture_group >= 0) {
     for (int g = 0; g < m->ngeom; ++g) {
-      if (m->geom_group[g] != cfg.texture_group || m->geom_contype[g] || m->geom_conaffinity[g])
+      // Geoms on the pad's own body (e.g. its visual meshes) are not textures.
+      if (m->geom_group[g] != cfg.texture_group || m->geom_contype[g] ||
+          m->geom_conaffinity[g] || on_pad(g))
         continue;
       if (!renderable(g)) {
         const char* gname = mj_id2name(m, mjOBJ_GEOM, g);
-        mju_warning("mjtouch.skin: geom '%s' in `texture_group` %d must be an hfield, plane or "
-                    "box (or move it to another group)", gname ? gname : "(unnamed)",
+        mju_warning("mjtouch.skin: geom '%s' in `texture_group` %d cannot be rendered against (an "
+                    "sdf geom; move it to another group)", gname ? gname : "(unnamed)",
                     cfg.texture_group);
         return nullptr;
       }
