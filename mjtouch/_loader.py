@@ -118,10 +118,21 @@ def _declare(lib: ctypes.CDLL) -> None:
         c_float_p, c_double_p]
     lib.mjtouch_receptor_run.argtypes = [
         ctypes.c_char_p, ctypes.c_int, c_double_p, ctypes.c_int, ctypes.c_double, c_double_p,
-        c_double_p, ctypes.c_char_p, ctypes.c_int]
+        c_double_p, c_double_p, ctypes.c_ulonglong, ctypes.c_char_p, ctypes.c_int]
     lib.mjtouch_check_config.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_int]
     lib.mjtouch_surface_compliance.argtypes = [ctypes.c_double] * 3 + [ctypes.c_int, c_float_p]
     lib.mjtouch_elastic_pressure.argtypes = [
         ctypes.c_int, ctypes.c_int, ctypes.c_double, c_double_p, ctypes.c_double, ctypes.c_double,
         ctypes.c_double, ctypes.c_int, ctypes.c_double, ctypes.c_int, c_double_p, c_double_p]
+    lib.mjtouch_render_gap.argtypes = [
+        ctypes.c_int, ctypes.c_double, c_double_p, c_double_p, c_double_p, ctypes.c_int, c_double_p,
+        ctypes.c_int, ctypes.c_int, c_float_p, ctypes.c_int, c_double_p, c_double_p]
+    lib.mjtouch_ridge_cell_mean.restype = ctypes.c_double
+    lib.mjtouch_ridge_cell_mean.argtypes = [ctypes.c_int] + [ctypes.c_double] * 5
+    lib.mjtouch_pad_surface.argtypes = [ctypes.c_int, ctypes.c_double, ctypes.c_int] + [
+        ctypes.c_double] * 3 + [ctypes.c_int] + [ctypes.c_double] * 3 + [c_double_p]
+    lib.mjtouch_slip_shear.argtypes = [ctypes.c_int, ctypes.c_double, c_double_p] + [
+        ctypes.c_double] * 3 + [c_double_p, c_double_p]
+    lib.mjtouch_splat_contacts.argtypes = [ctypes.c_int, ctypes.c_double, ctypes.c_int,
+                                           c_double_p, c_double_p, c_double_p, c_double_p]
     lib.mjtouch_describe.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_int]

@@ -8,6 +8,8 @@ the plugin's MJCF attributes (see plugin/README.md).
 from __future__ import annotations
 
 import ctypes
+import math
+import weakref
 
 import numpy as np
 
@@ -143,25 +145,36 @@ def winkler_pressure(gap_m: np.ndarray, pitch_m: float, stiffness_pa_per_m: floa
 
 
 def receptor_run(cls: str, quantity_pa: np.ndarray, dt_s: float,
-                 config: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Drive one receptor of class cls with the quantity trace (Pa, one value
-    per step of dt_s). Returns (spikes per step, normalised voltage)."""
+                 config: dict | None = None, stream: int = 0,
+                 return_rate: bool = False):
+    """Drive one receptor of class cls with the quantity trace (Pa for the
+    stress quantities; one value per step of dt_s), exactly as the plugin
+    does: the first value primes the receptor at rest (no output), each
+    further value ends a step of dt_s over which q is linear. Afferent
+    parameters come from ``config`` (the plugin's attribute names); ``stream``
+    is the receptor index that selects its noise sequence (a plugin
+    instance's receptor r uses stream r). Returns (spikes per step,
+    membrane over threshold), plus the smoothed rate (Hz) if return_rate."""
     if cls not in CLASS_INDEX:
         raise ValueError(f"receptor class {cls!r} is not one of {sorted(CLASS_INDEX)}")
     if not dt_s > 0:
         raise ValueError(f"dt_s = {dt_s} must be > 0")
+    if not (isinstance(stream, (int, np.integer)) and 0 <= stream < 2**64):
+        raise ValueError(f"stream = {stream!r} must be an integer in [0, 2**64)")
     q = np.ascontiguousarray(quantity_pa, dtype=np.float64).ravel()
     if q.size == 0 or not np.all(np.isfinite(q)):
         raise ValueError("quantity_pa must be a non-empty finite array")
     spikes = np.empty_like(q)
     volt = np.empty_like(q)
+    rate = np.empty_like(q)
     err = ctypes.create_string_buffer(512)
     rc = _lib().mjtouch_receptor_run(_config_text(config), CLASS_INDEX[cls], _ptr(q, ctypes.c_double),
                                      q.size, dt_s, _ptr(spikes, ctypes.c_double),
-                                     _ptr(volt, ctypes.c_double), err, 512)
+                                     _ptr(volt, ctypes.c_double), _ptr(rate, ctypes.c_double),
+                                     int(stream), err, 512)
     if rc:
         raise ValueError(err.value.decode())
-    return spikes, volt
+    return (spikes, volt, rate) if return_rate else (spikes, volt)
 
 
 def surface_compliance(n: int, pitch_m: float, young_pa: float, poisson: float) -> np.ndarray:
@@ -450,8 +463,13 @@ class StressEngine:
             depth_index, dtype=np.int32)
         if di.shape != (nrec,):
             raise ValueError("depth_index must have one entry per receptor")
-        comps = range(6) if components is None else components
-        mask = np.full(nrec, sum(1 << int(c) for c in comps), np.int32)
+        # components: None (all six), one list for every site, or one list per site.
+        comps = [range(6)] * nrec if components is None else list(components)
+        if not comps or np.ndim(comps[0]) == 0:
+            comps = [comps] * nrec
+        if len(comps) != nrec or any(not 0 <= int(c) < 6 for cc in comps for c in cc):
+            raise ValueError("components: indices in [0, 6), for all sites or one list per site")
+        mask = np.array([sum(1 << int(c) for c in set(cc)) for cc in comps], np.int32)
         ri, rj = np.ascontiguousarray(ij[:, 0]), np.ascontiguousarray(ij[:, 1])
         err = ctypes.create_string_buffer(512)
         lib = _llib()
@@ -514,3 +532,109 @@ class StressEngine:
             name = {1: "direct", 2: "fft"}[used.value]
             return out, sec.value, name, active.value
         return out
+
+
+SURFACE_TYPES = ("plane", "rectangle", "hfield", "sphere", "ellipsoid", "capsule", "cylinder")
+PAD_SHAPES = ("sphere", "ellipsoid", "capsule", "box")
+RIDGE_PROFILES = ("sine", "triangle", "square")
+
+
+def render_gap(skin_z_m: np.ndarray, pitch_m: float, surfaces: list[dict],
+               pad_pos=(0.0, 0.0, 0.0), pad_mat=np.eye(3), hfield: np.ndarray | None = None,
+               area_average: bool = True):
+    """Stage 1: gap (m; inf where no surface) and coverage of each taxel cell
+    of a skin (skin_z_m: n x n pad-frame heights) at the pad pose, against
+    counter-surfaces given as dicts: type (one of SURFACE_TYPES), pos (3),
+    mat (3 x 3, local -> world), size (3, MuJoCo geom size), half (2: face
+    half sizes of a rectangle / height field), elevation (height field, m).
+    Height-field surfaces read `hfield` (nrow x ncol samples in [0, 1]).
+    area_average=False samples cell centres (point sampling)."""
+    z = np.ascontiguousarray(skin_z_m, dtype=np.float64)
+    if z.ndim != 2 or z.shape[0] != z.shape[1]:
+        raise ValueError(f"skin_z_m must be square (n x n), got {z.shape}")
+    desc = np.zeros((len(surfaces), 20))
+    for k, s in enumerate(surfaces):
+        if s.get("type") not in SURFACE_TYPES:
+            raise ValueError(f"surface {k}: type {s.get('type')!r} is not one of {SURFACE_TYPES}")
+        desc[k, 0] = SURFACE_TYPES.index(s["type"])
+        desc[k, 1:4] = s.get("pos", (0, 0, 0))
+        desc[k, 4:13] = np.asarray(s.get("mat", np.eye(3)), float).ravel()
+        desc[k, 13:16] = s.get("size", (0, 0, 0))
+        desc[k, 16:18] = s.get("half", (0, 0))
+        desc[k, 18] = s.get("elevation", 0.0)
+        desc[k, 19] = s.get("elevation", 0.0) * (1.0 if hfield is None else float(np.max(hfield)))
+    hf = np.ascontiguousarray(np.zeros((2, 2)) if hfield is None else hfield, dtype=np.float32)
+    n = z.shape[0]
+    gap = np.empty_like(z)
+    cov = np.empty_like(z)
+    pos = np.ascontiguousarray(pad_pos, dtype=np.float64)
+    mat = np.ascontiguousarray(pad_mat, dtype=np.float64).ravel()
+    rc = _lib().mjtouch_render_gap(n, pitch_m, _ptr(z, ctypes.c_double), _ptr(pos, ctypes.c_double),
+                                   _ptr(mat, ctypes.c_double), len(surfaces),
+                                   _ptr(desc, ctypes.c_double), hf.shape[0], hf.shape[1],
+                                   _ptr(hf, ctypes.c_float), int(bool(area_average)),
+                                   _ptr(gap, ctypes.c_double), _ptr(cov, ctypes.c_double))
+    if rc:
+        raise ValueError("render_gap: invalid arguments (pitch_m > 0; height fields need "
+                         "hfield with at least 2 x 2 samples)")
+    return gap, cov
+
+
+def ridge_cell_mean(s_m, profile: str = "sine", pitch_m: float = 0.45e-3,
+                    height_m: float = 0.05e-3, angle_deg: float = 0.0,
+                    cell_m: float = 0.0) -> np.ndarray:
+    """Ridge relief (m, protrusion positive) at distance s_m along the ridge
+    normal, averaged exactly over a square taxel cell of side cell_m (0: the
+    point value)."""
+    if profile not in RIDGE_PROFILES:
+        raise ValueError(f"profile {profile!r} is not one of {RIDGE_PROFILES}")
+    lib = _lib()
+    s = np.asarray(s_m, float)
+    out = np.array([lib.mjtouch_ridge_cell_mean(RIDGE_PROFILES.index(profile), pitch_m, height_m,
+                                                math.radians(angle_deg), v, cell_m)
+                    for v in s.ravel()])
+    return out.reshape(s.shape)
+
+
+def pad_surface(shape: str, half_extents_m, n: int, pitch_m: float, profile: str = "sine",
+                ridge_pitch_m: float = 0.45e-3, ridge_height_m: float = 0.0,
+                ridge_angle_deg: float = 0.0) -> np.ndarray:
+    """Cell-averaged skin height (pad frame z, m; inf outside the pad), n x n
+    indexed [j, i], for a pad shape in PAD_SHAPES with half extents (x, y, z)
+    (capsule: r, r, r + half length); ridge_height_m = 0: smooth skin."""
+    if shape not in PAD_SHAPES:
+        raise ValueError(f"shape {shape!r} is not one of {PAD_SHAPES}")
+    if profile not in RIDGE_PROFILES:
+        raise ValueError(f"profile {profile!r} is not one of {RIDGE_PROFILES}")
+    a, b, c = (float(v) for v in half_extents_m)
+    out = np.empty(n * n)
+    rc = _lib().mjtouch_pad_surface(int(n), pitch_m, PAD_SHAPES.index(shape), a, b, c,
+                                    RIDGE_PROFILES.index(profile), ridge_pitch_m, ridge_height_m,
+                                    math.radians(ridge_angle_deg), _ptr(out, ctypes.c_double))
+    if rc:
+        raise ValueError("pad_surface: need n >= 1, pitch_m > 0 and positive half extents")
+    return out.reshape(n, n)
+
+
+def slip_shear(pressure_pa: np.ndarray, pitch_m: float, normal_n: float, tangential_n):
+    """Full-slip shear traction (qx, qy in Pa) for a pressure field and the
+    contact's normal and tangential (x, y) force."""
+    p = np.ascontiguousarray(pressure_pa, dtype=np.float64)
+    qx, qy = np.empty_like(p), np.empty_like(p)
+    _lib().mjtouch_slip_shear(p.shape[0], pitch_m, _ptr(p, ctypes.c_double), normal_n,
+                              float(tangential_n[0]), float(tangential_n[1]),
+                              _ptr(qx, ctypes.c_double), _ptr(qy, ctypes.c_double))
+    return qx, qy
+
+
+def splat_contacts(contacts, n: int, pitch_m: float):
+    """`contacts` model: rows (x, y, fx, fy, fz) in the pad frame (m, N)
+    spread onto the n x n grid. Returns (pressure, qx, qy) in Pa."""
+    c = np.ascontiguousarray(contacts, dtype=np.float64).reshape(-1, 5)
+    p, qx, qy = (np.empty((n, n)) for _ in range(3))
+    rc = _lib().mjtouch_splat_contacts(int(n), pitch_m, len(c), _ptr(c, ctypes.c_double),
+                                       _ptr(p, ctypes.c_double), _ptr(qx, ctypes.c_double),
+                                       _ptr(qy, ctypes.c_double))
+    if rc == 1:
+        raise ValueError("splat_contacts: need n >= 2 and pitch_m > 0")
+    return p, qx, qy

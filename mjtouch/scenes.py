@@ -266,7 +266,7 @@ def fingertip_fragment(tip: Fingertip, start_x_m: float = -0.02,
         # position setpoint, so the mean speed is exact despite friction;
         # stiff and critically damped (joint damping) so it does not ring.
         actuator=f"""    <intvelocity name="slide" joint="slide_x" kp="{_fmt(SLIDE_KP)}" actrange="{_fmt(-travel_m)} {_fmt(travel_m)}" ctrlrange="-2 2"/>
-    <motor name="press" joint="press_z" ctrlrange="-100 0"/>
+    <motor name="press" joint="press_z" ctrlrange="-100 100"/>
 """,
         sensor=f"""    <plugin name="skin" plugin="mjtouch.skin" objtype="geom" objname="pad">
 {config}

@@ -32,6 +32,8 @@ class SkinLayout:
     classes: np.ndarray  # (nrec,) "SA1" / "RA" / "PC"
     positions_m: np.ndarray  # (nrec, 3): x, y in the pad frame, depth
     quantity: dict[str, str]  # class -> receptor quantity name
+    substrate: str = ""  # the elastic skin (layered stack or half-space)
+    kernel_build_s: float = 0.0  # kernel tables (+ FFT spectra) build time, s
 
     @classmethod
     def from_model(cls, model: mujoco.MjModel, instance: int | str | None = None) -> "SkinLayout":
@@ -60,6 +62,8 @@ class SkinLayout:
             classes=np.array([r[0] for r in rec], dtype="<U3"),
             positions_m=np.array([r[1:] for r in rec], dtype=float).reshape(-1, 3),
             quantity=dict(zip(CLASSES, info["quantity"])),
+            substrate=info.get("substrate", ""),
+            kernel_build_s=float(info.get("kernel_build_s", 0.0)),
         )
 
     @property

@@ -87,7 +87,7 @@ class SlideSession:
 
     def __init__(self, settings: ViewSettings | None = None,
                  scene: str | pathlib.Path | None = None, window_s: float = 0.5,
-                 raster_per_class: int = 8):
+                 raster_per_class: int = 5):
         self.settings = settings or ViewSettings()
         self.settings.validate()
         self.scene_path = pathlib.Path(scene) if scene is not None else None
@@ -126,8 +126,14 @@ class SlideSession:
         self._stress = np.zeros((n, nrec), np.float32)
         self._time = np.full(n, np.nan)
         self._count = 0
-        self._raster_rows = np.concatenate(
-            [np.nonzero(self.layout.classes == c)[0][:self.raster_per_class] for c in CLASSES])
+        # A few receptors per class, spread from the pole (first) to the rim.
+        rows = []
+        for c in CLASSES:
+            members = np.nonzero(self.layout.classes == c)[0]
+            k = min(self.raster_per_class, len(members))
+            rows.append(members[np.unique(np.linspace(0, len(members) - 1, k).round().astype(int))]
+                        if k else members)
+        self._raster_rows = np.concatenate(rows)
         self._apply_ctrl()
 
     def _apply_ctrl(self) -> None:
@@ -250,7 +256,11 @@ class SlideSession:
         fig.title = "spike raster (SA1 blue, RA green, PC magenta)"
         fig.xlabel = "time (s)"
         fig.flg_extend = 0
-        fig.gridsize = [3, 0]
+        fig.gridsize = [6, 2]
+        fig.flg_ticklabel = [1, 0]
+        fig.xformat = "%.2f"
+        fig.linewidth = 1.5
+        fig.figurergba = fig.panergba = (0.0, 0.0, 0.0, 0.85)
         t, spikes, _ = self.window()
         t0 = t[0] if len(t) else 0.0
         fig.range = [[0.0, self.window_s], [-0.5, len(self._raster_rows) + 0.5]]
@@ -264,7 +274,7 @@ class SlideSession:
                 pts[1::3, 0] = ts
                 pts[2::3, 0] = ts
                 pts[0::3, 1] = y
-                pts[1::3, 1] = y + 0.8
+                pts[1::3, 1] = y + 0.6
                 pts[2::3, 1] = y
             else:
                 pts[0] = [0.0, y]
@@ -281,6 +291,7 @@ class SlideSession:
         fig.title = "receptor stress spectrum, log10 Pa^2"
         fig.xlabel = "frequency (Hz)"
         fig.flg_legend = 1
+        fig.figurergba = fig.panergba = (0.0, 0.0, 0.0, 0.85)
         f, p = self.spectrum()
         sel = (f > 0) & (f <= fmax_hz)
         f, logp = f[sel], np.log10(np.maximum(p[sel], 1e-12))

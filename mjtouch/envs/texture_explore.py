@@ -66,6 +66,10 @@ def texture_explore_xml(classes=DEFAULT_CLASSES, tip: scenes.Fingertip | None = 
     textured class on a mocap body (placed under the pad, or parked)."""
     tip = tip or env_fingertip()
     finger = scenes.fingertip_fragment(tip, start_x_m=0.0, travel_m=TRAVEL_M)
+    # The project's pad-plate contact, its friction tuned to a mid exploration
+    # (0.5 N, 25 mm/s): Coulomb friction with a steady normal force.
+    contact = scenes.pad_plate_contact(tip, scenes.Protocol(force_n=0.5, speed_m_s=0.025,
+                                                            timestep_s=timestep_s)).contact
     if not skin:
         finger.extension = finger.sensor = ""
     assets, bodies = [], []
@@ -94,6 +98,8 @@ def texture_explore_xml(classes=DEFAULT_CLASSES, tip: scenes.Fingertip | None = 
     <geom name="plate" type="box" size="0.04 0.015 0.002" pos="0 0 -0.002"
           friction="0.5 0.005 0.0001" rgba="0.55 0.6 0.65 1"/>
 {"".join(bodies)}{finger.worldbody}  </worldbody>
+  <contact>
+{contact}  </contact>
   <actuator>
 {finger.actuator}  </actuator>
 {"  <sensor>" + chr(10) + finger.sensor + "  </sensor>" if skin else ""}

@@ -2,14 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <sstream>
 
 namespace mjtouch {
 namespace {
-
-// State slots.
-enum { kU0 = 0, kU1, kU2, kU3, kRefractory, kPrevQ, kFilter, kHasPrev };
-constexpr int kMaxNodes = 4;
 
 void Principal(const double s[6], double* l1, double* l2, double* l3) {
   // Eigenvalues of a symmetric 3x3 (Smith 1961), ascending.
@@ -52,6 +50,8 @@ const char* QuantityName(Quantity q) {
     case Quantity::kCompressiveSzz: return "szz";
     case Quantity::kMaxCompressive: return "maxcomp";
     case Quantity::kVonMises: return "vonmises";
+    case Quantity::kStrainEnergy: return "sed";
+    case Quantity::kCompressiveStrain: return "strain";
     default: return "maxshear";
   }
 }
@@ -61,12 +61,17 @@ bool ParseQuantity(const std::string& s, Quantity* q) {
   if (s == "maxcomp") { *q = Quantity::kMaxCompressive; return true; }
   if (s == "vonmises") { *q = Quantity::kVonMises; return true; }
   if (s == "maxshear") { *q = Quantity::kMaxShear; return true; }
+  if (s == "sed") { *q = Quantity::kStrainEnergy; return true; }
+  if (s == "strain") { *q = Quantity::kCompressiveStrain; return true; }
   return false;
 }
 
 double ReceptorQuantity(Quantity q, const double s[6]) {
   switch (q) {
     case Quantity::kCompressiveSzz: return -s[2];
+    case Quantity::kStrainEnergy:
+    case Quantity::kCompressiveStrain:
+      return std::numeric_limits<double>::quiet_NaN();  // needs the material (skin.cc)
     case Quantity::kVonMises: {
       const double a = s[0] - s[1], b = s[1] - s[2], c = s[2] - s[0];
       return std::sqrt(0.5 * (a * a + b * b + c * c) +
@@ -81,101 +86,368 @@ double ReceptorQuantity(Quantity q, const double s[6]) {
   }
 }
 
-int ExactLIFStep(int nodes, double* u, const double* u_inf, double tau,
-                 double theta, double refractory, double* refractory_left,
-                 double dt) {
+// ---------------------------------------------------------------------------
+// Afferent dynamics.
+
+namespace {
+
+// Receptor state slots (kReceptorStateSize doubles).
+enum {
+  kU0 = 0, kU1, kU2, kU3,  // membranes over threshold (SA1: one per heminode)
+  kRefractory,             // refractory time left, s
+  kPrevQ,                  // q at the end of the previous step
+  kHasPrev,                // 1 once primed
+  kRate,                   // exponentially smoothed rate, Hz
+  kNoise,                  // Ornstein-Uhlenbeck noise, units of threshold
+  kCount,                  // steps drawn from the noise generator
+  kF0, kF1, kF2, kF3       // filter states (RA: 2, PC: 4)
+};
+static_assert(kF3 + 1 == kReceptorStateSize, "receptor state layout");
+constexpr int kMaxNodes = 4;
+constexpr double kTwoPi = 6.283185307179586;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// 1 - exp(-x) and x - 1 + exp(-x), accurate for small x.
+double Phi1(double x) { return -std::expm1(-x); }
+double Phi2(double x) {
+  if (x >= 0.1) return x - Phi1(x);
+  double term = x * x / 2.0, sum = 0.0;
+  for (int k = 3; k < 16; ++k) {  // x^2/2! - x^3/3! + ..., 0.1^16/16! ~ 5e-30
+    sum += term;
+    term *= -x / k;
+  }
+  return sum;
+}
+
+// Membrane at time s from u0 under the drive a + b t: exact solution of
+// tau du/dt = -u + a + b t.
+double Membrane(double u0, double a, double b, double tau, double s) {
+  const double x = s / tau;
+  return u0 * std::exp(-x) + a * Phi1(x) + b * tau * Phi2(x);
+}
+
+// First time in (0, span] at which the membrane reaches 1, or +inf. With
+// c = u0 - a + b tau the membrane is a + b (t - tau) + c exp(-t / tau):
+// convex for c >= 0 (one crossing at most, from below), concave for c < 0
+// (rising to a maximum at tau ln(c / (b tau)) when b < 0).
+double FirstCrossing(double u0, double a, double b, double tau, double span) {
+  if (u0 >= 1.0) return 0.0;
+  double hi = span;
+  const double c = u0 - a + b * tau;
+  if (c < 0.0 && b < 0.0) {
+    const double ratio = c / (b * tau);
+    if (ratio <= 1.0) return kInf;  // falling from the start
+    hi = std::min(span, tau * std::log(ratio));
+  }
+  if (Membrane(u0, a, b, tau, hi) < 1.0) return kInf;
+  // Bracketed: f(lo) < 0 <= f(hi), f increasing through its one root.
+  // Safeguarded Newton; returns the bracket's upper end (membrane >= 1).
+  const double tol = 1e-15 * span;
+  double lo = 0.0, s = hi;
+  for (int it = 0; it < 200; ++it) {
+    const double u = Membrane(u0, a, b, tau, s);
+    if (u >= 1.0) hi = s; else lo = s;
+    if (hi - lo <= tol) break;
+    const double du = (a + b * s - u) / tau;
+    double next = du > 0.0 ? s - (u - 1.0) / du : 0.5 * (lo + hi);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (std::abs(next - s) <= tol) {  // converged: close the bracket above
+      const double up = std::min(hi, std::max(next, s) + tol);
+      if (Membrane(u0, a, b, tau, up) >= 1.0) hi = up;
+      break;
+    }
+    s = next;
+  }
+  return hi;
+}
+
+uint64_t SplitMix64(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+// Standard normal deviate, a pure function of (seed, stream, count).
+double Normal(uint64_t seed, uint64_t stream, uint64_t count) {
+  const uint64_t h1 = SplitMix64(SplitMix64(SplitMix64(seed) ^ stream) ^ count);
+  const uint64_t h2 = SplitMix64(h1);
+  const double u1 = (static_cast<double>(h1 >> 11) + 0.5) * 0x1p-53;  // (0, 1)
+  const double u2 = static_cast<double>(h2 >> 11) * 0x1p-53;
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
+}
+
+// exp(A) of an m x m row-major matrix (m <= 5): scaling and squaring with a
+// 16-term Taylor series (||A|| <= 1/4 after scaling: error < 1e-24).
+void Expm(int m, const double* A, double* E) {
+  double norm = 0.0;
+  for (int i = 0; i < m; ++i) {
+    double row = 0.0;
+    for (int j = 0; j < m; ++j) row += std::abs(A[i * m + j]);
+    norm = std::max(norm, row);
+  }
+  int squarings = 0;
+  while (norm > 0.25 && squarings < 1000) {
+    norm *= 0.5;
+    ++squarings;
+  }
+  const double scale = std::ldexp(1.0, -squarings);
+  double X[25], T[25], tmp[25];
+  for (int i = 0; i < m * m; ++i) X[i] = A[i] * scale;
+  for (int i = 0; i < m * m; ++i) T[i] = E[i] = (i % (m + 1) == 0) ? 1.0 : 0.0;
+  auto mul = [m](const double* P, const double* Q, double* R) {
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < m; ++j) {
+        double acc = 0.0;
+        for (int k = 0; k < m; ++k) acc += P[i * m + k] * Q[k * m + j];
+        R[i * m + j] = acc;
+      }
+  };
+  for (int k = 1; k <= 16; ++k) {
+    mul(T, X, tmp);
+    for (int i = 0; i < m * m; ++i) {
+      T[i] = tmp[i] / k;
+      E[i] += T[i];
+    }
+  }
+  for (int s = 0; s < squarings; ++s) {
+    mul(E, E, tmp);
+    std::copy(tmp, tmp + m * m, E);
+  }
+}
+
+struct SpikeSink {
+  double offset;  // start of the current segment in the step, s
+  double dt, rate_tau, rate_sum;
+};
+
+void OnSpike(double t, void* ctx) {
+  auto* sink = static_cast<SpikeSink*>(ctx);
+  sink->rate_sum += std::exp(-(sink->dt - (sink->offset + t)) / sink->rate_tau);
+}
+
+}  // namespace
+
+void WangTable1Gains(Quantity q, SA1Params* p) {
+  switch (q) {
+    case Quantity::kCompressiveStrain:  // strain-based model
+      p->k0_a_per_pa = 2.73e-12;
+      p->k1_a_s_per_pa = 5.29e-12;
+      p->i0_a = 4.66e-12;
+      break;
+    case Quantity::kStrainEnergy:  // SED-based model
+      p->k0_a_per_pa = 1.46e-15;
+      p->k1_a_s_per_pa = 6.81e-15;
+      p->i0_a = 7.59e-12;
+      break;
+    default:  // stress-based model
+      p->k0_a_per_pa = 1.40e-16;
+      p->k1_a_s_per_pa = 1.68e-16;
+      p->i0_a = 4.94e-12;
+      break;
+  }
+}
+
+std::string ReceptorParamsKey(const ReceptorParams& p) {
+  std::ostringstream s;
+  s.precision(17);
+  for (double m : p.sa1.merkel_cells) s << m << ' ';
+  s << "| " << p.sa1.k0_a_per_pa << ' ' << p.sa1.k1_a_s_per_pa << ' ' << p.sa1.i0_a << ' '
+    << p.sa1.capacitance_f << ' ' << p.sa1.resistance_ohm << ' ' << p.sa1.threshold_v << ' '
+    << p.sa1.refractory_s << " | " << p.ra.gain_s_per_pa << ' ' << p.ra.lowpass_hz << ' '
+    << p.ra.tau_s << ' ' << p.ra.refractory_s << " | " << p.pc.gain_s2_per_pa << ' '
+    << p.pc.highpass_hz << ' ' << p.pc.lowpass_hz << ' ' << p.pc.tau_s << ' '
+    << p.pc.refractory_s << " | " << p.noise.sd[0] << ' ' << p.noise.sd[1] << ' '
+    << p.noise.sd[2] << ' ' << p.noise.tau_s << ' ' << p.noise.seed << " | " << p.rate_tau_s;
+  return s.str();
+}
+
+int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, double span,
+                   double tau, double refractory, double* refractory_left,
+                   void (*on_spike)(double t, void* ctx), void* ctx) {
   int spikes = 0;
   double t = 0.0;
-  auto hold = [&](double span) {  // refractory: membranes clamped at reset
-    const double used = std::min(*refractory_left, span);
-    *refractory_left -= used;
-    if (used > 0.0) for (int k = 0; k < nodes; ++k) u[k] = 0.0;
-    return used;
-  };
-  t += hold(dt);
-  while (t < dt) {
-    const double left = dt - t;
-    double t_hit = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < nodes; ++k) {
-      if (u_inf[k] > theta && u[k] < theta) {
-        t_hit = std::min(t_hit, tau * std::log((u_inf[k] - u[k]) / (u_inf[k] - theta)));
-      } else if (u[k] >= theta) {
-        t_hit = 0.0;
-      }
+  while (t < span) {
+    if (*refractory_left > 0.0) {  // membranes held at reset
+      const double used = std::min(*refractory_left, span - t);
+      *refractory_left -= used;
+      t += used;
+      for (int k = 0; k < nodes; ++k) u[k] = 0.0;
+      if (t >= span) break;
     }
-    if (t_hit > left) {
-      const double decay = std::exp(-left / tau);
-      for (int k = 0; k < nodes; ++k) u[k] = u_inf[k] + (u[k] - u_inf[k]) * decay;
+    const double left = span - t;
+    double hit = kInf;
+    for (int k = 0; k < nodes; ++k)
+      hit = std::min(hit, FirstCrossing(u[k], a[k] + b[k] * t, b[k], tau, left));
+    if (!(hit <= left)) {
+      for (int k = 0; k < nodes; ++k) u[k] = Membrane(u[k], a[k] + b[k] * t, b[k], tau, left);
       break;
     }
+    t += hit;
     ++spikes;
-    t += t_hit;
+    if (on_spike) on_spike(t, ctx);
     for (int k = 0; k < nodes; ++k) u[k] = 0.0;
     *refractory_left = refractory;
-    t += hold(dt - t);
   }
   return spikes;
 }
 
-void PrimeReceptor(double q, double* st) {
-  st[kPrevQ] = q;
-  st[kHasPrev] = 1.0;
+ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), dt_(dt_s) {
+  // Exact propagation of x' = A x + B v for v constant over dt: the
+  // exponential of the augmented matrix [[A, B], [0, 0]] dt.
+  auto build = [dt_s](int n, const double* A, const double* B, const double* c, Filter* f) {
+    const int m = n + 1;
+    double M[25] = {0}, E[25];
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) M[i * m + j] = A[i * n + j] * dt_s;
+      M[i * m + n] = B[i] * dt_s;
+    }
+    Expm(m, M, E);
+    f->n = n;
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) f->phi[i * n + j] = E[i * m + j];
+      f->gamma[i] = E[i * m + n];
+      f->c[i] = c[i];
+    }
+  };
+  {  // RA: y = w^2 / (s + w)^2 v
+    const double w = kTwoPi * p.ra.lowpass_hz;
+    const double A[4] = {-w, 0, w, -w}, B[2] = {w, 0}, c[2] = {0, 1};
+    build(2, A, B, c, &ra_);
+  }
+  {  // PC: a = v / (s + wh); b_k = wl b_{k-1} / (s + wl); y = s^2 b3
+    const double wh = kTwoPi * p.pc.highpass_hz, wl = kTwoPi * p.pc.lowpass_hz;
+    const double A[16] = {-wh, 0, 0, 0, wl, -wl, 0, 0, 0, wl, -wl, 0, 0, 0, wl, -wl};
+    const double B[4] = {1, 0, 0, 0};
+    const double c[4] = {0, wl * wl, -2 * wl * wl, wl * wl};
+    build(4, A, B, c, &pc_);
+  }
+  noise_rho_ = std::exp(-dt_s / p.noise.tau_s);
+  rate_decay_ = std::exp(-dt_s / p.rate_tau_s);
 }
 
-int AdvanceReceptor(ReceptorClass cls, const ReceptorParams& p, double q,
-                    double dt, double* st, double* voltage) {
-  const double dq = st[kHasPrev] > 0.0 ? (q - st[kPrevQ]) / dt : 0.0;
+void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
+                   unsigned long long stream, double* st) {
+  std::fill(st, st + kReceptorStateSize, 0.0);
   st[kPrevQ] = q;
   st[kHasPrev] = 1.0;
-  double u_inf[kMaxNodes] = {0, 0, 0, 0};
-  int spikes = 0;
-  double theta = 1.0;
+  const double sd = p.noise.sd[static_cast<int>(cls)];
+  if (sd > 0.0) st[kNoise] = sd * Normal(p.noise.seed, stream, 0);
+}
+
+double ReceptorRate(const double* st) { return st[kRate]; }
+
+int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long stream,
+                             double* st, double* voltage) const {
+  if (st[kHasPrev] <= 0.0) PrimeReceptor(p_, cls, q1, stream, st);
+  const double dt = dt_;
+  const double q0 = st[kPrevQ];
+  const double v = (q1 - q0) / dt;  // q linear over the step
+  st[kPrevQ] = q1;
+  const int ci = static_cast<int>(cls);
+
+  const double n0 = st[kNoise];
+  double n1 = n0;
+  const double sd = p_.noise.sd[ci];
+  if (sd > 0.0) {  // exact Ornstein-Uhlenbeck update
+    const double count = st[kCount] + 1.0;
+    st[kCount] = count;
+    n1 = noise_rho_ * n0 + sd * std::sqrt(1.0 - noise_rho_ * noise_rho_) *
+                               Normal(p_.noise.seed, stream, static_cast<uint64_t>(count));
+    st[kNoise] = n1;
+  }
+
+  // Drive before rectification at the step ends (units of threshold).
   int nodes = 1;
+  double l0[kMaxNodes] = {0}, l1[kMaxNodes] = {0};
+  bool full_wave = false;
+  double tau = 1.0, refractory = 1e-3;
+  auto filter = [&](const Filter& f, double gain) {
+    double x[4], y0 = 0.0, y1 = 0.0;
+    for (int i = 0; i < f.n; ++i) y0 += f.c[i] * st[kF0 + i];
+    for (int i = 0; i < f.n; ++i) {
+      double acc = f.gamma[i] * v;
+      for (int j = 0; j < f.n; ++j) acc += f.phi[i * f.n + j] * st[kF0 + j];
+      x[i] = acc;
+    }
+    for (int i = 0; i < f.n; ++i) {
+      st[kF0 + i] = x[i];
+      y1 += f.c[i] * x[i];
+    }
+    l0[0] = gain * y0;
+    l1[0] = gain * y1;
+  };
   switch (cls) {
     case ReceptorClass::kSA1: {
-      const SA1Params& s = p.sa1;
+      const SA1Params& s = p_.sa1;
       nodes = static_cast<int>(std::min<size_t>(s.merkel_cells.size(), kMaxNodes));
-      const double drive = s.k0_a_per_pa * q + s.k1_a_s_per_pa * std::abs(dq);
+      const double scale = s.resistance_ohm / s.threshold_v;  // A -> threshold units
+      const double dyn = s.k1_a_s_per_pa * std::abs(v);
       for (int k = 0; k < nodes; ++k) {
-        const double current = std::max(0.0, s.merkel_cells[k] * drive + s.i0_a);
-        u_inf[k] = current * s.resistance_ohm;
+        const double m = s.merkel_cells[k];
+        l0[k] = scale * (m * (s.k0_a_per_pa * q0 + dyn) + s.i0_a);
+        l1[k] = scale * (m * (s.k0_a_per_pa * q1 + dyn) + s.i0_a);
       }
-      theta = s.threshold_v;
-      spikes = ExactLIFStep(nodes, st + kU0, u_inf, s.resistance_ohm * s.capacitance_f,
-                            theta, s.refractory_s, st + kRefractory, dt);
+      tau = s.resistance_ohm * s.capacitance_f;
+      refractory = s.refractory_s;
       break;
     }
-    case ReceptorClass::kRA: {
-      u_inf[0] = p.ra.gain_s_per_pa * std::abs(dq);
-      spikes = ExactLIFStep(1, st + kU0, u_inf, p.ra.tau_s, 1.0, p.ra.refractory_s,
-                            st + kRefractory, dt);
+    case ReceptorClass::kRA:
+      filter(ra_, p_.ra.gain_s_per_pa);
+      full_wave = true;
+      tau = p_.ra.tau_s;
+      refractory = p_.ra.refractory_s;
       break;
-    }
-    case ReceptorClass::kPC: {
-      // Exact first-order high-pass of the (step-constant) rate dq/dt:
-      // y' = -y / tau_hp + d(dq)/dt. A step in dq/dt of size D adds D to y,
-      // which then decays; we carry y at the end of the step.
-      const double tau_hp = 1.0 / (2.0 * 3.14159265358979323846 * p.pc.highpass_hz);
-      double y = st[kFilter];
-      // st[kU3] stores the previous dq/dt for the PC (one node only uses kU0).
-      const double jump = dq - st[kU3];
-      st[kU3] = dq;
-      const double decay = std::exp(-dt / tau_hp);
-      // Mean of |y| over the step drives the membrane (y decays within it).
-      const double y0 = y + jump;
-      const double mean_abs = std::abs(y0) * (1.0 - decay) * tau_hp / dt;
-      y = y0 * decay;
-      st[kFilter] = y;
-      u_inf[0] = p.pc.gain_s_per_pa * mean_abs;
-      spikes = ExactLIFStep(1, st + kU0, u_inf, p.pc.tau_s, 1.0, p.pc.refractory_s,
-                            st + kRefractory, dt);
+    case ReceptorClass::kPC:
+      filter(pc_, p_.pc.gain_s2_per_pa);
+      tau = p_.pc.tau_s;
+      refractory = p_.pc.refractory_s;
       break;
+  }
+
+  // Segments between the rectification kinks: the drive is linear in each.
+  double cuts[kMaxNodes + 2];
+  int ncut = 0;
+  cuts[ncut++] = 0.0;
+  for (int k = 0; k < nodes; ++k) {
+    if ((l0[k] < 0.0 && l1[k] > 0.0) || (l0[k] > 0.0 && l1[k] < 0.0)) {
+      const double t = dt * l0[k] / (l0[k] - l1[k]);
+      if (t > 0.0 && t < dt) cuts[ncut++] = t;
     }
   }
-  double vmax = 0.0;
-  for (int k = 0; k < nodes; ++k) vmax = std::max(vmax, st[kU0 + k] / theta);
+  for (int i = 2; i < ncut; ++i)  // insertion sort of the kinks
+    for (int j = i; j > 1 && cuts[j] < cuts[j - 1]; --j) std::swap(cuts[j], cuts[j - 1]);
+  cuts[ncut++] = dt;
+  auto drive = [&](int k, double t) {
+    const double f = t / dt;
+    const double l = l0[k] + (l1[k] - l0[k]) * f;
+    const double rect = full_wave ? std::abs(l) : std::max(0.0, l);
+    return rect + n0 + (n1 - n0) * f;
+  };
+  SpikeSink sink{0.0, dt, p_.rate_tau_s, 0.0};
+  int spikes = 0;
+  for (int i = 0; i + 1 < ncut; ++i) {
+    const double ta = cuts[i], tb = cuts[i + 1], span = tb - ta;
+    if (!(span > 0.0)) continue;
+    double a[kMaxNodes], b[kMaxNodes];
+    for (int k = 0; k < nodes; ++k) {
+      a[k] = drive(k, ta);
+      b[k] = (drive(k, tb) - a[k]) / span;
+    }
+    sink.offset = ta;
+    spikes += LinearDriveLIF(nodes, st + kU0, a, b, span, tau, refractory, st + kRefractory,
+                             OnSpike, &sink);
+  }
+  st[kRate] = st[kRate] * rate_decay_ + sink.rate_sum / p_.rate_tau_s;
+  double vmax = st[kU0];
+  for (int k = 1; k < nodes; ++k) vmax = std::max(vmax, st[kU0 + k]);
   *voltage = vmax;
   return spikes;
+}
+
+int AdvanceReceptor(ReceptorClass cls, const ReceptorParams& p, double q_end, double dt,
+                    unsigned long long stream, double* state, double* voltage) {
+  return ReceptorStepper(p, dt).Advance(cls, q_end, stream, state, voltage);
 }
 
 }  // namespace mjtouch

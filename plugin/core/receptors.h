@@ -1,7 +1,7 @@
 // Stage 4: mechanoreceptor afferents. Each class turns its receptor quantity
 // q(t) (Pa, e.g. the most compressive principal stress at the site) into spikes
-// with leaky integrate-and-fire membranes integrated EXACTLY over each step for
-// a current held constant over the step: rates do not depend on dt and no
+// with leaky integrate-and-fire membranes integrated in closed form over each
+// step (the drive is linear within a step): rates do not depend on dt and no
 // spike is lost at coarse dt (several spikes per step are counted).
 #ifndef MJTOUCH_CORE_RECEPTORS_H_
 #define MJTOUCH_CORE_RECEPTORS_H_
@@ -16,7 +16,11 @@ constexpr int kNumClasses = 3;
 const char* ClassName(ReceptorClass c);
 
 // Which stress measure drives a class.
-enum class Quantity { kCompressiveSzz, kMaxCompressive, kVonMises, kMaxShear };
+// kStrainEnergy (SED, J/m^3) and kCompressiveStrain (most compressive
+// principal strain, Wang 2016) need the material at the receptor: skin.cc
+// converts them (ReceptorQuantity returns NaN for them).
+enum class Quantity { kCompressiveSzz, kMaxCompressive, kVonMises, kMaxShear, kStrainEnergy,
+                      kCompressiveStrain };
 const char* QuantityName(Quantity q);
 bool ParseQuantity(const std::string& s, Quantity* q);
 // Compressive-positive receptor quantity from a stress tensor (Voigt, Pa).
@@ -26,6 +30,8 @@ double ReceptorQuantity(Quantity q, const double stress[6]);
 // branching afferent collects current I_k = M_k (k0 q + k1 |dq/dt|) + I0
 // (negative clipped to 0) and integrates C dU/dt + U/R = I_k; when any
 // heminode reaches U_th all reset to 0 (spike-initiation zone shared).
+// Wang 2016 gives no reset value (rest is 0 after their shift) and no
+// refractory period; we reset to 0 and add the common 1 ms.
 struct SA1Params {
   std::vector<double> merkel_cells = {8, 5, 3, 1};  // M_k per heminode
   double k0_a_per_pa = 1.40e-16;     // static gain (Wang 2016, Table 1)
@@ -37,58 +43,117 @@ struct SA1Params {
   double refractory_s = 1e-3;        // absolute refractory period
 };
 
-// RA (Meissner, FA1): driven by the rectified rate of change of q, so silent
-// in a steady hold. Normalised membrane tau dU/dt = -U + gain |dq/dt|,
-// threshold 1. Membrane time constant in the 3-9 ms range of TouchSim
-// (Saal et al. 2017) gives the tens-of-Hz best frequency.
+// Wang et al. 2016, Table 1: the fitted (k0, k1, I0) of the model whose
+// input is `q` (stress-based for szz / maxcomp / vonmises / maxshear, in Pa;
+// strain-based for `strain`, dimensionless; SED-based for `sed`, J/m^3).
+// Units read as SI, as printed ("All values are SI units"); see README.
+void WangTable1Gains(Quantity q, SA1Params* p);
+
+// RA (Meissner, FA1): the rate of change of q, low-passed by two equal real
+// poles at `lowpass_hz`, y = w^2 / (s + w)^2 dq/dt (Pa/s), full-wave
+// rectified (fires on loading and unloading, silent in a steady hold):
+// tau dU/dt = -U + gain |y|, threshold 1. The low-pass sets the best
+// frequency (tens of Hz; Johansson et al. 1982), the membrane time constant
+// is in TouchSim's 3-9 ms range (Saal et al. 2017).
 struct RAParams {
-  // 1 / (|dq/dt| at threshold): 1e4 Pa/s, i.e. ~50 Pa at 30 Hz, which is
-  // ~5 um of skin indentation at 0.5 N (~10 Pa/um): RA thresholds are
-  // ~10 um at 20-40 Hz (Johansson et al. 1982). Provisional, see issue 5.
-  double gain_s_per_pa = 1.0e-4;
+  // Calibrated (README, "Afferent models"): 1:1 threshold 100 Pa at 40 Hz.
+  double gain_s_per_pa = 1.02e-4;
+  double lowpass_hz = 40.0;
   double tau_s = 5e-3;
   double refractory_s = 1e-3;
 };
 
-// PC (Pacinian, FA2): driven by the rectified output of a first-order
-// high-pass of dq/dt (an acceleration-like stage standing in for the
-// lamellar capsule's band-pass), short membrane time constant (~1-2 ms).
+// PC (Pacinian, FA2): stress acceleration through a band-pass,
+// y = [s / (s + wh)] [wl^3 / (s + wl)^3] d2q/dt2 (Pa/s^2): the capsule's
+// high-pass (Loewenstein & Skalak 1966) on top of the acceleration makes the
+// low-frequency flank steep; the low-pass and the short membrane (TouchSim:
+// 1-2 ms) bound the high one. Half-wave rectified (one spike per cycle, phase
+// locked): tau dU/dt = -U + gain max(0, y), threshold 1.
 struct PCParams {
-  // 1 / (filtered |dq/dt| at threshold): 1e3 Pa/s, ~0.6 Pa at 250 Hz, i.e.
-  // ~0.06 um (PC thresholds: tens of nm at 200-300 Hz). Provisional.
-  double gain_s_per_pa = 1.0e-3;
+  // Calibrated (README, "Afferent models"): 1:1 threshold 0.5 Pa at 250 Hz.
+  double gain_s2_per_pa = 5.28e-6;
   double highpass_hz = 150.0;
+  double lowpass_hz = 250.0;
   double tau_s = 1.5e-3;
   double refractory_s = 1e-3;
 };
 
+// Optional membrane noise: an Ornstein-Uhlenbeck process of standard
+// deviation sd[class] (in units of the threshold) and correlation time
+// tau_s, added to the drive, updated exactly at each step from a
+// counter-based generator (seed, receptor, step count), so runs are
+// reproducible bit for bit per seed whatever the thread or copy.
+struct NoiseParams {
+  double sd[kNumClasses] = {0.0, 0.0, 0.0};
+  double tau_s = 2e-3;
+  unsigned long long seed = 0;
+};
+
 // Doubles of plugin state per receptor (membranes, refractory clock,
-// previous q, filter state); the layout is private to receptors.cc.
-constexpr int kReceptorStateSize = 8;
+// previous q, smoothed rate, noise, step count, filter states); the layout
+// is private to receptors.cc.
+constexpr int kReceptorStateSize = 14;
 
 struct ReceptorParams {
   SA1Params sa1;
   RAParams ra;
   PCParams pc;
+  NoiseParams noise;
+  double rate_tau_s = 0.05;  // smoothed rate: exponential kernel, s
 };
 
-// Advance one receptor by dt with the quantity q_now at the end of the step
-// (Pa). `has_prev` says whether state holds a previous q (else dq/dt = 0).
-// Returns the number of spikes fired in the step; writes the normalised
-// membrane potential (U / threshold of the most depolarised node) to *voltage.
-int AdvanceReceptor(ReceptorClass cls, const ReceptorParams& p, double q_now,
-                    double dt, double* state, double* voltage);
+// Every parameter, printed at full precision (for model caches).
+std::string ReceptorParamsKey(const ReceptorParams& p);
 
-// Record q as the previous value without advancing (first call).
-void PrimeReceptor(double q_now, double* state);
+// Advances receptors over a step of dt. q is taken as linear in time between
+// the previous value and q_end (so dq/dt is constant over the step); the
+// filters are propagated exactly for that input; each class's drive is
+// linear between its values at the step ends, rectification kinks located
+// exactly; the membranes are then integrated in closed form (first threshold
+// crossing solved to round-off), so no spike is lost at coarse dt and several
+// spikes per step are counted. Build once per step size, use for every receptor.
+class ReceptorStepper {
+ public:
+  ReceptorStepper(const ReceptorParams& p, double dt_s);
+  // Returns the spike count; *voltage = membrane over threshold at the step
+  // end (SA1: the most depolarised heminode). `stream` (the receptor's index)
+  // selects its noise sequence.
+  int Advance(ReceptorClass cls, double q_end, unsigned long long stream, double* state,
+              double* voltage) const;
+  double dt() const { return dt_; }
 
-// Exact LIF over a step: membrane tau dU/dt = -U + u_inf with U reset to 0
-// at threshold `theta`, absolute refractory period `refractory` (> 0) during
-// which U is held at 0. `refractory_left` carries over between steps. Several
-// membranes (heminodes) share one reset. Returns the spike count.
-int ExactLIFStep(int nodes, double* u, const double* u_inf, double tau,
-                 double theta, double refractory, double* refractory_left,
-                 double dt);
+ private:
+  struct Filter {  // x(t + dt) = phi x + gamma dq/dt; output y = c . x
+    int n = 0;
+    double phi[16] = {0}, gamma[4] = {0}, c[4] = {0};
+  };
+  const ReceptorParams& p_;
+  double dt_;
+  Filter ra_, pc_;
+  double noise_rho_, rate_decay_;
+};
+
+// The state of a receptor at rest with quantity q (first call): filters at
+// rest, noise drawn from its stationary distribution.
+void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
+                   unsigned long long stream, double* state);
+// Exponentially smoothed firing rate (Hz) held in the state.
+double ReceptorRate(const double* state);
+
+// One step without a stepper (builds one: for tests and one-off calls).
+int AdvanceReceptor(ReceptorClass cls, const ReceptorParams& p, double q_end, double dt,
+                    unsigned long long stream, double* state, double* voltage);
+
+// Leaky membranes with a drive linear in time over [0, span]:
+// tau du_k/dt = -u_k + a_k + b_k t, threshold 1, shared reset to 0 and an
+// absolute refractory period (membranes held at 0; `refractory_left`
+// carries over). The first crossing is found exactly (the membrane is
+// convex or concave in t, so it is bracketed and solved by safeguarded
+// Newton). Each spike time (from the interval start) is passed to
+// on_spike(t, ctx). Returns the spike count.
+int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, double span,
+                   double tau, double refractory, double* refractory_left,
+                   void (*on_spike)(double t, void* ctx), void* ctx);
 
 }  // namespace mjtouch
 

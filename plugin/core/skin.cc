@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cerrno>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
@@ -324,19 +325,16 @@ std::string CacheKey(const SkinConfig& c) {
   s << c.grid.n << ' ' << c.grid.pitch_m << ' ' << static_cast<int>(c.pad.shape) << ' '
     << c.pad.semi_axes_m[0] << ' ' << c.pad.semi_axes_m[1] << ' ' << c.pad.semi_axes_m[2]
     << ' ' << c.ridges.enabled << ' ' << c.ridges.pitch_m << ' ' << c.ridges.height_m << ' '
-    << c.ridges.angle_rad << ' ' << static_cast<int>(c.pressure_model) << ' ' << c.young_pa
+    << c.ridges.angle_rad << ' ' << static_cast<int>(c.ridges.profile) << ' '
+    << static_cast<int>(c.pressure_model) << ' ' << c.young_pa
     << ' ' << c.tolerance << ' ' << c.stiffness_pa_per_m << ' ' << c.poisson << ' '
     << c.shear << ' ' << c.population_radius_m;
   for (const auto& k : c.classes)
     s << ' ' << k.present << ' ' << k.density_per_cm2 << ' ' << k.depth_m << ' '
       << static_cast<int>(k.quantity);
-  const auto& r = c.receptor;
-  for (double m : r.sa1.merkel_cells) s << ' ' << m;
-  s << ' ' << r.sa1.k0_a_per_pa << ' ' << r.sa1.k1_a_s_per_pa << ' ' << r.sa1.i0_a << ' '
-    << r.sa1.capacitance_f << ' ' << r.sa1.resistance_ohm << ' ' << r.sa1.threshold_v << ' '
-    << r.sa1.refractory_s << ' ' << r.ra.gain_s_per_pa << ' ' << r.ra.tau_s << ' '
-    << r.ra.refractory_s << ' ' << r.pc.gain_s_per_pa << ' ' << r.pc.highpass_hz << ' '
-    << r.pc.tau_s << ' ' << r.pc.refractory_s;
+  s << " receptors " << ReceptorParamsKey(c.receptor) << " sites";
+  for (const auto& e : c.sites)
+    s << ' ' << static_cast<int>(e.cls) << ' ' << e.x_m << ' ' << e.y_m << ' ' << e.depth_m;
   for (bool o : c.outputs) s << ' ' << o;
   s << " skin " << c.layered << ' ' << c.base.rigid << ' ' << c.base.young_pa << ' '
     << c.base.poisson << ' ' << static_cast<int>(c.interface_side) << ' '
@@ -345,10 +343,108 @@ std::string CacheKey(const SkinConfig& c) {
   return s.str();
 }
 
+// Stage 4 attributes: afferent parameters (README "Afferent models") and
+// explicit receptor sites. Call after `classes`, `quantity` and the grid.
+void ParseAfferents(Reader& r, SkinConfig* cfg) {
+  auto& p = cfg->receptor;
+  // SA1 gains default to the Wang 2016 Table 1 row of the SA1 quantity.
+  WangTable1Gains(cfg->classes[0].quantity, &p.sa1);
+  r.Number("sa1_k0", &p.sa1.k0_a_per_pa, 0, false, 1e-6, false, "A per unit of q");
+  r.Number("sa1_k1", &p.sa1.k1_a_s_per_pa, 0, false, 1e-6, false, "A s per unit of q");
+  r.Number("sa1_i0", &p.sa1.i0_a, -1e-6, false, 1e-6, false, "A");
+  r.Number("sa1_c", &p.sa1.capacitance_f, 0, true, 1, false, "F");
+  r.Number("sa1_r", &p.sa1.resistance_ohm, 0, true, 1e15, false, "Ohm");
+  r.Number("sa1_vth", &p.sa1.threshold_v, 0, true, 10, false, "V");
+  r.Number("ra_gain", &p.ra.gain_s_per_pa, 0, false, 1, false, "s/Pa");
+  r.Number("ra_lowpass", &p.ra.lowpass_hz, 0, true, 1e4, false, "Hz");
+  r.Number("ra_tau", &p.ra.tau_s, 0, true, 10, false, "s");
+  r.Number("pc_gain", &p.pc.gain_s2_per_pa, 0, false, 1, false, "s^2/Pa");
+  r.Number("pc_highpass", &p.pc.highpass_hz, 0, true, 1e5, false, "Hz");
+  r.Number("pc_lowpass", &p.pc.lowpass_hz, 0, true, 1e5, false, "Hz");
+  r.Number("pc_tau", &p.pc.tau_s, 0, true, 10, false, "s");
+  double refractory = p.sa1.refractory_s;
+  r.Number("refractory", &refractory, 0, true, 1, false, "s");
+  p.sa1.refractory_s = p.ra.refractory_s = p.pc.refractory_s = refractory;
+  r.PerClass("noise", p.noise.sd, 0, false, 100, false, "(threshold units)");
+  r.Number("noise_tau", &p.noise.tau_s, 0, true, 10, false, "s");
+  const std::string seed = r.Raw("seed");
+  if (!seed.empty()) {
+    char* end = nullptr;
+    errno = 0;
+    const unsigned long long v = std::strtoull(seed.c_str(), &end, 10);
+    if (seed[0] == '-' || *end != '\0' || errno == ERANGE) {
+      r.Fail(Fmt("attribute `seed` = '%s' is not an integer in [0, 18446744073709551615]",
+                 seed.c_str()));
+    } else {
+      p.noise.seed = v;
+    }
+  }
+  r.Number("rate_tau", &p.rate_tau_s, 0, true, 100, false, "s");
+
+  // Explicit sites: "CLASS x y depth" (m, pad frame), entries separated by
+  // ';' or ','. They replace the density population.
+  std::string sites = r.Raw("sites");
+  if (sites.empty() || !r.ok()) return;
+  for (const char* key : {"classes", "density", "depth", "radius"}) {
+    if (!r.Raw(key).empty()) {
+      r.Fail(Fmt("attribute `sites` places the receptors explicitly; remove `%s` (valid with "
+                 "`sites`: per-class `quantity` and the afferent parameters)", key));
+      return;
+    }
+  }
+  for (char& ch : sites)
+    if (ch == ';' || ch == ',') ch = ' ';
+  const auto w = Words(sites);
+  const char* form = "entries 'CLASS x y depth' (CLASS in SA1 RA PC; x, y, depth in m)";
+  if (w.size() % 4 != 0) {
+    r.Fail(Fmt("attribute `sites` has %zu words; it needs %s separated by ';' or ','",
+               w.size(), form));
+    return;
+  }
+  const double limit = cfg->grid.HalfExtent() - cfg->grid.pitch_m;
+  bool depth_set[kNumClasses] = {false, false, false};
+  for (auto& k : cfg->classes) k.present = false;
+  for (size_t e = 0; e < w.size(); e += 4) {
+    int c = -1;
+    for (int k = 0; k < kNumClasses; ++k)
+      if (w[e] == ClassName(static_cast<ReceptorClass>(k))) c = k;
+    double x, y, depth;
+    if (c < 0 || !ToDouble(w[e + 1], &x) || !ToDouble(w[e + 2], &y) ||
+        !ToDouble(w[e + 3], &depth)) {
+      r.Fail(Fmt("attribute `sites` entry %zu ('%s %s %s %s') is not one of %s", e / 4 + 1,
+                 w[e].c_str(), w[e + 1].c_str(), w[e + 2].c_str(), w[e + 3].c_str(), form));
+      return;
+    }
+    if (std::abs(x) > limit || std::abs(y) > limit) {
+      r.Fail(Fmt("attribute `sites` entry %zu (%s at x = %g, y = %g m) is outside the taxel "
+                 "grid; valid range |x|, |y| <= nx * pitch / 2 - pitch = %g m", e / 4 + 1,
+                 w[e].c_str(), x, y, limit));
+      return;
+    }
+    ClassConfig& k = cfg->classes[c];
+    if (!(depth > 0 && depth <= 0.02)) {
+      r.Fail(Fmt("attribute `sites` entry %zu (%s) depth = %g m is out of range; valid range "
+                 "(0, 0.02] m", e / 4 + 1, w[e].c_str(), depth));
+      return;
+    }
+    if (depth_set[c] && depth != k.depth_m) {
+      r.Fail(Fmt("attribute `sites` entry %zu: every %s site must have the same depth (its "
+                 "kernel table and material); got %g and %g m", e / 4 + 1, w[e].c_str(),
+                 k.depth_m, depth));
+      return;
+    }
+    depth_set[c] = true;
+    k.present = true;
+    k.depth_m = depth;
+    cfg->sites.push_back({static_cast<ReceptorClass>(c), x, y, depth});
+  }
+}
+
 }  // namespace
 
 const char* OutputName(int block) {
-  static const char* names[kNumOutputs] = {"spikes", "stress", "voltage", "force", "pressure"};
+  static const char* names[kNumOutputs] = {"spikes", "stress", "voltage", "force", "pressure",
+                                           "rate"};
   return names[block];
 }
 
@@ -364,9 +460,11 @@ SkinConfig::SkinConfig() {
 const std::vector<const char*>& SkinAttributeKeys() {
   static const std::vector<const char*> keys = {
       "texture", "texture_group", "nx", "pitch", "ridges", "ridge_pitch", "ridge_height", "ridge_angle",
+      "ridge_profile",
       "pressure", "young", "tolerance", "stiffness", "poisson", "shear", "classes", "density", "depth", "quantity", "radius",
       "outputs", "sa1_merkel", "sa1_k0", "sa1_k1", "sa1_i0", "sa1_c", "sa1_r", "sa1_vth",
       "ra_gain", "ra_tau", "pc_gain", "pc_tau", "pc_highpass", "refractory", "visual",
+      "ra_lowpass", "pc_lowpass", "noise", "noise_tau", "seed", "rate_tau", "sites",
       "skin", "layers", "base", "interface_side", "stress_method"};
   return keys;
 }
@@ -379,6 +477,11 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
   r.Bool("ridges", &cfg->ridges.enabled);
   r.Number("ridge_pitch", &cfg->ridges.pitch_m, 0, true, 1e-2, false, "m");
   r.Number("ridge_height", &cfg->ridges.height_m, 0, true, 1e-3, false, "m");
+  const std::string profile = r.Raw("ridge_profile");
+  if (!profile.empty() && !ParseRidgeProfile(profile, &cfg->ridges.profile)) {
+    r.Fail(Fmt("attribute `ridge_profile` = '%s' is not a ridge profile; valid: sine triangle "
+               "square", profile.c_str()));
+  }
   double angle_deg = cfg->ridges.angle_rad * 180.0 / kPi;
   r.Number("ridge_angle", &angle_deg, -180, false, 180, false, "deg");
   cfg->ridges.angle_rad = angle_deg * kPi / 180.0;
@@ -459,7 +562,7 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
         if (w == OutputName(b)) k = b;
       if (k < 0) {
         r.Fail(Fmt("attribute `outputs`: unknown output '%s'; valid: spikes stress voltage "
-                   "force pressure", w.c_str()));
+                   "force pressure rate", w.c_str()));
         break;
       }
       cfg->outputs[k] = true;
@@ -482,20 +585,7 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
       r.Fail("attribute `sa1_merkel`: Merkel cells per heminode must be 1 to 4 numbers in [0, 1000]");
     if (r.ok()) p.sa1.merkel_cells = m;
   }
-  r.Number("sa1_k0", &p.sa1.k0_a_per_pa, 0, false, 1e-6, false, "A/Pa");
-  r.Number("sa1_k1", &p.sa1.k1_a_s_per_pa, 0, false, 1e-6, false, "A s/Pa");
-  r.Number("sa1_i0", &p.sa1.i0_a, -1e-6, false, 1e-6, false, "A");
-  r.Number("sa1_c", &p.sa1.capacitance_f, 0, true, 1, false, "F");
-  r.Number("sa1_r", &p.sa1.resistance_ohm, 0, true, 1e15, false, "Ohm");
-  r.Number("sa1_vth", &p.sa1.threshold_v, 0, true, 10, false, "V");
-  r.Number("ra_gain", &p.ra.gain_s_per_pa, 0, false, 1, false, "s/Pa");
-  r.Number("ra_tau", &p.ra.tau_s, 0, true, 10, false, "s");
-  r.Number("pc_gain", &p.pc.gain_s_per_pa, 0, false, 1, false, "s/Pa");
-  r.Number("pc_tau", &p.pc.tau_s, 0, true, 10, false, "s");
-  r.Number("pc_highpass", &p.pc.highpass_hz, 0, true, 1e5, false, "Hz");
-  double refractory = p.sa1.refractory_s;
-  r.Number("refractory", &refractory, 0, true, 1, false, "s");
-  p.sa1.refractory_s = p.ra.refractory_s = p.pc.refractory_s = refractory;
+  ParseAfferents(r, cfg);
   if (r.ok()) ParseElasticSkin(r, cfg);
   if (!r.ok()) return false;
   if (!CheckElasticSkin(*cfg, error)) return false;
@@ -543,6 +633,21 @@ std::vector<ReceptorSite> SkinModel::PlaceReceptors(const SkinConfig& cfg) {
       depth_index = static_cast<int>(depths.size());
       depths.push_back(k.depth_m);
     }
+    if (!cfg.sites.empty()) {  // `sites`: this class's entries, in the order given
+      for (const auto& e : cfg.sites) {
+        if (static_cast<int>(e.cls) != c) continue;
+        ReceptorSite site;
+        site.cls = e.cls;
+        site.i = cfg.grid.Nearest(e.x_m);
+        site.j = cfg.grid.Nearest(e.y_m);
+        site.x_m = cfg.grid.Centre(site.i);
+        site.y_m = cfg.grid.Centre(site.j);
+        site.depth_m = k.depth_m;
+        site.depth_index = depth_index;
+        sites.push_back(site);
+      }
+      continue;
+    }
     const int count = static_cast<int>(std::lround(k.density_per_cm2 * area_cm2));
     for (int s = 0; s < count; ++s) {
       const double r = R * std::sqrt((s + 0.5) / count);
@@ -585,7 +690,16 @@ bool FinalizeSkinConfig(SkinConfig* cfg, std::string* error) {
   // Receptor sites must lie under the pad's skin (the receptor count depends
   // on attributes only, so this is a check, not a refit).
   const double footprint = 0.9 * std::min(ax[0], ax[1]);
-  if (cfg->population_radius_m > footprint) {
+  for (size_t e = 0; e < cfg->sites.size(); ++e) {
+    const ExplicitSite& s = cfg->sites[e];
+    if (std::hypot(s.x_m, s.y_m) > footprint) {
+      *error = Fmt("mjtouch.skin: attribute `sites` entry %zu (%s at x = %g, y = %g m) is not "
+                   "under the pad; valid: within %g m of the pole (0.9 x the smaller semi-axis)",
+                   e + 1, ClassName(s.cls), s.x_m, s.y_m, footprint);
+      return false;
+    }
+  }
+  if (cfg->sites.empty() && cfg->population_radius_m > footprint) {
     *error = Fmt("mjtouch.skin: attribute `radius` = %g m%s exceeds 0.9 x the pad's smaller "
                  "semi-axis; valid range [0, %g] m", cfg->population_radius_m,
                  cfg->radius_is_default ? " (default)" : "", footprint);
@@ -610,7 +724,7 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
   // Kernel tables only for the depths and components the receptors use, and
   // only if an output needs stress.
   const bool need_stress = cfg.outputs[kOutSpikes] || cfg.outputs[kOutStress] ||
-                           cfg.outputs[kOutVoltage];
+                           cfg.outputs[kOutVoltage] || cfg.outputs[kOutRate];
   std::vector<double> depths;
   std::array<bool, kNumStress> comps{};
   for (const auto& s : model->sites_) {
@@ -729,19 +843,20 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
   }
 
   // Receptors advance every step (membranes decay without contact).
-  const bool need_receptors = cfg.outputs[kOutSpikes] || cfg.outputs[kOutVoltage];
-  if (need_receptors) {
+  const bool need_receptors =
+      cfg.outputs[kOutSpikes] || cfg.outputs[kOutVoltage] || cfg.outputs[kOutRate];
+  if (need_receptors && elapsed > 0.0) {
+    const ReceptorStepper stepper(cfg.receptor, elapsed);  // filters for this step size
     for (int r = 0; r < nrec; ++r) {
       double* st = receptor_state + static_cast<size_t>(r) * kReceptorStateSize;
-      if (elapsed > 0.0) {
-        double v;
-        last_spikes[r] = AdvanceReceptor(sites[r].cls, cfg.receptor, ws->quantity[r],
-                                         elapsed, st, &v);
-        last_voltage[r] = v;
-      } else if (!time_valid) {
-        PrimeReceptor(ws->quantity[r], st);
-      }
+      double v;
+      last_spikes[r] = stepper.Advance(sites[r].cls, ws->quantity[r], r, st, &v);
+      last_voltage[r] = v;
     }
+  } else if (need_receptors && !time_valid) {
+    for (int r = 0; r < nrec; ++r)
+      PrimeReceptor(cfg.receptor, sites[r].cls, ws->quantity[r], r,
+                    receptor_state + static_cast<size_t>(r) * kReceptorStateSize);
   }
   double* cursor = out;
   if (cfg.outputs[kOutSpikes]) {
@@ -767,6 +882,11 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
     const size_t N = cfg.grid.Size();
     for (size_t i = 0; i < N; ++i) cursor[i] = touching ? tf.pressure_pa[i] : 0.0;
     cursor += N;
+  }
+  if (cfg.outputs[kOutRate]) {
+    for (int r = 0; r < nrec; ++r)
+      cursor[r] = ReceptorRate(receptor_state + static_cast<size_t>(r) * kReceptorStateSize);
+    cursor += nrec;
   }
 }
 

@@ -26,12 +26,20 @@
 namespace mjtouch {
 
 // Output blocks, in sensordata order.
-enum OutputBlock { kOutSpikes = 0, kOutStress, kOutVoltage, kOutForce, kOutPressure, kNumOutputs };
+enum OutputBlock {
+  kOutSpikes = 0, kOutStress, kOutVoltage, kOutForce, kOutPressure, kOutRate, kNumOutputs
+};
 const char* OutputName(int block);
 constexpr int kForceBlockSize = 4;  // normal, tangential x, y (N, pad frame), indentation (m)
 
 // `visual` attribute: none, pad (on the skin), above (a copy over the pad), both.
 enum class VisualMode { kNone = 0, kPad, kAbove, kBoth };
+
+// A receptor placed by the `sites` attribute (pad frame, m).
+struct ExplicitSite {
+  ReceptorClass cls;
+  double x_m, y_m, depth_m;
+};
 
 struct ClassConfig {
   bool present = true;
@@ -63,7 +71,9 @@ struct SkinConfig {
   bool radius_is_default = false;    // unset: fitted to the grid and pad
   ClassConfig classes[kNumClasses];
   ReceptorParams receptor;
-  bool outputs[kNumOutputs] = {true, true, false, true, false};
+  bool outputs[kNumOutputs] = {true, true, false, true, false, false};
+  // `sites`: explicit receptors (replace the density population when set).
+  std::vector<ExplicitSite> sites;
   // Where the MuJoCo adapter draws the pressure heatmap and receptor flashes
   // (drawing only: not part of the physics, nor of the kernel cache key).
   VisualMode visual = VisualMode::kBoth;

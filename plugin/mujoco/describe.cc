@@ -45,7 +45,16 @@ extern "C" __attribute__((visibility("default"))) int mjtouch_describe(const mjM
     js << "], \"quantity\": [";
     for (int c = 0; c < kNumClasses; ++c)
       js << (c ? ", " : "") << "\"" << QuantityName(cfg.classes[c].quantity) << "\"";
-    js << "]}";
+    js << "]";
+    // The elastic skin and the time its kernel tables took to build (once per
+    // configuration: found in the cache while an MjData of the model lives).
+    std::string build_error;
+    if (const auto model = SkinModel::Build(cfg, &build_error)) {
+      js << ", \"substrate\": \"" << model->substrate().Describe()
+         << "\", \"kernel_build_s\": " << model->kernel_build_seconds()
+         << ", \"fft_spectra\": " << (model->spectra() ? "true" : "false");
+    }
+    js << "}";
   }
   const std::string s = js.str();
   if (static_cast<int>(s.size()) + 1 > len) return static_cast<int>(s.size()) + 1;

@@ -1,0 +1,158 @@
+"""Per-step cost of the stress stage: layered vs homogeneous kernel, direct
+summation vs FFT convolution (a benchmark, not a test).
+
+    python examples/bench_kernel.py            # default: n = 128, 0.5 N, 250 receptors
+    python examples/bench_kernel.py --repeats 400 --receptors 250
+
+It presses the default fingertip (scenes.Fingertip(): 128 x 128 taxels at
+0.1 mm, ridged skin) onto the default grating with 0.5 N, slides it for
+50 ms (so there is friction shear), and takes the plugin's pressure field and
+tangential force of the last step. Shear as in the plugin (full slip,
+q = p F_t / F_n). 250 receptors on a sunflower spiral within the default
+5 mm radius, split SA1 : RA : PC as the default densities (70 : 140 : 21 per
+cm^2) at the default depths (0.75, 0.75, 2 mm) and quantities (SA1 maxcomp:
+all six components; RA and PC s_zz). The stress stage alone is timed
+(mjtouch.core.StressEngine, one core, the active cells found once as the
+pressure stage hands them over), for the layered Shao skin and for the
+homogeneous half-space (nu = 0.48), by both paths; and the cost model's
+estimates, whose constants (plugin/core/stress_field.cc) are fitted here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import mujoco
+import numpy as np
+
+from mjtouch import core, scenes
+from mjtouch.sensor import SkinLayout
+
+ALL = range(6)
+SZZ = (2,)
+
+
+def default_contact(force_n: float):
+    tip = scenes.Fingertip(skin={"outputs": "force pressure"})
+    proto = scenes.Protocol(force_n=force_n)
+    model = scenes.build_model(tip, scenes.Texture(), proto)
+    data = mujoco.MjData(model)
+    layout = SkinLayout.from_model(model)
+    ctrl = scenes.controls(proto, 0.05)
+    for row in ctrl:
+        data.ctrl[:] = row
+        mujoco.mj_step(model, data)
+    n = layout.nx
+    p = layout.block(data.sensordata, "pressure").reshape(n, n).astype(np.float32)
+    f = layout.block(data.sensordata, "force")
+    ratio = (f[1] / f[0], f[2] / f[0]) if f[0] > 0 else (0.0, 0.0)
+    return tip, p, ratio, f
+
+
+def sites(n: int, pitch: float, count: int, radius: float = 5e-3):
+    """count sites on a Vogel spiral, classes in the default density ratio."""
+    dens = np.array([70.0, 140.0, 21.0])
+    per = np.round(count * dens / dens.sum()).astype(int)
+    per[1] += count - per.sum()
+    golden = math.pi * (3 - math.sqrt(5))
+    ij, cls = [], []
+    for c, m in enumerate(per):
+        for s in range(m):
+            r = radius * math.sqrt((s + 0.5) / m)
+            th = s * golden + 0.5 * c
+            i = int(np.clip(round(r * math.cos(th) / pitch + n / 2 - 0.5), 0, n - 1))
+            j = int(np.clip(round(r * math.sin(th) / pitch + n / 2 - 0.5), 0, n - 1))
+            ij.append((i, j))
+            cls.append(c)
+    return np.array(ij), np.array(cls)
+
+
+def engine(skin, n, pitch, ij, cls):
+    """The plugin's stress stage for these sites: SA1 all six components at
+    0.75 mm, RA s_zz at 0.75 mm, PC s_zz at 2 mm (one engine, so the FFT path
+    shares its forward transforms as in the plugin)."""
+    depth_index = np.where(cls == 2, 1, 0)
+    comps = [ALL if c == 0 else SZZ for c in cls]
+    return core.StressEngine(skin, n, pitch, [0.75e-3, 2.0e-3], ij, depth_index=depth_index,
+                             components=comps, method="fft")
+
+
+def calibrate(n, pitch, ij, p, qx, qy, repeats):
+    """Fit the cost model's constants (plugin/core/stress_field.cc) here:
+    seconds per multiply-add (direct), per N^2 log2(N^2) of one 2D transform,
+    and per N^2 x load of one output pair's spectral products (FFT)."""
+    e1 = core.StressEngine(0.48, n, pitch, [0.75e-3], ij, components=SZZ, method="fft")
+    e2 = core.StressEngine(0.48, n, pitch, [0.75e-3, 2e-3], ij,
+                           depth_index=np.arange(len(ij)) % 2, method="fft")
+    _, t1, _, _ = e1.stress(p, method="fft", repeats=repeats, timing=True)
+    _, t2, _, _ = e2.stress(p, qx, qy, method="fft", repeats=repeats, timing=True)
+    _, td, _, active = e2.stress(p, qx, qy, method="direct", repeats=repeats, timing=True)
+    N = e1.fft_n
+    P, Q = N * N * math.log2(N * N), N * N
+    # t1 = a (1 forward + 1 pair) P + b (1 pair x 1 load) Q
+    # t2 = a (2 forward + 6 pairs) P + b (6 pairs x 3 loads) Q
+    a, b = np.linalg.solve([[2 * P, Q], [8 * P, 18 * Q]], [t1, t2])
+    c = td / (len(ij) * 6 * 3 * active)
+    print(f"cost model fit (N = {N}): kDirectSecondsPerMac = {c:.3g}, kFftSecondsPerPoint = "
+          f"{a:.3g}, kMulSecondsPerPoint = {b:.3g}")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--force", type=float, default=0.5, help="normal force, N")
+    ap.add_argument("--receptors", type=int, default=250)
+    ap.add_argument("--repeats", type=int, default=200)
+    ap.add_argument("--calibrate", action="store_true", help="fit the cost model's constants")
+    args = ap.parse_args(argv)
+
+    tip, p, ratio, f = default_contact(args.force)
+    n, pitch = tip.nx, tip.pitch_m
+    qx, qy = (p * ratio[0]).astype(np.float32), (p * ratio[1]).astype(np.float32)
+    ij, cls = sites(n, pitch, args.receptors)
+    print(f"contact: {f[0]:.3f} N normal, {math.hypot(f[1], f[2]):.3f} N tangential, "
+          f"{int((p > 0).sum())} active cells of {n}x{n} at {pitch * 1e3:.2g} mm; "
+          f"{len(ij)} receptors (SA1 {int((cls == 0).sum())}, RA {int((cls == 1).sum())}, "
+          f"PC {int((cls == 2).sum())})")
+
+    if args.calibrate:
+        calibrate(n, pitch, ij, p, qx, qy, args.repeats)
+    skins = {"layered (Shao)": core.LayeredSkin(), "homogeneous (nu 0.48)": 0.48}
+    results = {}
+    for name, skin in skins.items():
+        t0 = time.perf_counter()
+        e = engine(skin, n, pitch, ij, cls)
+        build = time.perf_counter() - t0
+        row = {"build_s": build}
+        for method in ("direct", "fft"):
+            e.stress(p, qx, qy, method=method, repeats=3)  # warm up
+            out, row[method], _, active = e.stress(p, qx, qy, method=method,
+                                                   repeats=args.repeats, timing=True)
+            row[method + "_out"] = out
+        row["est_direct"], row["est_fft"] = e.estimated_cost(active, True)
+        results[name] = row
+        print(f"{name:22s} tables+spectra {build:6.2f} s | direct {row['direct'] * 1e6:8.1f} us"
+              f" | fft {row['fft'] * 1e6:8.1f} us | model: direct {row['est_direct'] * 1e6:8.1f}"
+              f" us, fft {row['est_fft'] * 1e6:8.1f} us")
+        a, b = row["direct_out"], row["fft_out"]
+        agree = np.abs(a - b).max() / np.abs(a).max()
+        print(f"{'':22s} direct vs fft: max difference {agree:.1e} of the largest stress")
+
+    lay, hom = results["layered (Shao)"], results["homogeneous (nu 0.48)"]
+    print(f"ratio layered / homogeneous: direct {lay['direct'] / hom['direct']:.3f}, "
+          f"fft {lay['fft'] / hom['fft']:.3f}")
+    best = min(lay["direct"], lay["fft"])
+    print(f"per-step stress cost (layered, best path): {best * 1e6:.1f} us; goal 100 us: "
+          f"{'met' if best <= 100e-6 else 'NOT met'}")
+    # What bounds the direct path: one multiply-add per (site, component,
+    # load, active cell), streaming the float tables.
+    active = int((p > 0).sum())
+    macs = (int((cls == 0).sum()) * 6 + int((cls != 0).sum())) * 3 * active
+    print(f"direct path: {macs / 1e6:.2f} M multiply-adds per step -> "
+          f"{lay['direct'] / macs * 1e9:.3f} ns each, {macs * 8 / lay['direct'] / 1e9:.1f} GB/s "
+          "of table + traction reads")
+
+
+if __name__ == "__main__":
+    main()
