@@ -230,7 +230,7 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float, young_pa
 # (plugin/core/stress_field.*), without a MuJoCo scene.
 
 SIDES = {None: -1, "upper": 0, "lower": 1}
-STRESS_METHODS = {"auto": 0, "direct": 1, "fft": 2}
+STRESS_METHODS = {"auto": 0, "direct": 1, "fft": 2, "tree": 3}
 TRANSFER_NAMES = ("p_xixi", "p_etaeta", "p_zz", "p_xiz", "q_xixi", "q_etaeta", "q_zz", "q_xiz",
                   "a_etaz", "a_xieta")
 _layered_declared = False
@@ -258,7 +258,7 @@ def _llib():
         lib.mjtouch_layered_stress.argtypes = [vp, i, i, d, d, d, d, i, dp]
         lib.mjtouch_layered_lattice_table.argtypes = [vp, d, d, i, i, fp]
         lib.mjtouch_stress_engine_create.restype = vp
-        lib.mjtouch_stress_engine_create.argtypes = [vp, d, i, d, i, dp, i, ip, ip, ip, ip, i, cp, i]
+        lib.mjtouch_stress_engine_create.argtypes = [vp, d, i, d, i, dp, i, ip, ip, ip, ip, i, d, cp, i]
         lib.mjtouch_stress_engine_free.argtypes = [vp]
         lib.mjtouch_stress_engine_info.argtypes = [vp, dp]
         lib.mjtouch_stress_engine_cost.argtypes = [vp, i, i, dp]
@@ -445,11 +445,13 @@ class StressEngine:
     (and FFT spectra) at the given depths, and receptor sites (cell i, j;
     depth index; wanted components). ``skin``: a :class:`LayeredSkin`, or a
     float Poisson's ratio for a homogeneous half-space. ``method`` at creation:
-    ``"auto"`` builds FFT spectra where the FFT path can win (as the plugin),
-    ``"direct"`` never, ``"fft"`` always."""
+    ``"auto"`` builds FFT spectra where the FFT path can win (as the plugin
+    with stress_method="auto"), ``"direct"`` never, ``"fft"`` always,
+    ``"tree"`` builds the hierarchical path with opening angle ``theta``
+    (the plugin's default, stress_method="tree")."""
 
     def __init__(self, skin, n: int, pitch_m: float, depths_m, receptors_ij, depth_index=None,
-                 components=None, method: str = "auto"):
+                 components=None, method: str = "auto", theta: float = 0.5):
         if method not in STRESS_METHODS:
             raise ValueError(f"method {method!r} is not one of {sorted(STRESS_METHODS)}")
         if isinstance(skin, LayeredSkin):
@@ -476,7 +478,7 @@ class StressEngine:
         h = lib.mjtouch_stress_engine_create(
             handle, poisson, int(n), float(pitch_m), depths.size, _ptr(depths, ctypes.c_double),
             nrec, _ptr(ri, ctypes.c_int), _ptr(rj, ctypes.c_int), _ptr(di, ctypes.c_int),
-            _ptr(mask, ctypes.c_int), STRESS_METHODS[method], err, 512)
+            _ptr(mask, ctypes.c_int), STRESS_METHODS[method], float(theta), err, 512)
         if not h:
             raise ValueError(err.value.decode())
         self._skin = skin  # keeps the substrate alive
@@ -484,11 +486,12 @@ class StressEngine:
         self._finalizer = weakref.finalize(self, lib.mjtouch_stress_engine_free, self._h)
         self.n = int(n)
         self.nrec = nrec
-        info = np.zeros(4)
+        info = np.zeros(6)
         lib.mjtouch_stress_engine_info(self._h, _ptr(info, ctypes.c_double))
         self.table_build_s, self.spectra_build_s = float(info[0]), float(info[1])
         self.fft_n = int(info[2])
         self.table_bytes_per_depth = int(info[3])
+        self.tree_build_s, self.tree_terms_per_site = float(info[4]), float(info[5])
 
     def estimated_cost(self, active_cells: int, shear: bool = True) -> tuple[float, float]:
         """The cost model's (direct, fft) seconds per call."""
@@ -526,10 +529,12 @@ class StressEngine:
             ctypes.byref(active))
         if rc == 2:
             raise ValueError("method 'fft' needs FFT spectra: create the engine with method='fft'")
+        if rc == 3:
+            raise ValueError("method 'tree' needs the tree: create the engine with method='tree'")
         if rc:
             raise ValueError("stress: invalid arguments")
         if timing:
-            name = {1: "direct", 2: "fft"}[used.value]
+            name = {1: "direct", 2: "fft", 3: "tree"}[used.value]
             return out, sec.value, name, active.value
         return out
 

@@ -241,6 +241,7 @@ struct StressEngine {
   std::unique_ptr<mjtouch::Substrate> halfspace;  // when no layered substrate is given
   std::shared_ptr<const mjtouch::KernelTables> tables;
   std::shared_ptr<const mjtouch::KernelSpectra> spectra;
+  std::shared_ptr<const mjtouch::StressTree> tree;
   std::vector<mjtouch::StressSite> sites;
   mjtouch::StressScratch scratch;
   std::vector<mjtouch::Stress6> out;
@@ -403,15 +404,17 @@ __attribute__((visibility("default"))) int mjtouch_layered_lattice_table(void* h
 // when layered is null. Sites: cell (ri, rj), depth depths[depth_index], the
 // components in want_mask (bit c for Voigt component c). method 0 auto (FFT
 // spectra built where the FFT path can win, as in the plugin), 1 direct (no
-// spectra), 2 fft (spectra built).
+// spectra), 2 fft (spectra built), 3 tree (hierarchical, opening angle
+// theta; with shear coefficients).
 __attribute__((visibility("default"))) void* mjtouch_stress_engine_create(
     void* layered, double poisson, int n, double pitch_m, int ndepth, const double* depths,
     int nsite, const int* ri, const int* rj, const int* depth_index, const int* want_mask,
-    int method, char* err, int errlen) {
+    int method, double theta, char* err, int errlen) {
   auto e = std::make_unique<StressEngine>();
-  if (n < 1 || n > 512 || !(pitch_m > 0) || ndepth < 1 || method < 0 || method > 2) {
-    CopyError("need 1 <= n <= 512, pitch_m > 0, ndepth >= 1, method 0 (auto), 1 (direct) or 2 (fft)",
-              err, errlen);
+  if (n < 1 || n > 512 || !(pitch_m > 0) || ndepth < 1 || method < 0 || method > 3 ||
+      (method == 3 && !(theta > 0 && theta <= 2))) {
+    CopyError("need 1 <= n <= 512, pitch_m > 0, ndepth >= 1, method 0 (auto), 1 (direct), 2 "
+              "(fft) or 3 (tree, theta in (0, 2])", err, errlen);
     return nullptr;
   }
   const Substrate* sub = static_cast<LayeredSubstrate*>(layered);
@@ -451,6 +454,7 @@ __attribute__((visibility("default"))) void* mjtouch_stress_engine_create(
   const StressCost widest = EstimateStressCost(*e->tables, e->sites, n * n, true);
   if (method == 2 || (method == 0 && widest.fft_s < widest.direct_s))
     e->spectra = BuildKernelSpectra(*e->tables, e->sites);
+  if (method == 3) e->tree = StressTree::Build(*e->tables, e->sites, true, theta);
   e->out.resize(e->sites.size());
   return e.release();
 }
@@ -459,14 +463,16 @@ __attribute__((visibility("default"))) void mjtouch_stress_engine_free(void* h) 
   delete static_cast<StressEngine*>(h);
 }
 
-// out4: table build s, spectra build s (0: none), padded FFT size (0: none),
-// table bytes per depth.
-__attribute__((visibility("default"))) void mjtouch_stress_engine_info(void* h, double* out4) {
+// out6: table build s, spectra build s (0: none), padded FFT size (0: none),
+// table bytes per depth, tree build s (0: none), tree terms per site.
+__attribute__((visibility("default"))) void mjtouch_stress_engine_info(void* h, double* out6) {
   const auto* e = static_cast<StressEngine*>(h);
-  out4[0] = e->tables->build_seconds;
-  out4[1] = e->spectra ? e->spectra->build_seconds : 0.0;
-  out4[2] = e->spectra ? e->spectra->fft_n : 0;
-  out4[3] = e->tables->tables.empty() ? 0.0 : 4.0 * e->tables->tables[0].size();
+  out6[0] = e->tables->build_seconds;
+  out6[1] = e->spectra ? e->spectra->build_seconds : 0.0;
+  out6[2] = e->spectra ? e->spectra->fft_n : 0;
+  out6[3] = e->tables->tables.empty() ? 0.0 : 4.0 * e->tables->tables[0].size();
+  out6[4] = e->tree ? e->tree->build_seconds() : 0.0;
+  out6[5] = e->tree ? e->tree->mean_terms() : 0.0;
 }
 
 // The cost model's estimate (s) of each path: out2 = direct, fft.
@@ -480,22 +486,25 @@ __attribute__((visibility("default"))) void mjtouch_stress_engine_cost(void* h, 
 
 // Stress at every site (nsite x 6, Pa) from traction fields (n*n float, Pa,
 // row-major j * n + i; shear_x / shear_y both null or both given). method 0
-// auto, 1 direct, 2 fft. The stage is run `repeats` times (>= 1) and
+// auto, 1 direct, 2 fft, 3 tree. The stage is run `repeats` times (>= 1) and
 // *seconds_per_call gets the mean wall time of one (one core; the active
 // cells are found once, outside the timing, as the pressure stage gives
-// them). *method_used: 1 direct, 2 fft; *active_cells: cells with traction.
+// them). *method_used: 1 direct, 2 fft, 3 tree; *active_cells: cells with
+// traction.
 __attribute__((visibility("default"))) int mjtouch_stress_engine_eval(
     void* h, const float* pressure, const float* shear_x, const float* shear_y, int method,
     int repeats, double* out, double* seconds_per_call, int* method_used, int* active_cells) {
   auto* e = static_cast<StressEngine*>(h);
-  if (method < 0 || method > 2 || repeats < 1 || (!shear_x) != (!shear_y)) return 1;
+  if (method < 0 || method > 3 || repeats < 1 || (!shear_x) != (!shear_y)) return 1;
   if (method == 2 && !e->spectra) return 2;
+  if (method == 3 && !e->tree) return 3;
   const int n = e->tables->n;
   FindActiveRuns(n, pressure, shear_x, shear_y, &e->runs);
   StressMethod used = StressMethod::kDirect;
   const auto t0 = std::chrono::steady_clock::now();
   for (int k = 0; k < repeats; ++k)
-    used = ComputeStresses(*e->tables, e->spectra.get(), static_cast<StressMethod>(method),
+    used = ComputeStresses(*e->tables, e->spectra.get(), e->tree.get(),
+                           static_cast<StressMethod>(method),
                            e->sites, e->runs, pressure, shear_x, shear_y, &e->scratch,
                            e->out.data());
   const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -147,13 +147,19 @@ class Reader {
 
 // The elastic skin: `skin` (layered | halfspace), `layers` ("thickness E nu"
 // groups separated by ';' or ','; m, Pa, -), `base` (rigid | "E nu"),
-// `interface_side` (upper | lower), `stress_method` (auto | direct | fft).
+// `interface_side` (upper | lower), `stress_method` (tree | direct | fft |
+// auto), `stress_theta` (tree's opening angle).
 void ParseElasticSkin(Reader& r, SkinConfig* cfg) {
   constexpr double kMaxThicknessM = 1.0, kMaxYoungPa = 1e12;
   constexpr size_t kMaxLayers = 64;  // LayeredSubstrate::Create's limit
   const std::string method = r.Raw("stress_method");
   if (!method.empty() && !ParseStressMethod(method, &cfg->stress_method))
-    r.Fail(Fmt("attribute `stress_method` = '%s' is not one of: auto direct fft", method.c_str()));
+    r.Fail(Fmt("attribute `stress_method` = '%s' is not one of: tree direct fft auto",
+               method.c_str()));
+  r.Number("stress_theta", &cfg->stress_theta, 0, true, 2, false, "(block side / distance)");
+  if (r.ok() && !r.Raw("stress_theta").empty() && cfg->stress_method != StressMethod::kTree)
+    r.Fail(Fmt("attribute `stress_theta` applies to stress_method=\"tree\" only (stress_method "
+               "is \"%s\")", StressMethodName(cfg->stress_method)));
   const std::string skin = r.Raw("skin");
   if (skin == "layered") {
     cfg->layered = true;
@@ -338,7 +344,7 @@ std::string CacheKey(const SkinConfig& c) {
   for (bool o : c.outputs) s << ' ' << o;
   s << " skin " << c.layered << ' ' << c.base.rigid << ' ' << c.base.young_pa << ' '
     << c.base.poisson << ' ' << static_cast<int>(c.interface_side) << ' '
-    << static_cast<int>(c.stress_method);
+    << static_cast<int>(c.stress_method) << ' ' << c.stress_theta;
   for (const auto& l : c.layers) s << ' ' << l.thickness_m << ' ' << l.young_pa << ' ' << l.poisson;
   return s.str();
 }
@@ -465,7 +471,7 @@ const std::vector<const char*>& SkinAttributeKeys() {
       "outputs", "sa1_merkel", "sa1_k0", "sa1_k1", "sa1_i0", "sa1_c", "sa1_r", "sa1_vth",
       "ra_gain", "ra_tau", "pc_gain", "pc_tau", "pc_highpass", "refractory", "visual",
       "ra_lowpass", "pc_lowpass", "noise", "noise_tau", "seed", "rate_tau", "sites",
-      "skin", "layers", "base", "interface_side", "stress_method"};
+      "skin", "layers", "base", "interface_side", "stress_method", "stress_theta"};
   return keys;
 }
 
@@ -757,23 +763,27 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
   if (need_stress && !depths.empty()) {
     model->kernel_ = BuildKernelTables(*model->substrate_, cfg.grid.n, cfg.grid.pitch_m, depths,
                                        comps);
-    // FFT spectra only where the FFT path can win (for the widest possible
-    // contact, every cell active) and fits in memory.
-    constexpr double kMaxSpectraBytes = 256.0 * 1024 * 1024;
     const KernelTables& kt = *model->kernel_;
-    const double bytes = KernelSpectraBytes(kt, model->stress_sites_);
-    const StressCost widest =
-        EstimateStressCost(kt, model->stress_sites_, cfg.grid.n * cfg.grid.n, cfg.shear);
-    if (cfg.stress_method == StressMethod::kFft && bytes > kMaxSpectraBytes) {
-      *error = Fmt("mjtouch.skin: attribute `stress_method` = fft needs %.0f MiB of kernel spectra "
-                   "at nx = %d; the limit is %.0f MiB (use auto or direct)", bytes / 1048576.0,
-                   cfg.grid.n, kMaxSpectraBytes / 1048576.0);
-      return nullptr;
+    if (cfg.stress_method == StressMethod::kTree) {
+      model->tree_ = StressTree::Build(kt, model->stress_sites_, cfg.shear, cfg.stress_theta);
+    } else {
+      // FFT spectra only where the FFT path can win (for the widest possible
+      // contact, every cell active) and fits in memory.
+      constexpr double kMaxSpectraBytes = 256.0 * 1024 * 1024;
+      const double bytes = KernelSpectraBytes(kt, model->stress_sites_);
+      const StressCost widest =
+          EstimateStressCost(kt, model->stress_sites_, cfg.grid.n * cfg.grid.n, cfg.shear);
+      if (cfg.stress_method == StressMethod::kFft && bytes > kMaxSpectraBytes) {
+        *error = Fmt("mjtouch.skin: attribute `stress_method` = fft needs %.0f MiB of kernel "
+                     "spectra at nx = %d; the limit is %.0f MiB (use tree, auto or direct)",
+                     bytes / 1048576.0, cfg.grid.n, kMaxSpectraBytes / 1048576.0);
+        return nullptr;
+      }
+      const bool fft = cfg.stress_method == StressMethod::kFft ||
+                       (cfg.stress_method == StressMethod::kAuto && bytes <= kMaxSpectraBytes &&
+                        widest.fft_s < widest.direct_s);
+      if (fft) model->spectra_ = BuildKernelSpectra(kt, model->stress_sites_);
     }
-    const bool fft = cfg.stress_method == StressMethod::kFft ||
-                     (cfg.stress_method == StressMethod::kAuto && bytes <= kMaxSpectraBytes &&
-                      widest.fft_s < widest.direct_s);
-    if (fft) model->spectra_ = BuildKernelSpectra(kt, model->stress_sites_);
   }
   if (cfg.pressure_model == PressureModel::kElastic) {
     // Surface compliance of the skin: homogeneous half-space (young,
@@ -795,11 +805,15 @@ std::string SkinModel::Describe() const {
   return Fmt("mjtouch.skin: %dx%d taxels at %.3g mm, %d SA1 / %d RA / %d PC, kernel %.3f s "
              "(%s%s)", cfg_.grid.n, cfg_.grid.n, cfg_.grid.pitch_m * 1e3, count[0], count[1],
              count[2], kernel_build_seconds(), substrate_->Describe().c_str(),
-             spectra_ ? "; FFT spectra built" : "");
+             spectra_ ? "; FFT spectra built"
+                      : (tree_ ? Fmt("; stress tree, theta %g, %.0f terms per receptor",
+                                     tree_->theta(), tree_->mean_terms()).c_str()
+                               : ""));
 }
 
 double SkinModel::kernel_build_seconds() const {
-  return (kernel_ ? kernel_->build_seconds : 0.0) + (spectra_ ? spectra_->build_seconds : 0.0);
+  return (kernel_ ? kernel_->build_seconds : 0.0) + (spectra_ ? spectra_->build_seconds : 0.0) +
+         (tree_ ? tree_->build_seconds() : 0.0);
 }
 
 void ResetState(const SkinModel& model, double* state) {
@@ -832,7 +846,7 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
       // Direct summation or FFT convolution, whichever is cheaper this step.
       ws->stress.resize(nrec);
       ws->last_stress_method = ComputeStresses(
-          *kt, model.spectra(), cfg.stress_method, model.stress_sites(), tf.runs,
+          *kt, model.spectra(), model.tree(), cfg.stress_method, model.stress_sites(), tf.runs,
           tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
           cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data());
       for (int r = 0; r < nrec; ++r) {

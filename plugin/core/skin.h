@@ -21,6 +21,7 @@
 #include "pressure.h"
 #include "receptors.h"
 #include "stress_field.h"
+#include "stress_tree.h"
 #include "surface.h"
 
 namespace mjtouch {
@@ -64,7 +65,8 @@ struct SkinConfig {
   std::vector<ElasticLayer> layers = LayeredSubstrate::ShaoFingertipLayers();
   LayeredBase base = LayeredSubstrate::ShaoFingertipBase();
   InterfaceSide interface_side = InterfaceSide::kUpper;
-  StressMethod stress_method = StressMethod::kAuto;  // `stress_method`
+  StressMethod stress_method = StressMethod::kTree;  // `stress_method`
+  double stress_theta = 0.5;  // `stress_theta`: tree's opening angle
   bool shear = true;
   int texture_group = -1;  // non-colliding geoms in this group are textures (-1: none)
   double population_radius_m = 5e-3;  // receptors within this distance of the pole
@@ -130,6 +132,7 @@ class SkinModel {
   const Substrate& substrate() const { return *substrate_; }
   const LayeredSubstrate* layered() const { return layered_; }
   const KernelSpectra* spectra() const { return spectra_.get(); }
+  const StressTree* tree() const { return tree_.get(); }  // null unless stress_method = tree
   const std::vector<StressSite>& stress_sites() const { return stress_sites_; }
   const Material& material(int c) const { return material_[c]; }
   // Seconds spent building the kernel tables (and FFT spectra), once per
@@ -150,6 +153,7 @@ class SkinModel {
   std::shared_ptr<const Substrate> substrate_;
   const LayeredSubstrate* layered_ = nullptr;  // substrate_ if layered
   std::shared_ptr<const KernelSpectra> spectra_;
+  std::shared_ptr<const StressTree> tree_;
   std::vector<StressSite> stress_sites_;
   Material material_[kNumClasses];
   std::vector<std::array<bool, kNumStress>> want_;  // per class

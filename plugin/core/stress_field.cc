@@ -1,5 +1,7 @@
 #include "stress_field.h"
 
+#include "stress_tree.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -26,11 +28,13 @@ const char* StressMethodName(StressMethod m) {
   switch (m) {
     case StressMethod::kDirect: return "direct";
     case StressMethod::kFft: return "fft";
+    case StressMethod::kTree: return "tree";
     default: return "auto";
   }
 }
 
 bool ParseStressMethod(const std::string& s, StressMethod* m) {
+  if (s == "tree") { *m = StressMethod::kTree; return true; }
   if (s == "auto") { *m = StressMethod::kAuto; return true; }
   if (s == "direct") { *m = StressMethod::kDirect; return true; }
   if (s == "fft") { *m = StressMethod::kFft; return true; }
@@ -256,10 +260,19 @@ void FftStresses(const KernelTables& kt, const KernelSpectra& sp,
 }  // namespace
 
 StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectra,
-                             StressMethod method, const std::vector<StressSite>& sites,
-                             const ActiveRuns& runs, const float* pressure, const float* shear_x,
-                             const float* shear_y, StressScratch* scratch, Stress6* out) {
+                             const StressTree* tree, StressMethod method,
+                             const std::vector<StressSite>& sites, const ActiveRuns& runs,
+                             const float* pressure, const float* shear_x, const float* shear_y,
+                             StressScratch* scratch, Stress6* out) {
   const bool shear = shear_x && shear_y;
+  if (method == StressMethod::kTree) {
+    if (tree) {
+      tree->Compute(runs, pressure, shear ? shear_x : nullptr, shear ? shear_y : nullptr,
+                    &scratch->tree, out);
+      return method;
+    }
+    method = StressMethod::kAuto;
+  }
   if (method == StressMethod::kAuto) {
     if (spectra) {
       const StressCost c = EstimateStressCost(kt, sites, runs.Count(), shear);

@@ -1,11 +1,15 @@
 // Stage 3, per step: the stress tensor at receptor sites from the surface
-// tractions, through the lattice tables of kernel.h, by either path:
-//  - direct summation over the active cells (StressAtReceptor): cost
+// tractions, through the lattice tables of kernel.h, by one of three paths:
+//  - direct summation over the active cells (StressAtReceptor): exact; cost
 //    ~ receptors x components x loads x active cells;
 //  - FFT convolution of the whole grid with each table (zero padded to
-//    N >= 2n - 1, so no wrap-around; fft.h): cost ~ N^2 log N per transform,
-//    independent of the contact size, and only the wanted components.
-// ComputeStresses picks the cheaper one per step from a cost model whose
+//    N >= 2n - 1, so no wrap-around; fft.h): exact; cost ~ N^2 log N per
+//    transform, independent of the contact size, and only the wanted
+//    components;
+//  - hierarchical summation (stress_tree.h): the tables' least-squares planes
+//    over cell blocks far from the receptor, to a set opening angle; cost
+//    ~ receptors x components x loads x (20-250 terms), error ~ theta^2.
+// `auto` picks the cheaper exact path per step from a cost model whose
 // constants were measured (examples/bench_kernel.py); the choice depends on
 // the inputs only, so runs stay deterministic. Pure C++: no MuJoCo types.
 #ifndef MJTOUCH_CORE_STRESS_FIELD_H_
@@ -21,7 +25,7 @@
 
 namespace mjtouch {
 
-enum class StressMethod { kAuto = 0, kDirect = 1, kFft = 2 };
+enum class StressMethod { kAuto = 0, kDirect = 1, kFft = 2, kTree = 3 };
 const char* StressMethodName(StressMethod m);
 bool ParseStressMethod(const std::string& s, StressMethod* m);
 
@@ -63,17 +67,27 @@ struct StressCost {
 StressCost EstimateStressCost(const KernelTables& kt, const std::vector<StressSite>& sites,
                               int active_cells, bool shear);
 
+// Hierarchical path's per-step block moments (stress_tree.h).
+struct TreeScratch {
+  std::vector<std::vector<float>> moments;  // [level][(bj * nb + bi) * 9 + 3 * load + m]
+  std::vector<int> box;                     // [4 level + (i0, i1, j0, j1)], inclusive
+};
+
 // Per-simulation scratch (no state that outlives a call).
 struct StressScratch {
   std::vector<double> in_re, in_im, spec_re[3], spec_im[3], out_re, out_im, fft;
+  TreeScratch tree;
 };
+
+class StressTree;
 
 // Stress (Pa) at every site into out[site]. pressure / shear arrays: n*n,
 // row-major (j * n + i); shear may be null (both or neither). runs: the
-// cells with nonzero traction (direct path). kAuto picks by cost; kFft falls
-// back to direct when spectra is null. Returns the path taken.
+// cells with nonzero traction. kAuto picks direct or FFT by cost; kFft falls
+// back to direct when spectra is null, kTree when tree is null. Returns the
+// path taken.
 StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectra,
-                             StressMethod method, const std::vector<StressSite>& sites,
+                             const StressTree* tree, StressMethod method, const std::vector<StressSite>& sites,
                              const ActiveRuns& runs, const float* pressure, const float* shear_x,
                              const float* shear_y, StressScratch* scratch, Stress6* out);
 
