@@ -445,6 +445,34 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
   return spikes;
 }
 
+bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
+  const int ci = static_cast<int>(cls);
+  if (p_.noise.sd[ci] > 0.0 || st[kRefractory] > 0.0 || st[kPrevQ] != 0.0 || st[kHasPrev] <= 0.0)
+    return false;
+  if (cls == ReceptorClass::kSA1) {
+    const SA1Params& s = p_.sa1;
+    const double bias = s.resistance_ohm / s.threshold_v * s.i0_a;  // drive at q = 0
+    if (!(bias < 1.0)) return false;
+    const int nodes = static_cast<int>(std::min<size_t>(s.merkel_cells.size(), kMaxNodes));
+    for (int k = 0; k < nodes; ++k)
+      if (!(st[kU0 + k] < 1.0)) return false;
+    return true;
+  }
+  // Filters of chained real poles: no state entry ever exceeds the sum of
+  // the current ones (each propagator entry is (w t)^k / k! exp(-w t) <= 1),
+  // so |y| <= sum |c| * n * max |x|. A drive bound of 1e-6 (threshold units)
+  // keeps a membrane below 1 unless it already is within 1e-6 of it.
+  const Filter& f = cls == ReceptorClass::kRA ? ra_ : pc_;
+  const double gain = cls == ReceptorClass::kRA ? p_.ra.gain_s_per_pa : p_.pc.gain_s2_per_pa;
+  double csum = 0.0, xmax = 0.0;
+  for (int i = 0; i < f.n; ++i) {
+    csum += std::abs(f.c[i]);
+    xmax = std::max(xmax, std::abs(st[kF0 + i]));
+  }
+  const double bound = gain * csum * f.n * xmax;
+  return bound < 1e-6 && st[kU0] < 1.0 - 1e-6;
+}
+
 int AdvanceReceptor(ReceptorClass cls, const ReceptorParams& p, double q_end, double dt,
                     unsigned long long stream, double* state, double* voltage) {
   return ReceptorStepper(p, dt).Advance(cls, q_end, stream, state, voltage);

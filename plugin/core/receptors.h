@@ -121,6 +121,12 @@ class ReceptorStepper {
   int Advance(ReceptorClass cls, double q_end, unsigned long long stream, double* state,
               double* voltage) const;
   double dt() const { return dt_; }
+  // Whether the receptor, driven by q = 0 from now on and without noise, can
+  // never fire again: refractory over, previous q zero, the constant drive
+  // (SA1: the bias I0) below threshold, filter outputs bounded far below it.
+  // Its membranes then only relax, so its steps may be skipped and made up
+  // later in one exact step (skin.cc: idle receptors).
+  bool Quiescent(ReceptorClass cls, const double* state) const;
 
  private:
   struct Filter {  // x(t + dt) = phi x + gamma dq/dt; output y = c . x

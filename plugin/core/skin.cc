@@ -820,8 +820,18 @@ void ResetState(const SkinModel& model, double* state) {
   std::fill(state, state + model.state_size(), 0.0);
 }
 
-void Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
-          Workspace* ws, double* out) {
+namespace {
+
+const ReceptorStepper& StepperFor(const ReceptorParams& p, double dt_s, Workspace* ws) {
+  if (!ws->stepper || ws->stepper->dt() != dt_s)
+    ws->stepper = std::make_shared<const ReceptorStepper>(p, dt_s);
+  return *ws->stepper;
+}
+
+}  // namespace
+
+int Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
+         Workspace* ws, double* out) {
   const SkinConfig& cfg = model.config();
   const auto& sites = model.receptors();
   const int nrec = static_cast<int>(sites.size());
@@ -830,20 +840,30 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
   double* last_voltage = last_spikes + nrec;
   // Receptors integrate over the time elapsed since the previous call, so a
   // repeated mj_forward at the same time changes nothing.
-  const bool time_valid = state[3] > 0.0;
-  const double elapsed = time_valid ? time_s - state[2] : 0.0;
-  state[2] = time_s;
-  state[3] = 1.0;
+  const bool time_valid = state[kStTimeValid] > 0.0;
+  const double elapsed = time_valid ? time_s - state[kStLastTime] : 0.0;
+  state[kStLastTime] = time_s;
+  state[kStTimeValid] = 1.0;
 
-  ws->quantity.assign(nrec, 0.0);
   TractionField& tf = ws->traction;
-  bool touching = false;
   // Stages 1-2: gap and tractions (skin_traction.cc).
-  touching = ComputeTraction(model, in, state, ws);
-  if (touching) {
+  const bool touching = ComputeTraction(model, in, state, ws);
+  const bool need_receptors =
+      cfg.outputs[kOutSpikes] || cfg.outputs[kOutVoltage] || cfg.outputs[kOutRate];
+  // Idle receptors: untouched, quiescent receptors (ReceptorStepper::Quiescent)
+  // are not advanced while nothing touches and no output shows their
+  // relaxing membranes; the idle time is made up in one exact step when
+  // contact resumes. An untouched skin then costs O(1) per step.
+  const bool idle = state[kStReceptorsIdle] > 0.0;
+  int fired = 0;
+  if (!touching && idle && elapsed >= 0.0) {
+    // Nothing to do: the last spike counts are zero (idle is entered only
+    // after a step without spikes).
+  } else {
+    ws->quantity.assign(nrec, 0.0);
     const KernelTables* kt = model.kernel();
-    if (kt) {
-      // Direct summation or FFT convolution, whichever is cheaper this step.
+    if (touching && kt) {
+      // Stage 3: stress at the receptors (direct, FFT or tree).
       ws->stress.resize(nrec);
       ws->last_stress_method = ComputeStresses(
           *kt, model.spectra(), model.tree(), cfg.stress_method, model.stress_sites(), tf.runs,
@@ -854,23 +874,39 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
         ws->quantity[r] = QuantityAt(cfg.classes[c].quantity, ws->stress[r], model.material(c));
       }
     }
-  }
-
-  // Receptors advance every step (membranes decay without contact).
-  const bool need_receptors =
-      cfg.outputs[kOutSpikes] || cfg.outputs[kOutVoltage] || cfg.outputs[kOutRate];
-  if (need_receptors && elapsed > 0.0) {
-    const ReceptorStepper stepper(cfg.receptor, elapsed);  // filters for this step size
-    for (int r = 0; r < nrec; ++r) {
-      double* st = receptor_state + static_cast<size_t>(r) * kReceptorStateSize;
-      double v;
-      last_spikes[r] = stepper.Advance(sites[r].cls, ws->quantity[r], r, st, &v);
-      last_voltage[r] = v;
+    // Stage 4: receptors advance every step (membranes relax without contact).
+    if (need_receptors && elapsed > 0.0) {
+      if (idle) {  // make up the idle time at q = 0, in one exact step
+        const double gap_s = (time_s - elapsed) - state[kStReceptorsTime];
+        if (gap_s > 0.0) {
+          const ReceptorStepper catch_up(cfg.receptor, gap_s);
+          double v;
+          for (int r = 0; r < nrec; ++r)
+            catch_up.Advance(sites[r].cls, 0.0, r,
+                             receptor_state + static_cast<size_t>(r) * kReceptorStateSize, &v);
+        }
+        state[kStReceptorsIdle] = 0.0;
+      }
+      const ReceptorStepper& stepper = StepperFor(cfg.receptor, elapsed, ws);
+      bool quiescent = !touching && !cfg.outputs[kOutVoltage] && !cfg.outputs[kOutRate];
+      for (int r = 0; r < nrec; ++r) {
+        double* st = receptor_state + static_cast<size_t>(r) * kReceptorStateSize;
+        double v;
+        const int k = stepper.Advance(sites[r].cls, ws->quantity[r], r, st, &v);
+        last_spikes[r] = k;
+        last_voltage[r] = v;
+        fired += k;
+        quiescent = quiescent && last_spikes[r] == 0.0 && stepper.Quiescent(sites[r].cls, st);
+      }
+      if (quiescent) {
+        state[kStReceptorsIdle] = 1.0;
+        state[kStReceptorsTime] = time_s;
+      }
+    } else if (need_receptors && !time_valid) {
+      for (int r = 0; r < nrec; ++r)
+        PrimeReceptor(cfg.receptor, sites[r].cls, ws->quantity[r], r,
+                      receptor_state + static_cast<size_t>(r) * kReceptorStateSize);
     }
-  } else if (need_receptors && !time_valid) {
-    for (int r = 0; r < nrec; ++r)
-      PrimeReceptor(cfg.receptor, sites[r].cls, ws->quantity[r], r,
-                    receptor_state + static_cast<size_t>(r) * kReceptorStateSize);
   }
   double* cursor = out;
   if (cfg.outputs[kOutSpikes]) {
@@ -878,7 +914,8 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
     cursor += nrec;
   }
   if (cfg.outputs[kOutStress]) {
-    std::copy(ws->quantity.begin(), ws->quantity.end(), cursor);
+    if (touching) std::copy(ws->quantity.begin(), ws->quantity.end(), cursor);
+    else std::fill(cursor, cursor + nrec, 0.0);
     cursor += nrec;
   }
   if (cfg.outputs[kOutVoltage]) {
@@ -889,12 +926,13 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
     cursor[0] = touching ? in.normal_force_n : 0.0;
     cursor[1] = touching ? in.shear_x_n : 0.0;
     cursor[2] = touching ? in.shear_y_n : 0.0;
-    cursor[3] = touching ? state[0] : 0.0;  // indentation depth
+    cursor[3] = touching ? state[kStContactDepth] : 0.0;  // indentation depth
     cursor += kForceBlockSize;
   }
   if (cfg.outputs[kOutPressure]) {
     const size_t N = cfg.grid.Size();
-    for (size_t i = 0; i < N; ++i) cursor[i] = touching ? tf.pressure_pa[i] : 0.0;
+    if (touching) std::copy(tf.pressure_pa.begin(), tf.pressure_pa.begin() + N, cursor);
+    else std::fill(cursor, cursor + N, 0.0);
     cursor += N;
   }
   if (cfg.outputs[kOutRate]) {
@@ -902,6 +940,7 @@ void Step(const SkinModel& model, const StepInput& in, double time_s, double* st
       cursor[r] = ReceptorRate(receptor_state + static_cast<size_t>(r) * kReceptorStateSize);
     cursor += nrec;
   }
+  return fired;
 }
 
 }  // namespace mjtouch

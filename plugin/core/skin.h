@@ -93,8 +93,17 @@ bool FinalizeSkinConfig(SkinConfig* cfg, std::string* error);
 // All attribute keys, for plugin registration.
 const std::vector<const char*>& SkinAttributeKeys();
 
-// Header: contact depth, contact valid, last time, time valid, contact level.
-constexpr int kStateHeader = 5;
+// plugin_state header slots, then the receptors (StateSize).
+enum StateSlot {
+  kStContactDepth = 0,  // indentation depth of the last contact, m
+  kStContactValid,      // 1 if the last evaluation touched
+  kStLastTime,          // time of the last evaluation, s
+  kStTimeValid,         // 1 once evaluated
+  kStContactLevel,      // `elastic`: last contact level (gap range in contact), m
+  kStReceptorsIdle,     // 1 while receptors are quiescent and not advanced
+  kStReceptorsTime,     // time the receptors were advanced to, s
+  kStateHeader
+};
 
 struct ReceptorSite {
   ReceptorClass cls;
@@ -171,6 +180,8 @@ struct StepInput {
 
 // Scratch owned per simulation (no state that outlives a step).
 struct Workspace {
+  // Receptor propagators for the last step size (rebuilt when it changes).
+  std::shared_ptr<const ReceptorStepper> stepper;
   std::vector<double> gap, coverage;
   TractionField traction;
   std::vector<double> quantity;  // per receptor
@@ -198,8 +209,9 @@ void ResetState(const SkinModel& model, double* state);
 // Run the pipeline at simulation time time_s: receptors integrate over the
 // time elapsed since the previous call (none on the first call or a repeated
 // call at the same time). Writes the enabled output blocks to `out` (length
-// model.output_size()) and updates `state`.
-void Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
+// model.output_size()) and updates `state`. Returns the number of spikes
+// fired in this evaluation (all receptors).
+int Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
           Workspace* ws, double* out);
 
 }  // namespace mjtouch

@@ -51,10 +51,10 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   const SkinConfig& cfg = model.config();
   const TaxelGrid& grid = cfg.grid;
   TractionField& tf = ws->traction;
-  const bool warm = state[1] > 0.0;
-  const double depth_prev = state[0];
-  const double level_prev = state[4];
-  state[1] = 0.0;
+  const bool warm = state[kStContactValid] > 0.0;
+  const double depth_prev = state[kStContactDepth];
+  const double level_prev = state[kStContactLevel];
+  state[kStContactValid] = 0.0;
   if (!(in.in_contact && in.normal_force_n > 0.0)) return false;
 
   bool touching = false;
@@ -64,7 +64,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       tf.shear_x_pa.clear();
       tf.shear_y_pa.clear();
     }
-    state[0] = 0.0;
+    state[kStContactDepth] = 0.0;
   } else if (!in.surfaces.empty()) {
     // Warm start: the last step's indentation depth (approach minus smallest
     // gap) bounds which cells can touch; cells provably above 1.5x that
@@ -117,8 +117,8 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         continue;
       }
       if (touching) {
-        state[0] = approach - gmin;
-        state[4] = level;
+        state[kStContactDepth] = approach - gmin;
+        state[kStContactLevel] = level;
       }
     }
     if (touching) {
@@ -132,7 +132,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   }
   if (touching) {
     FinishTraction(grid, &tf);
-    state[1] = 1.0;
+    state[kStContactValid] = 1.0;
   }
   return touching;
 }

@@ -331,12 +331,14 @@ void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {
   GatherInput(m, d);
   mjtNum* state = d->plugin_state + m->plugin_stateadr[instance];
   mjtNum* out = d->sensordata + m->sensor_adr[sensor_id_];
-  Step(*model_, input_, d->time, state, &workspace_, out);
+  const int fired = Step(*model_, input_, d->time, state, &workspace_, out);
   // For drawing only: whether the field is live, and when each receptor last fired.
-  touching_ = state[1] > 0.0;
-  const double* spikes = LastSpikes(*model_, state);
-  for (size_t r = 0; r < last_spike_time_s_.size(); ++r)
-    if (spikes[r] > 0) last_spike_time_s_[r] = d->time;
+  touching_ = state[kStContactValid] > 0.0;
+  if (fired > 0) {
+    const double* spikes = LastSpikes(*model_, state);
+    for (size_t r = 0; r < last_spike_time_s_.size(); ++r)
+      if (spikes[r] > 0) last_spike_time_s_[r] = d->time;
+  }
 }
 
 void SkinPlugin::RegisterPlugin() {

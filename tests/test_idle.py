@@ -1,0 +1,48 @@
+"""An untouched skin skips its receptors (plugin/core/skin.cc, idle
+receptors) and makes the idle time up in one exact step when contact
+resumes. Skipping must not change what the receptors report."""
+
+import mujoco
+import numpy as np
+
+from mjtouch import scenes
+from mjtouch.sensor import SkinLayout
+
+IDLE_SLOT = 5  # plugin_state header: kStReceptorsIdle (plugin/core/skin.h)
+
+
+def run(outputs):
+    tip = scenes.Fingertip(nx=48, pitch_m=1.5e-4, ridges=False, skin={"outputs": outputs})
+    m = mujoco.MjModel.from_xml_string(
+        scenes.scene_xml(tip, scenes.Texture(kind="flat"), scenes.Protocol(timestep_s=2e-4)))
+    d = mujoco.MjData(m)
+    layout = SkinLayout.from_model(m)
+    spikes, idle = [], []
+    for k in range(4000):
+        # press 0.16 s, lift 0.32 s (the membranes relax, the filters ring
+        # down), press again
+        d.ctrl[:] = [0.0, -0.5 if (k < 800 or k >= 2400) else 0.02]
+        mujoco.mj_step(m, d)
+        spikes.append(layout.block(d.sensordata, "spikes").copy())
+        idle.append(d.plugin_state[m.plugin_stateadr[0] + IDLE_SLOT])
+    return np.array(spikes), np.array(idle)
+
+
+def test_idle_receptors_report_what_stepped_receptors_report():
+    # With a voltage output every step is advanced (the membranes are shown);
+    # with spikes only, quiescent receptors are skipped while untouched.
+    skipped, idle = run("spikes force")
+    stepped, never = run("spikes voltage force")
+    assert idle.max() == 1 and never.max() == 0  # the idle path was taken, and only there
+    assert idle[1600:2400].all()  # the second half of the lift was idle
+    assert idle[3000:].max() == 0  # and contact ended it
+    assert stepped.sum() > 0 and stepped[2400:].sum() > 0
+    # Exact integration over one long step or many short ones: the same
+    # spikes. Round-off (1e-16 relative) moves a spike time by ~1e-15 s, so a
+    # spike lying within that of a step boundary may be counted one step
+    # earlier or later: per receptor the running counts differ by at most 1,
+    # the totals not at all.
+    lag = np.abs(np.cumsum(skipped, axis=0) - np.cumsum(stepped, axis=0))
+    assert lag.max() <= 1
+    np.testing.assert_array_equal(skipped.sum(axis=0), stepped.sum(axis=0))
+    assert (skipped != stepped).any(axis=1).sum() <= 4  # and rarely
