@@ -162,7 +162,9 @@ __attribute__((visibility("default"))) int mjtouch_winkler_pressure(
   TaxelGrid grid{n, pitch_m};
   std::vector<double> g(gap, gap + grid.Size()), c(coverage, coverage + grid.Size());
   TractionField tf;
-  const bool ok = WinklerPressure(grid, g, c, stiffness, force, std::nan(""), &tf);
+  const bool ok = WinklerPressure(grid, g, c, CellBox::All(grid), stiffness, force, std::nan(""),
+                                  &tf);
+  FinishTraction(grid, false, &tf);
   std::memcpy(pressure_out, tf.pressure.data(), grid.Size() * sizeof(float));
   *approach_out = tf.approach_m;
   return ok ? 0 : 2;

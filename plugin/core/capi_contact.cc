@@ -172,7 +172,9 @@ __attribute__((visibility("default"))) int mjtouch_slip_shear(
   if (n < 1 || !(pitch_m > 0)) return 1;
   TaxelGrid grid{n, pitch_m};
   TractionField tf;
+  ClearTraction(grid, &tf);
   tf.pressure_pa.assign(pressure, pressure + grid.Size());
+  tf.box = CellBox::All(grid);
   UniformSlipShear(grid, fn, fx, fy, &tf);
   std::memcpy(qx, tf.shear_x_pa.data(), grid.Size() * sizeof(double));
   std::memcpy(qy, tf.shear_y_pa.data(), grid.Size() * sizeof(double));

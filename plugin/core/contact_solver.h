@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "fft.h"
+#include "grid.h"
 
 namespace mjtouch {
 
@@ -44,11 +45,6 @@ struct ElasticSolveStats {
   double max_contact_gap_m = 0;  // largest g0 among contact cells
   int contact_cells = 0;
   int fft_size_x = 0, fft_size_y = 0;
-};
-
-// A rectangle of grid cells [i0, i0 + nx) x [j0, j0 + ny).
-struct CellBox {
-  int i0 = 0, j0 = 0, nx = 0, ny = 0;
 };
 
 // Per-simulation scratch (no state that outlives a call).

@@ -23,6 +23,13 @@ struct TaxelGrid {
   }
 };
 
+// A rectangle of grid cells [i0, i0 + nx) x [j0, j0 + ny).
+struct CellBox {
+  int i0 = 0, j0 = 0, nx = 0, ny = 0;
+  bool empty() const { return nx <= 0 || ny <= 0; }
+  static CellBox All(const TaxelGrid& grid) { return CellBox{0, 0, grid.n, grid.n}; }
+};
+
 }  // namespace mjtouch
 
 #endif  // MJTOUCH_CORE_GRID_H_

@@ -25,46 +25,62 @@ bool ParsePressureModel(const std::string& name, PressureModel* m) {
   return false;
 }
 
-void SetPressure(const TaxelGrid& grid, const std::vector<double>& p, TractionField* out) {
+namespace {
+
+// Calls f(index) for every cell of the box, row by row.
+template <typename F>
+void ForBox(const TaxelGrid& grid, const CellBox& box, F&& f) {
+  for (int j = box.j0; j < box.j0 + box.ny; ++j) {
+    const size_t row = static_cast<size_t>(j) * grid.n;
+    for (int i = box.i0; i < box.i0 + box.nx; ++i) f(row + i);
+  }
+}
+
+}  // namespace
+
+void ClearTraction(const TaxelGrid& grid, TractionField* f) {
   const size_t N = grid.Size();
-  out->pressure_pa.assign(N, 0.0);
-  for (size_t i = 0; i < N; ++i) out->pressure_pa[i] = p[i] > 0.0 ? p[i] : 0.0;
+  for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa}) {
+    if (v->size() != N) v->assign(N, 0.0);
+    else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0; });
+  }
+  for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y}) {
+    if (v->size() != N) v->assign(N, 0.0f);
+    else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0f; });
+  }
+  f->box = CellBox{};
+  f->runs.Clear();
+  f->active_cells = 0;
+  f->approach_m = 0.0;
 }
 
 bool NormalizeLoad(const TaxelGrid& grid, double force, TractionField* out) {
   double total = 0.0;
-  for (double v : out->pressure_pa) total += v;
+  ForBox(grid, out->box, [&](size_t k) { total += out->pressure_pa[k]; });
   if (!(total > 0.0) || !(force > 0.0)) {
-    std::fill(out->pressure_pa.begin(), out->pressure_pa.end(), 0.0);
+    ForBox(grid, out->box, [&](size_t k) { out->pressure_pa[k] = 0.0; });
     return false;
   }
   const double scale = force / (grid.Area() * total);
-  for (double& v : out->pressure_pa) v *= scale;
+  ForBox(grid, out->box, [&](size_t k) { out->pressure_pa[k] *= scale; });
   return true;
 }
 
-void FinishTraction(const TaxelGrid& grid, TractionField* out) {
-  const size_t N = grid.Size();
-  const bool shear = out->shear_x_pa.size() == N && out->shear_y_pa.size() == N;
-  out->pressure.resize(N);
-  for (size_t i = 0; i < N; ++i) out->pressure[i] = static_cast<float>(out->pressure_pa[i]);
-  out->shear_x.assign(N, 0.0f);
-  out->shear_y.assign(N, 0.0f);
-  if (shear) {
-    for (size_t i = 0; i < N; ++i) {
-      out->shear_x[i] = static_cast<float>(out->shear_x_pa[i]);
-      out->shear_y[i] = static_cast<float>(out->shear_y_pa[i]);
-    }
-  }
+void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out) {
+  const CellBox& b = out->box;
+  ForBox(grid, b, [&](size_t k) {
+    out->pressure[k] = static_cast<float>(out->pressure_pa[k]);
+    out->shear_x[k] = shear ? static_cast<float>(out->shear_x_pa[k]) : 0.0f;
+    out->shear_y[k] = shear ? static_cast<float>(out->shear_y_pa[k]) : 0.0f;
+  });
   out->runs.Clear();
   out->active_cells = 0;
-  const int n = grid.n;
-  for (int j = 0; j < n; ++j) {
+  for (int j = b.j0; j < b.j0 + b.ny; ++j) {
     int begin = -1;
-    for (int i = 0; i <= n; ++i) {
+    for (int i = b.i0; i <= b.i0 + b.nx; ++i) {
       bool on = false;
-      if (i < n) {
-        const size_t idx = static_cast<size_t>(j) * n + i;
+      if (i < b.i0 + b.nx) {
+        const size_t idx = static_cast<size_t>(j) * grid.n + i;
         on = out->pressure_pa[idx] != 0.0 ||
              (shear && (out->shear_x_pa[idx] != 0.0 || out->shear_y_pa[idx] != 0.0));
         out->active_cells += on;
@@ -82,14 +98,11 @@ void FinishTraction(const TaxelGrid& grid, TractionField* out) {
 
 bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& contacts,
                    TractionField* out) {
-  const size_t N = grid.Size();
-  out->pressure_pa.assign(N, 0.0);
-  out->shear_x_pa.assign(N, 0.0);
-  out->shear_y_pa.assign(N, 0.0);
-  out->approach_m = 0.0;
+  ClearTraction(grid, out);
   const double inv_area = 1.0 / grid.Area();
   double total = 0.0;
   const int n = grid.n;
+  int i_lo = n, i_hi = -1, j_lo = n, j_hi = -1;
   for (const ContactPoint& c : contacts) {
     // Fractional cell coordinates of the contact, clamped to the centres of
     // the outermost cells so that the whole force stays on the grid.
@@ -107,33 +120,50 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
       out->shear_x_pa[idx[k]] += w[k] * c.force_n[0] * inv_area;
       out->shear_y_pa[idx[k]] += w[k] * c.force_n[1] * inv_area;
     }
+    i_lo = std::min(i_lo, i0);
+    i_hi = std::max(i_hi, i0 + 1);
+    j_lo = std::min(j_lo, j0);
+    j_hi = std::max(j_hi, j0 + 1);
     total += c.force_n[2];
   }
+  if (i_hi >= 0) out->box = CellBox{i_lo, j_lo, i_hi - i_lo + 1, j_hi - j_lo + 1};
   return total > 0.0;
 }
 
 bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
-                     const std::vector<double>& cov, double k, double force,
+                     const std::vector<double>& cov, const CellBox& box, double k, double force,
                      double guess, TractionField* out) {
-  const size_t N = grid.Size();
-  out->pressure_pa.assign(N, 0.0);
+  ClearTraction(grid, out);
   const double A = grid.Area();
-  // Solve f(c) = sum cov_i max(c - g_i, 0) - force / (k A) = 0. f is convex,
-  // piecewise linear and increasing, so Newton from the right of the root
-  // converges monotonically in finitely many steps.
+  // Solve f(c) = sum cov_i max(c - g_i, 0) - force / (k A) = 0 over the
+  // candidates (packed once: every pass below reads them contiguously). f is
+  // convex, piecewise linear and increasing, so Newton from the right of the
+  // root converges monotonically in finitely many steps.
   const double target = force / (k * A);
+  std::vector<double>& cg = out->scratch_gap;
+  std::vector<double>& cc = out->scratch_cov;
+  std::vector<size_t>& ci = out->scratch_index;
+  cg.clear();
+  cc.clear();
+  ci.clear();
   double gmin = std::numeric_limits<double>::infinity();
   double covmax = 0.0;
-  for (size_t i = 0; i < N; ++i) {
-    if (cov[i] > 0.0 && gap[i] < gmin) gmin = gap[i];
-    covmax = std::max(covmax, cov[i]);
-  }
+  ForBox(grid, box, [&](size_t i) {
+    if (cov[i] > 0.0 && std::isfinite(gap[i])) {
+      cg.push_back(gap[i]);
+      cc.push_back(cov[i]);
+      ci.push_back(i);
+      gmin = std::min(gmin, gap[i]);
+      covmax = std::max(covmax, cov[i]);
+    }
+  });
   if (!std::isfinite(gmin) || !(force > 0.0)) return false;
+  const size_t M = cg.size();
   auto eval = [&](double c, double* slope) {
     double f = -target, s = 0.0;
-    for (size_t i = 0; i < N; ++i) {
-      const double d = c - gap[i];
-      if (d > 0.0 && cov[i] > 0.0) { f += cov[i] * d; s += cov[i]; }
+    for (size_t i = 0; i < M; ++i) {
+      const double d = c - cg[i];
+      if (d > 0.0) { f += cc[i] * d; s += cc[i]; }
     }
     *slope = s;
     return f;
@@ -157,10 +187,10 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
   // outputs whatever the history): c = (target + sum cov g) / sum cov.
   for (int pass = 0; pass < 4; ++pass) {
     double sum_cov = 0.0, sum_cov_g = 0.0;
-    for (size_t i = 0; i < N; ++i) {
-      if (cov[i] > 0.0 && c - gap[i] > 0.0) {
-        sum_cov += cov[i];
-        sum_cov_g += cov[i] * gap[i];
+    for (size_t i = 0; i < M; ++i) {
+      if (c - cg[i] > 0.0) {
+        sum_cov += cc[i];
+        sum_cov_g += cc[i] * cg[i];
       }
     }
     if (!(sum_cov > 0.0)) break;
@@ -169,10 +199,10 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
     c = next;
   }
   // Exact normalisation removes the last round-off of the solve.
-  out->pressure_pa.assign(N, 0.0);
-  for (size_t i = 0; i < N; ++i) {
-    const double d = c - gap[i];
-    if (d > 0.0 && cov[i] > 0.0) out->pressure_pa[i] = cov[i] * d;
+  out->box = box;
+  for (size_t i = 0; i < M; ++i) {
+    const double d = c - cg[i];
+    if (d > 0.0) out->pressure_pa[ci[i]] = cc[i] * d;
   }
   out->approach_m = c;
   return NormalizeLoad(grid, force, out);
@@ -180,15 +210,11 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
 
 void UniformSlipShear(const TaxelGrid& grid, double fn, double fx, double fy,
                       TractionField* field) {
-  const size_t N = grid.Size();
-  field->shear_x_pa.assign(N, 0.0);
-  field->shear_y_pa.assign(N, 0.0);
-  if (!(fn > 0.0)) return;
-  const double rx = fx / fn, ry = fy / fn;
-  for (size_t i = 0; i < N; ++i) {
+  const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
+  ForBox(grid, field->box, [&](size_t i) {
     field->shear_x_pa[i] = rx * field->pressure_pa[i];
     field->shear_y_pa[i] = ry * field->pressure_pa[i];
-  }
+  });
 }
 
 }  // namespace mjtouch

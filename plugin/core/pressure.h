@@ -22,16 +22,26 @@ enum class PressureModel { kContacts = 0, kWinkler, kElastic };
 const char* PressureModelName(PressureModel m);
 bool ParsePressureModel(const std::string& name, PressureModel* m);
 
+// Every array is n*n, row-major (j * n + i), and zero outside `box`: the
+// per-step work of stage 2 is over the box only (the contact's candidate
+// cells), not the whole grid.
 struct TractionField {
-  std::vector<double> pressure_pa;  // Pa, n*n, into the skin (the output)
-  std::vector<double> shear_x_pa;   // Pa, n*n, along pad x
-  std::vector<double> shear_y_pa;   // Pa, n*n, along pad y
+  std::vector<double> pressure_pa;  // Pa, into the skin (the output)
+  std::vector<double> shear_x_pa;   // Pa, along pad x
+  std::vector<double> shear_y_pa;   // Pa, along pad y
   // float copies for the stress kernel (kernel.h)
   std::vector<float> pressure, shear_x, shear_y;
+  CellBox box;                  // support of every array
   ActiveRuns runs;              // cells with nonzero traction, by grid row
   double approach_m = 0;        // solved rigid approach of the pad
   int active_cells = 0;
+  // Solver scratch (no meaning between calls): the packed candidates.
+  std::vector<double> scratch_gap, scratch_cov;
+  std::vector<size_t> scratch_index;
 };
+
+// Size every array to the grid and zero the last support: an empty field.
+void ClearTraction(const TaxelGrid& grid, TractionField* field);
 
 // A MuJoCo contact on the pad, in the pad frame: position (m) and the force
 // on the pad (N; z along the pad's +z, i.e. pressing into the skin).
@@ -51,11 +61,12 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
 // Winkler (elastic foundation) pressure p = k * coverage * max(c - gap, 0),
 // with the approach c solved so that sum(p * A) = normal_force_n exactly (up
 // to round-off). The pressure's shape depends on k only through the contact
-// size. `approach_guess_m` warm-starts the solve (pass NaN for none).
-// Returns false (and an all-zero field) if no cell can touch.
+// size. `approach_guess_m` warm-starts the solve (pass NaN for none). Cells
+// outside `box` are not candidates. Returns false (and an all-zero field)
+// if no cell can touch.
 bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap_m,
-                     const std::vector<double>& coverage, double stiffness_pa_per_m,
-                     double normal_force_n, double approach_guess_m,
+                     const std::vector<double>& coverage, const CellBox& box,
+                     double stiffness_pa_per_m, double normal_force_n, double approach_guess_m,
                      TractionField* out);
 
 // Full-slip Coulomb shear: q = p * (F_t / F_n) along the direction of
@@ -65,15 +76,12 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap_m,
 void UniformSlipShear(const TaxelGrid& grid, double normal_force_n, double ft_x_n,
                       double ft_y_n, TractionField* field);
 
-// Set pressure_pa from a double field (n*n), zero where not positive.
-void SetPressure(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
-                 TractionField* out);
-// Scale pressure_pa (and shear) so that sum * A equals normal_force_n
-// exactly up to round-off; returns false if the sum is not positive.
+// Scale pressure_pa so that sum * A equals normal_force_n exactly up to
+// round-off; returns false (and zeroes it) if the sum is not positive.
 bool NormalizeLoad(const TaxelGrid& grid, double normal_force_n, TractionField* out);
 // Fill the float copies and the active runs (cells with any traction)
-// from the double fields; shear may be absent (empty vectors).
-void FinishTraction(const TaxelGrid& grid, TractionField* out);
+// from the double fields; `shear`: whether the shear fields are loads.
+void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out);
 
 }  // namespace mjtouch
 

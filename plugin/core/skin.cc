@@ -727,6 +727,7 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
   model->cfg_ = cfg;
   model->sites_ = PlaceReceptors(cfg);
   model->skin_z_ = SkinSurface(cfg.grid, cfg.pad, cfg.ridges);
+  model->skin_blocks_ = MakeSkinBlocks(cfg.grid, model->skin_z_);
   // Kernel tables only for the depths and components the receptors use, and
   // only if an output needs stress.
   const bool need_stress = cfg.outputs[kOutSpikes] || cfg.outputs[kOutStress] ||

@@ -132,6 +132,7 @@ class SkinModel {
   const SkinConfig& config() const { return cfg_; }
   const std::vector<ReceptorSite>& receptors() const { return sites_; }
   const std::vector<double>& skin_z() const { return skin_z_; }
+  const SkinBlocks& skin_blocks() const { return skin_blocks_; }
   const KernelTables* kernel() const { return kernel_.get(); }
   const ElasticContact* elastic() const { return elastic_.get(); }
   // The elastic skin (HalfSpace or LayeredSubstrate), its FFT spectra (null
@@ -157,6 +158,7 @@ class SkinModel {
   SkinConfig cfg_;
   std::vector<ReceptorSite> sites_;
   std::vector<double> skin_z_;
+  SkinBlocks skin_blocks_;
   std::shared_ptr<const KernelTables> kernel_;
   std::shared_ptr<const ElasticContact> elastic_;  // `elastic` model only
   std::shared_ptr<const Substrate> substrate_;

@@ -15,33 +15,16 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kElasticMaxIterations = 500;
 
-double MinGap(const std::vector<double>& gap, const std::vector<double>& cov) {
+// Smallest gap over the covered cells of the box (+inf if none).
+double MinGap(const TaxelGrid& grid, const CellBox& box, const std::vector<double>& gap,
+              const std::vector<double>& cov) {
   double gmin = kInf;
-  for (size_t i = 0; i < gap.size(); ++i)
-    if (cov[i] > 0.0) gmin = std::min(gmin, gap[i]);
-  return gmin;
-}
-
-// Cells that can touch get a finite gap; the rest +inf. Returns their
-// bounding box (empty if none).
-CellBox CandidateBox(const TaxelGrid& grid, std::vector<double>* gap,
-                     const std::vector<double>& cov) {
-  int i0 = grid.n, i1 = -1, j0 = grid.n, j1 = -1;
-  for (int j = 0; j < grid.n; ++j) {
-    for (int i = 0; i < grid.n; ++i) {
+  for (int j = box.j0; j < box.j0 + box.ny; ++j)
+    for (int i = box.i0; i < box.i0 + box.nx; ++i) {
       const size_t k = static_cast<size_t>(j) * grid.n + i;
-      if (!(cov[k] > 0.0) || !std::isfinite((*gap)[k])) {
-        (*gap)[k] = kInf;
-        continue;
-      }
-      i0 = std::min(i0, i);
-      i1 = std::max(i1, i);
-      j0 = std::min(j0, j);
-      j1 = std::max(j1, j);
+      if (cov[k] > 0.0) gmin = std::min(gmin, gap[k]);
     }
-  }
-  if (i1 < 0) return CellBox{0, 0, 0, 0};
-  return CellBox{i0, j0, i1 - i0 + 1, j1 - j0 + 1};
+  return gmin;
 }
 
 }  // namespace
@@ -60,12 +43,9 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   bool touching = false;
   if (cfg.pressure_model == PressureModel::kContacts) {
     touching = SplatContacts(grid, in.contacts, &tf);
-    if (!cfg.shear) {
-      tf.shear_x_pa.clear();
-      tf.shear_y_pa.clear();
-    }
     state[kStContactDepth] = 0.0;
   } else if (!in.surfaces.empty()) {
+    ClearTraction(grid, &tf);
     // Warm start: the last step's indentation depth (approach minus smallest
     // gap) bounds which cells can touch; cells provably above 1.5x that
     // depth are not rendered. A cell whose gap exceeds the approach cannot
@@ -73,24 +53,30 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     // so if the solved approach reaches the cull level, render everything and
     // solve again: the result is exact either way.
     const double cull_rel = warm ? 1.5 * depth_prev + 20e-6 : kInf;
+    CellBox box;
     double cull = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_rel, &ws->gap,
-                            &ws->coverage);
+                            &ws->coverage, true, &model.skin_blocks(), &box);
     for (int pass = 0; pass < 2 && !touching; ++pass) {
       if (pass == 1) {
         cull = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, kInf, &ws->gap,
-                         &ws->coverage);
+                         &ws->coverage, true, &model.skin_blocks(), &box);
       }
-      const double gmin = MinGap(ws->gap, ws->coverage);
+      const double gmin = MinGap(grid, box, ws->gap, ws->coverage);
       if (!std::isfinite(gmin)) break;
       double approach = 0.0, level = 0.0;
       if (cfg.pressure_model == PressureModel::kWinkler) {
         const double guess = warm ? gmin + depth_prev : std::nan("");
-        touching = WinklerPressure(grid, ws->gap, ws->coverage, cfg.stiffness_pa_per_m,
+        touching = WinklerPressure(grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m,
                                    in.normal_force_n, guess, &tf);
         approach = tf.approach_m;
       } else {
         const ElasticContact& ec = *model.elastic();
-        const CellBox box = CandidateBox(grid, &ws->gap, ws->coverage);
+        // Cells without coverage never touch.
+        for (int j = box.j0; j < box.j0 + box.ny; ++j)
+          for (int i = box.i0; i < box.i0 + box.nx; ++i) {
+            const size_t k = static_cast<size_t>(j) * grid.n + i;
+            if (!(ws->coverage[k] > 0.0)) ws->gap[k] = kInf;
+          }
         // Initial guess from the last step's contact level L (largest gap in
         // contact above the smallest): p ~ sqrt(L - (g - gmin)), which is
         // Hertz's distribution for a paraboloid and close for any smooth
@@ -107,6 +93,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
                             kElasticMaxIterations, &ws->pressure_guess, &ws->elastic, &st);
         if (touching) {
           tf.pressure_pa.swap(ws->pressure_guess);
+          tf.box = box;
           touching = NormalizeLoad(grid, in.normal_force_n, &tf);
         }
         approach = st.approach_m;
@@ -114,6 +101,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       }
       if (touching && approach >= cull && pass == 0) {
         touching = false;  // render all and solve again
+        ClearTraction(grid, &tf);
         continue;
       }
       if (touching) {
@@ -121,17 +109,11 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         state[kStContactLevel] = level;
       }
     }
-    if (touching) {
-      if (cfg.shear) {
-        UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
-      } else {
-        tf.shear_x_pa.clear();
-        tf.shear_y_pa.clear();
-      }
-    }
+    if (touching && cfg.shear)
+      UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
   }
   if (touching) {
-    FinishTraction(grid, &tf);
+    FinishTraction(grid, cfg.shear, &tf);
     state[kStContactValid] = 1.0;
   }
   return touching;

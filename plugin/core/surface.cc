@@ -20,30 +20,39 @@ double HatCdf(double t) {
   return 1.0;
 }
 
-// Weights of the piecewise-linear interpolant's samples in its mean over
-// [s0, s1] (grid units, clipped to [0, count - 1]); returns the first index.
-int HatWeights(double s0, double s1, int count, double* w, int max_w) {
+// The piecewise-linear interpolant's mean over [s0, s1] (grid units,
+// clipped to [0, count - 1]) is sum_c w_c f_c over the samples c in
+// [first, last]; HatSpan gives the range and HatWeight each weight. Computed
+// on the fly: a cell may span any number of samples.
+struct HatSpan {
+  int first = 0, last = -1;  // sample range
+  double s0 = 0, s1 = 0, inv = 0;
+  bool point = false;  // degenerate interval: linear interpolation at s0
+};
+
+HatSpan MakeHatSpan(double s0, double s1, int count) {
+  HatSpan h;
   const double top = count - 1;
-  s0 = std::clamp(s0, 0.0, top);
-  s1 = std::clamp(s1, 0.0, top);
-  if (s1 - s0 < 1e-9) {  // degenerate interval: point value
-    int c = std::min(static_cast<int>(s0), count - 2);
-    c = std::max(c, 0);
-    const double f = s0 - c;
-    w[0] = 1.0 - f;
-    w[1] = f;
-    for (int k = 2; k < max_w; ++k) w[k] = 0.0;
-    return c;
+  h.s0 = std::clamp(s0, 0.0, top);
+  h.s1 = std::clamp(s1, 0.0, top);
+  if (h.s1 - h.s0 < 1e-9) {
+    h.point = true;
+    h.first = std::max(0, std::min(static_cast<int>(h.s0), count - 2));
+    h.last = h.first + 1;
+    return h;
   }
-  const int c0 = std::max(0, static_cast<int>(std::floor(s0)));
-  const int c1 = std::min(count - 1, static_cast<int>(std::ceil(s1)));
-  const double inv = 1.0 / (s1 - s0);
-  int k = 0;
-  for (int c = c0; c <= c1 && k < max_w; ++c, ++k) {
-    w[k] = (HatCdf(s1 - c) - HatCdf(s0 - c)) * inv;
+  h.first = std::max(0, static_cast<int>(std::floor(h.s0)));
+  h.last = std::min(count - 1, static_cast<int>(std::ceil(h.s1)));
+  h.inv = 1.0 / (h.s1 - h.s0);
+  return h;
+}
+
+double HatWeight(const HatSpan& h, int c) {
+  if (h.point) {
+    const double f = h.s0 - h.first;
+    return c == h.first ? 1.0 - f : f;
   }
-  for (; k < max_w; ++k) w[k] = 0.0;
-  return c0;
+  return (HatCdf(h.s1 - c) - HatCdf(h.s0 - c)) * h.inv;
 }
 
 double Overlap1D(double a0, double a1, double b0, double b1) {
@@ -205,31 +214,32 @@ double RowIntegral(const CounterSurface& s, int r, double x) {
 
 double HeightFieldBoxMean(const CounterSurface& s, double x0, double x1,
                           double y0, double y1) {
-  constexpr int kMaxW = 64;
-  double wx[kMaxW], wy[kMaxW];
   const double scx = (s.ncol - 1) / (2.0 * s.half_x_m);
   const double scy = (s.nrow - 1) / (2.0 * s.half_y_m);
-  const int r0 = HatWeights((y0 + s.half_y_m) * scy, (y1 + s.half_y_m) * scy,
-                            s.nrow, wy, kMaxW);
-  double sx0 = std::clamp((x0 + s.half_x_m) * scx, 0.0, s.ncol - 1.0);
-  double sx1 = std::clamp((x1 + s.half_x_m) * scx, 0.0, s.ncol - 1.0);
+  const double sx0 = std::clamp((x0 + s.half_x_m) * scx, 0.0, s.ncol - 1.0);
+  const double sx1 = std::clamp((x1 + s.half_x_m) * scx, 0.0, s.ncol - 1.0);
+  // Identical rows: the row weights sum to one, so the mean is row 0's.
+  if (s.rows_identical && s.row_prefix && sx1 - sx0 > 1e-6)
+    return s.elevation_m * (RowIntegral(s, 0, sx1) - RowIntegral(s, 0, sx0)) / (sx1 - sx0);
+  const HatSpan hy = MakeHatSpan((y0 + s.half_y_m) * scy, (y1 + s.half_y_m) * scy, s.nrow);
+  double mean = 0.0;
   if (s.row_prefix && sx1 - sx0 > 1e-6) {
     const double inv = 1.0 / (sx1 - sx0);
-    double mean = 0.0;
-    for (int r = 0; r < kMaxW && r0 + r < s.nrow; ++r) {
-      if (wy[r] == 0.0) continue;
-      mean += wy[r] * (RowIntegral(s, r0 + r, sx1) - RowIntegral(s, r0 + r, sx0)) * inv;
+    for (int r = hy.first; r <= hy.last; ++r) {
+      const double wy = HatWeight(hy, r);
+      if (wy == 0.0) continue;
+      mean += wy * (RowIntegral(s, r, sx1) - RowIntegral(s, r, sx0)) * inv;
     }
     return s.elevation_m * mean;
   }
-  const int c0 = HatWeights(sx0, sx1, s.ncol, wx, kMaxW);
-  double mean = 0.0;
-  for (int r = 0; r < kMaxW && r0 + r < s.nrow; ++r) {
-    if (wy[r] == 0.0) continue;
-    const float* row = s.samples + static_cast<size_t>(r0 + r) * s.ncol + c0;
+  const HatSpan hx = MakeHatSpan(sx0, sx1, s.ncol);
+  for (int r = hy.first; r <= hy.last; ++r) {
+    const double wy = HatWeight(hy, r);
+    if (wy == 0.0) continue;
+    const float* row = s.samples + static_cast<size_t>(r) * s.ncol;
     double acc = 0.0;
-    for (int c = 0; c < kMaxW && c0 + c < s.ncol; ++c) acc += wx[c] * row[c];
-    mean += wy[r] * acc;
+    for (int c = hx.first; c <= hx.last; ++c) acc += HatWeight(hx, c) * row[c];
+    mean += wy * acc;
   }
   return s.elevation_m * mean;
 }
@@ -331,10 +341,29 @@ double BoundRadius(const CounterSurface& s) {
   }
 }
 
+SkinBlocks MakeSkinBlocks(const TaxelGrid& grid, const std::vector<double>& skin_z) {
+  SkinBlocks sb;
+  const int B = SkinBlocks::kSide;
+  sb.n = grid.n;
+  sb.nb = (grid.n + B - 1) / B;
+  sb.zmin.assign(static_cast<size_t>(sb.nb) * sb.nb, kInf);
+  sb.zmax.assign(static_cast<size_t>(sb.nb) * sb.nb, -kInf);
+  for (int j = 0; j < grid.n; ++j)
+    for (int i = 0; i < grid.n; ++i) {
+      const double z = skin_z[static_cast<size_t>(j) * grid.n + i];
+      if (!std::isfinite(z)) continue;
+      const size_t b = static_cast<size_t>(j / B) * sb.nb + i / B;
+      sb.zmin[b] = std::min(sb.zmin[b], z);
+      sb.zmax[b] = std::max(sb.zmax[b], z);
+    }
+  return sb;
+}
+
 double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  const Pose& pad, const std::vector<CounterSurface>& surfaces,
                  double cull_above_m, std::vector<double>* gap_m,
-                 std::vector<double>* coverage, bool area_average) {
+                 std::vector<double>* coverage, bool area_average, const SkinBlocks* blocks,
+                 CellBox* rendered) {
   const size_t N = grid.Size();
   gap_m->assign(N, kInf);
   coverage->assign(N, 0.0);
@@ -382,23 +411,72 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
     const double qz = F.t[2] + F.R[6] * u + F.R[7] * v + F.R[8] * z;
     return qz - surfaces[k].max_height_m;
   };
-  // The cull level is relative to the smallest lower bound of any cell.
+  // Blocks of cells, each with a lower bound of its cells' lower bounds, so
+  // that whole blocks out of reach are skipped.
+  SkinBlocks local;
+  if (!blocks || blocks->n != grid.n) {
+    local = MakeSkinBlocks(grid, skin_z);
+    blocks = &local;
+  }
+  const int B = SkinBlocks::kSide, nb = blocks->nb;
+  std::vector<double> block_lb(surfaces.size() * nb * nb, kInf);
+  for (size_t k = 0; k < surfaces.size(); ++k) {
+    const Frame& F = frames[k];
+    const bool line = IsLineType(surfaces[k].type);
+    for (int bj = 0; bj < nb; ++bj)
+      for (int bi = 0; bi < nb; ++bi) {
+        const size_t b = static_cast<size_t>(bj) * nb + bi;
+        const double zmin = blocks->zmin[b], zmax = blocks->zmax[b];
+        if (!std::isfinite(zmin)) continue;
+        const double u0 = grid.Centre(bi * B), u1 = grid.Centre(std::min(grid.n, bi * B + B) - 1);
+        const double v0 = grid.Centre(bj * B), v1 = grid.Centre(std::min(grid.n, bj * B + B) - 1);
+        double lb;
+        if (line) {
+          const double dx = std::max({0.0, u0 - F.centre_pad[0], F.centre_pad[0] - u1});
+          const double dy = std::max({0.0, v0 - F.centre_pad[1], F.centre_pad[1] - v1});
+          const double e = F.radius + h;
+          const double q = e * e - dx * dx - dy * dy;
+          lb = q < 0.0 ? kInf : zmin - (F.centre_pad[2] + std::sqrt(q));
+        } else {
+          lb = F.t[2] + std::min(F.R[6] * u0, F.R[6] * u1) + std::min(F.R[7] * v0, F.R[7] * v1) +
+               (F.R[8] >= 0.0 ? F.R[8] * zmin : F.R[8] * zmax) - surfaces[k].max_height_m;
+        }
+        block_lb[k * nb * nb + b] = lb;
+      }
+  }
+  auto for_cells = [&](int b, auto&& f) {
+    const int bi = b % nb, bj = b / nb;
+    for (int j = bj * B; j < std::min(grid.n, bj * B + B); ++j) {
+      const double v = grid.Centre(j);
+      for (int i = bi * B; i < std::min(grid.n, bi * B + B); ++i) {
+        const size_t idx = static_cast<size_t>(j) * grid.n + i;
+        const double z = skin_z[idx];
+        if (std::isfinite(z)) f(i, j, idx, grid.Centre(i), v, z);
+      }
+    }
+  };
+  // The cull level is relative to the smallest lower bound of any cell:
+  // exact over the blocks whose bound could hold it, best block first.
   double cull = kInf;
   if (std::isfinite(cull_above_m)) {
     double lb_min = kInf;
-    for (size_t k = 0; k < surfaces.size(); ++k) {
-      for (int j = 0; j < grid.n; ++j) {
-        const double v = grid.Centre(j);
-        for (int i = 0; i < grid.n; ++i) {
-          const double z = skin_z[static_cast<size_t>(j) * grid.n + i];
-          if (!std::isfinite(z)) continue;
-          lb_min = std::min(lb_min, lower_bound(k, grid.Centre(i), v, z));
-        }
-      }
+    size_t first = 0;
+    for (size_t e = 1; e < block_lb.size(); ++e)
+      if (block_lb[e] < block_lb[first]) first = e;
+    for (size_t pass = 0; pass <= block_lb.size(); ++pass) {
+      const size_t e = pass == 0 ? first : pass - 1;
+      if (pass > 0 && e == first) continue;
+      if (!(block_lb[e] < lb_min)) continue;
+      const size_t k = e / (nb * nb);
+      for_cells(static_cast<int>(e % (nb * nb)), [&](int, int, size_t, double u, double v,
+                                                     double z) {
+        lb_min = std::min(lb_min, lower_bound(k, u, v, z));
+      });
     }
     cull = lb_min + cull_above_m;
   }
   const double g = area_average ? 0.5 * h / std::sqrt(3.0) : 0.0;
+  int i_lo = grid.n, i_hi = -1, j_lo = grid.n, j_hi = -1;
   for (size_t k = 0; k < surfaces.size(); ++k) {
     const CounterSurface& s = surfaces[k];
     const Frame& F = frames[k];
@@ -408,75 +486,86 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
     // The pad's z axis in the surface frame, and in the world (kRay).
     const double d_loc[3] = {R[2], R[5], R[8]};
     const double d_world[3] = {-pad.mat[2], -pad.mat[5], -pad.mat[8]};
-    for (int j = 0; j < grid.n; ++j) {
-      const double v = grid.Centre(j);
-      for (int i = 0; i < grid.n; ++i) {
-        const size_t idx = static_cast<size_t>(j) * grid.n + i;
-        const double z = skin_z[idx];
-        if (!std::isfinite(z)) continue;
-        const double u = grid.Centre(i);
-        if (lower_bound(k, u, v, z) > cull) continue;
-        double cov = 1.0, gap;
-        if (line) {
-          if (s.type == CounterSurface::Type::kRay) {
-            // One ray down the pad's -z axis from the pad's centre plane.
-            double o[3];
-            for (int r = 0; r < 3; ++r)
-              o[r] = pad.pos[r] + pad.mat[3 * r + 0] * u + pad.mat[3 * r + 1] * v;
-            const double dist = s.ray ? s.ray(o, d_world) : -1.0;
-            if (!(dist >= 0.0)) continue;
-            gap = z + dist;
-          } else {
-            double top_sum = 0.0;
-            int hits = 0;
-            const int np = area_average ? 2 : 1;
-            for (int a = 0; a < np; ++a) {
-              for (int b = 0; b < np; ++b) {
-                const double x = u + (area_average ? (a ? g : -g) : 0.0);
-                const double y = v + (area_average ? (b ? g : -g) : 0.0);
-                const double o[3] = {F.t[0] + R[0] * x + R[1] * y, F.t[1] + R[3] * x + R[4] * y,
-                                     F.t[2] + R[6] * x + R[7] * y};
-                double lo, hi;
-                if (LineInterval(s, o, d_loc, &lo, &hi)) {
-                  top_sum += hi;
-                  ++hits;
+    for (int b = 0; b < nb * nb; ++b) {
+      if (!(block_lb[k * nb * nb + b] <= cull)) continue;
+      const int bi = b % nb, bj = b / nb;
+      for (int j = bj * B; j < std::min(grid.n, bj * B + B); ++j) {
+        const double v = grid.Centre(j);
+        for (int i = bi * B; i < std::min(grid.n, bi * B + B); ++i) {
+          const size_t idx = static_cast<size_t>(j) * grid.n + i;
+          const double z = skin_z[idx];
+          if (!std::isfinite(z)) continue;
+          const double u = grid.Centre(i);
+          if (lower_bound(k, u, v, z) > cull) continue;
+          double cov = 1.0, gap;
+          if (line) {
+            if (s.type == CounterSurface::Type::kRay) {
+              // One ray down the pad's -z axis from the pad's centre plane.
+              double o[3];
+              for (int r = 0; r < 3; ++r)
+                o[r] = pad.pos[r] + pad.mat[3 * r + 0] * u + pad.mat[3 * r + 1] * v;
+              const double dist = s.ray ? s.ray(o, d_world) : -1.0;
+              if (!(dist >= 0.0)) continue;
+              gap = z + dist;
+            } else {
+              double top_sum = 0.0;
+              int hits = 0;
+              const int np = area_average ? 2 : 1;
+              for (int a = 0; a < np; ++a) {
+                for (int b = 0; b < np; ++b) {
+                  const double x = u + (area_average ? (a ? g : -g) : 0.0);
+                  const double y = v + (area_average ? (b ? g : -g) : 0.0);
+                  const double o[3] = {F.t[0] + R[0] * x + R[1] * y, F.t[1] + R[3] * x + R[4] * y,
+                                       F.t[2] + R[6] * x + R[7] * y};
+                  double lo, hi;
+                  if (LineInterval(s, o, d_loc, &lo, &hi)) {
+                    top_sum += hi;
+                    ++hits;
+                  }
                 }
               }
+              if (hits == 0) continue;
+              cov = static_cast<double>(hits) / (np * np);
+              gap = z - top_sum / hits;
             }
-            if (hits == 0) continue;
-            cov = static_cast<double>(hits) / (np * np);
-            gap = z - top_sum / hits;
+          } else {
+            const double qz = F.t[2] + R[6] * u + R[7] * v + R[8] * z;
+            const double qx = F.t[0] + R[0] * u + R[1] * v + R[2] * z;
+            const double qy = F.t[1] + R[3] * u + R[4] * v + R[5] * z;
+            gap = qz;
+            if (s.type != CounterSurface::Type::kPlane) {
+              const double hx = area_average ? F.hx : 0.0, hy = area_average ? F.hy : 0.0;
+              if (area_average) {
+                const double ox = Overlap1D(qx - hx, qx + hx, -s.half_x_m, s.half_x_m);
+                const double oy = Overlap1D(qy - hy, qy + hy, -s.half_y_m, s.half_y_m);
+                cov = area > 0 ? ox * oy / area : 0.0;
+              } else {
+                cov = (std::abs(qx) <= s.half_x_m && std::abs(qy) <= s.half_y_m) ? 1.0 : 0.0;
+              }
+              if (cov <= 0.0) continue;
+              if (s.type == CounterSurface::Type::kHeightField) {
+                const double x0 = std::max(qx - hx, -s.half_x_m);
+                const double x1 = std::min(qx + hx, s.half_x_m);
+                const double y0 = std::max(qy - hy, -s.half_y_m);
+                const double y1 = std::min(qy + hy, s.half_y_m);
+                gap = qz - HeightFieldBoxMean(s, x0, x1, y0, y1);
+              }
+            }
           }
-        } else {
-          const double qz = F.t[2] + R[6] * u + R[7] * v + R[8] * z;
-          const double qx = F.t[0] + R[0] * u + R[1] * v + R[2] * z;
-          const double qy = F.t[1] + R[3] * u + R[4] * v + R[5] * z;
-          gap = qz;
-          if (s.type != CounterSurface::Type::kPlane) {
-            const double hx = area_average ? F.hx : 0.0, hy = area_average ? F.hy : 0.0;
-            if (area_average) {
-              const double ox = Overlap1D(qx - hx, qx + hx, -s.half_x_m, s.half_x_m);
-              const double oy = Overlap1D(qy - hy, qy + hy, -s.half_y_m, s.half_y_m);
-              cov = area > 0 ? ox * oy / area : 0.0;
-            } else {
-              cov = (std::abs(qx) <= s.half_x_m && std::abs(qy) <= s.half_y_m) ? 1.0 : 0.0;
-            }
-            if (cov <= 0.0) continue;
-            if (s.type == CounterSurface::Type::kHeightField) {
-              const double x0 = std::max(qx - hx, -s.half_x_m);
-              const double x1 = std::min(qx + hx, s.half_x_m);
-              const double y0 = std::max(qy - hy, -s.half_y_m);
-              const double y1 = std::min(qy + hy, s.half_y_m);
-              gap = qz - HeightFieldBoxMean(s, x0, x1, y0, y1);
-            }
+          if (gap < (*gap_m)[idx]) {
+            (*gap_m)[idx] = gap;
+            (*coverage)[idx] = cov;
+            i_lo = std::min(i_lo, i);
+            i_hi = std::max(i_hi, i);
+            j_lo = std::min(j_lo, j);
+            j_hi = std::max(j_hi, j);
           }
-        }
-        if (gap < (*gap_m)[idx]) {
-          (*gap_m)[idx] = gap;
-          (*coverage)[idx] = cov;
         }
       }
     }
+  }
+  if (rendered) {
+    *rendered = i_hi < 0 ? CellBox{} : CellBox{i_lo, j_lo, i_hi - i_lo + 1, j_hi - j_lo + 1};
   }
   return cull;
 }

@@ -99,6 +99,8 @@ struct CounterSurface {
   // Optional per-row running integrals of the samples (HeightFieldRowPrefix):
   // makes a cell average O(rows) instead of O(rows x columns).
   const double* row_prefix = nullptr;
+  // Every row equal (a 1D texture): cell means need one row only.
+  bool rows_identical = false;
   double max_height_m = 0;  // highest point above the local z = 0 plane
   int id = -1;  // caller's tag (e.g. MuJoCo geom id)
 };
@@ -112,10 +114,23 @@ struct CounterSurface {
 // contact reaches above it can render again without culling.
 // `area_average` = false samples each cell at its centre instead (point
 // sampling; for tests that show what the averaging removes).
+// `blocks`: MakeSkinBlocks(grid, skin_z), precomputed (else built per call).
+struct SkinBlocks;
+// `rendered`: if given, the bounding box of the cells with coverage > 0.
 double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  const Pose& pad_pose, const std::vector<CounterSurface>& surfaces,
                  double cull_above_m, std::vector<double>* gap_m,
-                 std::vector<double>* coverage, bool area_average = true);
+                 std::vector<double>* coverage, bool area_average = true,
+                 const SkinBlocks* blocks = nullptr, CellBox* rendered = nullptr);
+
+// Bounds of the skin's height over blocks of kSide x kSide cells, so that
+// RenderGap skips whole blocks out of reach. +inf / -inf: no skin cell.
+struct SkinBlocks {
+  static constexpr int kSide = 8;
+  int n = 0, nb = 0;
+  std::vector<double> zmin, zmax;  // nb x nb, row-major
+};
+SkinBlocks MakeSkinBlocks(const TaxelGrid& grid, const std::vector<double>& skin_z);
 
 // Radius of a sphere about the surface's origin containing the body
 // (analytic bodies from size_m; kRay: bound_radius_m).

@@ -49,6 +49,7 @@ CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mj
       s.samples = m->hfield_data + m->hfield_adr[h];
       if (cache) {
         s.row_prefix = cache->prefix.data();
+        s.rows_identical = cache->rows_identical;
         s.max_height_m = s.elevation_m * cache->max_sample;
       } else {
         s.max_height_m = s.elevation_m;  // samples are normalised to [0, 1]
@@ -322,8 +323,11 @@ const HeightFieldCache* SkinPlugin::HeightField(const mjModel* m, int geom) {
   const float* samples = m->hfield_data + m->hfield_adr[h];
   c.prefix = HeightFieldRowPrefix(m->hfield_nrow[h], m->hfield_ncol[h], samples);
   c.max_sample = 0;
-  for (int k = 0; k < m->hfield_nrow[h] * m->hfield_ncol[h]; ++k)
-    c.max_sample = std::max<double>(c.max_sample, samples[k]);
+  const int nrow = m->hfield_nrow[h], ncol = m->hfield_ncol[h];
+  for (int k = 0; k < nrow * ncol; ++k) c.max_sample = std::max<double>(c.max_sample, samples[k]);
+  c.rows_identical = true;
+  for (int r = 1; r < nrow && c.rows_identical; ++r)
+    c.rows_identical = std::equal(samples, samples + ncol, samples + static_cast<size_t>(r) * ncol);
   return &c;
 }
 

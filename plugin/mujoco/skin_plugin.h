@@ -19,6 +19,7 @@ namespace mjtouch {
 struct HeightFieldCache {
   std::vector<double> prefix;
   double max_sample = 0;
+  bool rows_identical = false;  // a 1D texture (e.g. a grating)
 };
 
 class SkinPlugin {
