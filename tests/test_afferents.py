@@ -461,7 +461,7 @@ def run_serial(m, d, ctrl):
     return out
 
 
-def test_noise_same_seed_is_bit_identical_across_copy_and_threads():
+def test_noise_same_seed_is_bit_identical_across_copy_reset_and_threads():
     m, _ = noise_model(seed="7")
     layout = SkinLayout.from_model(m)
     ctrl = press_controls(1000, 2e-4)
@@ -477,6 +477,9 @@ def test_noise_same_seed_is_bit_identical_across_copy_and_threads():
     mujoco.mj_copyData(d2, m, d)
     assert np.array_equal(run_serial(m, d, ctrl[500:]), run_serial(m, d2, ctrl[500:]))
     assert np.array_equal(first, a[:500])
+    # mj_resetData repeats the run from the start
+    mujoco.mj_resetData(m, d)
+    assert np.array_equal(run_serial(m, d, ctrl), a)
     # 1 and 2 threads of mujoco.rollout, 3 copies of the run
     s0 = np.repeat(initial_state(m)[None], 3, axis=0)
     _, one = mujoco.rollout.rollout(m, mujoco.MjData(m), s0, ctrl[None])
