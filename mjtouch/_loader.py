@@ -136,3 +136,4 @@ def _declare(lib: ctypes.CDLL) -> None:
     lib.mjtouch_splat_contacts.argtypes = [ctypes.c_int, ctypes.c_double, ctypes.c_int,
                                            c_double_p, c_double_p, c_double_p, c_double_p]
     lib.mjtouch_describe.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_int]
+    lib.mjtouch_last_evaluation.argtypes = [ctypes.c_void_p, ctypes.c_int, c_double_p]

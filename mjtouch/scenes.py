@@ -375,6 +375,30 @@ def controls(protocol: Protocol, duration_s: float) -> np.ndarray:
     return ctrl
 
 
+def sphere_press_xml(radius_m: float, skin: dict[str, str], timestep_s: float = 1e-3) -> str:
+    """A rigid-plate oracle scene: a sphere pad (the skin) on a slide joint,
+    pushed down onto a flat box plate by the motor `press` (ctrl = force, N),
+    no gravity. The Hertz set-up of mjtouch.oracles."""
+    _positive("radius_m", radius_m)
+    conf = "".join(f'<config key="{k}" value="{v}"/>' for k, v in skin.items())
+    return f"""<mujoco model="sphere_press">
+  <extension><plugin plugin="mjtouch.skin"/></extension>
+  <option timestep="{_fmt(timestep_s)}" gravity="0 0 0"/>
+  <worldbody>
+    <geom name="plate" type="box" size="0.05 0.05 0.002" pos="0 0 -0.002"/>
+    <body name="finger" pos="0 0 {_fmt(radius_m)}">
+      <joint name="press_z" type="slide" axis="0 0 1" damping="5"/>
+      <geom name="pad" type="sphere" size="{_fmt(radius_m)}" mass="0.01" solref="0.01 1"/>
+    </body>
+  </worldbody>
+  <actuator><motor name="press" joint="press_z" gear="-1"/></actuator>
+  <sensor>
+    <plugin name="skin" plugin="mjtouch.skin" objtype="geom" objname="pad">{conf}</plugin>
+  </sensor>
+</mujoco>
+"""
+
+
 def write_models(directory: str | pathlib.Path) -> list[pathlib.Path]:
     """Regenerate the committed MJCF files in ``models/``: parts (fingertips,
     plates) and scenes that include them."""

@@ -78,6 +78,21 @@ class SkinLayout:
         s = self.blocks[name]
         return sensordata[..., self.sensor_adr + s.start:self.sensor_adr + s.stop]
 
+    def last_evaluation(self, data: mujoco.MjData) -> dict:
+        """Diagnostics of this instance's last evaluation in ``data`` (the
+        plugin's scratch, not its state): the stress path taken, the
+        ``elastic`` solve's iterations, convergence, last relative pressure
+        change, contact cells and FFT size, and the cells with traction."""
+        lib = _loader.load()
+        out = np.zeros(8)
+        if lib.mjtouch_last_evaluation(ctypes.c_void_p(data._address), self.instance,
+                                       out.ctypes.data_as(ctypes.POINTER(ctypes.c_double))):
+            raise ValueError("the data has no mjtouch.skin plugin data for this instance")
+        return {"stress_method": {1: "direct", 2: "fft", 3: "tree"}.get(int(out[0]), "none"),
+                "elastic_iterations": int(out[1]), "elastic_converged": bool(out[2]),
+                "elastic_change": float(out[3]), "elastic_contact_cells": int(out[4]),
+                "elastic_fft_size": (int(out[5]), int(out[6])), "active_cells": int(out[7])}
+
     def mask(self, cls_name: str) -> np.ndarray:
         if cls_name not in CLASSES:
             raise ValueError(f"unknown receptor class {cls_name!r}; valid: {CLASSES}")

@@ -42,7 +42,9 @@ void HalfSpaceSurfaceComplianceTable(double young_pa, double poisson, double h, 
 }
 
 ElasticContact::ElasticContact(int n, double pitch_m, std::vector<float> table)
-    : periodic_(false), nx_(n), ny_(n), n_(n), pitch_m_(pitch_m), table_(std::move(table)) {}
+    : periodic_(false), nx_(n), ny_(n), n_(n), pitch_m_(pitch_m), table_(std::move(table)) {
+  for (float v : table_) max_lift_ = std::max(max_lift_, -static_cast<double>(v));
+}
 
 ElasticContact::ElasticContact(int nx, int ny, double pitch_m,
                                const std::function<double(double)>& c_of_k)
@@ -94,18 +96,22 @@ std::shared_ptr<const ElasticContact::Spectrum> ElasticContact::SpectrumFor(int 
 
 void ElasticContact::Convolve(const Spectrum& s, const double* in, int bx, int by,
                               double* out, ElasticWork* w) const {
+  // Real field, real even kernel: half spectra (Fft2D::ForwardReal).
   const size_t S = s.fft.spectrum_size();
   w->spec_re.resize(S);
   w->spec_im.resize(S);
-  s.fft.Forward(in, nullptr, bx, by, bx, w->spec_re.data(), w->spec_im.data(), &w->fft_scratch);
+  s.fft.ForwardReal(in, bx, by, bx, w->spec_re.data(), w->spec_im.data(), &w->fft_scratch);
   const double* k = s.k_hat.data();
   double* re = w->spec_re.data();
   double* im = w->spec_im.data();
-  for (size_t i = 0; i < S; ++i) {
-    re[i] *= k[i];
-    im[i] *= k[i];
-  }
-  s.fft.Inverse(re, im, by, bx, out, nullptr, bx, &w->fft_scratch);
+  const int ls = s.fft.spectrum_stride(), hy = s.fft.half_ny();
+  for (int kx = 0; kx < s.fft.nx(); ++kx)
+    for (int ky = 0; ky < hy; ++ky) {
+      const size_t i = static_cast<size_t>(kx) * ls + ky;
+      re[i] *= k[i];
+      im[i] *= k[i];
+    }
+  s.fft.InverseReal(re, im, by, bx, out, bx, &w->fft_scratch);
 }
 
 void ElasticContact::Displacement(const std::vector<double>& pressure, const CellBox& box,

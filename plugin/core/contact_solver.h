@@ -66,6 +66,11 @@ class ElasticContact {
   ElasticContact(int nx, int ny, double pitch_m, const std::function<double(double)>& c_of_k);
 
   bool periodic() const { return periodic_; }
+  // Largest upward (negative) surface displacement per Pa of pressure on a
+  // cell anywhere (m/Pa, >= 0): a layered skin bulges beside a load. A cell
+  // whose gap exceeds the approach by more than this times sum(p) can never
+  // touch, which bounds the box a solve needs.
+  double max_lift_m_per_pa() const { return max_lift_; }
   int nx() const { return nx_; }
   int ny() const { return ny_; }
   double pitch_m() const { return pitch_m_; }
@@ -103,6 +108,7 @@ class ElasticContact {
   int nx_ = 0, ny_ = 0, n_ = 0;
   double pitch_m_ = 0;
   std::vector<float> table_;  // non-periodic
+  double max_lift_ = 0;
   std::shared_ptr<const Spectrum> periodic_spectrum_;
   mutable std::mutex mu_;
   mutable std::map<std::pair<int, int>, std::shared_ptr<const Spectrum>> spectra_;

@@ -276,4 +276,90 @@ void Fft2D::Inverse(double* spec_re, double* spec_im, int rows, int cols, double
   }
 }
 
+void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, double* spec_re,
+                        double* spec_im, std::vector<double>* scratch) const {
+  const int h = (cols + 1) / 2;  // column c is packed with column c + h
+  const int lw = PaddedStride(h);
+  const size_t W = static_cast<size_t>(ny_) * lw;
+  const size_t S = std::max(W, spectrum_size());
+  scratch->resize(2 * W + 2 * S);
+  double* wr = scratch->data();
+  double* wi = wr + W;
+  double* sr = wi + W;
+  double* si = sr + S;
+  std::fill(wr, wr + W, 0.0);
+  std::fill(wi, wi + W, 0.0);
+  for (int y = 0; y < rows; ++y) {
+    const double* row = re + static_cast<size_t>(y) * stride;
+    std::memcpy(wr + static_cast<size_t>(y) * lw, row, h * sizeof(double));
+    std::memcpy(wi + static_cast<size_t>(y) * lw, row + h, (cols - h) * sizeof(double));
+  }
+  py_.Transform(wr, wi, h, lw, false, sr, si);
+  // Split Z = A + i B (A, B spectra of real columns): A = (Z(k) + conj
+  // Z(-k)) / 2, B = (Z(k) - conj Z(-k)) / (2 i); into (x, ky), half ky.
+  const int ls = spec_stride_, hy = half_ny();
+  for (int c = 0; c < h; ++c) {
+    double* ar = spec_re + static_cast<size_t>(c) * ls;
+    double* ai = spec_im + static_cast<size_t>(c) * ls;
+    double* br = spec_re + static_cast<size_t>(c + h) * ls;
+    double* bi = spec_im + static_cast<size_t>(c + h) * ls;
+    const bool has_b = c + h < cols;
+    for (int ky = 0; ky < hy; ++ky) {
+      const size_t k = static_cast<size_t>(ky) * lw + c;
+      const size_t m = static_cast<size_t>((ny_ - ky) % ny_) * lw + c;
+      const double zr = wr[k], zi = wi[k], mr = wr[m], mi = wi[m];
+      ar[ky] = 0.5 * (zr + mr);
+      ai[ky] = 0.5 * (zi - mi);
+      if (has_b) {
+        br[ky] = 0.5 * (zi + mi);
+        bi[ky] = -0.5 * (zr - mr);
+      }
+    }
+  }
+  for (int x = cols; x < nx_; ++x) {
+    std::fill(spec_re + static_cast<size_t>(x) * ls, spec_re + static_cast<size_t>(x) * ls + hy, 0.0);
+    std::fill(spec_im + static_cast<size_t>(x) * ls, spec_im + static_cast<size_t>(x) * ls + hy, 0.0);
+  }
+  px_.Transform(spec_re, spec_im, hy, ls, false, sr, si);
+}
+
+void Fft2D::InverseReal(double* spec_re, double* spec_im, int rows, int cols, double* re,
+                        int stride, std::vector<double>* scratch) const {
+  const int h = (cols + 1) / 2;
+  const int lw = PaddedStride(h);
+  const size_t W = static_cast<size_t>(ny_) * lw;
+  const size_t S = std::max(W, spectrum_size());
+  scratch->resize(2 * W + 2 * S);
+  double* wr = scratch->data();
+  double* wi = wr + W;
+  double* sr = wi + W;
+  double* si = sr + S;
+  const int ls = spec_stride_, hy = half_ny();
+  px_.Transform(spec_re, spec_im, hy, ls, true, sr, si);
+  // Z = A + i B over the full ky range, the upper half from A(-k) =
+  // conj A(k) (the columns' inverses are real).
+  for (int c = 0; c < h; ++c) {
+    const double* ar = spec_re + static_cast<size_t>(c) * ls;
+    const double* ai = spec_im + static_cast<size_t>(c) * ls;
+    const bool has_b = c + h < cols;
+    const double* br = spec_re + static_cast<size_t>(c + h) * ls;
+    const double* bi = spec_im + static_cast<size_t>(c + h) * ls;
+    for (int ky = 0; ky < ny_; ++ky) {
+      const bool low = ky < hy;
+      const int q = low ? ky : ny_ - ky;
+      const double sgn = low ? 1.0 : -1.0;  // conjugate in the upper half
+      const double a_r = ar[q], a_i = sgn * ai[q];
+      const double b_r = has_b ? br[q] : 0.0, b_i = has_b ? sgn * bi[q] : 0.0;
+      wr[static_cast<size_t>(ky) * lw + c] = a_r - b_i;
+      wi[static_cast<size_t>(ky) * lw + c] = a_i + b_r;
+    }
+  }
+  py_.Transform(wr, wi, h, lw, true, sr, si);
+  for (int y = 0; y < rows; ++y) {
+    double* row = re + static_cast<size_t>(y) * stride;
+    std::memcpy(row, wr + static_cast<size_t>(y) * lw, h * sizeof(double));
+    std::memcpy(row + h, wi + static_cast<size_t>(y) * lw, (cols - h) * sizeof(double));
+  }
+}
+
 }  // namespace mjtouch

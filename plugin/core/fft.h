@@ -64,6 +64,19 @@ class Fft2D {
   // x < cols only (im may be null). No 1/(nx ny) factor.
   void Inverse(double* spec_re, double* spec_im, int rows, int cols, double* re, double* im,
                int stride, std::vector<double>* scratch) const;
+  // Real input (a rows x cols block at the origin): the half spectrum ky in
+  // [0, half_ny()), stored like Forward's (spec[kx * spectrum_stride() + ky]);
+  // the other half is implied by X(-k) = conj X(k). Pairs of real columns
+  // share one complex transform along y, and only half the ky lanes are
+  // transformed along x: about half of Forward's work.
+  void ForwardReal(const double* re, int stride, int rows, int cols, double* spec_re,
+                   double* spec_im, std::vector<double>* scratch) const;
+  // Inverse of a half spectrum whose full spectrum is Hermitian (a real
+  // field): writes re[y * stride + x] for y < rows, x < cols. Destroys the
+  // spectrum. No 1/(nx ny) factor.
+  void InverseReal(double* spec_re, double* spec_im, int rows, int cols, double* re, int stride,
+                   std::vector<double>* scratch) const;
+  int half_ny() const { return ny_ / 2 + 1; }
   // The same with row stride nx (arrays of the full transform size).
   void Forward(const double* re, const double* im, int rows, int cols, double* spec_re,
                double* spec_im, std::vector<double>* scratch) const {

@@ -178,10 +178,12 @@ void ParseElasticSkin(Reader& r, SkinConfig* cfg) {
     }
     return;
   }
-  if (!r.Raw("poisson").empty()) {
-    r.Fail("attribute `poisson` applies to skin=\"halfspace\" only; the layered skin takes its "
-           "Poisson's ratios from `layers` (and `base`)");
-    return;
+  for (const char* key : {"poisson", "young"}) {
+    if (!r.Raw(key).empty()) {
+      r.Fail(Fmt("attribute `%s` applies to skin=\"halfspace\" only; the layered skin takes its "
+                 "moduli from `layers` (and `base`)", key));
+      return;
+    }
   }
   // One number of a layer or of the base, with its valid range.
   auto number = [&](const char* key, const std::string& what, const std::string& word, double lo,
@@ -787,12 +789,15 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
     }
   }
   if (cfg.pressure_model == PressureModel::kElastic) {
-    // Surface compliance of the skin: homogeneous half-space (young,
-    // poisson). For the layered skin the same table comes from
-    // LayeredSubstrate::SurfaceComplianceTable(pitch, n, &compliance).
+    // Surface compliance of the skin: the layered stack's, or a homogeneous
+    // half-space's (young, poisson).
     std::vector<float> compliance;
-    HalfSpaceSurfaceComplianceTable(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m, cfg.grid.n,
-                                    &compliance);
+    if (model->layered_) {
+      model->layered_->SurfaceComplianceTable(cfg.grid.pitch_m, cfg.grid.n, &compliance);
+    } else {
+      HalfSpaceSurfaceComplianceTable(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m, cfg.grid.n,
+                                      &compliance);
+    }
     model->elastic_ = std::make_shared<ElasticContact>(cfg.grid.n, cfg.grid.pitch_m,
                                                        std::move(compliance));
   }

@@ -56,7 +56,7 @@ struct SkinConfig {
   PressureModel pressure_model = PressureModel::kWinkler;  // `pressure`
   double stiffness_pa_per_m = 2e7;  // Winkler foundation
   double young_pa = 8e4;            // `elastic`: homogeneous skin (Shao 2010 epidermis)
-  double tolerance = 1e-6;          // `elastic`: relative L1 pressure change per iteration
+  double tolerance = 1e-4;          // `elastic`: relative L1 pressure change per iteration (~ its error)
   double poisson = 0.48;            // homogeneous skin (Shao 2010 epidermis)
   // Elastic skin: a layered stack (`skin` = layered: `layers` over `base`,
   // default the Shao et al. 2010 fingertip) or a homogeneous half-space
@@ -99,7 +99,6 @@ enum StateSlot {
   kStContactValid,      // 1 if the last evaluation touched
   kStLastTime,          // time of the last evaluation, s
   kStTimeValid,         // 1 once evaluated
-  kStContactLevel,      // `elastic`: last contact level (gap range in contact), m
   kStReceptorsIdle,     // 1 while receptors are quiescent and not advanced
   kStReceptorsTime,     // time the receptors were advanced to, s
   kStateHeader
@@ -121,10 +120,12 @@ class SkinModel {
   // Receptor layout and output sizes without building tables (for MuJoCo's
   // nstate / nsensordata callbacks).
   static std::vector<ReceptorSite> PlaceReceptors(const SkinConfig& cfg);
-  // Header (approach, valid, last time, valid), per-receptor membranes, and the
-  // last step's spike counts and voltages (re-output on repeated calls).
-  static int StateSize(int nreceptor) {
-    return kStateHeader + nreceptor * (kReceptorStateSize + 2);
+  // Header (StateSlot), per-receptor membranes, the last step's spike counts
+  // and voltages (re-output on repeated calls), and for `elastic` the last
+  // pressure field (n*n, Pa: the next step's warm start).
+  static int StateSize(const SkinConfig& cfg, int nreceptor) {
+    return kStateHeader + nreceptor * (kReceptorStateSize + 2) +
+           (cfg.pressure_model == PressureModel::kElastic ? static_cast<int>(cfg.grid.Size()) : 0);
   }
   static int OutputSize(const SkinConfig& cfg, int nreceptor);
   static int BlockSize(const SkinConfig& cfg, int nreceptor, int block);
@@ -148,7 +149,7 @@ class SkinModel {
   // Seconds spent building the kernel tables (and FFT spectra), once per
   // configuration (cached: shared by every MjData of a model).
   double kernel_build_seconds() const;
-  int state_size() const { return StateSize(static_cast<int>(sites_.size())); }
+  int state_size() const { return StateSize(cfg_, static_cast<int>(sites_.size())); }
   int output_size() const { return OutputSize(cfg_, static_cast<int>(sites_.size())); }
   std::string Describe() const;
   // Stress components that class c's receptor quantity needs.
@@ -188,6 +189,7 @@ struct Workspace {
   TractionField traction;
   std::vector<double> quantity;  // per receptor
   ElasticWork elastic;
+  ElasticSolveStats elastic_stats;  // the last `elastic` solve (diagnostics)
   std::vector<double> pressure_guess;  // `elastic` initial guess, n*n
   std::vector<Stress6> stress;   // per receptor, Pa
   StressScratch stress_scratch;
@@ -197,6 +199,10 @@ struct Workspace {
 // The last step's spike count per receptor (nreceptor values inside `state`).
 inline const double* LastSpikes(const SkinModel& model, const double* state) {
   return state + kStateHeader + model.receptors().size() * kReceptorStateSize;
+}
+// `elastic`: the last pressure field (n*n, Pa) inside `state`.
+inline double* LastPressure(const SkinModel& model, double* state) {
+  return state + kStateHeader + model.receptors().size() * (kReceptorStateSize + 2);
 }
 
 // Stages 1-2 for one step (skin_traction.cc): render the gap and solve the

@@ -36,7 +36,6 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   TractionField& tf = ws->traction;
   const bool warm = state[kStContactValid] > 0.0;
   const double depth_prev = state[kStContactDepth];
-  const double level_prev = state[kStContactLevel];
   state[kStContactValid] = 0.0;
   if (!(in.in_contact && in.normal_force_n > 0.0)) return false;
 
@@ -63,7 +62,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       }
       const double gmin = MinGap(grid, box, ws->gap, ws->coverage);
       if (!std::isfinite(gmin)) break;
-      double approach = 0.0, level = 0.0;
+      double approach = 0.0;
       if (cfg.pressure_model == PressureModel::kWinkler) {
         const double guess = warm ? gmin + depth_prev : std::nan("");
         touching = WinklerPressure(grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m,
@@ -77,27 +76,50 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
             const size_t k = static_cast<size_t>(j) * grid.n + i;
             if (!(ws->coverage[k] > 0.0)) ws->gap[k] = kInf;
           }
-        // Initial guess from the last step's contact level L (largest gap in
-        // contact above the smallest): p ~ sqrt(L - (g - gmin)), which is
-        // Hertz's distribution for a paraboloid and close for any smooth
-        // shape. It depends on plugin_state only, never on scratch memory.
+        // Warm start: the last step's pressure field (plugin_state), so a
+        // sliding contact needs a few iterations; cold: uniform.
+        const double* last = LastPressure(model, state);
         ws->pressure_guess.assign(grid.Size(), 0.0);
-        if (warm && level_prev > 0.0) {
-          for (size_t k = 0; k < grid.Size(); ++k) {
-            const double d = level_prev - (ws->gap[k] - gmin);
-            if (d > 0.0) ws->pressure_guess[k] = std::sqrt(d);
-          }
+        if (warm) std::copy(last, last + grid.Size(), ws->pressure_guess.begin());
+        // The solve box: cells that can touch if the approach is at most 1.2
+        // x the last step's depth above gmin (+ 10 um). A cell whose gap
+        // exceeds the approach by more than the largest bulge of the skin
+        // never touches, so if the solved approach stays below that level
+        // the box held every contact; else solve again on every rendered
+        // cell.
+        const double lift = ec.max_lift_m_per_pa() * in.normal_force_n / grid.Area();
+        const double level = gmin + 1.2 * depth_prev + 10e-6;
+        CellBox solve_box = box;
+        if (warm) {
+          int i0 = grid.n, i1 = -1, j0 = grid.n, j1 = -1;
+          for (int j = box.j0; j < box.j0 + box.ny; ++j)
+            for (int i = box.i0; i < box.i0 + box.nx; ++i)
+              if (ws->gap[static_cast<size_t>(j) * grid.n + i] <= level + lift) {
+                i0 = std::min(i0, i);
+                i1 = std::max(i1, i);
+                j0 = std::min(j0, j);
+                j1 = std::max(j1, j);
+              }
+          if (i1 >= 0) solve_box = CellBox{i0, j0, i1 - i0 + 1, j1 - j0 + 1};
         }
         ElasticSolveStats st;
-        touching = ec.Solve(ws->gap, box, in.normal_force_n, cfg.tolerance,
-                            kElasticMaxIterations, &ws->pressure_guess, &ws->elastic, &st);
+        for (int attempt = 0; attempt < 2; ++attempt) {
+          if (attempt == 1) {  // the tight box was too small: every rendered cell
+            if (!warm) break;
+            solve_box = box;
+            std::copy(last, last + grid.Size(), ws->pressure_guess.begin());
+          }
+          touching = ec.Solve(ws->gap, solve_box, in.normal_force_n, cfg.tolerance,
+                              kElasticMaxIterations, &ws->pressure_guess, &ws->elastic, &st);
+          if (!touching || !warm || st.approach_m <= level) break;
+        }
         if (touching) {
           tf.pressure_pa.swap(ws->pressure_guess);
-          tf.box = box;
+          tf.box = solve_box;
           touching = NormalizeLoad(grid, in.normal_force_n, &tf);
         }
+        ws->elastic_stats = st;
         approach = st.approach_m;
-        level = st.max_contact_gap_m - gmin;
       }
       if (touching && approach >= cull && pass == 0) {
         touching = false;  // render all and solve again
@@ -106,7 +128,6 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       }
       if (touching) {
         state[kStContactDepth] = approach - gmin;
-        state[kStContactLevel] = level;
       }
     }
     if (touching && cfg.shear)
@@ -115,6 +136,8 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   if (touching) {
     FinishTraction(grid, cfg.shear, &tf);
     state[kStContactValid] = 1.0;
+    if (cfg.pressure_model == PressureModel::kElastic)
+      std::copy(tf.pressure_pa.begin(), tf.pressure_pa.end(), LastPressure(model, state));
   }
   return touching;
 }

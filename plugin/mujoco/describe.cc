@@ -61,3 +61,24 @@ extern "C" __attribute__((visibility("default"))) int mjtouch_describe(const mjM
   std::memcpy(buf, s.c_str(), s.size() + 1);
   return 0;
 }
+
+// Diagnostics of an instance's last evaluation in `d` (scratch, not state):
+// out8 = stress path (1 direct, 2 fft, 3 tree), elastic iterations,
+// converged, last relative change, contact cells, FFT size x, y, active
+// traction cells. Returns 0, or 1 if the instance has no plugin data.
+extern "C" __attribute__((visibility("default"))) int mjtouch_last_evaluation(
+    const mjData* d, int instance, double* out8) {
+  using namespace mjtouch;
+  const auto* p = reinterpret_cast<const SkinPlugin*>(d->plugin_data[instance]);
+  if (!p) return 1;
+  const Workspace& w = p->workspace();
+  out8[0] = static_cast<int>(w.last_stress_method);
+  out8[1] = w.elastic_stats.iterations;
+  out8[2] = w.elastic_stats.converged;
+  out8[3] = w.elastic_stats.change;
+  out8[4] = w.elastic_stats.contact_cells;
+  out8[5] = w.elastic_stats.fft_size_x;
+  out8[6] = w.elastic_stats.fft_size_y;
+  out8[7] = w.traction.active_cells;
+  return 0;
+}

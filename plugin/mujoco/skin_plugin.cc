@@ -360,7 +360,7 @@ void SkinPlugin::RegisterPlugin() {
     SkinConfig cfg;
     std::string error;
     if (!ParseConfig(m, instance, &cfg, &error)) return 0;
-    return SkinModel::StateSize(static_cast<int>(SkinModel::PlaceReceptors(cfg).size()));
+    return SkinModel::StateSize(cfg, static_cast<int>(SkinModel::PlaceReceptors(cfg).size()));
   };
   plugin.nsensordata = +[](const mjModel* m, int instance, int sensor_id) {
     SkinConfig cfg;

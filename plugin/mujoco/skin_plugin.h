@@ -45,6 +45,7 @@ class SkinPlugin {
   void Visualize(const mjModel* m, mjData* d, const mjvOption* opt, mjvScene* scn,
                  int instance) const;
   const SkinModel& model() const { return *model_; }
+  const Workspace& workspace() const { return workspace_; }
 
  private:
   SkinPlugin() = default;

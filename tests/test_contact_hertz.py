@@ -1,0 +1,51 @@
+"""The `elastic` pressure model end to end: a sphere pad pressed on a flat
+plate by MuJoCo reproduces Hertz (examples/pressure_ladder.py prints how far
+every pressure model is from it)."""
+
+import mujoco
+import pytest
+
+from mjtouch import oracles, scenes
+from mjtouch.sensor import SkinLayout
+
+E, NU = 80e3, 0.48
+
+
+def test_elastic_sphere_pad_matches_hertz():
+    # R = 0.2 m keeps a / R = 0.045: the sphere's departure from Hertz's
+    # paraboloid, ~(a / R)^2 / 4 = 5e-4, stays below the 1e-3 tolerance; at
+    # 32 cells per contact radius the boundary elements' own error is 1e-4
+    # (tests/test_pressure.py).
+    h = oracles.Hertz(load_n=0.5, radius_m=0.2, young_pa=E, poisson=NU)
+    pitch, n = h.contact_radius_m / 32, 96
+    skin = dict(nx=n, pitch=pitch, ridges="false", pressure="elastic", skin="halfspace",
+                young=E, poisson=NU, tolerance=1e-8, outputs="force pressure")
+    m = mujoco.MjModel.from_xml_string(scenes.sphere_press_xml(h.radius_m, skin))
+    d = mujoco.MjData(m)
+    layout = SkinLayout.from_model(m)
+    d.ctrl[0] = h.load_n
+    for _ in range(1500):
+        mujoco.mj_step(m, d)
+    force = layout.block(d.sensordata, "force")
+    p = layout.block(d.sensordata, "pressure").reshape(n, n)
+    assert force[0] == pytest.approx(h.load_n, rel=1e-6)  # settled on the set load
+    # sum(p A) is MuJoCo's normal force (float32 pressure output: 1e-7)
+    assert p.sum() * pitch**2 == pytest.approx(force[0], rel=1e-6)
+    err = oracles.hertz_errors(h, p, pitch, force[3])
+    assert all(abs(v) < 1e-3 for v in err.values()), err
+
+
+def test_pressure_ladder_example():
+    # The example's fingertip-sized sphere (R = 20 mm, a / R = 0.21): elastic
+    # departs from Hertz by the sphere's non-paraboloid shape, bounded by
+    # (a / R)^2 / 4 = 1.1e-2; Winkler and contact splats are far off, which is
+    # what the ladder shows.
+    import runpy
+    import pathlib
+    ex = runpy.run_path(str(pathlib.Path(__file__).parents[1] / "examples" / "pressure_ladder.py"))
+    out = ex["ladder"](radius_m=0.02, force_n=0.5, steps=1500)
+    h = oracles.Hertz(load_n=0.5, radius_m=0.02, young_pa=E, poisson=NU)
+    bound = (h.contact_radius_m / h.radius_m) ** 2 / 4
+    assert all(abs(v) < bound for v in out["elastic"].values()), out
+    assert abs(out["winkler"]["indentation"]) > 10 * abs(out["elastic"]["indentation"])
+    assert out["contacts"]["peak"] > 10  # one splat per MuJoCo contact: a spike
