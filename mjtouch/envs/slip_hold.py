@@ -237,5 +237,6 @@ class SlipHoldEnv(TouchEnv):
         cam = mujoco.MjvCamera()
         cam.type = mujoco.mjtCamera.mjCAMERA_FREE
         cam.lookat[:] = [-0.006, 0.0, 0.0]
-        cam.distance, cam.elevation, cam.azimuth = 0.07, -20.0, 60.0
+        # from behind the finger: the skin's drawing above the pad faces -x
+        cam.distance, cam.elevation, cam.azimuth = 0.07, -15.0, 20.0
         return cam
