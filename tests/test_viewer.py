@@ -128,12 +128,18 @@ from mjtouch.viewer import (KEY_DELETE, KEY_END, KEY_F9, KEY_HOME, KEY_INSERT,  
 
 
 @pytest.fixture(scope="module")
-def rendered(tmp_path_factory):
+def gl_env():
+    """The environment for a subprocess that renders offscreen."""
     backend = viewer.offscreen_backend()
     if backend is None:
         pytest.fail(INSTALL_HINT, pytrace=False)
+    return {**os.environ, "MUJOCO_GL": backend, "PYOPENGL_PLATFORM": backend}
+
+
+@pytest.fixture(scope="module")
+def rendered(tmp_path_factory, gl_env):
     out = tmp_path_factory.mktemp("viewer_frames")
-    env = {**os.environ, "MUJOCO_GL": backend, "PYOPENGL_PLATFORM": backend}
+    env = gl_env
     proc = subprocess.run([sys.executable, __file__, str(out)], env=env, capture_output=True,
                           text=True, timeout=300)
     assert proc.returncode == 0, f"render worker failed:\n{proc.stdout}\n{proc.stderr}"
@@ -210,6 +216,24 @@ def test_environments_render_rgb_arrays(rendered):
         frame = frames[f"env_{name}"]
         assert frame.shape == (480, 640, 3) and frame.dtype == np.uint8
         assert frame.std() > 10  # a scene, not a blank frame
+
+
+def test_view_command_offscreen_writes_a_png(tmp_path, gl_env):
+    """`mjtouch view --offscreen` (Pillow writes the PNG)."""
+    from PIL import Image
+
+    png = tmp_path / "view.png"
+    proc = subprocess.run([sys.executable, "-m", "mjtouch", "view", "--offscreen", str(png),
+                           "--duration", "0.3"], env=gl_env, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "wrote" in proc.stdout and "F = 0.50 N" in proc.stdout
+    img = np.asarray(Image.open(png).convert("RGB"))
+    assert img.shape == (600, 960, 3)  # SlideSession.render's default size
+    scene = img[:, : 2 * img.shape[1] // 3]  # left of the figures
+    r, g, b = (scene[..., c].astype(int) for c in range(3))
+    yellow = (r > 180) & (g > 160) & (b < 80)  # mid heat ramp; the pad is (.93, .72, .62)
+    assert yellow.sum() > 200 and classify(scene)["SA1"].sum() > 10  # heatmap, lit SA1 sites
 
 
 # ----- the drawing in the scene, checked exactly (no OpenGL needed) ---------
