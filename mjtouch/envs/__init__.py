@@ -8,7 +8,10 @@ Importing this module registers, in Gymnasium's registry:
 | ``mjtouch/SlipHold-v0`` | hold a slipping object with the least grip force (:mod:`.slip_hold`) | 100 (1 s) |
 
 ```python
-import gymnasium as gym
+try:
+    import gymnasium as gym
+except ImportError as e:  # an optional dependency
+    raise ImportError("mjtouch.envs needs gymnasium >= 1.1: pip install 'mjtouch[envs]'") from e
 import mjtouch.envs  # noqa: F401 (registers the ids)
 env = gym.make("mjtouch/TextureExplore-v0")
 envs = gym.make_vec("mjtouch/SlipHold-v0", num_envs=8)  # mujoco.rollout threads

@@ -23,6 +23,14 @@ Touch observations (documented per environment):
 - ``pressure`` (only with ``pressure_image=p``): the taxel pressure at the
   end of the control step, averaged into p x p blocks (kPa), row-major.
 
+Every entry has finite bounds (the observation space's Box). Counts and rates
+are bounded exactly by the refractory period (at most ceil(T / t_ref) + 1
+spikes per receptor in a control step T). The measured quantities (finger
+motion, forces, pressure) have a full-scale range, like a real sensor's,
+several times what the task's actuators can produce in steady state; they
+saturate (are clipped) there, which the tests check never happens under
+random or bang-bang actions.
+
 ``touch="none"`` builds the scene without the skin plugin (and these blocks
 from the observation): the same task with MuJoCo alone, the baseline for
 the benchmark and for showing what touch adds.
@@ -43,6 +51,12 @@ from mjtouch.sensor import CLASSES, SkinLayout
 
 TOUCH_MODES = ("counts", "rates", "none")
 FULLPHYSICS = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
+# The skin's `refractory` attribute default (plugin/README.md), all classes.
+REFRACTORY_DEFAULT_S = 1e-3
+# Full-scale skin force: this many times the largest commanded force. The
+# mean over a control step exceeds the command only by impact transients
+# (measured: 1.09 x at 1 N with bang-bang actions).
+FORCE_FULL_SCALE_FACTOR = 5.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,7 +65,21 @@ class ObsBlock:
     size: int
     units: str
     meaning: str
-    low: float = -np.inf  # lower bound of every entry (upper: +inf)
+    low: float | tuple  # bounds of the entries (a scalar, or one per entry)
+    high: float | tuple
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        lo = np.broadcast_to(np.asarray(self.low, np.float64), (self.size,))
+        hi = np.broadcast_to(np.asarray(self.high, np.float64), (self.size,))
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(lo <= hi)):
+            raise ValueError(f"observation block {self.name!r} has bad bounds {lo}, {hi}")
+        return lo, hi
+
+
+def max_spikes_per_receptor(span_s: float, refractory_s: float) -> int:
+    """Most spikes one receptor can emit in span_s: spikes are at least a
+    refractory period apart."""
+    return math.ceil(span_s / refractory_s) + 1
 
 
 def check_choice(name: str, value: Any, choices: tuple) -> None:
@@ -71,7 +99,9 @@ class TouchEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
 
     def __init__(self, xml: str, *, touch: str, pressure_image: int, frame_skip: int,
-                 user_spec: int, render_mode: str | None, render_size: tuple[int, int]):
+                 user_spec: int, render_mode: str | None, render_size: tuple[int, int],
+                 max_force_n: float, max_friction: float,
+                 refractory_s: float = REFRACTORY_DEFAULT_S):
         check_choice("touch", touch, TOUCH_MODES)
         if render_mode is not None:
             check_choice("render_mode", render_mode, tuple(self.metadata["render_modes"]))
@@ -104,6 +134,10 @@ class TouchEnv(gym.Env):
         self._state = np.zeros(mujoco.mj_stateSize(self.model, FULLPHYSICS))
         self._renderer = None
         self._blocks: list[ObsBlock] = []
+        # full scales of the touch blocks (see the module docstring)
+        self.force_full_scale_n = FORCE_FULL_SCALE_FACTOR * float(max_force_n)
+        self.max_friction = float(max_friction)
+        self.refractory_s = float(refractory_s)
 
     # ----- observation layout ---------------------------------------------
     def _touch_blocks(self) -> list[ObsBlock]:
@@ -113,14 +147,25 @@ class TouchEnv(gym.Env):
         what = ("spike count per class (SA1, RA, PC), summed over the class's receptors and the "
                 "control step" if self.touch == "counts" else
                 "mean firing rate per receptor of each class (SA1, RA, PC) over the control step")
-        blocks = [ObsBlock("touch", 3, unit, what, low=0.0),
+        per_receptor = max_spikes_per_receptor(self.control_dt_s, self.refractory_s)
+        if self.touch == "counts":
+            touch_high = tuple(float(per_receptor * m.sum()) for m in self._class_masks)
+        else:
+            touch_high = per_receptor / self.control_dt_s
+        f = self.force_full_scale_n
+        ft = self.max_friction * f  # Coulomb: tangential <= mu x normal
+        blocks = [ObsBlock("touch", 3, unit, what, low=0.0, high=touch_high),
                   ObsBlock("contact", 3, "N", "skin force, mean over the control step: normal, "
-                           "tangential along pad x, along pad y")]
+                           "tangential along pad x, along pad y", low=(0.0, -ft, -ft),
+                           high=(f, ft, ft))]
         if self.pressure_image:
             p = self.pressure_image
+            # pressure x area sums to the normal force, so a block's mean is
+            # at most the force over the block's area
+            block_area_m2 = (self.layout.nx // p * self.layout.pitch_m) ** 2
             blocks.append(ObsBlock("pressure", p * p, "kPa",
                                    f"taxel pressure at the end of the step, {p} x {p} block means",
-                                   low=0.0))
+                                   low=0.0, high=f / block_area_m2 * 1e-3))
         return blocks
 
     def _set_blocks(self, blocks: list[ObsBlock]) -> None:
@@ -130,15 +175,28 @@ class TouchEnv(gym.Env):
         for b in blocks:
             self.observation_blocks[b.name] = slice(start, start + b.size)
             start += b.size
-        low = np.concatenate([np.full(b.size, b.low) for b in blocks])
-        self.observation_space = gym.spaces.Box(low, np.inf, (start,), np.float64)
+        bounds = [b.bounds() for b in blocks]
+        self._obs_low = np.concatenate([lo for lo, _ in bounds])
+        self._obs_high = np.concatenate([hi for _, hi in bounds])
+        self.observation_space = gym.spaces.Box(self._obs_low, self._obs_high, (start,),
+                                                np.float64)
+
+    def _bounded(self, obs: np.ndarray) -> np.ndarray:
+        """Saturate at the full-scale range (see the module docstring)."""
+        return np.clip(obs, self._obs_low, self._obs_high)
 
     def describe_observation(self) -> str:
-        """A table of the observation blocks (name, slice, units, meaning)."""
-        rows = [f"{'block':10s} {'slice':>9s}  {'units':7s} meaning"]
+        """A table of the observation blocks (name, slice, units, range, meaning)."""
+        rows = [f"{'block':10s} {'slice':>9s}  {'units':10s} meaning"]
         for b in self._blocks:
             s = self.observation_blocks[b.name]
-            rows.append(f"{b.name:10s} {f'{s.start}:{s.stop}':>9s}  {b.units:7s} {b.meaning}")
+            lo, hi = b.bounds()
+            if np.all(lo == lo[0]) and np.all(hi == hi[0]):
+                rng = f"[{lo[0]:.3g}, {hi[0]:.3g}]"
+            else:
+                rng = " ".join(f"[{a:.3g}, {z:.3g}]" for a, z in zip(lo, hi))
+            rows.append(f"{b.name:10s} {f'{s.start}:{s.stop}':>9s}  {b.units:10s} {b.meaning}\n"
+                        f"{'':33s}range {rng}")
         return "\n".join(rows)
 
     def split_observation(self, obs: np.ndarray) -> dict[str, np.ndarray]:

@@ -1,6 +1,6 @@
 """Environment steps per second, with and without touch.
 
-``python -m mjtouch.envs.bench [--env ID] [--num-envs N] [--steps S]``
+``python -m mjtouch.envs.bench [--env ID] [--num-envs N] [--steps S] [--quick]``
 
 Measures, in this process and on this machine:
 
@@ -12,6 +12,8 @@ Measures, in this process and on this machine:
   ``SyncVectorEnv``, with touch.
 
 Random actions (TextureExplore never commits, so episodes run to the limit).
+``--quick`` (20 steps, 2 environments) only shows that it works: its numbers
+are too short to compare.
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ import gymnasium as gym
 import numpy as np
 
 import mjtouch.envs  # noqa: F401  (registers the ids)
+
+QUICK_STEPS, QUICK_NUM_ENVS = 20, 2
 
 
 def _actions(space: gym.Space, n: int, env_id: str, seed: int) -> np.ndarray:
@@ -89,8 +93,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--env", default="mjtouch/TextureExplore-v0", choices=sorted(mjtouch.envs.ENV_IDS))
     p.add_argument("--num-envs", type=int, default=4)
     p.add_argument("--steps", type=int, default=200, help="env steps per measurement")
+    p.add_argument("--quick", action="store_true",
+                   help="a smoke run: 20 steps, 2 environments (overrides --steps, --num-envs)")
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
+    if args.quick:
+        args.steps, args.num_envs = QUICK_STEPS, QUICK_NUM_ENVS
+    if args.steps < 1 or args.num_envs < 1:
+        p.error(f"--steps {args.steps} and --num-envs {args.num_envs} must be >= 1")
     r = benchmark(args.env, args.num_envs, args.steps)
     if args.json:
         print(json.dumps(r))

@@ -11,14 +11,16 @@ the skin). Without touch the only safe policy is the worst-case grip.
 
 Action (Box, [-1, 1]): grip force, -1 -> ``force_range_n[0]``, +1 -> ``force_range_n[1]`` (N).
 
-Observation (Box, float64), blocks in this order (``env.unwrapped.describe_observation()``):
+Observation (Box, float64), blocks in this order (``env.unwrapped.describe_observation()``),
+with their bounds (F = ``force_range_n[1]``, mu = ``friction_range[1]``, T = control step,
+n_c = receptors of the class; *: full scale, saturates):
 
-| block | size | units | meaning |
-|---|---|---|---|
-| ``grip`` | 3 | m, m/s, N | fingertip position (towards the wall, from its start), velocity, grip force applied |
-| ``touch`` | 3 | spikes or Hz | SA1, RA, PC spike counts over the control step (or rates) |
-| ``contact`` | 3 | N | skin force (normal; tangential along pad x = up, along pad y), mean over the step |
-| ``pressure`` | p*p | kPa | optional, ``pressure_image=p``: end-of-step pressure, p x p |
+| block | size | units | meaning | bounds |
+|---|---|---|---|---|
+| ``grip`` | 3 | m, m/s, N | fingertip position (towards the wall, from its start), velocity, grip force applied | +-20 mm*, +-2 F / (2 N s/m)*, ``force_range_n`` |
+| ``touch`` | 3 | spikes or Hz | SA1, RA, PC spike counts over the control step (or rates) | 0 to n_c (ceil(T / 1 ms) + 1) |
+| ``contact`` | 3 | N | skin force (normal; tangential along pad x = up, along pad y), mean over the step | 0 to 5 F*, +-5 mu F* |
+| ``pressure`` | p*p | kPa | optional, ``pressure_image=p``: end-of-step pressure, p x p | 0 to 5 F / block area* |
 
 ``touch="none"``: only ``grip`` (the skin is not in the scene).
 
@@ -44,6 +46,12 @@ BLOCK_HALF_M = (0.01, 0.015, 0.02)  # the held block's half sizes (x: towards th
 BLOCK_MASS_KG = 0.02
 GRATING_PERIOD_M = 1e-3  # ridges across the block's face, perpendicular to slip
 PAD_FRICTION = 0.1  # below every block friction, so the block's sets the contact's
+GRIP_DAMPING_N_S_M = 2.0  # the grip joint's damping
+# Full scales of the grip block: the block (2 x 10 mm deep) stops the finger
+# towards the wall and nothing pulls it back; its speed is at most the
+# terminal speed F / damping under the largest grip force, doubled for
+# contact rebounds.
+GRIP_X_FULL_SCALE_M = 2 * BLOCK_HALF_M[0]
 
 
 def slip_hold_xml(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3,
@@ -84,7 +92,7 @@ def slip_hold_xml(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3,
             contype="0" conaffinity="0" group="{scenes.TEXTURE_GROUP}" rgba="0.25 0.4 0.7 1"/>
     </body>
     <body name="finger" pos="{-(bx + c + 3e-4):.9g} 0 0" euler="0 -90 0" gravcomp="1">
-      <joint name="grip" type="slide" axis="0 0 -1" damping="2"/>
+      <joint name="grip" type="slide" axis="0 0 -1" damping="{GRIP_DAMPING_N_S_M:g}"/>
       <geom name="pad" type="ellipsoid" size="{a:.9g} {b:.9g} {c:.9g}" mass="{tip.mass_kg:.9g}"
             friction="{PAD_FRICTION} 0.005 0.0001" solref="{scenes.CONTACT_SOLREF}"
             solimp="{scenes.CONTACT_SOLIMP}" rgba="0.93 0.72 0.62 1"/>
@@ -138,7 +146,8 @@ class SlipHoldEnv(TouchEnv):
         xml = slip_hold_xml(env_fingertip(outputs=outputs), timestep_s, skin=touch != "none")
         spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED
         super().__init__(xml, touch=touch, pressure_image=pressure_image, frame_skip=frame_skip,
-                         user_spec=int(spec), render_mode=render_mode, render_size=render_size)
+                         user_spec=int(spec), render_mode=render_mode, render_size=render_size,
+                         max_force_n=self.force_range_n[1], max_friction=self.friction_range[1])
         self.force_cost, self.slip_cost = float(force_cost), float(slip_cost)
         self.drop_m, self.drop_penalty = float(drop_m), float(drop_penalty)
         self.settle_force_n = float(settle_force_n)
@@ -146,8 +155,12 @@ class SlipHoldEnv(TouchEnv):
         self._object_body = m.body("object").id
         self._object_geom = m.geom("object").id
         self.action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+        lo, hi = self.force_range_n
+        v_fs = 2 * max(hi, 0.1) / GRIP_DAMPING_N_S_M
         self._set_blocks([ObsBlock("grip", 3, "m, m/s, N", "fingertip position towards the wall "
-                                   "(from its start), velocity, grip force applied")]
+                                   "(from its start), velocity, grip force applied",
+                                   low=(-GRIP_X_FULL_SCALE_M, -v_fs, lo),
+                                   high=(GRIP_X_FULL_SCALE_M, v_fs, hi))]
                          + self._touch_blocks())
         self._settled = self._settle()
         self._z0 = self._qpos(np.concatenate([[0.0], self._settled]), "object_z")
@@ -208,7 +221,7 @@ class SlipHoldEnv(TouchEnv):
     def _observe(self, states, sensordata) -> np.ndarray:
         s = self._state
         grip = [self._qpos(s, "grip") - self._x0, self._qvel(s, "grip"), self._grip]
-        return np.concatenate([grip, *self._touch_features(sensordata)])
+        return self._bounded(np.concatenate([grip, *self._touch_features(sensordata)]))
 
     def _outcome(self, states, sensordata, a):
         z_end = self._qpos(self._state, "object_z")
@@ -224,5 +237,6 @@ class SlipHoldEnv(TouchEnv):
         cam = mujoco.MjvCamera()
         cam.type = mujoco.mjtCamera.mjCAMERA_FREE
         cam.lookat[:] = [-0.006, 0.0, 0.0]
-        cam.distance, cam.elevation, cam.azimuth = 0.07, -20.0, 60.0
+        # from behind the finger: the skin's drawing above the pad faces -x
+        cam.distance, cam.elevation, cam.azimuth = 0.07, -15.0, 20.0
         return cam

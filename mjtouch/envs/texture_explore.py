@@ -16,15 +16,17 @@ Action (Box, [-1, 1]^(3+K)):
 | 2 | commit: > 0 ends the episode with the answer argmax(a[3:]) |
 | 3.. | one score per texture class (``classes``) |
 
-Observation (Box, float64), blocks in this order (``env.unwrapped.describe_observation()``):
+Observation (Box, float64), blocks in this order (``env.unwrapped.describe_observation()``),
+with their bounds (F = ``force_range_n[1]``, V = ``max_speed_m_s``, T = control step,
+n_c = receptors of the class, mu = the pad's friction; *: full scale, saturates):
 
-| block | size | units | meaning |
-|---|---|---|---|
-| ``finger`` | 2 | m, m/s | fingertip x from its start, x velocity |
-| ``command`` | 2 | N, m/s | the normal force and sliding speed being applied |
-| ``touch`` | 3 | spikes or Hz | SA1, RA, PC spike counts over the control step (or rates) |
-| ``contact`` | 3 | N | skin force (normal, tangential x, y), mean over the step |
-| ``pressure`` | p*p | kPa | optional, ``pressure_image=p``: end-of-step pressure, p x p |
+| block | size | units | meaning | bounds |
+|---|---|---|---|---|
+| ``finger`` | 2 | m, m/s | fingertip x from its start, x velocity | +-25 mm*, +-(2 V + 0.01)* |
+| ``command`` | 2 | N, m/s | the normal force and sliding speed being applied | the action's |
+| ``touch`` | 3 | spikes or Hz | SA1, RA, PC spike counts over the control step (or rates) | 0 to n_c (ceil(T / 1 ms) + 1) |
+| ``contact`` | 3 | N | skin force (normal, tangential x, y), mean over the step | 0 to 5 F*, +-5 mu F* |
+| ``pressure`` | p*p | kPa | optional, ``pressure_image=p``: end-of-step pressure, p x p | 0 to 5 F / block area* |
 
 ``touch="none"``: only ``finger`` and ``command`` (the skin is not in the scene).
 
@@ -50,6 +52,11 @@ DEFAULT_CLASSES = (0.0, 0.6e-3, 1.0e-3, 1.5e-3, 2.5e-3)  # grating period D (m);
 PARK_Y_M = 0.5  # unused textures wait here, far outside the pad's footprint
 TEXTURE_LENGTH_M = 0.06
 TRAVEL_M = 0.02  # the finger stays within +-20 mm of its start
+# Full scales of the finger block: the slide servo's setpoint is clamped to
+# +-TRAVEL_M (actrange); it is critically damped, so it barely overshoots
+# (measured: 1.04 x the commanded speed with bang-bang actions).
+FINGER_X_FULL_SCALE_M = TRAVEL_M + 5e-3
+FINGER_SPEED_MARGIN_M_S = 0.01
 
 
 def env_fingertip(nx: int = 48, pitch_m: float = 2e-4, radius_m: float = 4e-3,
@@ -140,7 +147,8 @@ class TextureExploreEnv(TouchEnv):
         xml = texture_explore_xml(classes, tip, timestep_s, skin=touch != "none")
         spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_POS
         super().__init__(xml, touch=touch, pressure_image=pressure_image, frame_skip=frame_skip,
-                         user_spec=int(spec), render_mode=render_mode, render_size=render_size)
+                         user_spec=int(spec), render_mode=render_mode, render_size=render_size,
+                         max_force_n=hi, max_friction=tip.friction)
         self.classes = classes
         self.force_range_n = (lo, hi)
         self.max_speed_m_s = float(max_speed_m_s)
@@ -150,8 +158,12 @@ class TextureExploreEnv(TouchEnv):
                        for k, c in enumerate(classes) if c != 0}
         self._x0 = self._qpos_model("slide_x")
         self.action_space = gym.spaces.Box(-1.0, 1.0, (3 + len(classes),), np.float32)
-        self._set_blocks([ObsBlock("finger", 2, "m, m/s", "fingertip x from its start, x velocity"),
-                          ObsBlock("command", 2, "N, m/s", "normal force and sliding speed applied")]
+        v_fs = 2 * self.max_speed_m_s + FINGER_SPEED_MARGIN_M_S
+        self._set_blocks([ObsBlock("finger", 2, "m, m/s", "fingertip x from its start, x velocity",
+                                   low=(-FINGER_X_FULL_SCALE_M, -v_fs),
+                                   high=(FINGER_X_FULL_SCALE_M, v_fs)),
+                          ObsBlock("command", 2, "N, m/s", "normal force and sliding speed applied",
+                                   low=(lo, -self.max_speed_m_s), high=(hi, self.max_speed_m_s))]
                          + self._touch_blocks())
         self.settle_force_n = float(settle_force_n)
         self._settled = self._settle(self.settle_force_n)
@@ -208,7 +220,8 @@ class TextureExploreEnv(TouchEnv):
     def _observe(self, states, sensordata) -> np.ndarray:
         s = self._state
         finger = [self._qpos(s, "slide_x") - self._x0, self._qvel(s, "slide_x")]
-        return np.concatenate([finger, self._command, *self._touch_features(sensordata)])
+        return self._bounded(np.concatenate([finger, self._command,
+                                             *self._touch_features(sensordata)]))
 
     def _outcome(self, states, sensordata, a):
         info = {"texture": self.label, "period_m": self.classes[self.label]}

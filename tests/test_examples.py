@@ -1,0 +1,111 @@
+"""Every example runs, with small arguments, and shows what it claims."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import pathlib
+import re
+import runpy
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from PIL import Image
+
+EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "examples"
+RIDGE_PITCH_M = 0.45e-3  # scenes.Fingertip's default lambda
+
+
+def example_main(name: str):
+    return runpy.run_path(str(EXAMPLES / name), run_name="example")["main"]
+
+
+def run_json(name: str, args: list[str], capsys):
+    assert example_main(name)(args + ["--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_quickstart_peak_at_v_over_d(capsys):
+    speed, period = 0.025, 1e-3
+    small = ["--nx", "48", "--pitch", "2e-4", "--dt", "5e-4", "--duration", "0.3"]
+    r = run_json("quickstart.py", small, capsys)
+    assert r["v_over_d_hz"] == pytest.approx(speed / period)
+    assert r["v_over_lambda_hz"] == pytest.approx(speed / RIDGE_PITCH_M)
+    # a grating of period D scanned at V: the strongest line at V/D, within
+    # one FFT bin (the window is 0.2 s: 5 Hz bins)
+    assert abs(r["peaks_hz"][0] - speed / period) <= r["fft_bin_hz"]
+    assert r["peak_at_v_over_d"] is True
+    rates = r["rates_hz"]
+    assert set(rates) == {"SA1", "RA", "PC"}
+    assert all(math.isfinite(v) and v >= 0 for v in rates.values())
+    assert rates["SA1"] > 0  # SA1 sustains while pressed
+    assert example_main("quickstart.py")(small) == 0
+    text = capsys.readouterr().out
+    assert "V/D = 25.00 Hz" in text and "within one bin: yes" in text
+
+
+def test_spectral_rollout_lines_and_ridge_filtering(tmp_path, capsys):
+    png = tmp_path / "spectra.png"
+    speed, period = 0.04, 1e-3
+    r = run_json("spectral_rollout.py", ["--duration", "0.15", "--plot", str(png)], capsys)
+    assert r["pressure"] == "elastic"
+    for name in ("grating_ridged", "grating_smooth"):
+        s = r["spectra"][name]
+        assert abs(s["peaks_hz"][0] - speed / period) <= s["fft_bin_hz"], (name, s["peaks_hz"])
+    # fingerprint ridges raise the power at V/lambda over a fine random
+    # texture (Scheibert et al. 2009); mjtouch.testing's documented check
+    # is a factor 10 (measured here: 16)
+    assert r["v_over_lambda_hz"] == pytest.approx(speed / RIDGE_PITCH_M)
+    assert r["random_ridged_over_smooth_at_v_over_lambda"] >= 10
+    img = np.asarray(Image.open(png).convert("RGB"))
+    assert img.shape == (700, 800, 3)  # figsize 8 x 7 in at 100 dpi
+    blue = (img[..., 2].astype(int) - img[..., 0] > 80).sum()  # the ridged curves
+    orange = (img[..., 0].astype(int) - img[..., 2] > 120).sum()  # the smooth ones
+    assert blue > 500 and orange > 500, (blue, orange)
+
+
+def binomial_tail(n: int, k: int, p: float) -> float:
+    """P(X >= k) for X ~ Binomial(n, p)."""
+    return sum(math.comb(n, i) * p ** i * (1 - p) ** (n - i) for i in range(k, n + 1))
+
+
+def test_texture_classification_beats_chance_with_touch_only(capsys):
+    results = run_json("texture_classification.py", ["--episodes", "4", "--steps", "20"], capsys)
+    by_touch = {r["touch"]: r for r in results}
+    touch, none = by_touch["counts"], by_touch["none"]
+    nclass = len(touch["classes_m"])
+    chance = 1.0 / nclass
+    assert touch["chance"] == pytest.approx(chance) == none["chance"]
+    n = touch["test_episodes"]
+    assert n == nclass * 2  # 4 episodes per class, half of them tested
+    correct = round(touch["accuracy"] * n)
+    # well above chance: guessing would do this well with probability < 1e-3
+    assert binomial_tail(n, correct, chance) < 1e-3, (touch["accuracy"], chance)
+    assert np.trace(touch["confusion"]) == correct
+    # without touch every texture gives the same observations (they do not
+    # collide in MuJoCo), so the classifier answers one class for all:
+    # exactly chance
+    assert none["accuracy"] == pytest.approx(chance)
+    assert sum(1 for row in none["confusion"] if row == none["confusion"][0]) == nclass
+
+
+def test_viewer_demo_writes_offscreen_frames(tmp_path):
+    out = tmp_path / "frames"
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    proc = subprocess.run([sys.executable, str(EXAMPLES / "viewer_demo.py"), "--offscreen",
+                           str(out), "--frames", "3", "--every", "0.02", "--settle", "0.3",
+                           "--size", "480", "300"], env=env, capture_output=True, text=True,
+                          timeout=300)
+    # no backend: the demo fails naming what to install (the test fails too)
+    assert proc.returncode == 0, proc.stderr
+    times = [float(t) for t in re.findall(r"^t = ([0-9.]+) s", proc.stdout, re.M)]
+    assert times == pytest.approx([0.30, 0.32, 0.34], abs=1e-9)
+    assert proc.stdout.count("F = 0.50 N   V = 25 mm/s   grating D = 1 mm") == 3
+    frames = [np.asarray(Image.open(out / f"frame_{k:03d}.png").convert("RGB")) for k in range(3)]
+    for a, b in zip(frames, frames[1:]):
+        assert a.shape == (300, 480, 3)
+        changed = (np.abs(a.astype(int) - b.astype(int)).max(axis=2) > 30).mean()
+        assert changed > 0.002, changed  # the drawing and the figures move
