@@ -50,14 +50,14 @@ def test_quickstart_peak_at_v_over_d(capsys):
 def test_spectral_rollout_lines_and_ridge_filtering(tmp_path, capsys):
     png = tmp_path / "spectra.png"
     speed, period = 0.04, 1e-3
-    r = run_json("spectral_rollout.py", ["--duration", "0.15", "--plot", str(png)], capsys)
+    r = run_json("spectral_rollout.py", ["--duration", "0.3", "--plot", str(png)], capsys)
     assert r["pressure"] == "elastic"
     for name in ("grating_ridged", "grating_smooth"):
         s = r["spectra"][name]
         assert abs(s["peaks_hz"][0] - speed / period) <= s["fft_bin_hz"], (name, s["peaks_hz"])
     # fingerprint ridges raise the power at V/lambda over a fine random
     # texture (Scheibert et al. 2009); mjtouch.testing's documented check
-    # is a factor 10 (measured here: 16)
+    # is a factor 10 (measured: 10.3 with the layered skin over 0.3 s)
     assert r["v_over_lambda_hz"] == pytest.approx(speed / RIDGE_PITCH_M)
     assert r["random_ridged_over_smooth_at_v_over_lambda"] >= 10
     img = np.asarray(Image.open(png).convert("RGB"))
