@@ -124,6 +124,9 @@ def _declare(lib: ctypes.CDLL) -> None:
     lib.mjtouch_elastic_pressure.argtypes = [
         ctypes.c_int, ctypes.c_int, ctypes.c_double, c_double_p, ctypes.c_double, ctypes.c_double,
         ctypes.c_double, ctypes.c_int, ctypes.c_double, ctypes.c_int, c_double_p, c_double_p]
+    lib.mjtouch_elastic_pressure_table.argtypes = [
+        ctypes.c_int, ctypes.c_double, c_double_p, c_float_p, ctypes.c_double, ctypes.c_double,
+        ctypes.c_int, c_double_p, c_double_p]
     lib.mjtouch_render_gap.argtypes = [
         ctypes.c_int, ctypes.c_double, c_double_p, c_double_p, c_double_p, ctypes.c_int, c_double_p,
         ctypes.c_int, ctypes.c_int, c_float_p, ctypes.c_int, c_double_p, c_double_p]

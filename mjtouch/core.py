@@ -188,12 +188,17 @@ def surface_compliance(n: int, pitch_m: float, young_pa: float, poisson: float) 
     return out.reshape(2 * n - 1, 2 * n - 1).astype(np.float64)
 
 
-def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float, young_pa: float,
-                     poisson: float, periodic: bool = False, tolerance: float = 1e-8,
-                     max_iterations: int = 2000, initial_pa: np.ndarray | None = None):
-    """Boundary-element contact of a homogeneous half-space skin against the
-    rigid gap field (ny x nx, m; inf: cannot touch), total load force_n.
-    Non-periodic grids must be square; periodic sizes products of 2, 3, 5.
+def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
+                     young_pa: float | None = None, poisson: float | None = None,
+                     periodic: bool = False, tolerance: float = 1e-8,
+                     max_iterations: int = 2000, initial_pa: np.ndarray | None = None,
+                     compliance_m_per_pa: np.ndarray | None = None):
+    """Boundary-element contact of the skin against the rigid gap field
+    (ny x nx, m; inf: cannot touch), total load force_n: a homogeneous
+    half-space (young_pa, poisson), or any skin given by its surface
+    compliance table ((2n - 1) x (2n - 1), m/Pa, e.g.
+    LayeredSkin.compliance_table(pitch_m, n)). Non-periodic grids must be
+    square; periodic sizes products of 2, 3, 5 (half-space only).
     Returns (pressure Pa, stats dict: iterations, converged, change,
     approach_m, contact_cells, max_contact_gap_m)."""
     g = np.ascontiguousarray(gap_m, dtype=np.float64)
@@ -207,10 +212,25 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float, young_pa
     if p.shape != g.shape:
         raise ValueError("initial_pa must have gap_m's shape")
     stats = np.zeros(6)
-    rc = _lib().mjtouch_elastic_pressure(nx, ny, pitch_m, _ptr(g, ctypes.c_double), young_pa,
-                                         poisson, force_n, int(bool(periodic)), tolerance,
-                                         int(max_iterations), _ptr(p, ctypes.c_double),
-                                         _ptr(stats, ctypes.c_double))
+    if compliance_m_per_pa is not None:
+        if young_pa is not None or poisson is not None or periodic:
+            raise ValueError("give either compliance_m_per_pa or young_pa and poisson (the "
+                             "table's solver is non-periodic)")
+        t = np.ascontiguousarray(compliance_m_per_pa, dtype=np.float32)
+        if t.shape != (2 * nx - 1, 2 * nx - 1) or not np.all(np.isfinite(t)):
+            raise ValueError(f"compliance_m_per_pa must be a finite ({2 * nx - 1}, {2 * nx - 1}) "
+                             f"table for a {nx} x {nx} grid, got shape {t.shape}")
+        rc = _lib().mjtouch_elastic_pressure_table(nx, pitch_m, _ptr(g, ctypes.c_double),
+                                                   _ptr(t, ctypes.c_float), force_n, tolerance,
+                                                   int(max_iterations), _ptr(p, ctypes.c_double),
+                                                   _ptr(stats, ctypes.c_double))
+    else:
+        if young_pa is None or poisson is None:
+            raise ValueError("give young_pa and poisson (a half-space), or compliance_m_per_pa")
+        rc = _lib().mjtouch_elastic_pressure(nx, ny, pitch_m, _ptr(g, ctypes.c_double), young_pa,
+                                             poisson, force_n, int(bool(periodic)), tolerance,
+                                             int(max_iterations), _ptr(p, ctypes.c_double),
+                                             _ptr(stats, ctypes.c_double))
     if rc == 1:
         raise ValueError("elastic_pressure: invalid arguments (pitch, young, poisson, tolerance; "
                          "periodic sizes must be products of 2, 3 and 5)")

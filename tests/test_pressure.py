@@ -125,3 +125,33 @@ def test_elastic_rejects_bad_arguments():
         core.elastic_pressure(np.full((8, 8), np.inf), 1e-4, 1.0, E, NU)
     with pytest.raises(ValueError, match="invalid arguments"):
         core.elastic_pressure(g, -1e-4, 1.0, E, NU)
+
+
+def test_elastic_solver_on_layered_compliance_tables():
+    # Identical layers over a half-space of the same material are that
+    # half-space: the solver on the layered skin's compliance table must give
+    # the closed-form half-space's contact (the table's radial route is
+    # accurate to ~1e-6 of its peak, far below the 1e-4 tolerance).
+    n, h = 48, 0.1e-3
+    x = (np.arange(n) - (n - 1) / 2) * h
+    X, Y = np.meshgrid(x, x)
+    gap = (X**2 + Y**2) / (2 * 0.05)
+    same = core.LayeredSkin([(1e-3, 80e3, 0.48), (2e-3, 80e3, 0.48)], (80e3, 0.48))
+    p_ref, st_ref = core.elastic_pressure(gap, h, 0.05, 80e3, 0.48, tolerance=1e-10)
+    p, st = core.elastic_pressure(gap, h, 0.05, tolerance=1e-10,
+                                  compliance_m_per_pa=same.compliance_table(h, n))
+    np.testing.assert_allclose(p, p_ref, atol=1e-4 * p_ref.max())
+    assert st["approach_m"] == pytest.approx(st_ref["approach_m"], rel=1e-4)
+    # Stiffening any material can only reduce the indentation under a set
+    # load: the Shao skin (every layer at least 24 kPa and nu 0.4, over rigid
+    # bone) indents less than a half-space of its softest layer.
+    shao = core.LayeredSkin()
+    _, st_shao = core.elastic_pressure(gap, h, 0.05, tolerance=1e-10,
+                                       compliance_m_per_pa=shao.compliance_table(h, n))
+    _, st_soft = core.elastic_pressure(gap, h, 0.05, 24e3, 0.4, tolerance=1e-10)
+    assert 0 < st_shao["approach_m"] < st_soft["approach_m"]
+    with pytest.raises(ValueError, match="compliance_m_per_pa must be a finite"):
+        core.elastic_pressure(gap, h, 0.05, compliance_m_per_pa=np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="either compliance_m_per_pa or young_pa"):
+        core.elastic_pressure(gap, h, 0.05, 80e3, 0.48,
+                              compliance_m_per_pa=same.compliance_table(h, n))

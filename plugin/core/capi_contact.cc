@@ -67,6 +67,28 @@ __attribute__((visibility("default"))) int mjtouch_elastic_pressure(
   return ok ? 0 : 2;
 }
 
+// The same on an n x n non-periodic grid with a given compliance table
+// ((2n-1)^2 floats, m/Pa, the layout of HalfSpaceSurfaceComplianceTable),
+// e.g. LayeredSubstrate::SurfaceComplianceTable for a layered skin.
+__attribute__((visibility("default"))) int mjtouch_elastic_pressure_table(
+    int n, double pitch_m, const double* gap, const float* table, double force, double tolerance,
+    int max_iterations, double* pressure, double* stats) {
+  if (n < 1 || !(pitch_m > 0) || !(tolerance > 0) || max_iterations < 1 || !table) return 1;
+  const size_t N = static_cast<size_t>(n) * n, L = 2 * static_cast<size_t>(n) - 1;
+  std::vector<double> g(gap, gap + N), p(pressure, pressure + N);
+  ElasticWork work;
+  ElasticSolveStats st;
+  ElasticContact ec(n, pitch_m, std::vector<float>(table, table + L * L));
+  const bool ok =
+      ec.Solve(g, CellBox{0, 0, n, n}, force, tolerance, max_iterations, &p, &work, &st);
+  std::memcpy(pressure, p.data(), N * sizeof(double));
+  const double out[6] = {static_cast<double>(st.iterations), static_cast<double>(st.converged),
+                         st.change, st.approach_m, static_cast<double>(st.contact_cells),
+                         st.max_contact_gap_m};
+  std::memcpy(stats, out, sizeof(out));
+  return ok ? 0 : 2;
+}
+
 }  // extern "C"
 
 namespace {
