@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import os
 
 import mujoco
 import mujoco.rollout
@@ -16,9 +15,10 @@ from mjtouch.sensor import SkinLayout
 @dataclasses.dataclass
 class SlideResult:
     time_s: np.ndarray  # (nstep,)
-    spikes: np.ndarray  # (nstep, nrec) spike counts per step
-    stress: np.ndarray  # (nstep, nrec) receptor quantity, Pa
-    force: np.ndarray  # (nstep, 4) normal, tangential x, y (N), approach (m)
+    # Output blocks the skin's `outputs` enables (None when disabled):
+    spikes: np.ndarray | None  # (nstep, nrec) spike counts per step
+    stress: np.ndarray | None  # (nstep, nrec) receptor quantity, Pa
+    force: np.ndarray | None  # (nstep, 4) normal, tangential x, y (N), indentation (m)
     finger_x_m: np.ndarray  # (nstep,) fingertip x
     layout: SkinLayout
     tip: scenes.Fingertip
@@ -37,8 +37,7 @@ class SlideResult:
 
 
 def run_slide(tip: scenes.Fingertip | None = None, texture: scenes.Texture | None = None,
-              protocol: scenes.Protocol | None = None, duration_s: float = 1.0,
-              nthread: int | None = None) -> SlideResult:
+              protocol: scenes.Protocol | None = None, duration_s: float = 1.0) -> SlideResult:
     """Press the fingertip onto the plate, then slide it for duration_s."""
     tip = tip or scenes.Fingertip()
     texture = texture or scenes.Texture()
@@ -65,14 +64,14 @@ def _collect(model, data, layout, ctrl, tip, texture, protocol) -> SlideResult:
     state, sensordata = state[0], sensordata[0]
     # state: time, qpos (slide_x, press_z), ...
     time = state[:, 0]
-    spikes = layout.block(sensordata, "spikes").astype(np.int32)
-    stress = layout.block(sensordata, "stress")
-    force = layout.block(sensordata, "force")
+    def block(name):
+        return layout.block(sensordata, name) if name in layout.blocks else None
+
+    spikes = block("spikes")
+    spikes = None if spikes is None else spikes.astype(np.int32)
+    stress, force = block("stress"), block("force")
     return SlideResult(
         time_s=time, spikes=spikes, stress=stress, force=force,
         finger_x_m=state[:, 1].copy(), layout=layout, tip=tip, texture=texture,
         protocol=protocol, slide_start_s=protocol.press_s)
 
-
-def default_threads() -> int:
-    return max(1, min(os.cpu_count() or 1, 8))

@@ -104,7 +104,9 @@ class SlideSession:
     def build(self) -> None:
         s = self.settings
         if self.scene_path is None:
-            tip = scenes.Fingertip(nx=s.nx, pitch_m=s.pitch_m, ridges=s.ridges)
+            # interactive: the fast hierarchical stress path
+            tip = scenes.Fingertip(nx=s.nx, pitch_m=s.pitch_m, ridges=s.ridges,
+                                   skin={"stress_method": "tree"})
             texture = dataclasses.replace(TEXTURES[s.texture][1])
             protocol = scenes.Protocol(force_n=s.force_n, speed_m_s=s.speed_m_s,
                                        timestep_s=s.timestep_s)

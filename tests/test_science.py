@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mjtouch import testing
+from mjtouch import scenes, testing
 
 
 @pytest.mark.parametrize("period_m", [0.2e-3, 0.6e-3, 1.8e-3])
@@ -29,3 +29,46 @@ def test_line_frequency_scales_linearly_with_speed():
     # slope 1/D; intercept 0 within a bin (2.2 Hz)
     assert slope == pytest.approx(1 / period, rel=0.01)
     assert abs(intercept) < 2.2
+
+
+# -- Fingerprint filtering (Scheibert et al. 2009) ---------------------------
+
+RIDGE_PITCH_M = 0.45e-3
+
+
+def _ridge_filtering_spectra(speed_m_s):
+    """Ridged and smooth skins over the same fine random texture (20 um rms,
+    60 um correlation length), `elastic` contact (the ridges carry the load in
+    partial contact; a Winkler foundation presses them flat) and exact
+    stress (stress_method auto: the hierarchical path's block approximation
+    would leak fine-scale traction into the smooth skin's spectrum)."""
+    out = {}
+    for ridges in (True, False):
+        tip = scenes.Fingertip(nx=64, pitch_m=1.5e-4, ridges=ridges,
+                               skin={"pressure": "elastic", "outputs": "stress force"})
+        out[ridges] = testing.slide_spectrum(texture=testing.random_texture(), speed_m_s=speed_m_s,
+                                             ridges=ridges, duration_s=0.4, timestep_s=1e-3,
+                                             tip=tip)
+    return out[True], out[False]
+
+
+def test_fingerprint_ridges_add_a_peak_at_v_over_lambda():
+    peaks = {}
+    for v in (0.025, 0.05):
+        ridged, smooth = _ridge_filtering_spectra(v)
+        f, fl = ridged.freqs_hz, v / RIDGE_PITCH_M
+        # Power in the band V/lambda +-15% (the ridge array's line is
+        # V / (contact length) ~ 4-8 Hz wide, the bins 2.8 Hz): ridged over
+        # smooth at least 10, as the issue asks (measured 26).
+        band = (f > 0.85 * fl) & (f < 1.15 * fl)
+        ratio = ridged.power[band].sum() / smooth.power[band].sum()
+        assert ratio >= 10, (v, ratio)
+        testing.assert_power_ratio(ridged, smooth, fl, at_least=10)
+        # The ridged spectrum peaks there: its 5-bin moving average has its
+        # maximum over V/lambda +-30% within 15% of V/lambda.
+        smoothed = np.convolve(ridged.power, np.ones(5) / 5, mode="same")
+        win = (f > 0.7 * fl) & (f < 1.3 * fl)
+        peaks[v] = f[win][np.argmax(smoothed[win])]
+        assert abs(peaks[v] / fl - 1) <= 0.15, (v, peaks[v], fl)
+    # ... and the peak moves with V (twice the speed, twice the frequency).
+    assert peaks[0.05] / peaks[0.025] == pytest.approx(2.0, rel=0.15)

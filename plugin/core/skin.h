@@ -65,7 +65,7 @@ struct SkinConfig {
   std::vector<ElasticLayer> layers = LayeredSubstrate::ShaoFingertipLayers();
   LayeredBase base = LayeredSubstrate::ShaoFingertipBase();
   InterfaceSide interface_side = InterfaceSide::kUpper;
-  StressMethod stress_method = StressMethod::kTree;  // `stress_method`
+  StressMethod stress_method = StressMethod::kAuto;  // `stress_method` (exact by default)
   double stress_theta = 0.5;  // `stress_theta`: tree's opening angle
   bool shear = true;
   int texture_group = -1;  // non-colliding geoms in this group are textures (-1: none)
