@@ -346,7 +346,7 @@ std::string CacheKey(const SkinConfig& c) {
   for (bool o : c.outputs) s << ' ' << o;
   s << " skin " << c.layered << ' ' << c.base.rigid << ' ' << c.base.young_pa << ' '
     << c.base.poisson << ' ' << static_cast<int>(c.interface_side) << ' '
-    << static_cast<int>(c.stress_method) << ' ' << c.stress_theta;
+    << static_cast<int>(c.stress_method) << ' ' << c.stress_theta << ' ' << c.oversample;
   for (const auto& l : c.layers) s << ' ' << l.thickness_m << ' ' << l.young_pa << ' ' << l.poisson;
   return s.str();
 }
@@ -473,7 +473,7 @@ const std::vector<const char*>& SkinAttributeKeys() {
       "outputs", "sa1_merkel", "sa1_k0", "sa1_k1", "sa1_i0", "sa1_c", "sa1_r", "sa1_vth",
       "ra_gain", "ra_tau", "pc_gain", "pc_tau", "pc_highpass", "refractory", "visual",
       "ra_lowpass", "pc_lowpass", "noise", "noise_tau", "seed", "rate_tau", "sites",
-      "skin", "layers", "base", "interface_side", "stress_method", "stress_theta"};
+      "skin", "layers", "base", "interface_side", "stress_method", "stress_theta", "oversample"};
   return keys;
 }
 
@@ -498,6 +498,18 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
     r.Fail(Fmt("attribute `pressure` = '%s' is not a pressure model; valid: contacts winkler "
                "elastic", pressure.c_str()));
   }
+  const std::string oversample = Trim(r.Raw("oversample"));
+  double count;
+  if (!oversample.empty() && oversample != "auto" &&
+      (!ToDouble(oversample, &count) || count != std::floor(count) || count < 1 || count > 64)) {
+    r.Fail(Fmt("attribute `oversample` = '%s' is not valid; valid: auto or an integer in [1, 64]",
+               oversample.c_str()));
+  } else if (!oversample.empty() && oversample != "auto") {
+    cfg->oversample = static_cast<int>(count);
+  }
+  if (r.ok() && cfg->oversample > 1 && cfg->pressure_model == PressureModel::kContacts)
+    r.Fail("attribute `oversample` needs pressure=\"winkler\" or \"elastic\" (the contacts model "
+           "has no geometry to interpolate over the step); valid with contacts: 1");
   r.Number("young", &cfg->young_pa, 0, true, 1e10, false, "Pa");
   r.Number("tolerance", &cfg->tolerance, 0, true, 0.1, false, "");
   r.Number("stiffness", &cfg->stiffness_pa_per_m, 0, true, 1e12, false, "Pa/m");
@@ -623,6 +635,39 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
     return false;
   }
   return true;
+}
+
+bool CheckTactileRate(const SkinConfig& cfg, double timestep_s, std::string* error) {
+  // Only the afferents filter: without spikes, voltage or rate outputs the
+  // stress is merely sampled.
+  const bool afferents =
+      cfg.outputs[kOutSpikes] || cfg.outputs[kOutVoltage] || cfg.outputs[kOutRate];
+  if (!(timestep_s > 0.0) || !afferents) return true;
+  const double rate_hz = cfg.oversample / timestep_s;
+  const struct { ReceptorClass cls; double corner_hz; const char* key; } bands[] = {
+      {ReceptorClass::kPC, cfg.receptor.pc.lowpass_hz, "pc_lowpass"},
+      {ReceptorClass::kRA, cfg.receptor.ra.lowpass_hz, "ra_lowpass"}};
+  for (const auto& b : bands) {
+    if (!cfg.classes[static_cast<int>(b.cls)].present) continue;
+    const double need_hz = 8.0 * b.corner_hz;
+    if (rate_hz >= need_hz * (1 - 1e-12)) continue;
+    const int k = static_cast<int>(std::ceil(need_hz * timestep_s * (1 - 1e-12)));
+    *error = Fmt("mjtouch.skin: %s afferents need tactile sampling of at least %g Hz (8 x `%s` "
+                 "= %g Hz: their band reaches a few times the corner); the timestep %g s with "
+                 "`oversample` = %d samples at %g Hz: set `oversample` >= %d (valid [1, 64]), "
+                 "or remove %s from `classes`", ClassName(b.cls), need_hz, b.key, b.corner_hz,
+                 timestep_s, cfg.oversample, rate_hz, k, ClassName(b.cls));
+    return false;
+  }
+  return true;
+}
+
+void ResolveOversample(SkinConfig* cfg, double timestep_s) {
+  if (cfg->oversample > 0) return;
+  cfg->oversample = 1;
+  if (cfg->pressure_model == PressureModel::kContacts || !(timestep_s > 0.0)) return;
+  std::string unused;
+  while (cfg->oversample < 64 && !CheckTactileRate(*cfg, timestep_s, &unused)) ++cfg->oversample;
 }
 
 std::vector<ReceptorSite> SkinModel::PlaceReceptors(const SkinConfig& cfg) {
@@ -836,8 +881,14 @@ const ReceptorStepper& StepperFor(const ReceptorParams& p, double dt_s, Workspac
 
 }  // namespace
 
-int Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
-         Workspace* ws, double* out) {
+namespace {
+
+// Stages 1-4 at time_s: receptors advance over the time since the last
+// evaluation. Leaves the quantities in ws->quantity and each receptor's
+// spike count and voltage in `state`; returns whether the skin touches and
+// adds the spikes fired to *fired.
+bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double* state,
+              Workspace* ws, int* fired) {
   const SkinConfig& cfg = model.config();
   const auto& sites = model.receptors();
   const int nrec = static_cast<int>(sites.size());
@@ -851,7 +902,7 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   state[kStLastTime] = time_s;
   state[kStTimeValid] = 1.0;
 
-  TractionField& tf = ws->traction;
+  const TractionField& tf = ws->traction;
   // Stages 1-2: gap and tractions (skin_traction.cc).
   const bool touching = ComputeTraction(model, in, state, ws);
   const bool need_receptors =
@@ -861,66 +912,142 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   // relaxing membranes; the idle time is made up in one exact step when
   // contact resumes. An untouched skin then costs O(1) per step.
   const bool idle = state[kStReceptorsIdle] > 0.0;
-  int fired = 0;
   if (!touching && idle && elapsed >= 0.0) {
     // Nothing to do: the last spike counts are zero (idle is entered only
     // after a step without spikes).
-  } else {
-    ws->quantity.assign(nrec, 0.0);
-    const KernelTables* kt = model.kernel();
-    if (touching && kt) {
-      // Stage 3: stress at the receptors (direct, FFT or tree).
-      ws->stress.resize(nrec);
-      ws->last_stress_method = ComputeStresses(
-          *kt, model.spectra(), model.tree(), cfg.stress_method, model.stress_sites(), tf.runs,
-          tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
-          cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data());
-      for (int r = 0; r < nrec; ++r) {
-        const int c = static_cast<int>(sites[r].cls);
-        ws->quantity[r] = QuantityAt(cfg.classes[c].quantity, ws->stress[r], model.material(c));
-      }
-    }
-    // Stage 4: receptors advance every step (membranes relax without contact).
-    if (need_receptors && elapsed > 0.0) {
-      if (idle) {  // make up the idle time at q = 0, in one exact step
-        const double gap_s = (time_s - elapsed) - state[kStReceptorsTime];
-        if (gap_s > 0.0) {
-          const ReceptorStepper catch_up(cfg.receptor, gap_s);
-          double v;
-          for (int r = 0; r < nrec; ++r)
-            catch_up.Advance(sites[r].cls, 0.0, r,
-                             receptor_state + static_cast<size_t>(r) * kReceptorStateSize, &v);
-        }
-        state[kStReceptorsIdle] = 0.0;
-      }
-      const ReceptorStepper& stepper = StepperFor(cfg.receptor, elapsed, ws);
-      bool quiescent = !touching && !cfg.outputs[kOutVoltage] && !cfg.outputs[kOutRate];
-      for (int r = 0; r < nrec; ++r) {
-        double* st = receptor_state + static_cast<size_t>(r) * kReceptorStateSize;
-        double v;
-        const int k = stepper.Advance(sites[r].cls, ws->quantity[r], r, st, &v);
-        last_spikes[r] = k;
-        last_voltage[r] = v;
-        fired += k;
-        quiescent = quiescent && last_spikes[r] == 0.0 && stepper.Quiescent(sites[r].cls, st);
-      }
-      if (quiescent) {
-        state[kStReceptorsIdle] = 1.0;
-        state[kStReceptorsTime] = time_s;
-      }
-    } else if (need_receptors && !time_valid) {
-      for (int r = 0; r < nrec; ++r)
-        PrimeReceptor(cfg.receptor, sites[r].cls, ws->quantity[r], r,
-                      receptor_state + static_cast<size_t>(r) * kReceptorStateSize);
+    return false;
+  }
+  ws->quantity.assign(nrec, 0.0);
+  const KernelTables* kt = model.kernel();
+  if (touching && kt) {
+    // Stage 3: stress at the receptors (direct, FFT or tree).
+    ws->stress.resize(nrec);
+    ws->last_stress_method = ComputeStresses(
+        *kt, model.spectra(), model.tree(), cfg.stress_method, model.stress_sites(), tf.runs,
+        tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
+        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data());
+    for (int r = 0; r < nrec; ++r) {
+      const int c = static_cast<int>(sites[r].cls);
+      ws->quantity[r] = QuantityAt(cfg.classes[c].quantity, ws->stress[r], model.material(c));
     }
   }
+  // Stage 4: receptors advance every step (membranes relax without contact).
+  if (need_receptors && elapsed > 0.0) {
+    if (idle) {  // make up the idle time at q = 0, in one exact step
+      const double gap_s = (time_s - elapsed) - state[kStReceptorsTime];
+      if (gap_s > 0.0) {
+        const ReceptorStepper catch_up(cfg.receptor, gap_s);
+        double v;
+        for (int r = 0; r < nrec; ++r)
+          catch_up.Advance(sites[r].cls, 0.0, r,
+                           receptor_state + static_cast<size_t>(r) * kReceptorStateSize, &v);
+      }
+      state[kStReceptorsIdle] = 0.0;
+    }
+    const ReceptorStepper& stepper = StepperFor(cfg.receptor, elapsed, ws);
+    bool quiescent = !touching && !cfg.outputs[kOutVoltage] && !cfg.outputs[kOutRate];
+    for (int r = 0; r < nrec; ++r) {
+      double* st = receptor_state + static_cast<size_t>(r) * kReceptorStateSize;
+      double v;
+      const int k = stepper.Advance(sites[r].cls, ws->quantity[r], r, st, &v);
+      last_spikes[r] = k;
+      last_voltage[r] = v;
+      *fired += k;
+      quiescent = quiescent && k == 0 && stepper.Quiescent(sites[r].cls, st);
+    }
+    if (quiescent) {
+      state[kStReceptorsIdle] = 1.0;
+      state[kStReceptorsTime] = time_s;
+    }
+  } else if (need_receptors && !time_valid) {
+    for (int r = 0; r < nrec; ++r)
+      PrimeReceptor(cfg.receptor, sites[r].cls, ws->quantity[r], r,
+                    receptor_state + static_cast<size_t>(r) * kReceptorStateSize);
+  }
+  return touching;
+}
+
+// Unit quaternion (w, x, y, z) of a row-major rotation matrix, and back.
+void MatToQuat(const double* m, double* q) {
+  const double tr = m[0] + m[4] + m[8];
+  if (tr > 0.0) {
+    const double s = 2.0 * std::sqrt(tr + 1.0);
+    q[0] = 0.25 * s;
+    q[1] = (m[7] - m[5]) / s;
+    q[2] = (m[2] - m[6]) / s;
+    q[3] = (m[3] - m[1]) / s;
+  } else if (m[0] > m[4] && m[0] > m[8]) {
+    const double s = 2.0 * std::sqrt(1.0 + m[0] - m[4] - m[8]);
+    q[0] = (m[7] - m[5]) / s;
+    q[1] = 0.25 * s;
+    q[2] = (m[1] + m[3]) / s;
+    q[3] = (m[2] + m[6]) / s;
+  } else if (m[4] > m[8]) {
+    const double s = 2.0 * std::sqrt(1.0 + m[4] - m[0] - m[8]);
+    q[0] = (m[2] - m[6]) / s;
+    q[1] = (m[1] + m[3]) / s;
+    q[2] = 0.25 * s;
+    q[3] = (m[5] + m[7]) / s;
+  } else {
+    const double s = 2.0 * std::sqrt(1.0 + m[8] - m[0] - m[4]);
+    q[0] = (m[3] - m[1]) / s;
+    q[1] = (m[2] + m[6]) / s;
+    q[2] = (m[5] + m[7]) / s;
+    q[3] = 0.25 * s;
+  }
+}
+
+void QuatToMat(const double* q, double* m) {
+  const double w = q[0], x = q[1], y = q[2], z = q[3];
+  m[0] = 1 - 2 * (y * y + z * z); m[1] = 2 * (x * y - w * z); m[2] = 2 * (x * z + w * y);
+  m[3] = 2 * (x * y + w * z); m[4] = 1 - 2 * (x * x + z * z); m[5] = 2 * (y * z - w * x);
+  m[6] = 2 * (x * z - w * y); m[7] = 2 * (y * z + w * x); m[8] = 1 - 2 * (x * x + y * y);
+}
+
+// Pose at fraction s of the way from a to b: position linear, rotation
+// by spherical linear interpolation.
+Pose InterpolatePose(const Pose& a, const Pose& b, double s) {
+  Pose out;
+  for (int k = 0; k < 3; ++k) out.pos[k] = a.pos[k] + s * (b.pos[k] - a.pos[k]);
+  double qa[4], qb[4], q[4];
+  MatToQuat(a.mat, qa);
+  MatToQuat(b.mat, qb);
+  double dot = qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3];
+  if (dot < 0.0) {  // the shorter arc
+    for (double& v : qb) v = -v;
+    dot = -dot;
+  }
+  double wa = 1.0 - s, wb = s;
+  if (dot < 1.0 - 1e-12) {
+    const double theta = std::acos(std::min(1.0, dot));
+    wa = std::sin((1.0 - s) * theta) / std::sin(theta);
+    wb = std::sin(s * theta) / std::sin(theta);
+  }
+  double norm = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    q[k] = wa * qa[k] + wb * qb[k];
+    norm += q[k] * q[k];
+  }
+  for (double& v : q) v /= std::sqrt(norm);
+  QuatToMat(q, out.mat);
+  return out;
+}
+
+void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching,
+                  const double* state, const Workspace& ws, double* out) {
+  const SkinConfig& cfg = model.config();
+  const int nrec = static_cast<int>(model.receptors().size());
+  const double* receptor_state = state + kStateHeader;
+  const double* last_spikes = receptor_state + static_cast<size_t>(nrec) * kReceptorStateSize;
+  const double* last_voltage = last_spikes + nrec;
+  const TractionField& tf = ws.traction;
   double* cursor = out;
   if (cfg.outputs[kOutSpikes]) {
     std::copy(last_spikes, last_spikes + nrec, cursor);
     cursor += nrec;
   }
   if (cfg.outputs[kOutStress]) {
-    if (touching) std::copy(ws->quantity.begin(), ws->quantity.end(), cursor);
+    if (touching) std::copy(ws.quantity.begin(), ws.quantity.end(), cursor);
     else std::fill(cursor, cursor + nrec, 0.0);
     cursor += nrec;
   }
@@ -946,6 +1073,59 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
       cursor[r] = ReceptorRate(receptor_state + static_cast<size_t>(r) * kReceptorStateSize);
     cursor += nrec;
   }
+}
+
+}  // namespace
+
+int Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
+         Workspace* ws, double* out) {
+  const SkinConfig& cfg = model.config();
+  const int K = cfg.oversample;
+  int fired = 0;
+  bool touching;
+  double* last = K > 1 ? LastPose(model, state) : nullptr;
+  const double elapsed = state[kStTimeValid] > 0.0 ? time_s - state[kStLastTime] : 0.0;
+  if (K > 1 && last[15] > 0.0 && elapsed > 0.0) {
+    // Tactile substeps: the pad's pose and MuJoCo's force interpolated from
+    // the last step's (counter-surfaces at this step's pose); spikes summed.
+    const int nrec = static_cast<int>(model.receptors().size());
+    double* last_spikes = state + kStateHeader + static_cast<size_t>(nrec) * kReceptorStateSize;
+    ws->spike_sum.assign(nrec, 0.0);
+    Pose from;
+    std::copy(last, last + 3, from.pos);
+    std::copy(last + 3, last + 12, from.mat);
+    StepInput& sub = ws->substep;
+    sub.surfaces = in.surfaces;
+    sub.contacts = in.contacts;
+    sub.in_contact = in.in_contact;
+    const double t0 = time_s - elapsed;
+    for (int k = 1; k <= K; ++k) {
+      const double s = static_cast<double>(k) / K;
+      const StepInput* use = &in;
+      if (k < K) {
+        sub.pad_pose = InterpolatePose(from, in.pad_pose, s);
+        sub.normal_force_n = last[12] + s * (in.normal_force_n - last[12]);
+        sub.shear_x_n = last[13] + s * (in.shear_x_n - last[13]);
+        sub.shear_y_n = last[14] + s * (in.shear_y_n - last[14]);
+        use = &sub;
+      }
+      touching = Evaluate(model, *use, k < K ? t0 + s * elapsed : time_s, state, ws, &fired);
+      // (an idle evaluation leaves zero counts: idle follows a silent step)
+      for (int r = 0; r < nrec; ++r) ws->spike_sum[r] += last_spikes[r];
+    }
+    std::copy(ws->spike_sum.begin(), ws->spike_sum.end(), last_spikes);
+  } else {
+    touching = Evaluate(model, in, time_s, state, ws, &fired);
+  }
+  if (K > 1) {
+    std::copy(in.pad_pose.pos, in.pad_pose.pos + 3, last);
+    std::copy(in.pad_pose.mat, in.pad_pose.mat + 9, last + 3);
+    last[12] = in.in_contact ? in.normal_force_n : 0.0;
+    last[13] = in.in_contact ? in.shear_x_n : 0.0;
+    last[14] = in.in_contact ? in.shear_y_n : 0.0;
+    last[15] = 1.0;
+  }
+  WriteOutputs(model, in, touching, state, *ws, out);
   return fired;
 }
 

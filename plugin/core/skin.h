@@ -67,6 +67,10 @@ struct SkinConfig {
   InterfaceSide interface_side = InterfaceSide::kUpper;
   StressMethod stress_method = StressMethod::kAuto;  // `stress_method` (exact by default)
   double stress_theta = 0.5;  // `stress_theta`: tree's opening angle
+  // `oversample`: tactile evaluations per physics step (the pad's pose and
+  // MuJoCo's contact force interpolated over the step); 0 (`auto`) until
+  // ResolveOversample sets the smallest that resolves the afferents.
+  int oversample = 0;
   bool shear = true;
   int texture_group = -1;  // non-colliding geoms in this group are textures (-1: none)
   double population_radius_m = 5e-3;  // receptors within this distance of the pole
@@ -90,6 +94,17 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
 // Pad-dependent checks and defaults; call after cfg->pad is set and before
 // PlaceReceptors (idempotent).
 bool FinalizeSkinConfig(SkinConfig* cfg, std::string* error);
+// Whether the tactile sampling rate, oversample / timestep_s, resolves every
+// present afferent class's band: PC and RA respond up to a few times their
+// low-pass corner (their drive falls only as 1/f above it), so they need at
+// least 8 x the corner (PC: 2 kHz at the default 250 Hz; RA: 320 Hz), when
+// an output shows the afferents (spikes, voltage, rate). Else false with a
+// message naming the rate needed and the `oversample` that gives it.
+bool CheckTactileRate(const SkinConfig& cfg, double timestep_s, std::string* error);
+// `oversample` = auto (0): the smallest count in [1, 64] that passes
+// CheckTactileRate at timestep_s (1 for the contacts model, which has no
+// geometry to interpolate); an explicit count is kept.
+void ResolveOversample(SkinConfig* cfg, double timestep_s);
 // All attribute keys, for plugin registration.
 const std::vector<const char*>& SkinAttributeKeys();
 
@@ -123,10 +138,16 @@ class SkinModel {
   // Header (StateSlot), per-receptor membranes, the last step's spike counts
   // and voltages (re-output on repeated calls), and for `elastic` the last
   // pressure field (n*n, Pa: the next step's warm start).
+  // (The last-pose block is always there: `auto` oversampling depends on the
+  // timestep, which MuJoCo's state-size callback does not see.)
   static int StateSize(const SkinConfig& cfg, int nreceptor) {
     return kStateHeader + nreceptor * (kReceptorStateSize + 2) +
-           (cfg.pressure_model == PressureModel::kElastic ? static_cast<int>(cfg.grid.Size()) : 0);
+           (cfg.pressure_model == PressureModel::kElastic ? static_cast<int>(cfg.grid.Size()) : 0) +
+           kOversampleStateSize;
   }
+  // For `oversample` > 1: the last step's pad pose (pos 3, rotation 9),
+  // MuJoCo force (normal, shear x, y) and whether they are valid.
+  static constexpr int kOversampleStateSize = 16;
   static int OutputSize(const SkinConfig& cfg, int nreceptor);
   static int BlockSize(const SkinConfig& cfg, int nreceptor, int block);
 
@@ -194,6 +215,8 @@ struct Workspace {
   std::vector<Stress6> stress;   // per receptor, Pa
   StressScratch stress_scratch;
   StressMethod last_stress_method = StressMethod::kDirect;
+  StepInput substep;            // `oversample`: the interpolated input
+  std::vector<double> spike_sum;  // `oversample`: spikes over the substeps
 };
 
 // The last step's spike count per receptor (nreceptor values inside `state`).
@@ -203,6 +226,12 @@ inline const double* LastSpikes(const SkinModel& model, const double* state) {
 // `elastic`: the last pressure field (n*n, Pa) inside `state`.
 inline double* LastPressure(const SkinModel& model, double* state) {
   return state + kStateHeader + model.receptors().size() * (kReceptorStateSize + 2);
+}
+// `oversample` > 1: the last step's pose and force inside `state`.
+inline double* LastPose(const SkinModel& model, double* state) {
+  return LastPressure(model, state) +
+         (model.config().pressure_model == PressureModel::kElastic ? model.config().grid.Size()
+                                                                   : 0);
 }
 
 // Stages 1-2 for one step (skin_traction.cc): render the gap and solve the

@@ -174,14 +174,17 @@ bool SkinPlugin::ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int
       return false;
     }
   }
-  return ParseConfig(m, instance, cfg, error) && FinalizeSkinConfig(cfg, error);
+  if (!ParseConfig(m, instance, cfg, error) || !FinalizeSkinConfig(cfg, error)) return false;
+  ResolveOversample(cfg, m->opt.timestep);
+  return true;
 }
 
 SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
   SkinConfig cfg;
   int sensor_id, pad;
   std::string error;
-  if (!ReadConfig(m, instance, &cfg, &sensor_id, &pad, &error)) {
+  if (!ReadConfig(m, instance, &cfg, &sensor_id, &pad, &error) ||
+      !CheckTactileRate(cfg, m->opt.timestep, &error)) {
     mju_warning("%s", error.c_str());
     return nullptr;
   }
