@@ -55,3 +55,22 @@ def assert_no_warnings(data: mujoco.MjData) -> None:
 @pytest.fixture
 def rng():
     return np.random.default_rng(0)
+
+
+def registered_attributes() -> list[str]:
+    """The attribute keys mjtouch.skin registers with MuJoCo (read back from
+    MuJoCo's plugin table, so that tests follow the plugin's real list)."""
+    import ctypes
+
+    class Plugin(ctypes.Structure):  # the head of mjpPlugin (mjplugin.h)
+        _fields_ = [("name", ctypes.c_char_p), ("nattribute", ctypes.c_int),
+                    ("attributes", ctypes.POINTER(ctypes.c_char_p))]
+
+    root = pathlib.Path(mujoco.__file__).parent
+    lib = ctypes.CDLL(str(sorted(root.glob("libmujoco.so.*"))[0]))
+    lib.mjp_getPlugin.restype = ctypes.POINTER(Plugin)
+    lib.mjp_getPlugin.argtypes = [ctypes.c_char_p, ctypes.POINTER(ctypes.c_int)]
+    slot = ctypes.c_int()
+    plugin = lib.mjp_getPlugin(b"mjtouch.skin", ctypes.byref(slot))
+    assert plugin, "mjtouch.skin is not registered"
+    return [plugin.contents.attributes[i].decode() for i in range(plugin.contents.nattribute)]

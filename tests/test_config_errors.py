@@ -3,7 +3,7 @@
 import mujoco
 import pytest
 
-from conftest import pad_scene
+from conftest import pad_scene, registered_attributes
 
 CASES = [
     ({"nx": "-3"}, "`nx`", "[4, 512]"),
@@ -32,16 +32,102 @@ CASES = [
     ({"young": "0"}, "`young`", "(0, 1e+10]"),
     ({"tolerance": "0"}, "`tolerance`", "(0, 0.1]"),
     ({"ridge_profile": "zigzag"}, "`ridge_profile`", "valid: sine triangle square"),
+    ({"pressure": "2"}, "`pressure`", "valid: contacts winkler elastic"),
+    ({"young": "soft"}, "`young`", "(0, 1e+10] Pa"),
+    ({"young": "2e10"}, "`young`", "(0, 1e+10] Pa"),
+    ({"tolerance": "-1e-3"}, "`tolerance`", "(0, 0.1]"),
+    ({"tolerance": "0.2"}, "`tolerance`", "(0, 0.1]"),
+    ({"pitch": "nan"}, "`pitch`", "(0, 0.01] m"),
+    ({"pitch": "inf"}, "`pitch`", "(0, 0.01] m"),
+    ({"pitch": "1e-4 2e-4"}, "`pitch`", "(0, 0.01] m"),
+    ({"ridge_angle": "181"}, "`ridge_angle`", "[-180, 180] deg"),
+    ({"shear": "yes"}, "`shear`", "true or false"),
+    ({"texture_group": "2.5"}, "`texture_group`", "not an integer; valid range [0, 5]"),
+    ({"stiffness": "stiff"}, "`stiffness`", "(0, 1e+12] Pa/m"),
+    ({"sa1_k0": "-1e-16"}, "`sa1_k0`", "[0, 1e-06]"),
+    ({"sa1_k1": "2e-6"}, "`sa1_k1`", "[0, 1e-06]"),
+    ({"sa1_i0": "2e-6"}, "`sa1_i0`", "[-1e-06, 1e-06] A"),
+    ({"sa1_r": "0"}, "`sa1_r`", "(0, 1e+15] Ohm"),
+    ({"sa1_vth": "11"}, "`sa1_vth`", "(0, 10] V"),
+    ({"ra_gain": "-1"}, "`ra_gain`", "[0, 1] s/Pa"),
+    ({"ra_tau": "0"}, "`ra_tau`", "(0, 10] s"),
+    ({"pc_gain": "2"}, "`pc_gain`", "[0, 1] s^2/Pa"),
+    ({"pc_tau": "11"}, "`pc_tau`", "(0, 10] s"),
+    ({"pc_highpass": "0"}, "`pc_highpass`", "(0, 100000] Hz"),
+    # explicit receptor sites
+    ({"sites": "SA1 0 0"}, "`sites` has 3 words", "'CLASS x y depth' (CLASS in SA1 RA PC"),
+    ({"sites": "XX 0 0 1e-3"}, "`sites` entry 1", "CLASS in SA1 RA PC"),
+    ({"sites": "SA1 abc 0 1e-3"}, "`sites` entry 1", "x, y, depth in m"),
+    ({"sites": "SA1 0 0 1e-3; RA 0.01 0 1e-3"}, "`sites` entry 2", "|x|, |y| <= nx * pitch / 2 - pitch = 0.00345 m"),
+    ({"sites": "PC 0 0 0"}, "`sites` entry 1", "(0, 0.02] m"),
+    ({"sites": "PC 0 0 0.03"}, "`sites` entry 1", "(0, 0.02] m"),
+    ({"sites": "SA1 0 0 1e-3, SA1 1e-3 0 2e-3"}, "`sites` entry 2", "the same depth"),
+    ({"sites": "SA1 0 0 1e-3", "density": "70 140 21"}, "remove `density`", "valid with `sites`"),
+    ({"sites": "SA1 0 0 1e-3", "radius": "2e-3"}, "remove `radius`", "valid with `sites`"),
+    # afferent parameters
+    ({"noise": "1 2"}, "`noise`", "3 numbers (SA1 RA PC), each in [0, 100]"),
+    ({"noise": "-1 0 0"}, "`noise` entry 1", "[0, 100]"),
+    ({"noise": "0 0 101"}, "`noise` entry 3", "[0, 100]"),
+    ({"noise": "0 low 0"}, "`noise` entry 2", "[0, 100]"),
+    ({"noise_tau": "0"}, "`noise_tau`", "(0, 10] s"),
+    ({"noise_tau": "slow"}, "`noise_tau`", "(0, 10] s"),
+    ({"seed": "-1"}, "`seed`", "[0, 18446744073709551615]"),
+    ({"seed": "1.5"}, "`seed`", "[0, 18446744073709551615]"),
+    ({"seed": "18446744073709551616"}, "`seed`", "[0, 18446744073709551615]"),
+    ({"rate_tau": "0"}, "`rate_tau`", "(0, 100] s"),
+    ({"rate_tau": "101"}, "`rate_tau`", "(0, 100] s"),
+    ({"outputs": "rate", "rate_tau": "fast"}, "`rate_tau`", "(0, 100] s"),
+    ({"outputs": "spikes rates"}, "`outputs`", "valid: spikes stress voltage force pressure rate"),
+    ({"visual": "all"}, "`visual`", "none pad above both"),
+    ({"sa1_merkel": "8 5 3 1 2"}, "`sa1_merkel`", "1 to 4 numbers in [0, 1000]"),
+    ({"sa1_merkel": "8 -1"}, "`sa1_merkel`", "1 to 4 numbers in [0, 1000]"),
+    ({"sa1_merkel": "1001"}, "`sa1_merkel`", "1 to 4 numbers in [0, 1000]"),
+    ({"sa1_merkel": "many"}, "`sa1_merkel`", "1 to 4 numbers in [0, 1000]"),
+    ({"ra_lowpass": "0"}, "`ra_lowpass`", "(0, 10000] Hz"),
+    ({"ra_lowpass": "2e4"}, "`ra_lowpass`", "(0, 10000] Hz"),
+    ({"pc_lowpass": "-5"}, "`pc_lowpass`", "(0, 100000] Hz"),
+    ({"pc_lowpass": "2e5"}, "`pc_lowpass`", "(0, 100000] Hz"),
+    # the elastic skin (more in tests/test_layered.py)
+    ({"stress_method": "gpu"}, "`stress_method`", "auto direct fft"),
+    ({"skin": "foam"}, "`skin`", "layered halfspace"),
+    ({"layers": "1e-3 5e4 0.45 2"}, "`layers`", "needs 3 numbers"),
+    ({"layers": "2 5e4 0.45"}, "`layers`", "(0, 1] m"),
+    ({"base": "5e4"}, "`base`", "nu in (-1, 0.5]"),
+    ({"base": "5e4 0.45", "skin": "halfspace"}, "`base`", "skin=\"layered\" only"),
+    ({"interface_side": "both"}, "`interface_side`", "upper lower"),
 ]
 
 
-@pytest.mark.parametrize("attrs,name,valid", CASES, ids=[next(iter(c[0])) + "=" + next(iter(c[0].values())) for c in CASES])
+@pytest.mark.parametrize("attrs,name,valid", CASES,
+                         ids=[";".join(f"{k}={v}" for k, v in c[0].items()) for c in CASES])
 def test_bad_attribute_fails_at_compile(attrs, name, valid):
     xml = pad_scene(attrs, extra='<geom name="plate_sphere" type="sphere" size="0.001" pos="0.03 0 0.01" contype="0" conaffinity="0"/>')
     with pytest.raises(ValueError) as e:
         mujoco.MjModel.from_xml_string(xml)
     msg = str(e.value)
-    assert name in msg and valid in msg, msg
+    # the plugin's own message (a line of MuJoCo's error) names the
+    # attribute and its valid range
+    ours = [line for line in msg.splitlines() if line.startswith("mjtouch.skin: ")]
+    assert ours, msg
+    assert name in ours[0] and valid in ours[0], msg
+
+
+def test_every_attribute_is_checked_here_or_in_test_layered():
+    # every key the plugin registers has a bad-input case in CASES (or in
+    # tests/test_layered.py's BAD for the elastic skin)
+    from test_layered import BAD
+    covered = {k for attrs, *_ in CASES + BAD for k in attrs}
+    assert set(registered_attributes()) - covered == set()
+
+
+@pytest.mark.parametrize("outputs", ["rate", "spikes rate", "rate pressure force"])
+def test_rate_output_is_accepted(outputs):
+    # the counterpart of the `outputs` error: `rate` is a valid block
+    from mjtouch.sensor import SkinLayout
+    m = mujoco.MjModel.from_xml_string(pad_scene({"outputs": outputs, "rate_tau": "0.05"}))
+    layout = SkinLayout.from_model(m)
+    assert set(layout.blocks) == set(outputs.split())
+    assert layout.blocks["rate"].stop - layout.blocks["rate"].start == len(layout.classes)
 
 
 def test_unknown_attribute_fails_at_compile():
@@ -74,3 +160,106 @@ def test_sensor_must_name_a_geom():
     xml = pad_scene().replace('objtype="geom" objname="pad"', 'objtype="body" objname="finger"')
     with pytest.raises(ValueError, match='objtype="geom"'):
         mujoco.MjModel.from_xml_string(xml)
+
+
+# -- messages that name the wrong thing, or twice (plugin bugs, see below) ---
+
+def _plugin_lines(attrs):
+    with pytest.raises(ValueError) as e:
+        mujoco.MjModel.from_xml_string(pad_scene(attrs))
+    return [line for line in str(e.value).splitlines() if line.startswith("mjtouch.skin: ")]
+
+
+def test_compile_error_is_reported_once():
+    # The plugin reports its error once (mju_warning, then init fails);
+    # MuJoCo's compile error repeats the warning text: the message should
+    # appear once.
+    assert len(_plugin_lines({"noise": "1 2"})) == 1
+
+
+def test_too_deep_site_names_sites():
+    # The depth comes from `sites`, which the user set; `depth` was not set.
+    line = _plugin_lines({"sites": "SA1 0 0 0.01"})[0]
+    assert "`sites`" in line and "(0, 0.004]" in line, line
+
+
+def test_default_ridge_pitch_against_pitch_says_default():
+    # The user set `pitch`; `ridge_pitch` is at its default: the message
+    # must say so (as the `radius` message does) or name `pitch`.
+    line = _plugin_lines({"nx": "24", "pitch": "1.7e-3"})[0]
+    assert "(default)" in line or "`pitch`" in line, line
+
+
+# -- a plugin built for another MuJoCo -----------------------------------------
+
+def test_loader_refuses_a_plugin_built_for_another_mujoco(monkeypatch):
+    # The Python loader compares the MuJoCo the library was compiled against
+    # (mjtouch_built_mujoco_version) with the installed mujoco: pretend an
+    # older mujoco is installed and load the library afresh.
+    import importlib.metadata
+
+    from mjtouch import _loader
+    real_version = importlib.metadata.version
+    monkeypatch.setattr(importlib.metadata, "version",
+                        lambda name: "3.3.7" if name == "mujoco" else real_version(name))
+    monkeypatch.setattr(_loader, "_handle", None)
+    with pytest.raises(_loader.PluginNotBuiltError) as e:
+        _loader.load()
+    msg = str(e.value)
+    assert f"compiled against MuJoCo {mujoco.__version__} but mujoco 3.3.7 is installed" in msg, msg
+    assert "pip install ." in msg
+
+
+SHIM_C = r"""
+/* Pretends the running MuJoCo is 3.3.7: interposes mj_version. */
+int mj_version(void) { return 3003007; }
+"""
+
+PROBE_PY = r"""
+import ctypes, sys
+mj = ctypes.CDLL(sys.argv[1], mode=ctypes.RTLD_GLOBAL)
+mj.mjp_getPlugin.restype = ctypes.c_void_p
+mj.mjp_getPlugin.argtypes = [ctypes.c_char_p, ctypes.c_void_p]
+ctypes.CDLL(sys.argv[2])  # its constructor registers mjtouch.skin, or refuses
+print("registered:", bool(mj.mjp_getPlugin(b"mjtouch.skin", None)), flush=True)
+"""
+
+
+@pytest.mark.parametrize("mismatch", [False, True], ids=["same", "other_version"])
+def test_library_refuses_to_register_under_another_mujoco(tmp_path, mismatch):
+    # The C side (plugin/mujoco/register.cc): loaded into a process whose
+    # libmujoco reports another version (mj_version interposed through
+    # LD_PRELOAD), the library must not register and must say why.
+    import os
+    import pathlib
+    import shutil
+    import subprocess
+    import sys
+
+    from mjtouch import _loader
+    libmujoco = sorted(pathlib.Path(mujoco.__file__).parent.glob("libmujoco.so.*"))[0]
+    env = dict(os.environ)
+    if mismatch:
+        cc = os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
+        assert cc, "no C compiler on PATH"
+        (tmp_path / "shim.c").write_text(SHIM_C)
+        build = subprocess.run([cc, "-shared", "-fPIC", "-o", str(tmp_path / "shim.so"),
+                                str(tmp_path / "shim.c")], capture_output=True, text=True)
+        assert build.returncode == 0, build.stderr
+        # after any sanitizer runtime already preloaded (it must come first)
+        env["LD_PRELOAD"] = f"{env.get('LD_PRELOAD', '')} {tmp_path / 'shim.so'}".strip()
+    (tmp_path / "probe.py").write_text(PROBE_PY)
+    run = subprocess.run([sys.executable, str(tmp_path / "probe.py"), str(libmujoco),
+                          str(_loader.library_path())], capture_output=True, text=True,
+                         cwd=tmp_path, env=env, timeout=120)
+    assert run.returncode == 0, run.stdout + run.stderr
+    log = (tmp_path / "MUJOCO_LOG.TXT").read_text() if (tmp_path / "MUJOCO_LOG.TXT").exists() else ""
+    said = run.stdout + run.stderr + log
+    if mismatch:
+        assert "registered: False" in run.stdout
+        built = _loader.load().mjtouch_built_mujoco_version()
+        assert (f"mjtouch: plugin built for MuJoCo {built} but running MuJoCo 3003007; "
+                "not registered") in said, said
+    else:
+        assert "registered: True" in run.stdout
+        assert "mjtouch" not in said.replace("registered: True", ""), said

@@ -13,6 +13,11 @@ must obey whatever the scene:
   pressure. For a half-space s_zz under any p >= 0 is bounded by max p (its
   kernel is positive and integrates to 1); 10x leaves room for the other
   measures and layered skins while catching any blow-up near the surface.
+Where a case has a law of its own it is checked too (each test says which):
+a closed form (Love's rectangle under a sharp edge), an exact identity (a
+layer split in two; a layer over its own material), a limit (a thin film's
+effect linear in its thickness; a far rigid base felt as F / H^2), or a
+continuity condition (s_zz across an interface).
 """
 
 import dataclasses
@@ -44,6 +49,12 @@ class Run:
     pressure_sum: np.ndarray
     pressure_max: np.ndarray
     contact_steps: int
+    layout: SkinLayout | None = None
+    # the final state, recomputed by mj_forward: taxel pressure image [j, i]
+    # (Pa), receptor quantities, and the pad's world position
+    final_pressure: np.ndarray | None = None
+    final_stress: np.ndarray | None = None
+    pad_pos: np.ndarray | None = None
 
 
 def pad_normal_force(m, d, pad, pad_z):
@@ -81,11 +92,14 @@ def simulate(m, ctrl_fn, steps, setup=None) -> Run:
         out["pmax"].append(p.max())
         contact_steps += bool(d.ncon)
     assert_no_warnings(d)
-    r = Run(np.array(out["spikes"]), np.array(out["stress"]), np.array(out["force"]),
-            np.array(out["psum"]), np.array(out["pmax"]), contact_steps)
     # Force balance at the final state, evaluated consistently: mj_forward
     # recomputes contacts, forces and the plugin's output at the same time.
     mujoco.mj_forward(m, d)
+    n = layout.nx
+    r = Run(np.array(out["spikes"]), np.array(out["stress"]), np.array(out["force"]),
+            np.array(out["psum"]), np.array(out["pmax"]), contact_steps, layout,
+            layout.block(d.sensordata, "pressure").reshape(n, n).copy(),
+            layout.block(d.sensordata, "stress").copy(), d.geom_xpos[pad].copy())
     f = layout.block(d.sensordata, "force")
     pad_z = d.geom_xmat[pad].reshape(3, 3)[:, 2]
     fn = pad_normal_force(m, d, pad, pad_z)
@@ -162,17 +176,255 @@ def test_texture_finer_than_taxel_pitch():
     check(r, m.opt.timestep)
 
 
+PLATE_HALF_M = (0.04, 0.015)  # the scenes' plate box half-sizes along x, y
+
+
+def cell_centres(layout):
+    """Taxel cell centres along one grid axis, pad frame (m)."""
+    return (np.arange(layout.nx) - (layout.nx - 1) / 2) * layout.pitch_m
+
+
 @pytest.mark.parametrize("corner", [False, True], ids=["edge", "corner"])
 def test_contact_at_plate_edge_and_corner(corner):
+    # The pad's pole sits over the plate's +x edge (and its +y edge): the
+    # plate ends under the middle of the skin.
     def edit(s):
-        # move the finger over the plate's +x edge (and +y edge)
-        y = 0.015 if corner else 0.0
-        return s.replace('<body name="finger" pos="-0.02 0', f'<body name="finger" pos="0.04 {y}')
+        y = PLATE_HALF_M[1] if corner else 0.0
+        return s.replace('<body name="finger" pos="-0.02 0', f'<body name="finger" pos="{PLATE_HALF_M[0]} {y}')
     m = model(texture=scenes.Texture(kind="flat"), edit=edit)
     r = simulate(m, press_slide(speed=0.0), 800)
     check(r, m.opt.timestep)
-    # part of the skin hangs over the edge: the pressure is not symmetric
     assert r.contact_steps > 400
+    # The finger only slides and presses (no rotation): pad axes = world axes.
+    p, h = r.final_pressure, r.layout.pitch_m
+    X, Y = np.meshgrid(cell_centres(r.layout), cell_centres(r.layout))  # [j, i]
+    edges = [(X, PLATE_HALF_M[0] - r.pad_pos[0])]
+    if corner:
+        edges.append((Y, PLATE_HALF_M[1] - r.pad_pos[1]))
+    for coord, edge in edges:  # edge: the plate's edge in the pad frame
+        assert abs(edge) < h / 2  # the edge is under the pole's cells
+        beyond = coord - h / 2 > edge  # cells wholly off the plate
+        assert np.all(p[beyond] == 0)
+        # the contact reaches the edge: the last cells wholly on the plate
+        # carry load
+        last = (coord + h / 2 <= edge) & (coord + 1.5 * h > edge)
+        assert p[last].max() > 0.1 * p.max()
+        # The pressure is not symmetric about the pole: its centroid lies on
+        # the plate side. Winkler pressure on a paraboloidal pad is
+        # p ~ a^2 - r^2; cut at the pole its centroid is 16 a / (15 pi)
+        # = 0.34 a into the plate (a: the contact's reach); a flatter
+        # profile (here the contact is clipped by the grid) moves it further
+        # in, and 0.25 a leaves room for the ridges and the ellipsoid's shape.
+        reach = edge - coord[p > 0].min()
+        centroid = (p * coord).sum() / p.sum()
+        assert centroid < edge - 0.25 * reach, (centroid, reach)
+
+
+def love_rectangle_szz(x1, x2, y1, y2, z):
+    """-s_zz at depth z under the origin from a unit uniform pressure on the
+    rectangle [x1, x2] x [y1, y2] of a homogeneous half-space (Love 1929,
+    by superposition of corner rectangles; independent of nu)."""
+    def corner(a, b):
+        r = np.sqrt(a * a + b * b + z * z)
+        return (np.arctan(a * b / (z * r))
+                + a * b * z / r * (1 / (a * a + z * z) + 1 / (b * b + z * z))) / (2 * np.pi)
+    return corner(x2, y2) - corner(x1, y2) - corner(x2, y1) + corner(x1, y1)
+
+
+STEP_SKINS = {
+    "halfspace": {"skin": "halfspace", "poisson": "0.48"},
+    # identical incompressible layers over the same half-space: a homogeneous
+    # solid through the layered code path
+    "layered_homogeneous": {"layers": "0.7e-3 5e4 0.5; 0.8e-3 5e4 0.5", "base": "5e4 0.5"},
+    "shao": {},  # the default layered fingertip over bone
+}
+
+
+@pytest.mark.parametrize("skin", list(STEP_SKINS))
+def test_receptors_under_a_sharp_step_edge(skin):
+    # The pad pressed on a 3 mm step (a box) whose edge lies under the pole:
+    # the pressure jumps from zero to its peak across one taxel boundary.
+    # Explicit receptor sites in the two cell columns either side of the edge
+    # and one further out, at 20 um (well inside a taxel: the kernel's
+    # near-surface regime), 0.15 mm and 0.75 mm; s_zz everywhere.
+    h = 1.5e-4
+    xs = (-1.5 * h, -0.5 * h, 0.5 * h, 1.5 * h)
+    ys = (0.5 * h, 3.5 * h)
+    sites = "; ".join(f"{c} {x!r} {y!r} {z!r}" for c, z in (("SA1", 20e-6), ("RA", 0.15e-3),
+                                                            ("PC", 0.75e-3))
+                      for x in xs for y in ys)
+    cfg = {"outputs": "spikes stress force pressure", "shear": "false",
+           "quantity": "szz szz szz", "sites": sites, **STEP_SKINS[skin]}
+
+    def edit(s):
+        s = s.replace('<body name="finger" pos="-0.02 0 0.0073"', '<body name="finger" pos="-0.02 0 0.0103"')
+        return s.replace('</worldbody>', '  <geom name="step" type="box" size="0.01 0.01 0.0015" '
+                         'pos="-0.01 0 0.0015"/>\n  </worldbody>', 1)
+    m = model(tip=fast_tip(skin=cfg, ridges=False, pitch_m=h), texture=scenes.Texture(kind="flat"),
+              edit=edit)
+    r = simulate(m, press_slide(speed=0.0), 600)
+    check(r, m.opt.timestep)
+    layout, p = r.layout, r.final_pressure
+    c = cell_centres(layout)
+    edge = -0.02 - r.pad_pos[0]  # the step's -x face, pad frame
+    assert abs(edge) < 1e-3 * h  # on the cell boundary at the pole (the slide holds x)
+    # a sharp edge: nothing beyond it, the first column on the step loaded
+    # like the peak (the pad's curvature changes p by < 1% over one taxel)
+    i_edge = layout.nx // 2
+    assert np.all(p[:, :i_edge] == 0)
+    assert p[:, i_edge].max() > 0.9 * p.max()
+    got = r.final_stress
+    pos = layout.positions_m
+    assert len(got) == 3 * len(xs) * len(ys)
+    if skin == "shao":
+        # no closed form: the stress equals the kernel applied to the
+        # rendered pressure (LayeredSkin: the same tables, evaluated outside
+        # the plugin)
+        from mjtouch import core
+        stack = core.LayeredSkin()
+        ij = np.rint(pos[:, :2] / h + (layout.nx - 1) / 2).astype(int)
+        want = np.empty(len(got))
+        for z in np.unique(pos[:, 2]):
+            k = pos[:, 2] == z
+            want[k] = -stack.field_stress(p.astype(np.float32), h, z, ij[k])[:, 2]
+    else:
+        want = np.array([
+            (p * love_rectangle_szz(c[None, :] - h / 2 - x, c[None, :] + h / 2 - x,
+                                    c[:, None] - h / 2 - y, c[:, None] + h / 2 - y, z)).sum()
+            for x, y, z in pos])
+        # Boussinesq's s_zz kernel is positive and integrates to 1: 0 <= -s_zz <= max p
+        assert np.all(got >= 0) and np.all(got <= p.max() * (1 + 1e-6))
+    # kernel tables and pressures are float32 (6e-8 relative each); 1e-5 of
+    # the peak covers their rounding summed over the ~1000 loaded cells
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-5 * p.max())
+    # under the edge the shallow receptors see the jump: full load on the
+    # step side, a small fraction of it beyond
+    shallow = pos[:, 2] == 20e-6
+    on_step = shallow & (pos[:, 0] > 0)
+    off_step = shallow & (pos[:, 0] < 0)
+    assert got[on_step].min() > 0.5 * p.max() and got[off_step].max() < 0.05 * p.max()
+
+
+SHAO_LAYERS = [(0.7e-3, 8e4, 0.48), (0.8e-3, 5e4, 0.48), (2.5e-3, 2.4e4, 0.4)]  # over bone
+
+
+def layers_attr(layers):
+    return "; ".join(f"{t!r} {e!r} {nu!r}" for t, e, nu in layers)
+
+
+def skin_rollout(skin, steps=400):
+    """The grating slide (press 0.5 N, slide at 25 mm/s) with the given
+    elastic skin; the skin changes no dynamics, so every call sees the same
+    contact and (Winkler) pressure."""
+    cfg = {"outputs": "spikes stress force pressure", **skin}
+    m = model(tip=fast_tip(skin=cfg))
+    r = simulate(m, press_slide(), steps)
+    check(r, m.opt.timestep)
+    return r
+
+
+def assert_same_contact(a: Run, b: Run):
+    # the plugin is a sensor: different skins, bit-identical contact; and
+    # the same receptors (class, x, y) to compare
+    np.testing.assert_array_equal(a.pressure_max, b.pressure_max)
+    np.testing.assert_array_equal(a.final_pressure, b.final_pressure)
+    np.testing.assert_array_equal(a.layout.classes, b.layout.classes)
+    np.testing.assert_array_equal(a.layout.positions_m[:, :2], b.layout.positions_m[:, :2])
+
+
+def film_stack(thickness_m, young_pa):
+    """Shao's fingertip with its top `thickness_m` replaced by a film."""
+    (t0, e0, nu0), *rest = SHAO_LAYERS
+    return [(thickness_m, young_pa, nu0), (t0 - thickness_m, e0, nu0), *rest]
+
+
+def test_very_thin_10um_layer():
+    ref = skin_rollout({})  # Shao's stack
+    peak = np.abs(ref.stress).max()
+    assert peak > 0
+    # Splitting the epidermis into a 10 um layer and the rest, same
+    # material, changes nothing (float32 tables: 1e-5 of the peak).
+    split = skin_rollout({"layers": layers_attr(film_stack(10e-6, SHAO_LAYERS[0][1]))})
+    assert_same_contact(ref, split)
+    np.testing.assert_allclose(split.stress, ref.stress, rtol=0, atol=1e-5 * peak)
+    # A 10x stiffer film (stratum corneum-like), 10 um and 5 um thick, with
+    # the SA1 receptors exactly on the 10 um film's lower interface. The
+    # film's effect on the RA (0.75 mm) and PC (2 mm) stresses is first
+    # order in its thickness (membrane stiffness E t): halving t halves it,
+    # up to O(t^2) (measured ratio 1.9).
+    stiff = 10 * SHAO_LAYERS[0][1]
+    film10 = skin_rollout({"layers": layers_attr(film_stack(10e-6, stiff)),
+                           "depth": "1e-5 0.75e-3 2e-3"})
+    film5 = skin_rollout({"layers": layers_attr(film_stack(5e-6, stiff))})
+    deep = ~ref.layout.mask("SA1")
+    effect10 = np.abs(film10.stress[:, deep] - ref.stress[:, deep]).max()
+    effect5 = np.abs(film5.stress[:, deep] - ref.stress[:, deep]).max()
+    assert effect10 > 1e-3 * peak  # the film is felt ...
+    assert 1.5 < effect10 / effect5 < 2.5, (effect10, effect5)  # ... linearly in t
+    assert_same_contact(ref, film10)
+
+
+def test_very_thick_20mm_layer():
+    E, nu, H = 5e4, 0.45, 20e-3
+    half = skin_rollout({"skin": "halfspace", "poisson": repr(nu)})
+    peak = np.abs(half.stress).max()
+    # a 20 mm layer over a half-space of the same material is a half-space
+    # (the layered transfer functions at k H up to ~400 vs Boussinesq)
+    same = skin_rollout({"layers": f"{H!r} {E!r} {nu!r}", "base": f"{E!r} {nu!r}"})
+    assert_same_contact(half, same)
+    np.testing.assert_allclose(same.stress, half.stress, rtol=0, atol=1e-5 * peak)
+    # Over bone, with the PC receptors on the bone surface (20 mm). Seen
+    # from the bone the load is a point force F, so the bone's reaction
+    # field near the skin surface is of order F / H^2 (measured 0.13 F/H^2,
+    # against stresses ~ 20x larger): SA1 and RA (0.75 mm) within F / H^2.
+    bone = skin_rollout({"layers": f"{H!r} {E!r} {nu!r}", "depth": f"0.75e-3 0.75e-3 {H!r}"})
+    assert_same_contact(half, bone)
+    near = ~half.layout.mask("PC")
+    fn = half.force[:, :1]
+    assert np.all(np.abs(bone.stress[:, near] - half.stress[:, near]) <= fn / H**2 + 1e-9)
+    # On the bone surface the stress is set by F / H^2 too (Boussinesq's
+    # 3 F / (2 pi H^2) = 0.48 F / H^2 in a half-space; the bonded bone raises
+    # it, measured 0.8 F / H^2): an order of magnitude either way.
+    pc = bone.final_stress[bone.layout.mask("PC")]
+    scale = bone.force[-1, 0] / H**2
+    assert np.all((pc > 0.1 * scale) & (pc < 10 * scale)), (pc.min(), pc.max(), scale)
+
+
+def test_receptor_exactly_on_an_interface():
+    # Sites on Shao's epidermis/dermis interface (0.7 mm) and 0.5 um above
+    # and below it, with interface_side upper and lower.
+    z, eps, h = 0.7e-3, 0.5e-6, 1.5e-4
+    xy = [(0.0, 0.0), (3 * h, 0.0), (0.0, 6 * h), (-9 * h, 3 * h)]
+    sites = "; ".join(f"{c} {x!r} {y!r} {d!r}" for c, d in (("SA1", z - eps), ("RA", z),
+                                                           ("PC", z + eps)) for x, y in xy)
+    for quantity in ("szz", "maxcomp"):
+        got = {}
+        for side in ("upper", "lower"):
+            r = skin_rollout({"sites": sites, "interface_side": side,
+                              "quantity": f"{quantity} {quantity} {quantity}"})
+            got[side] = {c: r.stress[:, r.layout.mask(c)] for c in ("SA1", "RA", "PC")}
+        above, below = got["upper"]["SA1"], got["upper"]["PC"]
+        peak = np.abs(above).max()
+        assert peak > 0
+        # 0.5 um off the interface moves a field that varies over ~z by
+        # about eps / z of the peak
+        tol = 2 * eps / z * peak
+        if quantity == "szz":
+            # traction continuity: s_zz is the same from both sides (float32
+            # tables: 1e-5 of the peak) ...
+            np.testing.assert_allclose(got["upper"]["RA"], got["lower"]["RA"], rtol=0,
+                                       atol=1e-5 * peak)
+            # ... and so is d s_zz / dz (equilibrium: -d s_xz / dx - d s_yz / dy,
+            # both continuous), so the interface value is the mean of its
+            # neighbours up to O(eps^2): within a tenth of their difference
+            mid, spread = (above + below) / 2, np.abs(above - below)
+            assert np.all(np.abs(got["upper"]["RA"] - mid) <= 0.1 * spread + 1e-5 * peak)
+        else:
+            # in-plane stresses jump (different materials): each side takes
+            # the limit from its own layer
+            np.testing.assert_allclose(got["upper"]["RA"], above, rtol=0, atol=tol)
+            np.testing.assert_allclose(got["lower"]["RA"], below, rtol=0, atol=tol)
+            assert np.abs(above - below).max() > 10 * tol
 
 
 def test_lift_off_and_recontact_every_few_ms():
