@@ -34,6 +34,7 @@ class SkinLayout:
     quantity: dict[str, str]  # class -> receptor quantity name
     substrate: str = ""  # the elastic skin (layered stack or half-space)
     kernel_build_s: float = 0.0  # kernel tables (+ FFT spectra) build time, s
+    oversample: int = 1  # tactile evaluations per physics step (resolved `oversample`)
 
     @classmethod
     def from_model(cls, model: mujoco.MjModel, instance: int | str | None = None) -> "SkinLayout":
@@ -64,6 +65,7 @@ class SkinLayout:
             quantity=dict(zip(CLASSES, info["quantity"])),
             substrate=info.get("substrate", ""),
             kernel_build_s=float(info.get("kernel_build_s", 0.0)),
+            oversample=int(info.get("oversample", 1)),
         )
 
     @property

@@ -88,7 +88,14 @@ CASES = [
     ({"pc_lowpass": "-5"}, "`pc_lowpass`", "(0, 100000] Hz"),
     ({"pc_lowpass": "2e5"}, "`pc_lowpass`", "(0, 100000] Hz"),
     # the elastic skin (more in tests/test_layered.py)
-    ({"stress_method": "gpu"}, "`stress_method`", "auto direct fft"),
+    ({"stress_method": "gpu"}, "`stress_method`", "tree direct fft auto"),
+    ({"stress_method": "tree", "stress_theta": "0"}, "`stress_theta`", "(0, 2]"),
+    ({"stress_method": "tree", "stress_theta": "2.5"}, "`stress_theta`", "(0, 2]"),
+    ({"stress_theta": "0.3"}, "`stress_theta`", "stress_method=\"tree\" only"),
+    ({"oversample": "0"}, "`oversample`", "auto or an integer in [1, 64]"),
+    ({"oversample": "2.5"}, "`oversample`", "auto or an integer in [1, 64]"),
+    ({"oversample": "65"}, "`oversample`", "auto or an integer in [1, 64]"),
+    ({"oversample": "2", "pressure": "contacts"}, "`oversample`", "valid with contacts: 1"),
     ({"skin": "foam"}, "`skin`", "layered halfspace"),
     ({"layers": "1e-3 5e4 0.45 2"}, "`layers`", "needs 3 numbers"),
     ({"layers": "2 5e4 0.45"}, "`layers`", "(0, 1] m"),
@@ -168,13 +175,6 @@ def _plugin_lines(attrs):
     with pytest.raises(ValueError) as e:
         mujoco.MjModel.from_xml_string(pad_scene(attrs))
     return [line for line in str(e.value).splitlines() if line.startswith("mjtouch.skin: ")]
-
-
-def test_compile_error_is_reported_once():
-    # The plugin reports its error once (mju_warning, then init fails);
-    # MuJoCo's compile error repeats the warning text: the message should
-    # appear once.
-    assert len(_plugin_lines({"noise": "1 2"})) == 1
 
 
 def test_too_deep_site_names_sites():

@@ -23,7 +23,7 @@ LOG_RANGES = {
     "sa1_c": (1e-14, 1), "sa1_r": (1e3, 1e15), "sa1_vth": (1e-4, 10), "ra_gain": (1e-8, 1),
     "ra_tau": (1e-5, 10), "pc_gain": (1e-8, 1), "pc_tau": (1e-5, 10), "pc_highpass": (1, 1e5),
     "refractory": (1e-5, 1), "ra_lowpass": (1, 1e4), "pc_lowpass": (1, 1e5),
-    "noise_tau": (1e-5, 10), "rate_tau": (1e-4, 100),
+    "noise_tau": (1e-5, 10), "rate_tau": (1e-4, 100), "stress_theta": (0.05, 2),
 }
 LINEAR_RANGES = {"ridge_angle": (-180, 180), "poisson": (-0.99, 0.5), "sa1_i0": (-1e-6, 1e-6)}
 INTEGER_RANGES = {"nx": (4, 40), "texture_group": (0, 5)}
@@ -31,7 +31,8 @@ CHOICES = {
     "ridges": ["true", "false", "1", "0"], "shear": ["true", "false"],
     "ridge_profile": ["sine", "triangle", "square"], "pressure": ["contacts", "winkler", "elastic"],
     "visual": ["none", "pad", "above", "both"], "skin": ["layered", "halfspace"],
-    "interface_side": ["upper", "lower"], "stress_method": ["auto", "direct", "fft"],
+    "interface_side": ["upper", "lower"], "stress_method": ["auto", "direct", "fft", "tree"],
+    "oversample": ["auto", "1", "2", "3"],
     "texture": ["", "texture", "plate", "texture plate"],
 }
 CLASSES = ["SA1", "RA", "PC"]

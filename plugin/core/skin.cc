@@ -307,10 +307,18 @@ bool CheckElasticSkin(const SkinConfig& cfg, std::string* error) {
     const std::string why = sub->CheckDepth(k.depth_m, cfg.interface_side);
     if (!why.empty()) {
       const bool upper = cfg.interface_side == InterfaceSide::kUpper;
-      *error = Fmt("mjtouch.skin: attribute `depth` entry %d (%s, %g m) is outside the elastic "
-                   "skin (%s); valid range (0, %g%s m for these `layers` over a rigid `base`%s",
-                   c + 1, name, k.depth_m, why.c_str(), sub->stack_depth_m(), upper ? "]" : ")",
-                   upper ? "" : " with interface_side=\"lower\"");
+      // The depth came from `sites` (its first entry of this class) or `depth`.
+      std::string where = Fmt("`depth` entry %d", c + 1);
+      for (size_t e = 0; e < cfg.sites.size(); ++e) {
+        if (static_cast<int>(cfg.sites[e].cls) == c) {
+          where = Fmt("`sites` entry %zu", e + 1);
+          break;
+        }
+      }
+      *error = Fmt("mjtouch.skin: attribute %s (%s, %g m) is outside the elastic skin (%s); "
+                   "valid range (0, %g%s m for these `layers` over a rigid `base`%s",
+                   where.c_str(), name, k.depth_m, why.c_str(), sub->stack_depth_m(),
+                   upper ? "]" : ")", upper ? "" : " with interface_side=\"lower\"");
       return false;
     }
   }
@@ -484,6 +492,7 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
   r.Number("pitch", &cfg->grid.pitch_m, 0, true, 1e-2, false, "m");
   r.Bool("ridges", &cfg->ridges.enabled);
   r.Number("ridge_pitch", &cfg->ridges.pitch_m, 0, true, 1e-2, false, "m");
+  cfg->ridge_pitch_is_default = r.Raw("ridge_pitch").empty();
   r.Number("ridge_height", &cfg->ridges.height_m, 0, true, 1e-3, false, "m");
   const std::string profile = r.Raw("ridge_profile");
   if (!profile.empty() && !ParseRidgeProfile(profile, &cfg->ridges.profile)) {
@@ -499,7 +508,7 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
                "elastic", pressure.c_str()));
   }
   const std::string oversample = Trim(r.Raw("oversample"));
-  double count;
+  double count = 0;
   if (!oversample.empty() && oversample != "auto" &&
       (!ToDouble(oversample, &count) || count != std::floor(count) || count < 1 || count > 64)) {
     r.Fail(Fmt("attribute `oversample` = '%s' is not valid; valid: auto or an integer in [1, 64]",
@@ -622,9 +631,11 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
     return false;
   }
   if (cfg->ridges.enabled && cfg->ridges.pitch_m < 2 * cfg->grid.pitch_m) {
-    *error = Fmt("mjtouch.skin: attribute `ridge_pitch` = %g m is below two taxels (2 * pitch "
-                 "= %g m); the grid cannot resolve the ridges", cfg->ridges.pitch_m,
-                 2 * cfg->grid.pitch_m);
+    *error = Fmt("mjtouch.skin: attribute `ridge_pitch` = %g m%s is below two taxels (2 x "
+                 "`pitch` = %g m); the grid cannot resolve the ridges: valid `ridge_pitch` >= %g "
+                 "m, or `pitch` <= %g m, or ridges=\"false\"", cfg->ridges.pitch_m,
+                 cfg->ridge_pitch_is_default ? " (default)" : "", 2 * cfg->grid.pitch_m,
+                 2 * cfg->grid.pitch_m, cfg->ridges.pitch_m / 2);
     return false;
   }
   const double table_bytes = 4.0 * kNumLoads * kNumStress * std::pow(2.0 * cfg->grid.n - 1, 2);

@@ -53,6 +53,7 @@ struct SkinConfig {
   TaxelGrid grid{128, 1e-4};
   PadGeometry pad;  // filled by the caller (MuJoCo: the pad geom's size)
   Ridges ridges;
+  bool ridge_pitch_is_default = true;  // (error messages)
   PressureModel pressure_model = PressureModel::kWinkler;  // `pressure`
   double stiffness_pa_per_m = 2e7;  // Winkler foundation
   double young_pa = 8e4;            // `elastic`: homogeneous skin (Shao 2010 epidermis)

@@ -42,7 +42,7 @@ extern "C" __attribute__((visibility("default"))) int mjtouch_describe(const mjM
       js << (r ? ", " : "") << "[\"" << ClassName(s.cls) << "\", " << s.x_m << ", " << s.y_m
          << ", " << s.depth_m << "]";
     }
-    js << "], \"quantity\": [";
+    js << "], \"oversample\": " << cfg.oversample << ", \"quantity\": [";
     for (int c = 0; c < kNumClasses; ++c)
       js << (c ? ", " : "") << "\"" << QuantityName(cfg.classes[c].quantity) << "\"";
     js << "]";

@@ -1,0 +1,68 @@
+"""Tactile oversampling (`oversample`): physics at a coarse timestep, the
+skin evaluated at K substeps per step with the pad's pose and MuJoCo's force
+interpolated; afferents the sampling cannot resolve are refused."""
+
+import mujoco
+import numpy as np
+import pytest
+
+from mjtouch import rollout, scenes
+from mjtouch.sensor import SkinLayout
+
+
+def layout(dt, **skin):
+    tip = scenes.Fingertip(nx=32, pitch_m=2e-4, skin={k: str(v) for k, v in skin.items()})
+    xml = scenes.scene_xml(tip, scenes.Texture(period_m=1e-3), scenes.Protocol(timestep_s=dt))
+    return SkinLayout.from_model(mujoco.MjModel.from_xml_string(xml))
+
+
+def test_auto_oversample_resolves_the_afferents():
+    # PC needs 8 x pc_lowpass = 2 kHz: 1 substep at 0.1 ms, 2 at 1 ms, 4 at 2 ms
+    assert layout(1e-4).oversample == 1
+    assert layout(1e-3).oversample == 2
+    assert layout(2e-3).oversample == 4
+    # without PC, RA's 8 x 40 Hz = 320 Hz is met at 2 ms
+    assert layout(2e-3, classes="SA1 RA").oversample == 1
+    # a higher PC corner needs more: 8 x 600 Hz = 4.8 kHz at 1 ms -> 5
+    assert layout(1e-3, pc_lowpass=600).oversample == 5
+
+
+def test_unresolvable_pc_is_refused():
+    with pytest.raises(ValueError, match=r"PC afferents need tactile sampling of at least 2000 Hz"
+                                         r".*`oversample` >= 2"):
+        layout(1e-3, oversample=1)
+    # the contacts model has no geometry to interpolate: it cannot oversample
+    with pytest.raises(ValueError, match=r"PC afferents need tactile sampling"):
+        layout(1e-3, pressure="contacts")
+
+
+def test_oversampled_coarse_step_approaches_the_fine_step():
+    # Sliding over a 1 mm grating at 40 mm/s for 0.3 s. The reference steps
+    # MuJoCo and the skin at 0.1 ms; the others step MuJoCo at 1 ms and the
+    # skin at 1 ms / K. At the step ends the pose is the same, so the stress
+    # agrees there to MuJoCo's own step difference (< 1e-3); between them only
+    # the substeps sample it, which PC (band up to ~1 kHz) needs: its spike
+    # count converges to the fine run's as K grows.
+    def run(dt, k, classes="SA1 RA PC"):
+        tip = scenes.Fingertip(nx=64, pitch_m=1.5e-4, skin={
+            "oversample": str(k), "classes": classes, "outputs": "spikes stress force"})
+        proto = scenes.Protocol(force_n=0.5, speed_m_s=0.04, timestep_s=dt, press_s=0.1)
+        return rollout.run_slide(tip, scenes.Texture(period_m=1e-3), proto, duration_s=0.3)
+
+    fine = run(1e-4, 1)
+    counts = {}
+    for k in (2, 10):
+        coarse = run(1e-3, k)
+        assert coarse.layout.oversample == k
+        for cls in ("SA1", "RA", "PC"):
+            wf, wc = fine.window(0.05), coarse.window(0.05)
+            qf = fine.stress[wf][::10][:, fine.layout.mask(cls)]
+            qc = coarse.stress[wc][:, coarse.layout.mask(cls)]
+            n = min(len(qf), len(qc))
+            err = np.sqrt(np.mean((qf[:n] - qc[:n]) ** 2) / np.mean(qf[:n] ** 2))
+            assert err < 1e-3, (k, cls, err)
+        counts[k] = coarse.spikes[coarse.window(0.05)][:, coarse.layout.mask("PC")].sum()
+    ref = fine.spikes[fine.window(0.05)][:, fine.layout.mask("PC")].sum()
+    assert ref > 100
+    assert abs(counts[10] - ref) < abs(counts[2] - ref)
+    assert abs(counts[10] - ref) <= 0.05 * ref, (counts, ref)
