@@ -19,7 +19,6 @@ constexpr double kGoldenAngle = 2.39996322972865332;  // pi (3 - sqrt 5)
 // Kernel tables above this size are refused (shared per model, float32).
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr double kDefaultRadius = 5e-3;  // receptor population, m
-constexpr double kMaxTableBytes = 1024.0 * 1024.0 * 1024.0;
 
 std::string Trim(const std::string& s) {
   const size_t a = s.find_first_not_of(" \t\n\r");
@@ -636,13 +635,6 @@ bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* e
                  "m, or `pitch` <= %g m, or ridges=\"false\"", cfg->ridges.pitch_m,
                  cfg->ridge_pitch_is_default ? " (default)" : "", 2 * cfg->grid.pitch_m,
                  2 * cfg->grid.pitch_m, cfg->ridges.pitch_m / 2);
-    return false;
-  }
-  const double table_bytes = 4.0 * kNumLoads * kNumStress * std::pow(2.0 * cfg->grid.n - 1, 2);
-  if (table_bytes * 2 > kMaxTableBytes) {
-    *error = Fmt("mjtouch.skin: attribute `nx` = %d needs %.0f MiB of kernel tables per depth; "
-                 "the limit is %.0f MiB in all", cfg->grid.n, table_bytes / 1048576.0,
-                 kMaxTableBytes / 1048576.0);
     return false;
   }
   return true;
