@@ -57,6 +57,9 @@ def _slide_parser(sub):
                    help="taxel pitch (m), default 1e-4")
     p.add_argument("--seed", type=int, default=0,
                    help="seed of the random texture (the pipeline itself is deterministic)")
+    p.add_argument("--pressure", choices=["winkler", "elastic", "contacts"], default="winkler",
+                   help="pressure model (default winkler; elastic lets the ridges carry the "
+                        "load in partial contact, which fingerprint filtering needs; slower)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="write a PNG of the spectrum and raster")
     return p
@@ -66,7 +69,7 @@ def slide(args) -> dict:
     from mjtouch import analysis, rollout, scenes
 
     tip = scenes.Fingertip(ridges=args.ridges, ridge_pitch_m=args.ridge_pitch, nx=args.nx,
-                           pitch_m=args.pitch)
+                           pitch_m=args.pitch, skin={"pressure": args.pressure})
     texture = scenes.Texture(kind=args.texture, period_m=args.period, plateau_m=args.plateau,
                              height_m=args.height, rms_m=args.rms,
                              corr_length_m=args.corr_length, dot_spacing_m=args.dot_spacing,
@@ -102,6 +105,7 @@ def slide(args) -> dict:
         "ridge_pitch_m": args.ridge_pitch,
         "ridges": args.ridges,
         "texture": args.texture,
+        "pressure": args.pressure,
         "force_n": args.force,
         "duration_s": args.duration,
         "dt_s": dt,

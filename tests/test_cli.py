@@ -40,6 +40,7 @@ def test_slide_human_output_and_plot(tmp_path):
     (["--speed", "-1"], "--speed must be a positive number"),
     (["--nx", "2"], "--nx 2 is out of range"),
     (["--texture", "wood"], "invalid choice"),
+    (["--pressure", "foam"], "invalid choice"),
     (["--dt", "0.1"], "timestep_s"),
 ])
 def test_slide_bad_arguments(args, msg):
