@@ -59,7 +59,7 @@ from mjtouch.sensor import CLASSES, SkinLayout
 # --- scene, sites, state ------------------------------------------------------
 
 EXTENT_M = 12.8e-3  # skin grid side kept by the pitch sweep (default: 128 x 0.1 mm)
-SITE_SPACING_M = 0.6e-3  # multiple of every swept pitch: 200, 150, 120, 100, 75, 60, 50 um
+SITE_SPACING_M = 0.6e-3  # multiple of every swept pitch: 200, 150, 120, 100, 75, 60, 50, 37.5 um
 SITE_RADIUS_M = 4.8e-3  # the contact patch at 0.5 N spans |x| < 4.2 mm, |y| < 3.7 mm
 SITE_DEPTH_M = {"SA1": 0.75e-3, "RA": 0.75e-3, "PC": 2.0e-3}  # the plugin's defaults
 # Classes along the lattice (sorted by radius): 3 SA1 : 7 RA : 1 PC, close to
@@ -133,8 +133,8 @@ def default_knobs(cfg: "BenchConfig") -> list[Knob]:
             knob("timestep", "timestep_s", (4e-4,), 1e-4, base=grid),
         ]
     return [
-        Knob("pitch", tuple(pitch_grid(p) for p in (200e-6, 150e-6, 100e-6, 75e-6)),
-             pitch_grid(50e-6)),
+        Knob("pitch", tuple(pitch_grid(p) for p in (200e-6, 150e-6, 100e-6, 75e-6, 50e-6)),
+             pitch_grid(37.5e-6)),
         knob("pressure", "skin.pressure", ("contacts", "winkler"), "elastic", base=coarse,
              steps=cfg.elastic_steps),
         knob("skin", "skin.skin", ("halfspace",), "layered", base=grid),
@@ -189,7 +189,7 @@ class BenchConfig:
     quick: bool = False
     duration_s: float = 0.25  # sliding simulated per row (errors need >= SPECTRAL_MIN_S + SKIP_S)
     time_steps: int = 500  # steps per timed repeat
-    repeats: int = 3  # timed repeats per configuration (the minimum is reported)
+    repeats: int = 4  # timed repeats per configuration (the minimum is reported)
     elastic_steps: int = 300  # sliding steps of the pressure knob (elastic: ~5 ms/step at 64^2)
     elastic_time_steps: int = 20  # steps per timed repeat of elastic rows (effects: 128^2)
     cheap_steps: int = 5000  # steps per timed repeat of the bare and idle baselines
@@ -668,6 +668,7 @@ class Bench:
         timed = self._time(list(runs.values()), c.repeats + 2)
         us = {name: t * 1e6 for name, (t, _) in zip(runs, timed)}
         same = {name: ok for name, (_, ok) in zip(runs, timed)}
+        self._baseline_runs = runs
         full_run = runs["full_pipeline"][0]
         tact_model = runs["native_tactile"][0].model
         layout = SkinLayout.from_model(full_run.model)
@@ -682,11 +683,26 @@ class Bench:
             "contacts_pressed": int(self.states.physics(dt, True)[2]),
             "contacts_idle": int(self.states.physics(dt, False)[2]),
             "repeats_identical": all(same.values()),
+            "passes_us_per_step": {k: [v] for k, v in us.items()},
         })
         if out["native_tactile_taxels"] != layout.nx ** 2:
             raise RuntimeError("the native tactile mesh does not have one vertex per taxel")
         self._tick("baselines timed")
         return out
+
+    def retime_baselines(self, out: dict) -> None:
+        """A second timing pass at the end of the run: each baseline keeps
+        the minimum of both passes (a busy spell of the machine during one
+        pass does not set the ratios)."""
+        runs = self._baseline_runs
+        timed = self._time(list(runs.values()), self.cfg.repeats + 2)
+        for name, (t, ok) in zip(runs, timed):
+            key = f"{name}_us_per_step"
+            out["passes_us_per_step"][name].append(t * 1e6)
+            out[key] = min(out[key], t * 1e6)
+            out["repeats_identical"] &= ok
+        self._baseline_runs = None
+        self._tick("baselines timed again")
 
     @staticmethod
     def ratios(b: dict) -> dict:
@@ -848,7 +864,7 @@ class Bench:
         return ks
 
     def count_tasks(self) -> int:
-        n = 10  # baselines: 9 warm-ups + the timed repeats
+        n = 11  # baselines: 9 warm-ups + two timing passes
         for k in self.knobs():
             n += len(k.settings) + 2 + (k.name == "pitch")
         if self.cfg.effects:
@@ -874,14 +890,16 @@ class Bench:
                       "skip_s": SKIP_S, "lead_in_s": LEAD_IN_S,
                       "spectral_min_s": SPECTRAL_MIN_S, "site_spacing_m": SITE_SPACING_M},
             "baselines": base,
-            "ratios": self.ratios(base),
             "rows": rows,
         }
         if self.cfg.effects:
             out["effects"] = self.effects()
-            out["profile"] = _profile(base, out["effects"])
         if self.cfg.threads:
             out["threads"] = self.threads()
+        self.retime_baselines(base)
+        out["ratios"] = self.ratios(base)
+        if self.cfg.effects:
+            out["profile"] = _profile(base, out["effects"])
         out["scaling"] = _scaling(rows, base)
         out["machine"]["loadavg_start"] = load0
         out["machine"]["loadavg_end"] = _loadavg()
@@ -1089,7 +1107,8 @@ def add_arguments(p) -> None:
     p.add_argument("--time-steps", type=int, default=None,
                    help="steps per timed repeat (default 500; --quick 100)")
     p.add_argument("--repeats", type=int, default=None,
-                   help="timed repeats per configuration, the minimum is reported (default 3)")
+                   help="timed repeats per configuration, the minimum is reported (default 4; "
+                        "--quick 2)")
     p.add_argument("--elastic-steps", type=int, default=None,
                    help="sliding steps of the pressure knob, whose reference is the slow elastic "
                         "model (default 300; --quick 120)")
