@@ -26,11 +26,15 @@ Timing: one process, same-process ratios; every run starts from one settled
 state (the press and a lead-in of sliding are simulated once per timestep on
 the scene without the plugin, then set with ``mj_setState``; the skin's own
 state starts fresh, and its first ``SKIP_S`` are left out of the errors);
-only the sliding phase is timed, in ``mujoco.rollout`` (a C loop: no Python
-per step); the first rollout of each configuration is the untimed warm-up
-(and gives the data for the errors); the cost is the minimum over
-``repeats`` timed rollouts. Timed repeats must reproduce the warm-up's
-sensordata bit for bit (``repeats_identical``).
+only the sliding phase is timed, as ``mj_step(model, data, nstep)`` (a C
+loop, nothing recorded per step). Each configuration is warmed up once
+(the knob rows record their data then, step by step); then timing rounds
+run over all configurations, each round timing every configuration once,
+and each configuration reports its minimum over the rounds: on a shared
+machine the load changes over seconds to minutes, and interleaving spreads
+every configuration's samples over the whole phase. Every timed run must
+end on the warm-up's sensordata bit for bit (``repeats_identical``).
+Threads are timed separately as wall time of ``mujoco.rollout`` calls.
 
 Adding a knob is one line in :func:`default_knobs`: a :class:`Knob` lists
 its settings as override dicts (keys in ``OVERRIDE_KEYS``), cheapest first,
@@ -188,8 +192,8 @@ def default_effects(cfg: "BenchConfig") -> list[tuple[str, str, dict]]:
 class BenchConfig:
     quick: bool = False
     duration_s: float = 0.25  # sliding simulated per row (errors need >= SPECTRAL_MIN_S + SKIP_S)
-    time_steps: int = 500  # steps per timed repeat
-    repeats: int = 4  # timed repeats per configuration (the minimum is reported)
+    time_steps: int = 200  # steps per timed repeat
+    repeats: int = 8  # timing rounds; each configuration's minimum over them is reported
     elastic_steps: int = 300  # sliding steps of the pressure knob (elastic: ~5 ms/step at 64^2)
     elastic_time_steps: int = 20  # steps per timed repeat of elastic rows (effects: 128^2)
     cheap_steps: int = 5000  # steps per timed repeat of the bare and idle baselines
@@ -207,7 +211,7 @@ class BenchConfig:
     @classmethod
     def quick_config(cls, **kw) -> "BenchConfig":
         """A tiny sweep for CI: small grids, short runs (well under a minute)."""
-        base = dict(quick=True, duration_s=0.11, time_steps=100, repeats=2, elastic_steps=150,
+        base = dict(quick=True, duration_s=0.11, time_steps=60, repeats=3, elastic_steps=150,
                     elastic_time_steps=10, cheap_steps=1000, threads_batch=4, nx=48,
                     pitch_m=2e-4, coarse_nx=48, coarse_pitch_m=2e-4, extent_m=9.6e-3)
         base.update(kw)
@@ -593,12 +597,20 @@ def _label(overrides: dict) -> str:
 
 
 class Bench:
+    """The benchmark. Every configuration is built and warmed up first (the
+    knob rows also record their data for the errors); then one timing
+    phase runs interleaved rounds over all of them, each round timing every
+    configuration once, so each configuration's minimum is taken over
+    samples spread across the whole phase (the load of a shared machine
+    changes over seconds to minutes)."""
+
     def __init__(self, cfg: BenchConfig, progress: Progress | None = None):
         cfg.validate()
         self.cfg = cfg
         self.texture = scenes.Texture()
         self.states = States(self.texture)
         self.progress = progress
+        self._items = []  # (run, nstep, last sensordata, recorded, result dict)
 
     def _tick(self, label: str) -> None:
         if self.progress:
@@ -617,32 +629,45 @@ class Bench:
         state0, warm = self.states.initial(model, pressed)
         return Run(model, state0, warm, slide_ctrl(proto, nstep, pressed)), proto, tip
 
-    def _time(self, items: list, repeats: int) -> list[tuple[float, bool]]:
-        """Interleaved timing rounds over items (run, nstep, reference last
-        sensordata, recorded): slow drifts of the machine's load hit every
-        item alike. Per item: (min wall seconds per step over repeats of
-        nstep mj_steps, or of a rollout if recorded; whether every repeat's
-        last sensordata equals the reference, bit for bit)."""
+    def _queue(self, run: Run, nstep: int, last: np.ndarray, result: dict,
+               recorded: bool = False) -> None:
+        """Time run later (nstep steps per repeat); the repeats must end on
+        sensordata `last`. Fills result["us_per_step"], ["repeats_identical"]."""
+        self._items.append((run, nstep, last, recorded, result))
+
+    def time_all(self) -> None:
+        """The timing phase: repeats rounds over every queued configuration
+        (mj_step(nstep) from the settled state, or a rollout if recorded)."""
+        items = self._items
         best = [math.inf] * len(items)
         same = [True] * len(items)
-        for _ in range(repeats):
-            for i, (run, nstep, ref, rec) in enumerate(items):
+        for r in range(self.cfg.repeats):
+            for i, (run, nstep, ref, rec, _) in enumerate(items):
                 if rec:
                     wall, sd = run.rollout(nstep)
                     last = sd[nstep - 1]
                 else:
                     wall, last = run.step(nstep)
                 best[i] = min(best[i], wall / nstep)
-                same[i] &= ref is not None and bool(np.array_equal(last, ref))
-        return list(zip(best, same))
+                same[i] &= bool(np.array_equal(last, ref))
+            self._tick(f"timing round {r + 1}/{self.cfg.repeats} ({len(items)} configurations)")
+        for (_, _, _, _, result), t, ok in zip(items, best, same):
+            result["us_per_step"] = t * 1e6
+            result["repeats_identical"] = ok
+        self._items = []
 
     # baselines ----------------------------------------------------------------
+    BASELINES = ("bare_mujoco", "native_tactile", "native_tactile_sensors_off", "full_pipeline",
+                 "homogeneous_kernel", "idle_plugin", "bare_mujoco_idle", "idle_plugin_rollout",
+                 "bare_mujoco_idle_rollout")
+
     def baselines(self) -> dict:
+        """Builds and warms up the baselines; their times come from time_all()."""
         c = self.cfg
         grid = {"nx": c.nx, "pitch_m": c.pitch_m}
         tip = scene_parts(grid)[0]
-        cheap = max(c.cheap_steps, c.time_steps)
         tactile = lambda x: native_tactile_xml(x, tip.nx, tip.pitch_m, tip.semi_axes_m)  # noqa: E731
+        cheap = max(c.cheap_steps, c.time_steps)  # ~20 ms per repeat: call overhead < 0.1%
         recorded = min(cheap, 1000)  # rollout's buffers stay small (23 kB of state per step)
         configs = {  # name: (options, steps per timed repeat, timed through mujoco.rollout)
             "bare_mujoco": (dict(xml=strip_plugin), cheap, False),
@@ -656,53 +681,38 @@ class Bench:
             "idle_plugin_rollout": (dict(pressed=False), recorded, True),
             "bare_mujoco_idle_rollout": (dict(xml=strip_plugin, pressed=False), recorded, True),
         }
-        runs = {}
+        self._baseline_results = {}
+        models = {}
         for name, (kw, nstep, rec) in configs.items():
             kw = dict(kw)
             extra = kw.pop("extra", {})
             run, proto, _ = self._run({**grid, **extra}, nstep=nstep, **kw)
             # warm-up; its last sensordata is what every timed repeat must reproduce
             last = run.rollout(nstep)[1][-1].copy() if rec else run.step(nstep)[1]
-            runs[name] = (run, nstep, last, rec)
+            self._baseline_results[name] = {}
+            self._queue(run, nstep, last, self._baseline_results[name], rec)
+            models[name] = run.model
             self._tick(f"baseline {name}")
-        timed = self._time(list(runs.values()), c.repeats + 2)
-        us = {name: t * 1e6 for name, (t, _) in zip(runs, timed)}
-        same = {name: ok for name, (_, ok) in zip(runs, timed)}
-        self._baseline_runs = runs
-        full_run = runs["full_pipeline"][0]
-        tact_model = runs["native_tactile"][0].model
-        layout = SkinLayout.from_model(full_run.model)
-        dt = float(full_run.model.opt.timestep)
-        out = {f"{k}_us_per_step": v for k, v in us.items()}
-        out.update({
+        layout = SkinLayout.from_model(models["full_pipeline"])
+        dt = float(models["full_pipeline"].opt.timestep)
+        out = {
             "taxels": layout.nx ** 2,
-            "native_tactile_taxels": int(tact_model.mesh_vertnum[0]),
+            "native_tactile_taxels": int(models["native_tactile"].mesh_vertnum[0]),
             "receptors": int(len(layout.classes)),
             "active_taxels": self.active_taxels(grid),
             "timestep_s": dt,
             "contacts_pressed": int(self.states.physics(dt, True)[2]),
             "contacts_idle": int(self.states.physics(dt, False)[2]),
-            "repeats_identical": all(same.values()),
-            "passes_us_per_step": {k: [v] for k, v in us.items()},
-        })
+        }
         if out["native_tactile_taxels"] != layout.nx ** 2:
             raise RuntimeError("the native tactile mesh does not have one vertex per taxel")
-        self._tick("baselines timed")
         return out
 
-    def retime_baselines(self, out: dict) -> None:
-        """A second timing pass at the end of the run: each baseline keeps
-        the minimum of both passes (a busy spell of the machine during one
-        pass does not set the ratios)."""
-        runs = self._baseline_runs
-        timed = self._time(list(runs.values()), self.cfg.repeats + 2)
-        for name, (t, ok) in zip(runs, timed):
-            key = f"{name}_us_per_step"
-            out["passes_us_per_step"][name].append(t * 1e6)
-            out[key] = min(out[key], t * 1e6)
-            out["repeats_identical"] &= ok
-        self._baseline_runs = None
-        self._tick("baselines timed again")
+    def finish_baselines(self, out: dict) -> None:
+        for name in self.BASELINES:
+            out[f"{name}_us_per_step"] = self._baseline_results[name]["us_per_step"]
+        out["repeats_identical"] = all(r["repeats_identical"]
+                                       for r in self._baseline_results.values())
 
     @staticmethod
     def ratios(b: dict) -> dict:
@@ -739,6 +749,8 @@ class Bench:
 
     # knobs --------------------------------------------------------------------
     def knob_rows(self, k: Knob) -> list[dict]:
+        """Builds every setting and records its data; errors against the
+        reference and the Pareto front come in finish_rows() after timing."""
         c = self.cfg
         settings = k.all_settings()
         sites = None
@@ -748,7 +760,7 @@ class Bench:
                 tip = scene_parts(ov)[0]
                 grids.append((tip.nx, tip.pitch_m))
             sites = lattice_sites(grids, min(SITE_RADIUS_M, c.extent_m / 2 - 2 * c.pitch_m))
-        rows, traces, items = [], [], []
+        rows = []
         for ov, own, is_ref in settings:
             tip, proto = scene_parts(ov, sites)
             nstep = c.knob_steps.get(k.name, k.steps)
@@ -765,96 +777,99 @@ class Bench:
             nt = min(c.time_steps, nstep)
             if ov.get("skin.pressure") == "elastic":
                 nt = min(nt, c.elastic_time_steps)
-            items.append((run, nt, sd[nt - 1].copy(), False))
-            traces.append(Trace(layout.block(sd, "stress").copy(),
-                                layout.block(sd, "spikes").astype(np.int64),
-                                layout.classes, proto.timestep_s))
-            rows.append({
+            row = {
                 "knob": k.name, "setting": _label(own), "overrides": dict(ov),
                 "reference": is_ref, "timestep_s": proto.timestep_s,
                 "steps": nstep, "timed_steps": nt, "nx": tip.nx, "pitch_m": tip.pitch_m,
                 "taxels": tip.nx ** 2, "receptors": int(len(layout.classes)),
                 "kernel_build_s": layout.kernel_build_s,
                 "stress_basis": "receptor" if k.sites else "class mean",
-            })
-            self._tick(f"{k.name}: {rows[-1]['setting']}")
-        for row, (per_step, same) in zip(rows, self._time(items, c.repeats)):
-            row["us_per_step"] = per_step * 1e6
-            row["wall_s_per_sim_s"] = per_step / row["timestep_s"]
-            row["repeats_identical"] = same
-        self._tick(f"{k.name}: timed")
-        ref = traces[-1]
-        for row, tr in zip(rows, traces):
-            row["errors"] = errors(tr, ref, row["stress_basis"])
-        front = pareto_front([r["wall_s_per_sim_s"] for r in rows],
-                             [r["errors"]["stress_rms_rel"] for r in rows])
-        for row, f in zip(rows, front):
-            row["pareto"] = f
-        if k.name == "pitch":  # active taxels for the scaling fit
-            for (ov, _, _), row in zip(settings, rows):
+                "_trace": Trace(layout.block(sd, "stress").copy(),
+                                layout.block(sd, "spikes").astype(np.int64),
+                                layout.classes, proto.timestep_s),
+            }
+            self._queue(run, nt, sd[nt - 1].copy(), row)
+            if k.name == "pitch":  # for the scaling fit
                 row["active_taxels"] = self.active_taxels(ov, sites)
-            self._tick("pitch: active taxels")
+            rows.append(row)
+            self._tick(f"{k.name}: {row['setting']}")
         return rows
+
+    @staticmethod
+    def finish_rows(rows: list[dict]) -> None:
+        for name in dict.fromkeys(r["knob"] for r in rows):
+            kr = [r for r in rows if r["knob"] == name]
+            ref = kr[-1]["_trace"]
+            for r in kr:
+                r["wall_s_per_sim_s"] = r["us_per_step"] * 1e-6 / r["timestep_s"]
+                r["errors"] = errors(r.pop("_trace"), ref, r["stress_basis"])
+            front = pareto_front([r["wall_s_per_sim_s"] for r in kr],
+                                 [r["errors"]["stress_rms_rel"] for r in kr])
+            for r, f in zip(kr, front):
+                r["pareto"] = f
 
     # effects ------------------------------------------------------------------
     def effects(self) -> list[dict]:
         c = self.cfg
         grid = {"nx": c.nx, "pitch_m": c.pitch_m}
-        out, items = [], []
+        out = []
         for group, label, ov in default_effects(c):
             ov = {**grid, **ov}
             elastic = ov.get("skin.pressure") == "elastic"
             nt = min(c.time_steps, c.elastic_time_steps) if elastic else c.time_steps
             run, _, _ = self._run(ov, nstep=nt)
-            items.append((run, nt, run.step(nt)[1], False))  # warm-up
-            out.append({"group": group, "effect": label, "overrides": ov, "timed_steps": nt,
-                        "receptors": int(len(SkinLayout.from_model(run.model).classes)),
-                        "sensordata": int(run.model.nsensordata)})
+            r = {"group": group, "effect": label, "overrides": ov, "timed_steps": nt,
+                 "receptors": int(len(SkinLayout.from_model(run.model).classes)),
+                 "sensordata": int(run.model.nsensordata)}
+            self._queue(run, nt, run.step(nt)[1], r)  # warm-up
+            out.append(r)
             self._tick(f"effect: {label}")
-        for r, (per_step, same) in zip(out, self._time(items, c.repeats)):
-            r["us_per_step"] = per_step * 1e6
-            r["repeats_identical"] = same
-        self._tick("effects: timed")
+        return out
+
+    @staticmethod
+    def finish_effects(out: list[dict]) -> None:
         minimal = next((r["us_per_step"] for r in out if r["group"] == "alone"), None)
         full = next((r["us_per_step"] for r in out if r["group"] == "together"), None)
         for r in out:
             r["over_minimal_us"] = r["us_per_step"] - minimal if minimal is not None else None
             r["over_default_us"] = r["us_per_step"] - full if full is not None else None
-        return out
 
     # threads ------------------------------------------------------------------
     def threads(self) -> dict:
+        """Wall time of one mujoco.rollout call over threads_batch MjData,
+        with 1 and 2 threads (alternating, minimum of repeats)."""
         c = self.cfg
-        nb, nt = c.threads_batch, max(10, c.time_steps // 2)
+        nb, nt = c.threads_batch, max(10, c.time_steps)
         run, proto, _ = self._run({"nx": c.nx, "pitch_m": c.pitch_m}, nstep=nt)
         states = np.repeat(run.state0[None], nb, axis=0)
         warm = np.repeat(run.warm[None], nb, axis=0)
-        result, outputs = {}, {}
         state_buf = np.zeros((nb, nt, run.state0.size))
-        sd_buf = np.zeros((nb, nt, run.model.nsensordata))
-        for nthread in (1, 2):
-            sd_buf[:] = np.nan  # every entry must be written again
-            datas = [mujoco.MjData(run.model) for _ in range(nthread)]
-            with mujoco.rollout.Rollout(nthread=nthread) as pool:
-                best = math.inf
-                for r in range(c.repeats + 1):
+        sd_buf = {n: np.full((nb, nt, run.model.nsensordata), np.nan) for n in (1, 2)}
+        pools = {n: mujoco.rollout.Rollout(nthread=n) for n in (1, 2)}
+        datas = {n: [mujoco.MjData(run.model) for _ in range(n)] for n in (1, 2)}
+        best = {1: math.inf, 2: math.inf}
+        try:
+            for r in range(c.repeats + 1):
+                for n in (1, 2):
                     t0 = time.perf_counter()
-                    pool.rollout(run.model, datas, states, run.ctrl[None, :nt],
-                                 initial_warmstart=warm, state=state_buf, sensordata=sd_buf)
+                    pools[n].rollout(run.model, datas[n], states, run.ctrl[None, :nt],
+                                     initial_warmstart=warm, state=state_buf,
+                                     sensordata=sd_buf[n])
                     wall = time.perf_counter() - t0
                     if r:  # the first is the warm-up
-                        best = min(best, wall)
-            sd = sd_buf.copy()
-            outputs[nthread] = sd
-            result[f"wall_s_{nthread}_thread"] = best
-            result[f"us_per_step_{nthread}_thread"] = best / (nb * nt) * 1e6
-            self._tick(f"threads: {nthread}")
-        result.update({
-            "nbatch": nb, "steps": nt, "speedup_2_threads": result["wall_s_1_thread"] /
-            result["wall_s_2_thread"], "cpu_count": os.cpu_count(),
-            "identical_across_threads": bool(np.array_equal(outputs[1], outputs[2])),
-        })
-        return result
+                        best[n] = min(best[n], wall)
+                self._tick(f"threads: round {r + 1}/{c.repeats + 1}")
+        finally:
+            for pool in pools.values():
+                pool.close()
+        return {
+            "nbatch": nb, "steps": nt,
+            "wall_s_1_thread": best[1], "wall_s_2_thread": best[2],
+            "us_per_step_1_thread": best[1] / (nb * nt) * 1e6,
+            "us_per_step_2_thread": best[2] / (nb * nt) * 1e6,
+            "speedup_2_threads": best[1] / best[2], "cpu_count": os.cpu_count(),
+            "identical_across_threads": bool(np.array_equal(sd_buf[1], sd_buf[2])),
+        }
 
     # all ----------------------------------------------------------------------
     def knobs(self) -> list[Knob]:
@@ -864,13 +879,13 @@ class Bench:
         return ks
 
     def count_tasks(self) -> int:
-        n = 11  # baselines: 9 warm-ups + two timing passes
+        n = len(self.BASELINES) + self.cfg.repeats
         for k in self.knobs():
-            n += len(k.settings) + 2 + (k.name == "pitch")
+            n += len(k.settings) + 1
         if self.cfg.effects:
-            n += len(default_effects(self.cfg)) + 1
+            n += len(default_effects(self.cfg))
         if self.cfg.threads:
-            n += 2
+            n += self.cfg.repeats + 1
         return n
 
     def run(self) -> dict:
@@ -880,6 +895,10 @@ class Bench:
         rows = []
         for k in self.knobs():
             rows += self.knob_rows(k)
+        effects = self.effects() if self.cfg.effects else None
+        self.time_all()
+        self.finish_baselines(base)
+        self.finish_rows(rows)
         out = {
             "machine": _machine(),
             "config": {k: (list(v) if isinstance(v, tuple) else v)
@@ -890,19 +909,19 @@ class Bench:
                       "skip_s": SKIP_S, "lead_in_s": LEAD_IN_S,
                       "spectral_min_s": SPECTRAL_MIN_S, "site_spacing_m": SITE_SPACING_M},
             "baselines": base,
+            "ratios": self.ratios(base),
             "rows": rows,
         }
-        if self.cfg.effects:
-            out["effects"] = self.effects()
+        if effects is not None:
+            self.finish_effects(effects)
+            out["effects"] = effects
+            out["profile"] = _profile(base, effects)
         if self.cfg.threads:
             out["threads"] = self.threads()
-        self.retime_baselines(base)
-        out["ratios"] = self.ratios(base)
-        if self.cfg.effects:
-            out["profile"] = _profile(base, out["effects"])
         out["scaling"] = _scaling(rows, base)
         out["machine"]["loadavg_start"] = load0
         out["machine"]["loadavg_end"] = _loadavg()
+        out["machine"]["peak_rss_mb"] = _peak_rss_mb()
         out["wall_s"] = time.perf_counter() - t0
         return out
 
@@ -941,6 +960,14 @@ def _scaling(rows: list[dict], base: dict) -> dict:
         out["receptors"] = {"points": [[a, b] for a, b in zip(x, y)],
                             "power_law": fit_power_law(x, y), "affine": fit_affine(x, y)}
     return out
+
+
+def _peak_rss_mb():
+    try:
+        import resource
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
+    except (ImportError, OSError):
+        return None
 
 
 def _loadavg():
@@ -1038,42 +1065,52 @@ def print_report(o: dict, stream=None) -> None:
               f"per unit (R^2 {_fmt(a['r2'], '.3f')})")
 
 
+def _error_panel(ax, o: dict, key: str, ylabel: str) -> None:
+    rows = o["rows"]
+    nonzero = [r["errors"][key] for r in rows if r["errors"][key]]
+    floor = min(nonzero) / 10 if nonzero else 1e-6
+    for i, name in enumerate(dict.fromkeys(r["knob"] for r in rows)):
+        kr = [r for r in rows if r["knob"] == name and r["errors"][key] is not None]
+        x = [r["wall_s_per_sim_s"] for r in kr]
+        y = [max(r["errors"][key], floor) for r in kr]
+        colour = f"C{i}"
+        ax.plot(x, y, "-o", c=colour, ms=4, lw=0.8, label=name)
+        for xi, yi, r in zip(x, y, kr):
+            if r["pareto"]:
+                ax.plot(xi, yi, "o", ms=9, mfc="none", c=colour)
+            if r["reference"]:
+                ax.plot(xi, yi, "v", ms=8, c=colour)
+    base = o["baselines"]
+    dt = base["timestep_s"]
+    for k, style, label in (("bare_mujoco", ":", "bare MuJoCo"),
+                            ("native_tactile", "--", "native tactile"),
+                            ("full_pipeline", "-", "full pipeline")):
+        x = base[k + "_us_per_step"] * 1e-6 / dt
+        ax.axvline(x, ls=style, c="grey", lw=0.8)
+        ax.text(x, floor, " " + label, rotation=90, va="bottom", fontsize=7, color="grey")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall seconds per simulated second")
+    ax.set_ylabel(ylabel)
+
+
 def plot(o: dict, path: str) -> None:
+    """Stress and spike-rate error vs cost per knob (circles: the Pareto
+    front of stress error; triangles: references, drawn at the floor), and
+    the baselines and effects in us per step."""
     try:
         import matplotlib.figure
     except ImportError:
         raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'")
-    fig = matplotlib.figure.Figure(figsize=(12, 5.5))
-    a, bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.3, 1]})
-    rows = o["rows"]
-    nonzero = [r["errors"]["stress_rms_rel"] for r in rows if r["errors"]["stress_rms_rel"]]
-    floor = min(nonzero) / 10 if nonzero else 1e-6
-    for i, name in enumerate(dict.fromkeys(r["knob"] for r in rows)):
-        kr = [r for r in rows if r["knob"] == name]
-        x = [r["wall_s_per_sim_s"] for r in kr]
-        y = [max(r["errors"]["stress_rms_rel"] or 0.0, floor) for r in kr]
-        colour = f"C{i}"
-        a.plot(x, y, "-o", c=colour, ms=4, lw=0.8, label=name)
-        for xi, yi, r in zip(x, y, kr):
-            if r["pareto"]:
-                a.plot(xi, yi, "o", ms=9, mfc="none", c=colour)
-            if r["reference"]:
-                a.plot(xi, yi, "v", ms=8, c=colour)
-    base = o["baselines"]
-    dt = base["timestep_s"]
-    for key, style, label in (("bare_mujoco", ":", "bare MuJoCo"),
-                              ("native_tactile", "--", "native tactile"),
-                              ("full_pipeline", "-", "full pipeline")):
-        a.axvline(base[key + "_us_per_step"] * 1e-6 / dt, ls=style, c="grey", lw=0.8)
-        a.text(base[key + "_us_per_step"] * 1e-6 / dt, floor, " " + label, rotation=90,
-               va="bottom", fontsize=7, color="grey")
-    a.set_xscale("log")
-    a.set_yscale("log")
-    a.set_xlabel("wall seconds per simulated second")
-    a.set_ylabel("relative RMS stress error at receptors")
-    a.set_title("accuracy vs cost (circles: Pareto front; triangles: references at the floor)",
+    fig = matplotlib.figure.Figure(figsize=(16, 5.5))
+    a, a2, bx = fig.subplots(1, 3, gridspec_kw={"width_ratios": [1, 1, 0.9]})
+    _error_panel(a, o, "stress_rms_rel", "relative RMS stress error at receptors")
+    a.set_title("stress error vs cost (circles: Pareto front; triangles: references)",
                 fontsize=9)
     a.legend(fontsize=8)
+    _error_panel(a2, o, "spike_rate_rel", "relative spike-rate error (classes summed)")
+    a2.set_title("spike-rate error vs cost", fontsize=9)
+    base = o["baselines"]
     labels = ["bare MuJoCo", "native tactile", "full pipeline", "half-space kernel",
               "idle plugin"]
     vals = [base[k + "_us_per_step"] for k in ("bare_mujoco", "native_tactile", "full_pipeline",
@@ -1087,7 +1124,7 @@ def plot(o: dict, path: str) -> None:
     bx.invert_yaxis()
     bx.set_xscale("log")
     bx.set_xlabel("us per step")
-    bx.set_title("baselines and effects (a: alone, t: together, w: default with change)",
+    bx.set_title("baselines; effects (a: alone over minimal, t: together, w: default changed)",
                  fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -1102,13 +1139,15 @@ def add_arguments(p) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="write a PNG: error vs cost, baselines, effects")
     p.add_argument("--save-json", metavar="FILE", help="also write the JSON object to FILE")
+    p.add_argument("--from-json", metavar="FILE",
+                   help="run nothing: print the table (and --plot) of a saved --save-json FILE")
     p.add_argument("--duration", type=float, default=None,
                    help="sliding seconds per knob row (default 0.25; --quick 0.12)")
     p.add_argument("--time-steps", type=int, default=None,
-                   help="steps per timed repeat (default 500; --quick 100)")
+                   help="steps per timed repeat (default 200; --quick 60)")
     p.add_argument("--repeats", type=int, default=None,
-                   help="timed repeats per configuration, the minimum is reported (default 4; "
-                        "--quick 2)")
+                   help="timing rounds over every configuration; the minimum is reported "
+                        "(default 8; --quick 3)")
     p.add_argument("--elastic-steps", type=int, default=None,
                    help="sliding steps of the pressure knob, whose reference is the slow elastic "
                         "model (default 300; --quick 120)")
@@ -1161,10 +1200,20 @@ def main(args) -> int:
             print("mjtouch bench: error: --plot needs matplotlib: pip install 'mjtouch[plot]'",
                   file=sys.stderr)
             return 2
-    bench = Bench(cfg)
-    bench.progress = Progress(bench.count_tasks(), enabled=not args.no_progress)
-    out = bench.run()
-    bench.progress.close()
+    if args.from_json:
+        try:
+            with open(args.from_json) as f:
+                out = json.load(f)
+            out["rows"], out["baselines"]  # noqa: B018  (a bench JSON object)
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            print(f"mjtouch bench: error: --from-json {args.from_json}: not a saved bench "
+                  f"result ({e})", file=sys.stderr)
+            return 2
+    else:
+        bench = Bench(cfg)
+        bench.progress = Progress(bench.count_tasks(), enabled=not args.no_progress)
+        out = bench.run()
+        bench.progress.close()
     if args.plot:
         plot(out, args.plot)
         out["plot"] = args.plot

@@ -4,6 +4,7 @@ Timings are never asserted (the machine is shared and noisy); the run's
 structure, finiteness, determinism and its errors are.
 """
 
+import io
 import json
 import math
 import re
@@ -94,6 +95,19 @@ def test_quick_pitch_errors_shrink_toward_reference(quick):
         assert all(a > b for a, b in zip(errs, errs[1:])), (key, errs)
     # every pitch row has the same receptors (explicit sites)
     assert len({r["receptors"] for r in o["rows"] if r["knob"] == "pitch"}) == 1
+
+
+def test_report_lists_every_row_and_marks_the_front(quick):
+    o, _, _ = quick
+    buf = io.StringIO()
+    bench.print_report(o, buf)
+    text = buf.getvalue()
+    table = [line for line in text.splitlines() if line[:2] in ("* ", "  ")
+             and line[2:].split(" ")[0] in {r["knob"] for r in o["rows"]}]
+    assert len(table) == len(o["rows"])
+    assert sum(line.startswith("*") for line in table) == sum(r["pareto"] for r in o["rows"])
+    for key in ("Baselines", "Effects", "Threads", "Scaling"):
+        assert key in text
 
 
 # --- the metrics on signals with known answers ----------------------------------------
@@ -245,6 +259,7 @@ def test_one_line_knob_overrides_are_checked():
     (["--knob-steps", "wood=100"], "knob_steps: unknown knob 'wood'"),
     (["--repeats", "0"], "repeats = 0 is out of range; valid range [1, 100]"),
     (["--duration", "0.001"], "duration_s = 0.001 is out of range"),
+    (["--from-json", "/nonexistent/bench.json"], "not a saved bench result"),
 ])
 def test_bad_arguments(args, msg, capsys):
     assert cli.main(["bench", "--quick", *args]) == 2
