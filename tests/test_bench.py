@@ -43,7 +43,7 @@ def test_quick_structure_and_finiteness(quick):
     knobs = [r["knob"] for r in o["rows"]]
     assert {"pitch", "pressure", "stress_method", "receptors", "timestep"} <= set(knobs)
     for row in o["rows"]:
-        assert {"knob", "setting", "us_per_step", "errors"} <= set(row)
+        assert {"knob", "setting", "us_per_step", "errors", "pareto", "pareto_spike_rate"} <= set(row)
         assert math.isfinite(row["us_per_step"]) and row["us_per_step"] > 0
         assert row["wall_s_per_sim_s"] == pytest.approx(row["us_per_step"] * 1e-6
                                                         / row["timestep_s"])
