@@ -109,6 +109,7 @@ class Knob:
     base: dict = dataclasses.field(default_factory=dict)
     sites: bool = True  # the same explicit receptor sites in every setting
     steps: int | None = None  # sliding steps per row (default: duration / dt)
+    labels: tuple | None = None  # row names, settings then reference (default: the overrides)
 
     def all_settings(self) -> list[tuple[dict, dict, bool]]:
         """(overrides, the setting's own overrides, is reference), reference last."""
@@ -146,7 +147,19 @@ def default_knobs(cfg: "BenchConfig") -> list[Knob]:
                                tree(0.25)), {"skin.stress_method": "direct"}, base=grid),
         knob("receptors", "density_scale", (0.25, 0.5, 1.0, 2.0), 4.0, base=grid, sites=False),
         knob("timestep", "timestep_s", (1e-3, 5e-4, 2e-4, 1e-4, 5e-5), 2.5e-5, base=grid),
+        Knob("presets", (PRESETS["rl"], PRESETS["interactive"]), PRESETS["science"],
+             labels=("rl (fast)", "interactive", "science (accurate)")),
     ]
+
+
+# Recommended settings (docs_bench.md), measured as the `presets` knob: odd
+# grids of pitches dividing the 0.6 mm site lattice, timesteps multiples of
+# the science preset's.
+PRESETS = {
+    "rl": {"nx": 65, "pitch_m": 200e-6, "timestep_s": 1e-3, "skin.stress_theta": 1.0},
+    "interactive": {"nx": 85, "pitch_m": 150e-6, "timestep_s": 1e-3},
+    "science": {"nx": 257, "pitch_m": 50e-6, "timestep_s": 1e-4, "skin.stress_theta": 0.25},
+}
 
 
 MINIMAL = {"ridges": False, "skin.shear": "false", "skin.skin": "halfspace",
@@ -778,7 +791,8 @@ class Bench:
             if ov.get("skin.pressure") == "elastic":
                 nt = min(nt, c.elastic_time_steps)
             row = {
-                "knob": k.name, "setting": _label(own), "overrides": dict(ov),
+                "knob": k.name, "overrides": dict(ov),
+                "setting": k.labels[len(rows)] if k.labels else _label(own),
                 "reference": is_ref, "timestep_s": proto.timestep_s,
                 "steps": nstep, "timed_steps": nt, "nx": tip.nx, "pitch_m": tip.pitch_m,
                 "taxels": tip.nx ** 2, "receptors": int(len(layout.classes)),
@@ -1157,7 +1171,7 @@ def add_arguments(p) -> None:
                    help="sliding steps of one knob's rows (repeatable)")
     p.add_argument("--knobs", default=None,
                    help="comma-separated knobs to sweep (default all: pitch, pressure, skin, "
-                        "stress_method, receptors, timestep)")
+                        "stress_method, receptors, timestep, presets)")
     p.add_argument("--no-effects", action="store_true", help="skip the effects table")
     p.add_argument("--no-threads", action="store_true", help="skip the threads measurement")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
