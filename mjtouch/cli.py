@@ -1,4 +1,4 @@
-"""Command line: ``python -m mjtouch slide`` (also the ``mjtouch`` script)."""
+"""Command line: ``python -m mjtouch slide | view | bench`` (also the ``mjtouch`` script)."""
 
 from __future__ import annotations
 
@@ -211,12 +211,25 @@ def view(args) -> int:
     return 0
 
 
+def _bench_parser(sub):
+    from mjtouch import bench
+    p = sub.add_parser("bench", help="what accuracy costs in time: sweeps each knob of the "
+                                     "default sliding scene against a converged reference",
+                       description=bench.__doc__.split("\n\n")[0])
+    bench.add_arguments(p)
+    return p
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="mjtouch", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     _slide_parser(sub)
     _view_parser(sub)
+    _bench_parser(sub)
     args = parser.parse_args(argv)
+    if args.command == "bench":
+        from mjtouch import bench
+        return bench.main(args)
     if args.command == "view":
         return view(args)
     if args.command == "slide":
