@@ -25,7 +25,7 @@ half-space) the 50 um ridges carry the load in partial contact and the
 ridged skin shows the V/lambda peak (ratio > 10); with the plugin's default
 ``winkler`` foundation the ridges are pressed flat in the ~1 mm indentation
 (pressure modulated by +-3% along the ridges) and the two spectra are
-nearly the same (ratio ~1). The elastic solve costs ~40 ms a step, hence
+nearly the same (ratio ~1). The elastic solve costs ~15-20 ms a step here, hence
 the coarse default timestep (1 ms: V/lambda = 89 Hz is far below Nyquist).
 """
 

@@ -133,7 +133,9 @@ def default_knobs(cfg: "BenchConfig") -> list[Knob]:
                  pitch_grid(100e-6, cfg.extent_m)),
             knob("pressure", "skin.pressure", ("winkler",), "elastic", base=coarse,
                  steps=cfg.elastic_steps),
-            knob("stress_method", "skin.stress_theta", (1.0,), 0.5, base=grid),
+            Knob("stress_method", (tree(1.0),), {"skin.stress_method": "direct"}, base=grid),
+            Knob("oversample", ({"timestep_s": 1e-3, "skin.oversample": 2},),
+                 {"timestep_s": 2e-4, "skin.oversample": 1}, base=grid),
             knob("receptors", "density_scale", (0.5,), 1.0, base=grid, sites=False),
             knob("timestep", "timestep_s", (4e-4,), 1e-4, base=grid),
         ]
@@ -147,6 +149,9 @@ def default_knobs(cfg: "BenchConfig") -> list[Knob]:
                                tree(0.25)), {"skin.stress_method": "direct"}, base=grid),
         knob("receptors", "density_scale", (0.25, 0.5, 1.0, 2.0), 4.0, base=grid, sites=False),
         knob("timestep", "timestep_s", (1e-3, 5e-4, 2e-4, 1e-4, 5e-5), 2.5e-5, base=grid),
+        # physics at 1 ms, the skin K times per step (auto gives K = 2 there)
+        Knob("oversample", tuple({"timestep_s": 1e-3, "skin.oversample": k} for k in (2, 4, 10)),
+             {"timestep_s": 1e-4, "skin.oversample": 1}, base=grid),
         Knob("presets", (PRESETS["rl"], PRESETS["interactive"]), PRESETS["science"],
              labels=("rl (fast)", "interactive", "science (accurate)")),
     ]
@@ -156,9 +161,9 @@ def default_knobs(cfg: "BenchConfig") -> list[Knob]:
 # grids of pitches dividing the 0.6 mm site lattice, timesteps multiples of
 # the science preset's.
 PRESETS = {
-    "rl": {"nx": 65, "pitch_m": 200e-6, "timestep_s": 1e-3, "skin.stress_theta": 1.0},
-    "interactive": {"nx": 85, "pitch_m": 150e-6, "timestep_s": 1e-3},
-    "science": {"nx": 257, "pitch_m": 50e-6, "timestep_s": 1e-4, "skin.stress_theta": 0.25},
+    "rl": {"nx": 65, "pitch_m": 200e-6, "timestep_s": 1e-3, **tree(1.0)},
+    "interactive": {"nx": 85, "pitch_m": 150e-6, "timestep_s": 1e-3, **tree(0.5)},
+    "science": {"nx": 257, "pitch_m": 50e-6, "timestep_s": 1e-4, "skin.stress_method": "auto"},
 }
 
 
