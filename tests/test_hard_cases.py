@@ -7,8 +7,8 @@ must obey whatever the scene:
 - spikes per step <= dt / refractory + 1 (a refractory period bounds firing);
 - force balance: the plugin's normal force equals MuJoCo's total contact
   normal force on the pad (computed here independently with
-  mj_contactForce) to 1e-9 relative, and sum(p * A) equals it to 1e-6
-  (pressures are float32);
+  mj_contactForce) to 1e-9 relative, and sum(p * A) equals it to 1e-9 (the
+  pressure output is double precision, normalised to the load);
 - stress is bounded: every receptor quantity <= 10 x the peak taxel
   pressure. For a half-space s_zz under any p >= 0 is bounded by max p (its
   kernel is positive and integrates to 1); 10x leaves room for the other
@@ -106,7 +106,7 @@ def simulate(m, ctrl_fn, steps, setup=None) -> Run:
     if fn > 0:
         assert abs(f[0] - fn) <= 1e-9 * abs(fn), (f[0], fn)
         psum = layout.block(d.sensordata, "pressure").sum() * area
-        assert abs(psum - fn) <= 1e-6 * fn, (psum, fn)
+        assert abs(psum - fn) <= 1e-9 * fn, (psum, fn)
     return r
 
 
@@ -118,7 +118,7 @@ def check(run: Run, dt: float) -> None:
     # sum(p A) equals the plugin's normal force whenever it reports contact
     fn = run.force[:, 0]
     touching = fn > 0
-    assert np.all(np.abs(run.pressure_sum[touching] - fn[touching]) <= 1e-6 * fn[touching] + 1e-12)
+    assert np.all(np.abs(run.pressure_sum[touching] - fn[touching]) <= 1e-9 * fn[touching] + 1e-12)
     assert np.all(run.pressure_sum[~touching] == 0)
     bound = 10 * run.pressure_max[:, None] + 1e-9
     assert np.all(np.abs(run.stress) <= bound)

@@ -155,3 +155,22 @@ def test_elastic_solver_on_layered_compliance_tables():
     with pytest.raises(ValueError, match="either compliance_m_per_pa or young_pa"):
         core.elastic_pressure(gap, h, 0.05, 80e3, 0.48,
                               compliance_m_per_pa=same.compliance_table(h, n))
+
+
+def test_shear_tractions_sum_to_mujocos_tangential_force():
+    # Full-slip shear (q = p F_t / F_n) and contact splats carry MuJoCo's
+    # forces exactly: sum(q A) is the tangential force, sum(p A) the normal
+    # one, to double round-off.
+    rng = np.random.default_rng(3)
+    n, h = 40, 1.5e-4
+    p = np.clip(rng.normal(1e4, 5e3, (n, n)), 0, None)
+    fn = p.sum() * h * h
+    qx, qy = core.slip_shear(p, h, fn, (-0.31 * fn, 0.12 * fn))
+    assert qx.sum() * h * h == pytest.approx(-0.31 * fn, rel=1e-12)
+    assert qy.sum() * h * h == pytest.approx(0.12 * fn, rel=1e-12)
+    contacts = np.c_[rng.uniform(-2e-3, 2e-3, (5, 2)), rng.normal(0, 0.1, (5, 2)),
+                     rng.uniform(0.05, 0.2, 5)]
+    ps, sx, sy = core.splat_contacts(contacts, n, h)
+    total = contacts[:, 2:].sum(axis=0)
+    assert [sx.sum() * h * h, sy.sum() * h * h, ps.sum() * h * h] == pytest.approx(
+        list(total), rel=1e-12)

@@ -37,3 +37,23 @@ def test_flat_plate_has_no_texture_line():
         f, p = analysis.stress_spectrum(res.stress[res.window(0.1)], res.dt)
         power[kind] = analysis.power_at(f, p, proto.speed_m_s / D)
     assert power["flat"] < 1e-4 * power["grating"], power
+
+
+@pytest.mark.parametrize("kind", ["flat", "grating"])
+def test_no_line_at_speed_over_taxel_pitch(kind):
+    # The taxel grid is fixed in the skin while the texture moves at V: a
+    # renderer that sampled cells at points would add a line at V / pitch
+    # (267 Hz here). Cell means are exact, so the power there must be at the
+    # noise floor: within 10x the median of the bins around it (a periodogram
+    # bin of noise is exponential, so noise alone exceeds 10x its median
+    # (6.9x its mean) in one of the 5 bins tested with probability 5e-3).
+    pitch, speed = 1.5e-4, 0.04
+    tip = scenes.Fingertip(nx=48, pitch_m=pitch, ridges=False, skin={"outputs": "stress force"})
+    proto = scenes.Protocol(speed_m_s=speed, timestep_s=2e-4, press_s=0.1)
+    res = rollout.run_slide(tip, scenes.Texture(kind=kind, period_m=1e-3), proto, 0.4)
+    f, p = analysis.stress_spectrum(res.stress[res.window(0.05)], res.dt)
+    k = int(np.argmin(abs(f - speed / pitch)))
+    floor = np.median(np.r_[p[k - 30:k - 5], p[k + 5:k + 30]])
+    assert p[k - 2:k + 3].max() <= 10 * floor, (p[k - 2:k + 3], floor)
+    if kind == "grating":  # the texture's own line stands far above it
+        assert analysis.power_at(f, p, speed / 1e-3) > 1e4 * p[k - 2:k + 3].max()

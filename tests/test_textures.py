@@ -120,3 +120,42 @@ def test_2d_texture_model_holds_the_heights():
 def test_bad_texture_parameters(kw, msg):
     with pytest.raises(ValueError, match=msg):
         scenes.Texture(**kw).validate()
+
+
+def test_analytic_counter_surfaces_render_their_exact_tops():
+    # Stage 1 against closed forms: a flat skin (z = 0, pad frame = world)
+    # over each analytic body below it; the gap at a cell centre (point
+    # sampling) is the distance down the pad's -z axis to the body's top.
+    n, h = 33, 2e-4
+    x = (np.arange(n) - (n - 1) / 2) * h
+    X, Y = np.meshgrid(x, x)
+    r2 = X**2 + Y**2
+    R, d, hh = 2e-3, 1e-4, 1e-3  # radius, clearance, half length (capsule, cylinder)
+    a, b, c = 2.5e-3, 1.5e-3, 1e-3  # ellipsoid semi-axes
+    cases = {
+        "sphere": (dict(pos=(0, 0, -R - d), size=(R, 0, 0)),
+                   R + d - np.sqrt(np.clip(R * R - r2, 0, None)), r2 < R * R),
+        "capsule": (dict(pos=(0, 0, -R - hh - d), size=(R, hh, 0)),
+                    R + d - np.sqrt(np.clip(R * R - r2, 0, None)), r2 < R * R),
+        "cylinder": (dict(pos=(0, 0, -hh - d), size=(R, hh, 0)), np.full_like(r2, d), r2 < R * R),
+        "ellipsoid": (dict(pos=(0, 0, -c - d), size=(a, b, c)),
+                      c + d - c * np.sqrt(np.clip(1 - X**2 / a**2 - Y**2 / b**2, 0, None)),
+                      X**2 / a**2 + Y**2 / b**2 < 1),
+    }
+    for name, (surface, expect, inside) in cases.items():
+        gap, cov = core.render_gap(np.zeros((n, n)), h, [dict(type=name, **surface)],
+                                   area_average=False)
+        # cells whose centre is off the body see no surface (centres exactly
+        # on the rim graze it: left out)
+        rim = np.isclose(r2 if name != "ellipsoid" else X**2 / a**2 + Y**2 / b**2,
+                         R * R if name != "ellipsoid" else 1.0, rtol=1e-9)
+        outside = ~inside & ~rim
+        assert np.all(np.isinf(gap[outside])) and np.all(cov[outside] == 0), name
+        np.testing.assert_allclose(gap[inside], expect[inside], rtol=0, atol=1e-12, err_msg=name)
+        assert np.all(cov[inside] == 1), name
+    # Area averaging: the 2 x 2 Gauss mean of a sphere's top over a cell; at
+    # the pole the top is r^2 / 2R to leading order, whose cell mean exceeds
+    # the centre value by h^2 / 12R: the averaged gap is larger by that.
+    gap, _ = core.render_gap(np.zeros((n, n)), h, [dict(type="sphere", pos=(0, 0, -R - d),
+                                                        size=(R, 0, 0))])
+    assert gap[16, 16] - d == pytest.approx(h * h / (12 * R), rel=1e-2)
