@@ -109,3 +109,15 @@ def test_viewer_demo_writes_offscreen_frames(tmp_path):
         assert a.shape == (300, 480, 3)
         changed = (np.abs(a.astype(int) - b.astype(int)).max(axis=2) > 30).mean()
         assert changed > 0.002, changed  # the drawing and the figures move
+
+
+def test_bench_pressure_runs_every_model_and_grid():
+    # a benchmark, so no timing assertion: every model at every grid reports
+    # finite positive costs and ratios against baselines of the same run
+    ex = runpy.run_path(str(EXAMPLES / "bench_pressure.py"))
+    rows = ex["measure"](steps=5, elastic_steps=2, rounds=1)
+    assert {(r["taxels"], r["model"]) for r in rows} == {
+        (n * n, m) for n in (64, 128, 256) for m in ("contacts", "winkler", "elastic")}
+    for r in rows:
+        for k in ("us_per_step", "over_bare", "over_native_tactile", "native_tactile_us_per_step"):
+            assert np.isfinite(r[k]) and r[k] > 0, (r, k)
