@@ -488,80 +488,72 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
     const double d_world[3] = {-pad.mat[2], -pad.mat[5], -pad.mat[8]};
     for (int b = 0; b < nb * nb; ++b) {
       if (!(block_lb[k * nb * nb + b] <= cull)) continue;
-      const int bi = b % nb, bj = b / nb;
-      for (int j = bj * B; j < std::min(grid.n, bj * B + B); ++j) {
-        const double v = grid.Centre(j);
-        for (int i = bi * B; i < std::min(grid.n, bi * B + B); ++i) {
-          const size_t idx = static_cast<size_t>(j) * grid.n + i;
-          const double z = skin_z[idx];
-          if (!std::isfinite(z)) continue;
-          const double u = grid.Centre(i);
-          if (lower_bound(k, u, v, z) > cull) continue;
-          double cov = 1.0, gap;
-          if (line) {
-            if (s.type == CounterSurface::Type::kRay) {
-              // One ray down the pad's -z axis from the pad's centre plane.
-              double o[3];
-              for (int r = 0; r < 3; ++r)
-                o[r] = pad.pos[r] + pad.mat[3 * r + 0] * u + pad.mat[3 * r + 1] * v;
-              const double dist = s.ray ? s.ray(o, d_world) : -1.0;
-              if (!(dist >= 0.0)) continue;
-              gap = z + dist;
-            } else {
-              double top_sum = 0.0;
-              int hits = 0;
-              const int np = area_average ? 2 : 1;
-              for (int a = 0; a < np; ++a) {
-                for (int b = 0; b < np; ++b) {
-                  const double x = u + (area_average ? (a ? g : -g) : 0.0);
-                  const double y = v + (area_average ? (b ? g : -g) : 0.0);
-                  const double o[3] = {F.t[0] + R[0] * x + R[1] * y, F.t[1] + R[3] * x + R[4] * y,
-                                       F.t[2] + R[6] * x + R[7] * y};
-                  double lo, hi;
-                  if (LineInterval(s, o, d_loc, &lo, &hi)) {
-                    top_sum += hi;
-                    ++hits;
-                  }
+      for_cells(b, [&](int i, int j, size_t idx, double u, double v, double z) {
+        if (lower_bound(k, u, v, z) > cull) return;
+        double cov = 1.0, gap;
+        if (line) {
+          if (s.type == CounterSurface::Type::kRay) {
+            // One ray down the pad's -z axis from the pad's centre plane.
+            double o[3];
+            for (int r = 0; r < 3; ++r)
+              o[r] = pad.pos[r] + pad.mat[3 * r + 0] * u + pad.mat[3 * r + 1] * v;
+            const double dist = s.ray ? s.ray(o, d_world) : -1.0;
+            if (!(dist >= 0.0)) return;
+            gap = z + dist;
+          } else {
+            double top_sum = 0.0;
+            int hits = 0;
+            const int np = area_average ? 2 : 1;
+            for (int a = 0; a < np; ++a) {
+              for (int b = 0; b < np; ++b) {
+                const double x = u + (area_average ? (a ? g : -g) : 0.0);
+                const double y = v + (area_average ? (b ? g : -g) : 0.0);
+                const double o[3] = {F.t[0] + R[0] * x + R[1] * y, F.t[1] + R[3] * x + R[4] * y,
+                                     F.t[2] + R[6] * x + R[7] * y};
+                double lo, hi;
+                if (LineInterval(s, o, d_loc, &lo, &hi)) {
+                  top_sum += hi;
+                  ++hits;
                 }
               }
-              if (hits == 0) continue;
-              cov = static_cast<double>(hits) / (np * np);
-              gap = z - top_sum / hits;
             }
-          } else {
-            const double qz = F.t[2] + R[6] * u + R[7] * v + R[8] * z;
-            const double qx = F.t[0] + R[0] * u + R[1] * v + R[2] * z;
-            const double qy = F.t[1] + R[3] * u + R[4] * v + R[5] * z;
-            gap = qz;
-            if (s.type != CounterSurface::Type::kPlane) {
-              const double hx = area_average ? F.hx : 0.0, hy = area_average ? F.hy : 0.0;
-              if (area_average) {
-                const double ox = Overlap1D(qx - hx, qx + hx, -s.half_x_m, s.half_x_m);
-                const double oy = Overlap1D(qy - hy, qy + hy, -s.half_y_m, s.half_y_m);
-                cov = area > 0 ? ox * oy / area : 0.0;
-              } else {
-                cov = (std::abs(qx) <= s.half_x_m && std::abs(qy) <= s.half_y_m) ? 1.0 : 0.0;
-              }
-              if (cov <= 0.0) continue;
-              if (s.type == CounterSurface::Type::kHeightField) {
-                const double x0 = std::max(qx - hx, -s.half_x_m);
-                const double x1 = std::min(qx + hx, s.half_x_m);
-                const double y0 = std::max(qy - hy, -s.half_y_m);
-                const double y1 = std::min(qy + hy, s.half_y_m);
-                gap = qz - HeightFieldBoxMean(s, x0, x1, y0, y1);
-              }
-            }
+            if (hits == 0) return;
+            cov = static_cast<double>(hits) / (np * np);
+            gap = z - top_sum / hits;
           }
-          if (gap < (*gap_m)[idx]) {
-            (*gap_m)[idx] = gap;
-            (*coverage)[idx] = cov;
-            i_lo = std::min(i_lo, i);
-            i_hi = std::max(i_hi, i);
-            j_lo = std::min(j_lo, j);
-            j_hi = std::max(j_hi, j);
+        } else {
+          const double qz = F.t[2] + R[6] * u + R[7] * v + R[8] * z;
+          const double qx = F.t[0] + R[0] * u + R[1] * v + R[2] * z;
+          const double qy = F.t[1] + R[3] * u + R[4] * v + R[5] * z;
+          gap = qz;
+          if (s.type != CounterSurface::Type::kPlane) {
+            const double hx = area_average ? F.hx : 0.0, hy = area_average ? F.hy : 0.0;
+            if (area_average) {
+              const double ox = Overlap1D(qx - hx, qx + hx, -s.half_x_m, s.half_x_m);
+              const double oy = Overlap1D(qy - hy, qy + hy, -s.half_y_m, s.half_y_m);
+              cov = area > 0 ? ox * oy / area : 0.0;
+            } else {
+              cov = (std::abs(qx) <= s.half_x_m && std::abs(qy) <= s.half_y_m) ? 1.0 : 0.0;
+            }
+            if (cov <= 0.0) return;
+            if (s.type == CounterSurface::Type::kHeightField) {
+              const double x0 = std::max(qx - hx, -s.half_x_m);
+              const double x1 = std::min(qx + hx, s.half_x_m);
+              const double y0 = std::max(qy - hy, -s.half_y_m);
+              const double y1 = std::min(qy + hy, s.half_y_m);
+              gap = qz - HeightFieldBoxMean(s, x0, x1, y0, y1);
+            }
           }
         }
-      }
+        if (gap < (*gap_m)[idx]) {
+          (*gap_m)[idx] = gap;
+          (*coverage)[idx] = cov;
+          i_lo = std::min(i_lo, i);
+          i_hi = std::max(i_hi, i);
+          j_lo = std::min(j_lo, j);
+          j_hi = std::max(j_hi, j);
+        }
+      });
     }
   }
   if (rendered) {

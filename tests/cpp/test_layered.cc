@@ -1,9 +1,9 @@
 // Standalone checks of the layered kernel (plugin/core/layered.*).
 // Build and run (about 10-20 s on one core):
 //   g++ -O2 -std=c++17 -Iplugin/core plugin/core/kernel.cc \
-//       plugin/core/layered.cc tests/cpp/test_layered.cc -o /tmp/test_layered
-//   /tmp/test_layered            # PASS/FAIL lines, exit status 1 on failure
-//   /tmp/test_layered --dump F   # also writes disc/transfer values as JSON
+//       plugin/core/layered.cc tests/cpp/test_layered.cc -o test_layered
+//   ./test_layered            # PASS/FAIL lines, exit status 1 on failure
+//   ./test_layered --dump F   # also writes disc/transfer values as JSON
 //                                # for tests/layered_oracle.py to compare
 #include <algorithm>
 #include <chrono>
@@ -459,12 +459,16 @@ void TestBuildTime() {
   for (const auto& t : kt->tables)
     for (float v : t)
       if (!std::isfinite(v)) finite = false;
-  Report(finite && kt->build_seconds < 1.0, "build time n=128, 3 depths",
-         F("%.3f s (%s)", kt->build_seconds, s->Describe().c_str()));
+  // (the build time is reported, not asserted: the machines are shared)
+  Report(finite, "tables n=128, 3 depths finite",
+         F("built in %.3f s (%s)", kt->build_seconds, s->Describe().c_str()));
   std::vector<float> c;
   const auto t0 = std::chrono::steady_clock::now();
   s->SurfaceComplianceTable(0.1e-3, 128, &c);
-  Report(true, "compliance table n=128", F("%.3f s", Seconds(t0)));
+  bool positive_centre = c.size() == 255u * 255u && c[127 * 255 + 127] > 0;
+  for (float v : c) positive_centre = positive_centre && std::isfinite(v);
+  Report(positive_centre, "compliance table n=128 finite, positive at the load",
+         F("built in %.3f s", Seconds(t0)));
 }
 
 // Input validation names the field and range.
@@ -608,8 +612,7 @@ void Dump(const char* path) {
     std::fprintf(f, "]}");
   }
   std::fprintf(f, "\n]}\n");
-  std::fclose(f);
-  Report(true, "dump", F("wrote %s", path));
+  Report(std::fclose(f) == 0, "dump", F("wrote %s", path));
 }
 }  // namespace
 
