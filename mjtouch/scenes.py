@@ -149,14 +149,25 @@ class Texture:
 
 @dataclasses.dataclass
 class Protocol:
-    """Press with a set normal force, then slide at a set speed along +x."""
+    """Press, hold, then slide at a set speed along +x. ``control="force"``
+    (default) presses with ``force_n`` (a motor); ``control="displacement"``
+    drives the pad's pole ``depth_m`` below the plate's top (a stiff,
+    critically damped position servo), the force then being MuJoCo's contact
+    force at that penetration (its soft-contact impedance, not the skin's
+    layers: see README, Wang 2016)."""
 
     force_n: float = 0.5
     speed_m_s: float = 0.025
     press_s: float = 0.15  # press and settle before sliding
     timestep_s: float = 1e-4
+    control: Literal["force", "displacement"] = "force"
+    depth_m: float = 1e-3  # displacement control: the pole's depth below the plate top
 
     def validate(self) -> None:
+        if self.control not in ("force", "displacement"):
+            raise ValueError(f"control = {self.control!r} is not one of 'force', 'displacement'")
+        if self.control == "displacement" and not 0 < self.depth_m <= 5e-3:
+            raise ValueError(f"depth_m = {self.depth_m} is out of range; valid range (0, 5e-3] m")
         if not 0 < self.force_n <= 100:
             raise ValueError(f"force_n = {self.force_n} is out of range; valid range (0, 100] N")
         if not 0 <= self.speed_m_s <= 2:
@@ -242,16 +253,31 @@ def _start_x(texture_length_m: float) -> float:
     return -texture_length_m / 4
 
 
+PRESS_KP = 2e3  # N/m, the displacement-control servo (critically damped by kv)
+PAD_CLEARANCE_M = 3e-4  # the pad's pole starts this far above the plate
+
+
 def fingertip_fragment(tip: Fingertip, start_x_m: float = -0.02,
-                       travel_m: float = 0.04) -> Fragment:
+                       travel_m: float = 0.04, control: str = "force") -> Fragment:
     """The fingertip: slide joints in x (sliding) and z (pressing), the pad
-    geom, its actuators and the skin sensor plugin instance."""
+    geom, its actuators and the skin sensor plugin instance. The `press`
+    actuator is a motor (ctrl = -force, N) or, for control="displacement", a
+    position servo on press_z (ctrl = the joint's target, m; the pole's depth
+    below the plate top is -ctrl - PAD_CLEARANCE_M)."""
     tip.validate()
     a, b, c = tip.semi_axes_m
-    z0 = c + 3e-4  # pad 0.3 mm above the plate
+    z0 = c + PAD_CLEARANCE_M
     cfg = skin_config(tip)
     slide_damping = 2 * math.sqrt(SLIDE_KP * tip.mass_kg)
     config = "\n".join(f'        <config key="{k}" value="{v}"/>' for k, v in cfg.items())
+    if control == "displacement":
+        kv = 2 * math.sqrt(PRESS_KP * tip.mass_kg)
+        press = (f'    <position name="press" joint="press_z" kp="{_fmt(PRESS_KP)}" '
+                 f'kv="{_fmt(kv)}" ctrlrange="-0.01 0.01"/>\n')
+    elif control == "force":
+        press = '    <motor name="press" joint="press_z" ctrlrange="-100 100"/>\n'
+    else:
+        raise ValueError(f"control = {control!r} is not one of 'force', 'displacement'")
     return Fragment(
         extension='    <plugin plugin="mjtouch.skin"/>\n',
         worldbody=f"""    <body name="finger" pos="{_fmt(start_x_m)} 0 {_fmt(z0)}" gravcomp="1">
@@ -266,8 +292,7 @@ def fingertip_fragment(tip: Fingertip, start_x_m: float = -0.02,
         # position setpoint, so the mean speed is exact despite friction;
         # stiff and critically damped (joint damping) so it does not ring.
         actuator=f"""    <intvelocity name="slide" joint="slide_x" kp="{_fmt(SLIDE_KP)}" actrange="{_fmt(-travel_m)} {_fmt(travel_m)}" ctrlrange="-2 2"/>
-    <motor name="press" joint="press_z" ctrlrange="-100 100"/>
-""",
+{press}""",
         sensor=f"""    <plugin name="skin" plugin="mjtouch.skin" objtype="geom" objname="pad">
 {config}
     </plugin>
@@ -351,7 +376,8 @@ def scene_xml(tip: Fingertip | None = None, texture: Texture | None = None,
     protocol = protocol or Protocol()
     protocol.validate()
     parts = [plate_fragment(texture),
-             fingertip_fragment(tip, _start_x(texture.length_m), texture.length_m),
+             fingertip_fragment(tip, _start_x(texture.length_m), texture.length_m,
+                                protocol.control),
              pad_plate_contact(tip, protocol)]
     return _document(model_name, parts, head=_options(protocol))
 
@@ -366,11 +392,16 @@ def pad_plate_contact(tip: Fingertip, protocol: Protocol) -> Fragment:
 
 
 def controls(protocol: Protocol, duration_s: float) -> np.ndarray:
-    """Open-loop controls (nstep x 2: slide speed, press force) for press then slide."""
+    """Open-loop controls (nstep x 2: slide speed, press) for press then
+    slide; press is -force (N) or, under displacement control, the press
+    joint's target (m)."""
     n_press = int(round(protocol.press_s / protocol.timestep_s))
     n_slide = int(round(duration_s / protocol.timestep_s))
     ctrl = np.zeros((n_press + n_slide, 2))
-    ctrl[:, 1] = -protocol.force_n
+    if protocol.control == "displacement":
+        ctrl[:, 1] = -(protocol.depth_m + PAD_CLEARANCE_M)
+    else:
+        ctrl[:, 1] = -protocol.force_n
     ctrl[n_press:, 0] = protocol.speed_m_s
     return ctrl
 

@@ -57,3 +57,26 @@ def test_no_line_at_speed_over_taxel_pitch(kind):
     assert p[k - 2:k + 3].max() <= 10 * floor, (p[k - 2:k + 3], floor)
     if kind == "grating":  # the texture's own line stands far above it
         assert analysis.power_at(f, p, speed / 1e-3) > 1e4 * p[k - 2:k + 3].max()
+
+
+def test_displacement_controlled_press_and_slide():
+    # Protocol(control="displacement"): a position servo holds the pad's pole
+    # depth_m below the plate; the normal force is then MuJoCo's contact force
+    # at that penetration: steady while sliding and rising with the depth,
+    # and the receptors' stress and the SA1 rate with it.
+    forces, stress = [], []
+    for depth in (0.5e-3, 1e-3, 1.5e-3):
+        tip = scenes.Fingertip(nx=48, pitch_m=1.5e-4, skin={"outputs": "spikes stress force"})
+        proto = scenes.Protocol(control="displacement", depth_m=depth, timestep_s=2e-4,
+                                press_s=0.15)
+        res = rollout.run_slide(tip, scenes.Texture(period_m=1e-3), proto, 0.2)
+        fn = res.force[res.window(0.05)][:, 0]
+        assert fn.std() < 1e-3 * fn.mean()
+        forces.append(fn.mean())
+        stress.append(res.stress[res.window(0.05)][:, res.layout.mask("SA1")].mean())
+    assert forces[0] > 0 and np.all(np.diff(forces) > 0), forces
+    assert np.all(np.diff(stress) > 0), stress
+    with pytest.raises(ValueError, match="depth_m = 0.01 is out of range"):
+        scenes.scene_xml(protocol=scenes.Protocol(control="displacement", depth_m=0.01))
+    with pytest.raises(ValueError, match="control = 'speed' is not one of"):
+        scenes.scene_xml(protocol=scenes.Protocol(control="speed"))
