@@ -215,6 +215,18 @@ namespace {
 // Odd row strides: power-of-two strides put the radix streams of a stage in
 // the same cache sets (measured 3-8x slower at 128 and 256).
 int PaddedStride(int n) { return n | 1; }
+
+// Scratch for a 2D transform: the y-pass work arrays (W each) and the
+// stages' ping-pong arrays (max(W, spectrum) each), in one buffer.
+void SplitScratch(size_t W, size_t spectrum, std::vector<double>* scratch, double** wr,
+                  double** wi, double** sr, double** si) {
+  const size_t S = std::max(W, spectrum);
+  scratch->resize(2 * W + 2 * S);
+  *wr = scratch->data();
+  *wi = *wr + W;
+  *sr = *wi + W;
+  *si = *sr + S;
+}
 }  // namespace
 
 Fft2D::Fft2D(int nx, int ny)
@@ -224,12 +236,8 @@ void Fft2D::Forward(const double* re, const double* im, int stride, int rows, in
                     double* spec_im, std::vector<double>* scratch) const {
   const int lw = PaddedStride(cols);
   const size_t W = static_cast<size_t>(ny_) * lw;
-  const size_t S = std::max(W, spectrum_size());
-  scratch->resize(2 * W + 2 * S);
-  double* wr = scratch->data();
-  double* wi = wr + W;
-  double* sr = wi + W;
-  double* si = sr + S;
+  double *wr, *wi, *sr, *si;
+  SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
   // Along y, the `cols` nonzero columns only (ny x cols).
   std::fill(wr, wr + W, 0.0);
   std::fill(wi, wi + W, 0.0);
@@ -255,12 +263,8 @@ void Fft2D::Inverse(double* spec_re, double* spec_im, int rows, int cols, double
                     std::vector<double>* scratch) const {
   const int lw = PaddedStride(cols);
   const size_t W = static_cast<size_t>(ny_) * lw;
-  const size_t S = std::max(W, spectrum_size());
-  scratch->resize(2 * W + 2 * S);
-  double* wr = scratch->data();
-  double* wi = wr + W;
-  double* sr = wi + W;
-  double* si = sr + S;
+  double *wr, *wi, *sr, *si;
+  SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
   const int ls = spec_stride_;
   px_.Transform(spec_re, spec_im, ny_, ls, true, sr, si);
   Transpose(spec_re, ls, cols, ny_, wr, lw);
@@ -281,12 +285,8 @@ void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, double
   const int h = (cols + 1) / 2;  // column c is packed with column c + h
   const int lw = PaddedStride(h);
   const size_t W = static_cast<size_t>(ny_) * lw;
-  const size_t S = std::max(W, spectrum_size());
-  scratch->resize(2 * W + 2 * S);
-  double* wr = scratch->data();
-  double* wi = wr + W;
-  double* sr = wi + W;
-  double* si = sr + S;
+  double *wr, *wi, *sr, *si;
+  SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
   std::fill(wr, wr + W, 0.0);
   std::fill(wi, wi + W, 0.0);
   for (int y = 0; y < rows; ++y) {
@@ -328,12 +328,8 @@ void Fft2D::InverseReal(double* spec_re, double* spec_im, int rows, int cols, do
   const int h = (cols + 1) / 2;
   const int lw = PaddedStride(h);
   const size_t W = static_cast<size_t>(ny_) * lw;
-  const size_t S = std::max(W, spectrum_size());
-  scratch->resize(2 * W + 2 * S);
-  double* wr = scratch->data();
-  double* wi = wr + W;
-  double* sr = wi + W;
-  double* si = sr + S;
+  double *wr, *wi, *sr, *si;
+  SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
   const int ls = spec_stride_, hy = half_ny();
   px_.Transform(spec_re, spec_im, hy, ls, true, sr, si);
   // Z = A + i B over the full ky range, the upper half from A(-k) =

@@ -176,12 +176,6 @@ double StressTree::mean_terms() const {
   return t / sites_.size();
 }
 
-size_t StressTree::bytes() const {
-  size_t b = 0;
-  for (const auto& s : sites_) b += s.block.size() * sizeof(uint32_t) + s.coef.size() * 4;
-  return b;
-}
-
 void StressTree::Compute(const ActiveRuns& runs, const float* pressure, const float* shear_x,
                          const float* shear_y, TreeScratch* w, Stress6* out) const {
   const int n = n_;

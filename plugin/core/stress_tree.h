@@ -45,7 +45,6 @@ class StressTree {
   // Mean number of terms per site (blocks summed), for cost reports.
   double mean_terms() const;
   double build_seconds() const { return build_seconds_; }
-  size_t bytes() const;
 
  private:
   struct SiteTerms {
