@@ -15,7 +15,7 @@ all six components; RA and PC s_zz). The stress stage alone is timed
 (mjtouch.core.StressEngine, one core, the active cells found once as the
 pressure stage hands them over), for the layered Shao skin and for the
 homogeneous half-space (nu = 0.48), by both paths; and the cost model's
-estimates, whose constants (plugin/core/stress_field.cc) are fitted here.
+estimates, whose constants (plugin/core/stress/stress_field.cc) are fitted here.
 """
 
 from __future__ import annotations
@@ -80,7 +80,7 @@ def engine(skin, n, pitch, ij, cls):
 
 
 def calibrate(n, pitch, ij, p, qx, qy, repeats):
-    """Fit the cost model's constants (plugin/core/stress_field.cc) here:
+    """Fit the cost model's constants (plugin/core/stress/stress_field.cc) here:
     seconds per multiply-add (direct), per N^2 log2(N^2) of one 2D transform,
     and per N^2 x load of one output pair's spectral products (FFT)."""
     e1 = core.StressEngine(0.48, n, pitch, [0.75e-3], ij, components=SZZ, method="fft")

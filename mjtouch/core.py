@@ -246,8 +246,8 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
 
 
 # ---------------------------------------------------------------------------
-# Layered elastic skin (plugin/core/layered.*) and the stress stage
-# (plugin/core/stress_field.*), without a MuJoCo scene.
+# Layered elastic skin (plugin/core/substrate/layered.*) and the stress stage
+# (plugin/core/stress/stress_field.*), without a MuJoCo scene.
 
 SIDES = {None: -1, "upper": 0, "lower": 1}
 STRESS_METHODS = {"auto": 0, "direct": 1, "fft": 2, "tree": 3}
@@ -305,7 +305,7 @@ def _side(side) -> int:
 
 class LayeredSkin:
     """A stack of welded elastic layers over a rigid base (bone) or an
-    elastic half-space: the C++ ``LayeredSubstrate`` (plugin/core/layered.h).
+    elastic half-space: the C++ ``LayeredSubstrate`` (plugin/core/substrate/layered.h).
 
     ``layers``: rows (thickness m, E Pa, nu) from the surface down (default:
     the Shao et al. 2010 fingertip); ``base``: ``"rigid"`` or (E Pa, nu);

@@ -1,4 +1,4 @@
-"""Independent oracle for the layered elastic kernel (plugin/core/layered.*).
+"""Independent oracle for the layered elastic kernel (plugin/core/substrate/layered.*).
 
 A second computation of the same problem, written separately from the C++:
 

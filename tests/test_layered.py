@@ -1,5 +1,5 @@
-"""Stage 3b: the layered elastic skin (plugin/core/layered.*) and the stress
-stage (plugin/core/stress_field.*), against an independent numpy/scipy
+"""Stage 3b: the layered elastic skin (plugin/core/substrate/layered.*) and the stress
+stage (plugin/core/stress/stress_field.*), against an independent numpy/scipy
 computation (tests/layered_oracle.py: Navier equations with Lame constants,
 complex arithmetic, direct inverse 2D Fourier integration), closed forms and
 physical laws; and its wiring into the plugin (attributes, errors, outputs)."""
@@ -487,8 +487,8 @@ def test_cpp_layered_checks(tmp_path):
     assert cxx, "no C++ compiler on PATH"
     exe = tmp_path / "test_layered"
     core_dir = REPO / "plugin" / "core"
-    build = subprocess.run([cxx, "-O2", "-std=c++17", f"-I{core_dir}", str(core_dir / "kernel.cc"),
-                            str(core_dir / "layered.cc"),
+    build = subprocess.run([cxx, "-O2", "-std=c++17", f"-I{core_dir}", str(core_dir / "substrate" / "half_space.cc"),
+                            str(core_dir / "substrate" / "layered.cc"),
                             str(REPO / "tests" / "cpp" / "test_layered.cc"), "-o", str(exe)],
                            capture_output=True, text=True, timeout=300)
     assert build.returncode == 0, build.stderr

@@ -1,4 +1,4 @@
-"""Stage 3's hierarchical path (plugin/core/stress_tree.*) against direct
+"""Stage 3's hierarchical path (plugin/core/stress/stress_tree.*) against direct
 summation of the same lattice tables.
 
 The tree replaces the table over a block of side b at distance R by its

@@ -10,13 +10,13 @@
 #include <chrono>
 #include <memory>
 
-#include "kernel.h"
-#include "layered.h"
-#include "pressure.h"
-#include "stress_field.h"
-#include "receptors.h"
-#include "skin.h"
-#include "surface.h"
+#include "stress/kernel_tables.h"
+#include "substrate/layered.h"
+#include "contact/pressure.h"
+#include "stress/stress_field.h"
+#include "afferents/receptors.h"
+#include "pipeline/skin.h"
+#include "surface/surface.h"
 
 namespace {
 

@@ -6,9 +6,9 @@
 #include <limits>
 #include <vector>
 
-#include "contact_solver.h"
-#include "pressure.h"
-#include "surface.h"
+#include "contact/contact_solver.h"
+#include "contact/pressure.h"
+#include "surface/surface.h"
 
 namespace {
 using namespace mjtouch;

@@ -1,6 +1,6 @@
 // MuJoCo adapter for the mjtouch.skin sensor plugin: reads the pad geom, the
 // counter-surfaces and MuJoCo's contact forces into a mjtouch::StepInput, runs
-// the pure-C++ pipeline (plugin/core/skin.h) and writes sensordata.
+// the pure-C++ pipeline (plugin/core/pipeline/skin.h) and writes sensordata.
 #ifndef MJTOUCH_MUJOCO_SKIN_PLUGIN_H_
 #define MJTOUCH_MUJOCO_SKIN_PLUGIN_H_
 
@@ -11,7 +11,7 @@
 
 #include <mujoco/mujoco.h>
 
-#include "../core/skin.h"
+#include "pipeline/skin.h"
 
 namespace mjtouch {
 

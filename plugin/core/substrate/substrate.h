@@ -1,12 +1,13 @@
-// Stage 3: elastic kernel. Surface tractions on the taxel grid -> stress tensor
-// at receptor sites. Pure C++: no MuJoCo types.
+// The elastic skin as a substrate: the stress below the surface from a unit
+// uniform traction on one square cell (Green's functions integrated over the
+// cell). Used by the stress stage's tables. Pure C++: no MuJoCo types.
 //
 // Frame: x, y in the skin's tangent plane (the taxel grid's u, v axes), z
 // pointing INTO the skin (depth). Tension positive. Tractions are the force per
 // area that the counter-surface exerts on the skin: `pressure` pushes into the
 // skin (+z), shear along +x / +y.
-#ifndef MJTOUCH_CORE_KERNEL_H_
-#define MJTOUCH_CORE_KERNEL_H_
+#ifndef MJTOUCH_SUBSTRATE_SUBSTRATE_H_
+#define MJTOUCH_SUBSTRATE_SUBSTRATE_H_
 
 #include <array>
 #include <memory>
@@ -73,47 +74,6 @@ class HalfSpace : public Substrate {
   double nu_;
 };
 
-// Lattice tables for a set of depths, shared read-only by every MjData of one
-// model (built once per distinct configuration).
-struct KernelTables {
-  int n = 0;            // taxel grid is n x n
-  double pitch_m = 0;   // taxel pitch
-  std::vector<double> depths_m;               // one table per depth
-  std::vector<std::vector<float>> tables;     // layout as Substrate::LatticeTable
-  std::array<bool, kNumStress> components{};  // components filled
-  double build_seconds = 0;
-
-  const float* At(int depth_index, SurfaceLoad load, StressComponent comp) const {
-    const int L = 2 * n - 1;
-    return tables[depth_index].data() +
-           static_cast<size_t>(load * kNumStress + comp) * L * L;
-  }
-};
-
-std::shared_ptr<const KernelTables> BuildKernelTables(
-    const Substrate& substrate, int n, double pitch_m,
-    const std::vector<double>& depths_m,
-    const std::array<bool, kNumStress>& components);
-
-// Stress at one receptor (grid cell index ri, rj, table `depth_index`) from
-// the tractions of the active cells. Direct summation over the active cells'
-// row runs. pressure/shear arrays are n*n, row-major (j * n + i), Pa.
-struct ActiveRuns {
-  // For each grid row j with contact: [i_begin, i_end) of active cells.
-  std::vector<int> row, begin, end;
-  void Clear() { row.clear(); begin.clear(); end.clear(); }
-  int Count() const {
-    int c = 0;
-    for (size_t k = 0; k < row.size(); ++k) c += end[k] - begin[k];
-    return c;
-  }
-};
-
-void StressAtReceptor(const KernelTables& kt, int depth_index, int ri, int rj,
-                      const ActiveRuns& runs, const float* pressure,
-                      const float* shear_x, const float* shear_y,
-                      const std::array<bool, kNumStress>& want, Stress6* out);
-
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_CORE_KERNEL_H_
+#endif  // MJTOUCH_SUBSTRATE_SUBSTRATE_H_

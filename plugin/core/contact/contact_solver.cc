@@ -1,4 +1,4 @@
-#include "contact_solver.h"
+#include "contact/contact_solver.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "receptors.h"
+#include "afferents/receptors.h"
 
 #include <algorithm>
 #include <cmath>

@@ -36,15 +36,15 @@
 // interface is evaluated on the side chosen at creation: kUpper (default: the
 // layer above, e.g. the basal epidermis for Merkel cells at the
 // epidermis/dermis interface) or kLower. The explicit-side overloads override.
-#ifndef MJTOUCH_CORE_LAYERED_H_
-#define MJTOUCH_CORE_LAYERED_H_
+#ifndef MJTOUCH_SUBSTRATE_LAYERED_H_
+#define MJTOUCH_SUBSTRATE_LAYERED_H_
 
 #include <array>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "kernel.h"
+#include "substrate/substrate.h"
 
 namespace mjtouch {
 
@@ -190,4 +190,4 @@ class LayeredSubstrate : public Substrate {
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_CORE_LAYERED_H_
+#endif  // MJTOUCH_SUBSTRATE_LAYERED_H_

@@ -1,4 +1,4 @@
-#include "fft.h"
+#include "common/fft.h"
 
 #include <algorithm>
 #include <cmath>

@@ -12,8 +12,8 @@
 // Substrate: SurfaceCompliance below (homogeneous half-space, closed form)
 // or any table with the same layout, e.g.
 // LayeredSubstrate::SurfaceComplianceTable (layered.h).
-#ifndef MJTOUCH_CORE_CONTACT_SOLVER_H_
-#define MJTOUCH_CORE_CONTACT_SOLVER_H_
+#ifndef MJTOUCH_CONTACT_CONTACT_SOLVER_H_
+#define MJTOUCH_CONTACT_CONTACT_SOLVER_H_
 
 #include <functional>
 #include <map>
@@ -22,8 +22,8 @@
 #include <utility>
 #include <vector>
 
-#include "fft.h"
-#include "grid.h"
+#include "common/fft.h"
+#include "common/grid.h"
 
 namespace mjtouch {
 
@@ -116,4 +116,4 @@ class ElasticContact {
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_CORE_CONTACT_SOLVER_H_
+#endif  // MJTOUCH_CONTACT_CONTACT_SOLVER_H_

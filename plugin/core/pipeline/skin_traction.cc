@@ -7,7 +7,7 @@
 #include <cmath>
 #include <limits>
 
-#include "skin.h"
+#include "pipeline/skin.h"
 
 namespace mjtouch {
 namespace {

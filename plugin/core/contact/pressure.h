@@ -7,14 +7,13 @@
 //   winkler   elastic foundation: p proportional to the local overlap;
 //   elastic   boundary-element contact on the skin's surface compliance
 //             (contact_solver.h).
-#ifndef MJTOUCH_CORE_PRESSURE_H_
-#define MJTOUCH_CORE_PRESSURE_H_
+#ifndef MJTOUCH_CONTACT_PRESSURE_H_
+#define MJTOUCH_CONTACT_PRESSURE_H_
 
 #include <string>
 #include <vector>
 
-#include "grid.h"
-#include "kernel.h"
+#include "common/grid.h"
 
 namespace mjtouch {
 
@@ -85,4 +84,4 @@ void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out);
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_CORE_PRESSURE_H_
+#endif  // MJTOUCH_CONTACT_PRESSURE_H_

@@ -12,30 +12,23 @@
 // `auto` picks the cheaper exact path per step from a cost model whose
 // constants were measured (examples/bench_kernel.py); the choice depends on
 // the inputs only, so runs stay deterministic. Pure C++: no MuJoCo types.
-#ifndef MJTOUCH_CORE_STRESS_FIELD_H_
-#define MJTOUCH_CORE_STRESS_FIELD_H_
+#ifndef MJTOUCH_STRESS_STRESS_FIELD_H_
+#define MJTOUCH_STRESS_STRESS_FIELD_H_
 
 #include <array>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "fft.h"
-#include "kernel.h"
+#include "common/fft.h"
+#include "stress/kernel_tables.h"
+#include "stress/stress_tree.h"
 
 namespace mjtouch {
 
 enum class StressMethod { kAuto = 0, kDirect = 1, kFft = 2, kTree = 3 };
 const char* StressMethodName(StressMethod m);
 bool ParseStressMethod(const std::string& s, StressMethod* m);
-
-// One receptor site: taxel cell above it, its depth's table, and the stress
-// components its receptor quantity needs.
-struct StressSite {
-  int i = 0, j = 0;
-  int depth_index = 0;
-  std::array<bool, kNumStress> want{};
-};
 
 // Spectra of the flipped lattice tables (float, split re / im), per depth and
 // (load, component) that some site wants. Shared read-only like the tables.
@@ -67,19 +60,11 @@ struct StressCost {
 StressCost EstimateStressCost(const KernelTables& kt, const std::vector<StressSite>& sites,
                               int active_cells, bool shear);
 
-// Hierarchical path's per-step block moments (stress_tree.h).
-struct TreeScratch {
-  std::vector<std::vector<float>> moments;  // [level][(bj * nb + bi) * 9 + 3 * load + m]
-  std::vector<int> box;                     // [4 level + (i0, i1, j0, j1)], inclusive
-};
-
 // Per-simulation scratch (no state that outlives a call).
 struct StressScratch {
   std::vector<double> in_re, in_im, spec_re[3], spec_im[3], out_re, out_im, fft;
   TreeScratch tree;
 };
-
-class StressTree;
 
 // Stress (Pa) at every site into out[site]. pressure / shear arrays: n*n,
 // row-major (j * n + i); shear may be null (both or neither). runs: the
@@ -97,4 +82,4 @@ void FindActiveRuns(int n, const float* pressure, const float* shear_x, const fl
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_CORE_STRESS_FIELD_H_
+#endif  // MJTOUCH_STRESS_STRESS_FIELD_H_

@@ -6,23 +6,23 @@
 // SkinModel is immutable and shared by every MjData of a model; the per-step
 // mutable state lives in a caller-owned double array (MuJoCo plugin_state) and
 // scratch buffers in a Workspace (MuJoCo plugin_data).
-#ifndef MJTOUCH_CORE_SKIN_H_
-#define MJTOUCH_CORE_SKIN_H_
+#ifndef MJTOUCH_PIPELINE_SKIN_H_
+#define MJTOUCH_PIPELINE_SKIN_H_
 
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "grid.h"
-#include "kernel.h"
-#include "layered.h"
-#include "contact_solver.h"
-#include "pressure.h"
-#include "receptors.h"
-#include "stress_field.h"
-#include "stress_tree.h"
-#include "surface.h"
+#include "common/grid.h"
+#include "stress/kernel_tables.h"
+#include "substrate/layered.h"
+#include "contact/contact_solver.h"
+#include "contact/pressure.h"
+#include "afferents/receptors.h"
+#include "stress/stress_field.h"
+#include "stress/stress_tree.h"
+#include "surface/surface.h"
 
 namespace mjtouch {
 
@@ -254,4 +254,4 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_CORE_SKIN_H_
+#endif  // MJTOUCH_PIPELINE_SKIN_H_

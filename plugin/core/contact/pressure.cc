@@ -1,4 +1,4 @@
-#include "pressure.h"
+#include "contact/pressure.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,8 +3,8 @@
 // with leaky integrate-and-fire membranes integrated in closed form over each
 // step (the drive is linear within a step): rates do not depend on dt and no
 // spike is lost at coarse dt (several spikes per step are counted).
-#ifndef MJTOUCH_CORE_RECEPTORS_H_
-#define MJTOUCH_CORE_RECEPTORS_H_
+#ifndef MJTOUCH_AFFERENTS_RECEPTORS_H_
+#define MJTOUCH_AFFERENTS_RECEPTORS_H_
 
 #include <string>
 #include <vector>
@@ -163,4 +163,4 @@ int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, doubl
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_CORE_RECEPTORS_H_
+#endif  // MJTOUCH_AFFERENTS_RECEPTORS_H_

@@ -1,9 +1,10 @@
 // The taxel grid: an n x n lattice of square cells in the skin's tangent plane
 // at the pad's pole (pad frame x, y), centred on the pole.
-#ifndef MJTOUCH_CORE_GRID_H_
-#define MJTOUCH_CORE_GRID_H_
+#ifndef MJTOUCH_COMMON_GRID_H_
+#define MJTOUCH_COMMON_GRID_H_
 
 #include <cstddef>
+#include <vector>
 
 namespace mjtouch {
 
@@ -30,6 +31,18 @@ struct CellBox {
   static CellBox All(const TaxelGrid& grid) { return CellBox{0, 0, grid.n, grid.n}; }
 };
 
+// Cells with nonzero traction as row runs: for each grid row j with contact,
+// [i_begin, i_end) of active cells.
+struct ActiveRuns {
+  std::vector<int> row, begin, end;
+  void Clear() { row.clear(); begin.clear(); end.clear(); }
+  int Count() const {
+    int c = 0;
+    for (size_t k = 0; k < row.size(); ++k) c += end[k] - begin[k];
+    return c;
+  }
+};
+
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_CORE_GRID_H_
+#endif  // MJTOUCH_COMMON_GRID_H_

@@ -1,6 +1,4 @@
-#include "stress_field.h"
-
-#include "stress_tree.h"
+#include "stress/stress_field.h"
 
 #include <algorithm>
 #include <chrono>

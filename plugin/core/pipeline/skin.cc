@@ -1,4 +1,4 @@
-#include "skin.h"
+#include "pipeline/skin.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,14 +3,14 @@
 // cell and the counter-surfaces it faces. Every sample is an exact average over
 // the cell's area (anti-aliased), so a texture sliding under the grid varies
 // smoothly and adds no spurious line at V / pitch.
-#ifndef MJTOUCH_CORE_SURFACE_H_
-#define MJTOUCH_CORE_SURFACE_H_
+#ifndef MJTOUCH_SURFACE_SURFACE_H_
+#define MJTOUCH_SURFACE_SURFACE_H_
 
 #include <functional>
 #include <string>
 #include <vector>
 
-#include "grid.h"
+#include "common/grid.h"
 
 namespace mjtouch {
 
@@ -147,4 +147,4 @@ double HeightFieldBoxMean(const CounterSurface& s, double x0, double x1,
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_CORE_SURFACE_H_
+#endif  // MJTOUCH_SURFACE_SURFACE_H_

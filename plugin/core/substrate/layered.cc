@@ -1,4 +1,4 @@
-#include "layered.h"
+#include "substrate/layered.h"
 
 #include <algorithm>
 #include <cmath>

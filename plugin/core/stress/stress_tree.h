@@ -14,17 +14,22 @@
 // moments of the active bounding box are formed (O(active cells)), then
 // ~20-250 terms per receptor instead of one per active cell. Deterministic:
 // fixed order, no data-dependent paths. Pure C++: no MuJoCo types.
-#ifndef MJTOUCH_CORE_STRESS_TREE_H_
-#define MJTOUCH_CORE_STRESS_TREE_H_
+#ifndef MJTOUCH_STRESS_STRESS_TREE_H_
+#define MJTOUCH_STRESS_STRESS_TREE_H_
 
 #include <cstdint>
 #include <memory>
 #include <vector>
 
-#include "kernel.h"
-#include "stress_field.h"
+#include "stress/kernel_tables.h"
 
 namespace mjtouch {
+
+// Hierarchical path's per-step block moments .
+struct TreeScratch {
+  std::vector<std::vector<float>> moments;  // [level][(bj * nb + bi) * 9 + 3 * load + m]
+  std::vector<int> box;                     // [4 level + (i0, i1, j0, j1)], inclusive
+};
 
 class StressTree {
  public:
@@ -71,4 +76,4 @@ class StressTree {
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_CORE_STRESS_TREE_H_
+#endif  // MJTOUCH_STRESS_STRESS_TREE_H_

@@ -1,4 +1,4 @@
-#include "stress_tree.h"
+#include "stress/stress_tree.h"
 
 #include <algorithm>
 #include <chrono>
