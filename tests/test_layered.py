@@ -489,6 +489,7 @@ def test_cpp_layered_checks(tmp_path):
     core_dir = REPO / "plugin" / "core"
     build = subprocess.run([cxx, "-O2", "-std=c++17", f"-I{core_dir}", str(core_dir / "substrate" / "half_space.cc"),
                             str(core_dir / "substrate" / "layered.cc"),
+                            str(core_dir / "substrate" / "layered_radial.cc"),
                             str(core_dir / "stress" / "kernel_tables.cc"),
                             str(REPO / "tests" / "cpp" / "test_layered.cc"), "-o", str(exe)],
                            capture_output=True, text=True, timeout=300)

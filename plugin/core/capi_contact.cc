@@ -8,6 +8,7 @@
 
 #include "contact/contact_solver.h"
 #include "contact/pressure.h"
+#include "substrate/substrate.h"
 #include "surface/surface.h"
 
 namespace {
@@ -49,13 +50,13 @@ __attribute__((visibility("default"))) int mjtouch_elastic_pressure(
   bool ok;
   if (periodic) {
     const double e_star = young / (1.0 - poisson * poisson);
-    ElasticContact ec(nx, ny, pitch_m, [&](double k) { return 2.0 / (e_star * k); });
-    ok = ec.Solve(g, CellBox{0, 0, nx, ny}, force, tolerance, max_iterations, &p, &work, &st);
+    SurfaceCompliance K(nx, ny, pitch_m, [&](double k) { return 2.0 / (e_star * k); });
+    ok = SolveElasticContact(K, g, CellBox{0, 0, nx, ny}, force, tolerance, max_iterations, &p,
+                             &work, &st);
   } else {
-    std::vector<float> table;
-    HalfSpaceSurfaceComplianceTable(young, poisson, pitch_m, nx, &table);
-    ElasticContact ec(nx, pitch_m, std::move(table));
-    ok = ec.Solve(g, CellBox{0, 0, nx, nx}, force, tolerance, max_iterations, &p, &work, &st);
+    ok = SolveElasticContact(*HalfSpaceCompliance(young, poisson, pitch_m, nx), g,
+                             CellBox{0, 0, nx, nx}, force, tolerance, max_iterations, &p, &work,
+                             &st);
   }
   std::memcpy(pressure, p.data(), N * sizeof(double));
   stats[0] = st.iterations;
@@ -78,9 +79,10 @@ __attribute__((visibility("default"))) int mjtouch_elastic_pressure_table(
   std::vector<double> g(gap, gap + N), p(pressure, pressure + N);
   ElasticWork work;
   ElasticSolveStats st;
-  ElasticContact ec(n, pitch_m, std::vector<float>(table, table + L * L));
+  const SurfaceCompliance K(n, pitch_m, std::vector<float>(table, table + L * L));
   const bool ok =
-      ec.Solve(g, CellBox{0, 0, n, n}, force, tolerance, max_iterations, &p, &work, &st);
+      SolveElasticContact(K, g, CellBox{0, 0, n, n}, force, tolerance, max_iterations, &p, &work,
+                          &st);
   std::memcpy(pressure, p.data(), N * sizeof(double));
   const double out[6] = {static_cast<double>(st.iterations), static_cast<double>(st.converged),
                          st.change, st.approach_m, static_cast<double>(st.contact_cells),

@@ -1,7 +1,8 @@
 // Standalone checks of the layered kernel (plugin/core/substrate/layered.*).
 // Build and run (about 10-20 s on one core):
 //   g++ -O2 -std=c++17 -Iplugin/core plugin/core/substrate/half_space.cc \
-//       plugin/core/substrate/layered.cc plugin/core/stress/kernel_tables.cc tests/cpp/test_layered.cc -o test_layered
+//       plugin/core/substrate/layered.cc plugin/core/substrate/layered_radial.cc \
+//       plugin/core/stress/kernel_tables.cc tests/cpp/test_layered.cc -o test_layered
 //   ./test_layered            # PASS/FAIL lines, exit status 1 on failure
 //   ./test_layered --dump F   # also writes disc/transfer values as JSON
 //                                # for tests/layered_oracle.py to compare

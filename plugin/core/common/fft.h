@@ -1,5 +1,5 @@
 // Mixed-radix (2, 3, 4, 5) Stockham FFTs, double precision, for the contact
-// solver's convolutions on the taxel grid (contact_solver.*). Pure C++.
+// solver's convolutions on the taxel grid (contact/compliance.*). Pure C++.
 //
 // Why our own rather than a library: the solver needs 2D transforms of sizes
 // just above 2m - 1 for an m-cell contact box (zero padding, DC-FFT); sizes

@@ -839,15 +839,10 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
   if (cfg.pressure_model == PressureModel::kElastic) {
     // Surface compliance of the skin: the layered stack's, or a homogeneous
     // half-space's (young, poisson).
-    std::vector<float> compliance;
-    if (model->layered_) {
-      model->layered_->SurfaceComplianceTable(cfg.grid.pitch_m, cfg.grid.n, &compliance);
-    } else {
-      HalfSpaceSurfaceComplianceTable(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m, cfg.grid.n,
-                                      &compliance);
-    }
-    model->elastic_ = std::make_shared<ElasticContact>(cfg.grid.n, cfg.grid.pitch_m,
-                                                       std::move(compliance));
+    model->elastic_ = std::make_shared<ElasticContact>(
+        model->layered_
+            ? LayeredCompliance(*model->layered_, cfg.grid.pitch_m, cfg.grid.n)
+            : HalfSpaceCompliance(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m, cfg.grid.n));
   }
   cache[key] = model;
   return model;

@@ -16,6 +16,14 @@ constexpr double kGaussX[4] = {-0.8611363115940526, -0.3399810435848563,
 constexpr double kGaussW[4] = {0.3478548451374538, 0.6521451548625461,
                                0.6521451548625461, 0.3478548451374538};
 
+// Antiderivative of 1/r: d^2 Phi / dX dY = 1 / sqrt(X^2 + Y^2).
+double Phi(double X, double Y) {
+  double out = 0.0;
+  if (X != 0.0) out += X * std::asinh(Y / std::abs(X));
+  if (Y != 0.0) out += Y * std::asinh(X / std::abs(Y));
+  return out;
+}
+
 }  // namespace
 
 // Boussinesq: normal point force P = 1 N into the solid at the origin, the
@@ -150,6 +158,31 @@ void Substrate::LatticeTable(double z, double h, int n,
                     (dj + n - 1)) * L + (di + n - 1)] = static_cast<float>(s[c]);
         }
       }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Surface compliance (the half-space's surface Green's function per cell).
+
+void HalfSpaceSurfaceComplianceTable(double young_pa, double poisson, double h, int n,
+                                     std::vector<float>* table) {
+  const int L = 2 * n - 1;
+  table->assign(static_cast<size_t>(L) * L, 0.0f);
+  const double e_star = young_pa / (1.0 - poisson * poisson);
+  const double scale = 1.0 / (kPi * e_star);
+  const double a = 0.5 * h;
+  for (int dj = 0; dj < n; ++dj) {
+    for (int di = 0; di < n; ++di) {
+      // Field point at (x, y) = offset of the receptor cell from the loaded
+      // one: minus (di, dj) h; the response is even in both.
+      const double x = di * h, y = dj * h;
+      const double v = scale * (Phi(x + a, y + a) - Phi(x + a, y - a) - Phi(x - a, y + a) +
+                                Phi(x - a, y - a));
+      const float f = static_cast<float>(v);
+      for (int sj : {-1, 1})
+        for (int si : {-1, 1})
+          (*table)[static_cast<size_t>(sj * dj + n - 1) * L + (si * di + n - 1)] = f;
     }
   }
 }

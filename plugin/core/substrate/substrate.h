@@ -74,6 +74,17 @@ class HalfSpace : public Substrate {
   double nu_;
 };
 
+// Normal surface displacement (m per Pa) of a homogeneous, isotropic
+// half-space at the centre of cell (i, j) of an n x n lattice of pitch
+// pitch_m from unit uniform pressure on cell (i + di, j + dj):
+// table[(dj + n - 1) * L + (di + n - 1)], L = 2n - 1 (the layout of
+// LayeredSubstrate::SurfaceComplianceTable). The substrate's surface Green's
+// function over a cell, closed form (Love 1929; Johnson, Contact Mechanics,
+// eq. 3.25): u = p / (pi E*) sum over the corners of
+// +-[X asinh(Y/|X|) + Y asinh(X/|Y|)], E* = E / (1 - nu^2).
+void HalfSpaceSurfaceComplianceTable(double young_pa, double poisson, double pitch_m, int n,
+                                     std::vector<float>* table);
+
 }  // namespace mjtouch
 
 #endif  // MJTOUCH_SUBSTRATE_SUBSTRATE_H_

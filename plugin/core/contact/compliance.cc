@@ -1,0 +1,114 @@
+#include "contact/compliance.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "substrate/layered.h"
+#include "substrate/substrate.h"
+
+namespace mjtouch {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+}  // namespace
+
+SurfaceCompliance::SurfaceCompliance(int n, double pitch_m, std::vector<float> table)
+    : periodic_(false), nx_(n), ny_(n), n_(n), pitch_m_(pitch_m), table_(std::move(table)) {
+  for (float v : table_) max_lift_ = std::max(max_lift_, -static_cast<double>(v));
+}
+
+SurfaceCompliance::SurfaceCompliance(int nx, int ny, double pitch_m,
+                                     const std::function<double(double)>& c_of_k)
+    : periodic_(true), nx_(nx), ny_(ny), n_(0), pitch_m_(pitch_m) {
+  auto s = std::make_shared<Spectrum>(nx, ny);
+  s->k_hat.assign(s->fft.spectrum_size(), 0.0);
+  const int ls = s->fft.spectrum_stride();
+  const double norm = 1.0 / (static_cast<double>(nx) * ny);
+  for (int kx = 0; kx < nx; ++kx) {
+    const int fx = kx <= nx / 2 ? kx : kx - nx;
+    for (int ky = 0; ky < ny; ++ky) {
+      const int fy = ky <= ny / 2 ? ky : ky - ny;
+      if (fx == 0 && fy == 0) continue;
+      const double k = 2.0 * kPi * std::hypot(fx / (nx * pitch_m), fy / (ny * pitch_m));
+      s->k_hat[static_cast<size_t>(kx) * ls + ky] = c_of_k(k) * norm;
+    }
+  }
+  periodic_spectrum_ = std::move(s);
+}
+
+std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFor(
+    int bx, int by) const {
+  if (periodic_) return periodic_spectrum_;
+  const int mx = NextFftSize(2 * bx - 1), my = NextFftSize(2 * by - 1);
+  std::lock_guard<std::mutex> lock(mu_);
+  auto& slot = spectra_[{mx, my}];
+  if (slot) return slot;
+  // The kernel wrapped onto the mx x my torus: offsets up to the box size
+  // matter; it is even in both axes, so its transform is real.
+  auto s = std::make_shared<Spectrum>(mx, my);
+  std::vector<double> kr(static_cast<size_t>(mx) * my, 0.0);
+  for (int y = 0; y < my; ++y) {
+    const int dy = y <= my / 2 ? y : y - my;
+    if (std::abs(dy) > n_ - 1) continue;
+    for (int x = 0; x < mx; ++x) {
+      const int dx = x <= mx / 2 ? x : x - mx;
+      if (std::abs(dx) > n_ - 1) continue;
+      kr[static_cast<size_t>(y) * mx + x] = TableAt(dx, dy);
+    }
+  }
+  std::vector<double> sre(s->fft.spectrum_size()), sim(s->fft.spectrum_size()), scratch;
+  s->fft.Forward(kr.data(), nullptr, mx, my, mx, sre.data(), sim.data(), &scratch);
+  const double norm = 1.0 / (static_cast<double>(mx) * my);
+  s->k_hat.resize(sre.size());
+  for (size_t k = 0; k < sre.size(); ++k) s->k_hat[k] = sre[k] * norm;
+  slot = std::move(s);
+  return slot;
+}
+
+void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
+                              ComplianceWork* w) const {
+  // Real field, real even kernel: half spectra (Fft2D::ForwardReal).
+  const size_t S = s.fft.spectrum_size();
+  w->spec_re.resize(S);
+  w->spec_im.resize(S);
+  s.fft.ForwardReal(in, bx, by, bx, w->spec_re.data(), w->spec_im.data(), &w->fft_scratch);
+  const double* k = s.k_hat.data();
+  double* re = w->spec_re.data();
+  double* im = w->spec_im.data();
+  const int ls = s.fft.spectrum_stride(), hy = s.fft.half_ny();
+  for (int kx = 0; kx < s.fft.nx(); ++kx)
+    for (int ky = 0; ky < hy; ++ky) {
+      const size_t i = static_cast<size_t>(kx) * ls + ky;
+      re[i] *= k[i];
+      im[i] *= k[i];
+    }
+  s.fft.InverseReal(re, im, by, bx, out, bx, &w->fft_scratch);
+}
+
+void SurfaceCompliance::AddCell(int c, double d, int bx, int by, double* u) const {
+  const int ci = c % bx, cj = c / bx;
+  for (int j = 0; j < by; ++j) {
+    double* urow = u + static_cast<size_t>(j) * bx;
+    const float* krow =
+        table_.data() + static_cast<size_t>(cj - j + n_ - 1) * (2 * n_ - 1) + (ci + n_ - 1);
+    // K(ci - i, cj - j): walk the table row backwards with i.
+    for (int i = 0; i < bx; ++i) urow[i] += d * krow[-i];
+  }
+}
+
+std::shared_ptr<const SurfaceCompliance> HalfSpaceCompliance(double young_pa, double poisson,
+                                                             double pitch_m, int n) {
+  std::vector<float> table;
+  HalfSpaceSurfaceComplianceTable(young_pa, poisson, pitch_m, n, &table);
+  return std::make_shared<SurfaceCompliance>(n, pitch_m, std::move(table));
+}
+
+std::shared_ptr<const SurfaceCompliance> LayeredCompliance(const LayeredSubstrate& substrate,
+                                                           double pitch_m, int n) {
+  std::vector<float> table;
+  substrate.SurfaceComplianceTable(pitch_m, n, &table);
+  return std::make_shared<SurfaceCompliance>(n, pitch_m, std::move(table));
+}
+
+}  // namespace mjtouch

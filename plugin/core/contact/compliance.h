@@ -1,0 +1,91 @@
+// Stage 2, `elastic` model: the substrate's surface compliance as an
+// operator on the taxel grid, u = K * p (u: normal surface displacement, m;
+// p: cell pressure, Pa; K: displacement at one cell's centre per Pa of
+// uniform pressure on another cell). Applied by FFT: zero-padded to at least
+// 2m - 1 per axis on an m-cell box (non-periodic, DC-FFT: Liu, Wang & Liu
+// 2000), or without padding on a periodic grid. The solver
+// (contact_solver.h) only ever sees this operator.
+//
+// Built from a (2n - 1)^2 table (substrate/substrate.h
+// HalfSpaceSurfaceComplianceTable, LayeredSubstrate::SurfaceComplianceTable)
+// or, periodic, from the Fourier compliance C(k).
+#ifndef MJTOUCH_CONTACT_COMPLIANCE_H_
+#define MJTOUCH_CONTACT_COMPLIANCE_H_
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <utility>
+#include <vector>
+
+#include "common/fft.h"
+
+namespace mjtouch {
+
+class LayeredSubstrate;
+
+// Per-caller FFT scratch (no state that outlives a call).
+struct ComplianceWork {
+  std::vector<double> spec_re, spec_im, fft_scratch;
+};
+
+class SurfaceCompliance {
+ public:
+  // Non-periodic, n x n grid of pitch pitch_m: table[(dj + n - 1) * L +
+  // (di + n - 1)], L = 2n - 1, m/Pa (layout of HalfSpaceSurfaceComplianceTable).
+  SurfaceCompliance(int n, double pitch_m, std::vector<float> table);
+  // Periodic nx x ny grid (IsFftSize of both) with the Fourier surface
+  // compliance C(k) (m/Pa per unit wavenumber 1/m; C(0) is ignored: the mean
+  // displacement is part of the approach). For oracles such as Westergaard's
+  // wavy surface.
+  SurfaceCompliance(int nx, int ny, double pitch_m, const std::function<double(double)>& c_of_k);
+
+  bool periodic() const { return periodic_; }
+  int nx() const { return nx_; }
+  int ny() const { return ny_; }
+  double pitch_m() const { return pitch_m_; }
+  // Largest upward (negative) surface displacement per Pa of pressure on a
+  // cell anywhere (m/Pa, >= 0): a layered skin bulges beside a load.
+  double max_lift_m_per_pa() const { return max_lift_; }
+
+  // The kernel's spectrum on the FFT grid for a bx x by box (periodic: the
+  // whole grid), built once per FFT size and shared (thread-safe).
+  struct Spectrum {
+    Fft2D fft;
+    std::vector<double> k_hat;  // real (K is even), already divided by nx ny
+    explicit Spectrum(int mx, int my) : fft(mx, my) {}
+  };
+  std::shared_ptr<const Spectrum> SpectrumFor(int bx, int by) const;
+  // out = K * in over a bx x by box (arrays bx * by, row-major), with the
+  // spectrum from SpectrumFor(bx, by).
+  void Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
+             ComplianceWork* w) const;
+  // u += K * (d on cell c of the box) by direct sum (non-periodic only):
+  // cheaper than an FFT when few cells change.
+  void AddCell(int c, double d, int bx, int by, double* u) const;
+
+ private:
+  double TableAt(int di, int dj) const {
+    return table_[static_cast<size_t>(dj + n_ - 1) * (2 * n_ - 1) + (di + n_ - 1)];
+  }
+
+  bool periodic_ = false;
+  int nx_ = 0, ny_ = 0, n_ = 0;
+  double pitch_m_ = 0;
+  std::vector<float> table_;  // non-periodic, m/Pa, (2n - 1)^2
+  double max_lift_ = 0;
+  std::shared_ptr<const Spectrum> periodic_spectrum_;
+  mutable std::mutex mu_;
+  mutable std::map<std::pair<int, int>, std::shared_ptr<const Spectrum>> spectra_;
+};
+
+// The operators of the two skins on an n x n grid of pitch pitch_m.
+std::shared_ptr<const SurfaceCompliance> HalfSpaceCompliance(double young_pa, double poisson,
+                                                             double pitch_m, int n);
+std::shared_ptr<const SurfaceCompliance> LayeredCompliance(const LayeredSubstrate& substrate,
+                                                           double pitch_m, int n);
+
+}  // namespace mjtouch
+
+#endif  // MJTOUCH_CONTACT_COMPLIANCE_H_
