@@ -69,7 +69,7 @@ extern "C" __attribute__((visibility("default"))) int mjtouch_describe(const mjM
 extern "C" __attribute__((visibility("default"))) int mjtouch_last_evaluation(
     const mjData* d, int instance, double* out8) {
   using namespace mjtouch;
-  const auto* p = reinterpret_cast<const SkinPlugin*>(d->plugin_data[instance]);
+  const SkinPlugin* p = SkinPlugin::Owned(d, instance);
   if (!p) return 1;
   const Workspace& w = p->workspace();
   out8[0] = static_cast<int>(w.last_stress_method);

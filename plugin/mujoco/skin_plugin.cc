@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
+#include <mutex>
 #include <sstream>
+#include <unordered_map>
 
 namespace mjtouch {
 namespace {
@@ -121,7 +124,66 @@ CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mj
   }
 }
 
+// Live plugins and the mjData each belongs to (see SkinPlugin::Owned).
+// Never destroyed: an mjData may be freed after static destructors run.
+std::mutex& RegistryMutex() {
+  static auto* mu = new std::mutex();
+  return *mu;
+}
+std::unordered_map<const SkinPlugin*, const mjData*>& Registry() {
+  static auto* live = new std::unordered_map<const SkinPlugin*, const mjData*>();
+  return *live;
+}
+
+// A non-finite sample in a height field the skin renders: a message naming
+// the hfield, the geom and the first bad sample, or empty.
+std::string CheckHeightFieldSamples(const mjModel* m, int geom) {
+  const int h = m->geom_dataid[geom];
+  const int nrow = m->hfield_nrow[h], ncol = m->hfield_ncol[h];
+  const float* samples = m->hfield_data + m->hfield_adr[h];
+  for (int r = 0; r < nrow; ++r)
+    for (int c = 0; c < ncol; ++c) {
+      const float v = samples[static_cast<size_t>(r) * ncol + c];
+      if (std::isfinite(v)) continue;
+      const char* hname = mj_id2name(m, mjOBJ_HFIELD, h);
+      const char* gname = mj_id2name(m, mjOBJ_GEOM, geom);
+      char buf[512];
+      std::snprintf(buf, sizeof(buf),
+                    "mjtouch.skin: height field '%s' (geom '%s') has sample %g at row %d, col %d "
+                    "of %d x %d (mjModel.hfield_data); valid: finite (MuJoCo normalises "
+                    "elevation to [0, 1])",
+                    hname ? hname : "(unnamed)", gname ? gname : "(unnamed)", v, r, c, nrow,
+                    ncol);
+      return buf;
+    }
+  return "";
+}
+
 }  // namespace
+
+SkinPlugin* SkinPlugin::Owned(const mjData* d, int instance) {
+  auto* p = reinterpret_cast<const SkinPlugin*>(d->plugin_data[instance]);
+  if (!p) return nullptr;
+  std::lock_guard<std::mutex> lock(RegistryMutex());
+  auto it = Registry().find(p);
+  return it != Registry().end() && it->second == d ? const_cast<SkinPlugin*>(p) : nullptr;
+}
+
+SkinPlugin* SkinPlugin::OwnedOrRebuilt(const mjModel* m, mjData* d, int instance) {
+  if (SkinPlugin* p = Owned(d, instance)) return p;
+  SkinPlugin* p = Create(m, d, instance);
+  if (!p) return nullptr;
+  {
+    std::lock_guard<std::mutex> lock(RegistryMutex());
+    Registry()[p] = d;
+  }
+  // A pointer copied from elsewhere is not ours to free: overwrite it.
+  d->plugin_data[instance] = reinterpret_cast<uintptr_t>(p);
+  p->touching_ = d->plugin_state[m->plugin_stateadr[instance] + kStContactValid] > 0.0;
+  p->last_spike_time_s_.assign(p->model_->receptors().size(),
+                               -std::numeric_limits<double>::infinity());
+  return p;
+}
 
 bool SkinPlugin::ParseConfig(const mjModel* m, int instance, SkinConfig* cfg,
                              std::string* error) {
@@ -140,6 +202,20 @@ bool SkinPlugin::ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int
   if (*sensor_id < 0) {
     *error = "mjtouch.skin: the plugin instance has no <sensor><plugin .../></sensor>";
     return false;
+  }
+  // MuJoCo lets several sensors name one instance, but a plugin computes one
+  // sensor (the others would stay all zero).
+  for (int i = *sensor_id + 1; i < m->nsensor; ++i) {
+    if (m->sensor_type[i] == mjSENS_PLUGIN && m->sensor_plugin[i] == instance) {
+      const char* iname = mj_id2name(m, mjOBJ_PLUGIN, instance);
+      const char* a = mj_id2name(m, mjOBJ_SENSOR, *sensor_id);
+      const char* b = mj_id2name(m, mjOBJ_SENSOR, i);
+      *error = std::string("mjtouch.skin: plugin instance '") + (iname ? iname : "(unnamed)") +
+               "' is used by two sensors, '" + (a ? a : "(unnamed)") + "' and '" +
+               (b ? b : "(unnamed)") + "'; valid: one sensor per instance (give each sensor "
+               "its own <instance>)";
+      return false;
+    }
   }
   if (m->sensor_objtype[*sensor_id] != mjOBJ_GEOM) {
     *error = "mjtouch.skin: the sensor must name the fingertip pad with objtype=\"geom\" "
@@ -232,6 +308,28 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
         return nullptr;
       }
       if (std::find(textures.begin(), textures.end(), g) == textures.end()) textures.push_back(g);
+    }
+  }
+  // Height fields the skin renders (textures, and hfields that can collide
+  // with the pad): a non-finite sample would silently drop the texture.
+  auto may_collide = [&](int g) {
+    if ((m->geom_contype[g] & m->geom_conaffinity[pad]) ||
+        (m->geom_conaffinity[g] & m->geom_contype[pad]))
+      return true;
+    for (int k = 0; k < m->npair; ++k)
+      if ((m->pair_geom1[k] == pad && m->pair_geom2[k] == g) ||
+          (m->pair_geom2[k] == pad && m->pair_geom1[k] == g))
+        return true;
+    return false;
+  };
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (m->geom_type[g] != mjGEOM_HFIELD || on_pad(g)) continue;
+    if (!may_collide(g) && std::find(textures.begin(), textures.end(), g) == textures.end())
+      continue;
+    const std::string bad = CheckHeightFieldSamples(m, g);
+    if (!bad.empty()) {
+      mju_warning("%s", bad.c_str());
+      return nullptr;
     }
   }
   auto model = SkinModel::Build(cfg, &error);
@@ -374,18 +472,29 @@ void SkinPlugin::RegisterPlugin() {
   plugin.init = +[](const mjModel* m, mjData* d, int instance) {
     SkinPlugin* p = SkinPlugin::Create(m, d, instance);
     if (!p) return -1;
+    {
+      std::lock_guard<std::mutex> lock(RegistryMutex());
+      Registry()[p] = d;
+    }
     d->plugin_data[instance] = reinterpret_cast<uintptr_t>(p);
     p->Reset(m, d->plugin_state + m->plugin_stateadr[instance], instance);
     return 0;
   };
   plugin.destroy = +[](mjData* d, int instance) {
-    delete reinterpret_cast<SkinPlugin*>(d->plugin_data[instance]);
+    // Only the owner frees (an unpickled mjData shares or dangles its copy).
+    if (SkinPlugin* p = Owned(d, instance)) {
+      {
+        std::lock_guard<std::mutex> lock(RegistryMutex());
+        Registry().erase(p);
+      }
+      delete p;
+    }
     d->plugin_data[instance] = 0;
   };
   // Each MjData owns its scratch; the shared SkinModel is reference counted.
   plugin.copy = +[](mjData* dest, const mjModel* m, const mjData* src, int instance) {
-    auto* from = reinterpret_cast<SkinPlugin*>(src->plugin_data[instance]);
-    auto* to = reinterpret_cast<SkinPlugin*>(dest->plugin_data[instance]);
+    const SkinPlugin* from = Owned(src, instance);
+    SkinPlugin* to = OwnedOrRebuilt(m, dest, instance);
     if (from && to && from != to) {
       to->input_ = from->input_;
       to->workspace_ = from->workspace_;
@@ -394,17 +503,30 @@ void SkinPlugin::RegisterPlugin() {
     }
   };
   plugin.reset = +[](const mjModel* m, mjtNum* plugin_state, void* plugin_data, int instance) {
-    auto* p = reinterpret_cast<SkinPlugin*>(plugin_data);
-    if (p) p->Reset(m, plugin_state, instance);
+    // No mjData here: a live plugin (any owner; its drawing state is reset
+    // too) or, for a pointer copied from another process, the model's own.
+    auto* p = static_cast<SkinPlugin*>(plugin_data);
+    bool live;
+    {
+      std::lock_guard<std::mutex> lock(RegistryMutex());
+      live = p && Registry().count(p);
+    }
+    if (live) {
+      p->Reset(m, plugin_state, instance);
+      return;
+    }
+    SkinConfig cfg;
+    int sensor_id, pad;
+    std::string error;
+    if (!plugin_data || !ReadConfig(m, instance, &cfg, &sensor_id, &pad, &error)) return;
+    if (auto model = SkinModel::Build(cfg, &error)) ResetState(*model, plugin_state);
   };
   plugin.compute = +[](const mjModel* m, mjData* d, int instance, int capability_bit) {
-    auto* p = reinterpret_cast<SkinPlugin*>(d->plugin_data[instance]);
-    if (p) p->Compute(m, d, instance);
+    if (SkinPlugin* p = OwnedOrRebuilt(m, d, instance)) p->Compute(m, d, instance);
   };
   plugin.visualize = +[](const mjModel* m, mjData* d, const mjvOption* opt, mjvScene* scn,
                          int instance) {
-    auto* p = reinterpret_cast<const SkinPlugin*>(d->plugin_data[instance]);
-    if (p) p->Visualize(m, d, opt, scn, instance);
+    if (const SkinPlugin* p = OwnedOrRebuilt(m, d, instance)) p->Visualize(m, d, opt, scn, instance);
   };
   mjp_registerPlugin(&plugin);
 }

@@ -45,6 +45,17 @@ class SkinPlugin {
   void Visualize(const mjModel* m, mjData* d, const mjvOption* opt, mjvScene* scn,
                  int instance) const;
   const SkinModel& model() const { return *model_; }
+
+  // The plugin that `d` owns for `instance`, or null. MuJoCo's Python
+  // bindings pickle an mjData as its raw buffer, plugin_data included, so an
+  // unpickled mjData holds a pointer it does not own (another mjData's
+  // plugin, a freed one, or, from another process, garbage): every callback
+  // looks the pointer up among the live plugins before using it.
+  static SkinPlugin* Owned(const mjData* d, int instance);
+  // Owned, or else a new plugin for `d` built from the model (plugin_state,
+  // the time-dependent state, is kept: the rollout continues). Null only if
+  // the model is invalid.
+  static SkinPlugin* OwnedOrRebuilt(const mjModel* m, mjData* d, int instance);
   const Workspace& workspace() const { return workspace_; }
 
  private:
