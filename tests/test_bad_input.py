@@ -44,7 +44,8 @@ def test_inf_in_colliding_hfield_fails_at_mjdata(capfd):
     # MuJoCo raises its generic init error, our message is its warning.
     plate = ('<asset><hfield name="ground" nrow="3" ncol="3" size="0.02 0.02 0.001 0.001" '
              'elevation="0 0 0 0 0 0 0 0 0"/></asset>')
-    xml = pad_scene(texture=False, extra='<geom name="bumps" type="hfield" hfield="ground" pos="0 0 -0.01"/>')
+    bumps = '<geom name="bumps" type="hfield" hfield="ground" pos="0 0 -0.01"/>'
+    xml = pad_scene(texture=False, extra=bumps)
     m = mujoco.MjModel.from_xml_string(xml.replace('<option timestep="2e-4"/>',
                                                    '<option timestep="2e-4"/>' + plate))
     mujoco.MjData(m)  # finite: fine
@@ -53,7 +54,7 @@ def test_inf_in_colliding_hfield_fails_at_mjdata(capfd):
     with pytest.raises(mujoco.FatalError, match="plugin->init failed"):
         mujoco.MjData(m)
     out = "".join(capfd.readouterr())
-    assert "height field 'ground' (geom 'bumps') has sample inf at row 1, col 1 of 3 x 3" in out, out
+    assert "field 'ground' (geom 'bumps') has sample inf at row 1, col 1 of 3 x 3" in out, out
 
 
 def test_nan_in_hfield_the_skin_never_renders_is_accepted():

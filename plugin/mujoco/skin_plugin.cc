@@ -506,14 +506,12 @@ void SkinPlugin::RegisterPlugin() {
     // No mjData here: a live plugin (any owner; its drawing state is reset
     // too) or, for a pointer copied from another process, the model's own.
     auto* p = static_cast<SkinPlugin*>(plugin_data);
-    bool live;
     {
       std::lock_guard<std::mutex> lock(RegistryMutex());
-      live = p && Registry().count(p);
-    }
-    if (live) {
-      p->Reset(m, plugin_state, instance);
-      return;
+      if (p && Registry().count(p)) {
+        p->Reset(m, plugin_state, instance);
+        return;
+      }
     }
     SkinConfig cfg;
     int sensor_id, pad;
@@ -526,7 +524,8 @@ void SkinPlugin::RegisterPlugin() {
   };
   plugin.visualize = +[](const mjModel* m, mjData* d, const mjvOption* opt, mjvScene* scn,
                          int instance) {
-    if (const SkinPlugin* p = OwnedOrRebuilt(m, d, instance)) p->Visualize(m, d, opt, scn, instance);
+    if (const SkinPlugin* p = OwnedOrRebuilt(m, d, instance))
+      p->Visualize(m, d, opt, scn, instance);
   };
   mjp_registerPlugin(&plugin);
 }
