@@ -1,4 +1,4 @@
-"""An untouched skin skips its receptors (plugin/core/pipeline/skin.cc, idle
+"""An untouched skin skips its receptors (plugin/core/pipeline/step.cc, idle
 receptors) and makes the idle time up in one exact step when contact
 resumes. Skipping must not change what the receptors report."""
 
