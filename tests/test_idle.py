@@ -8,7 +8,7 @@ import numpy as np
 from mjtouch import scenes
 from mjtouch.sensor import SkinLayout
 
-IDLE_SLOT = 4  # plugin_state header: kStReceptorsIdle (plugin/core/pipeline/skin.h)
+IDLE_SLOT = 4  # plugin_state header: kStReceptorsIdle (plugin/core/pipeline/model.h)
 
 
 def run(outputs):

@@ -2,7 +2,10 @@
 // and tests: README's markdown table and the numeric ranges as JSON.
 #include <cstring>
 #include <sstream>
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "pipeline/attributes.h"
 
@@ -48,4 +51,32 @@ extern "C" __attribute__((visibility("default"))) int mjtouch_attribute_ranges_j
   }
   js << "]";
   return CopyOut(js.str(), buf, len);
+}
+
+// The model cache key of a configuration given as "key=value" lines (on a
+// sphere pad of radius 8 mm), or "error: ..." (tests: every physics
+// attribute must change the key).
+extern "C" __attribute__((visibility("default"))) int mjtouch_config_cache_key(const char* text,
+                                                                              char* buf,
+                                                                              int len) {
+  std::istringstream lines(text ? text : "");
+  std::string line;
+  std::vector<std::pair<std::string, std::string>> kv;
+  while (std::getline(lines, line)) {
+    const size_t eq = line.find('=');
+    if (eq != std::string::npos) kv.emplace_back(line.substr(0, eq), line.substr(eq + 1));
+  }
+  mjtouch::SkinConfig cfg;
+  std::string error;
+  const bool ok = mjtouch::ParseSkinAttributes(
+      [&](const char* key) -> std::optional<std::string> {
+        for (const auto& [k, v] : kv)
+          if (k == key) return v;
+        return std::nullopt;
+      },
+      &cfg, &error);
+  if (!ok) return CopyOut("error: " + error, buf, len);
+  cfg.pad.shape = mjtouch::PadShape::kSphere;
+  for (double& a : cfg.pad.semi_axes_m) a = 8e-3;
+  return CopyOut(mjtouch::ConfigCacheKey(cfg), buf, len);
 }
