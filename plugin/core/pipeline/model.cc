@@ -95,6 +95,8 @@ int SkinModel::OutputSize(const SkinConfig& cfg, int nrec) {
 std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std::string* error) {
   SkinConfig cfg = cfg_in;
   if (!FinalizeSkinConfig(&cfg, error)) return nullptr;
+  // Models whose every physics attribute (and pad) parse to the same values
+  // share one instance (the key comes from the attribute table).
   static std::mutex mu;
   static std::map<std::string, std::weak_ptr<const SkinModel>> cache;
   const std::string key = ConfigCacheKey(cfg);
