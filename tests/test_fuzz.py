@@ -11,14 +11,15 @@ from hypothesis import strategies as st
 
 from conftest import pad_scene, registered_attributes
 
-# Valid ranges of the numeric attributes (plugin/core/pipeline/skin.cc). Draws inside
+# Ranges drawn for the numeric attributes, inside their valid ranges
+# (plugin/core/pipeline/attributes.cc; test_fuzz_ranges_are_valid). Draws inside
 # a range are log-uniform where the range is positive; the nx and depth
 # ranges are narrowed to keep kernel builds fast (tests/test_hard_cases.py
 # covers 10 um and 20 mm); out-of-range and malformed values come from
 # `anything` below.
 LOG_RANGES = {
     "pitch": (5e-5, 1e-2), "ridge_pitch": (1e-4, 1e-2), "ridge_height": (1e-6, 1e-3),
-    "young": (1e2, 1e10), "tolerance": (1e-6, 0.1), "stiffness": (1e3, 1e12),
+    "young": (1e2, 1e10), "tolerance": (1e-6, 0.1), "stiffness": (1e5, 1e12),
     "radius": (1e-4, 0.1), "sa1_k0": (1e-20, 1e-6), "sa1_k1": (1e-20, 1e-6),
     "sa1_c": (1e-14, 1), "sa1_r": (1e3, 1e15), "sa1_vth": (1e-4, 10), "ra_gain": (1e-8, 1),
     "ra_tau": (1e-5, 10), "pc_gain": (1e-8, 1), "pc_tau": (1e-5, 10), "pc_highpass": (1, 1e5),
@@ -212,3 +213,30 @@ def test_model_load_unload_does_not_grow_memory():
     gc.collect()
     growth_kib = _rss_kib() - before
     assert growth_kib < 8 * 1024, f"resident memory grew by {growth_kib} KiB over 150 cycles"
+
+
+def _table_ranges():
+    """The plugin's own valid ranges (plugin/core/pipeline/attributes.cc)."""
+    import ctypes
+    import json
+
+    from mjtouch import _loader
+    fn = _loader.load().mjtouch_attribute_ranges_json
+    fn.restype = ctypes.c_int
+    fn.argtypes = [ctypes.c_char_p, ctypes.c_int]
+    buf = ctypes.create_string_buffer(fn(None, 0))
+    fn(buf, len(buf))
+    return {r["key"]: r for r in json.loads(buf.value.decode())}
+
+
+def test_fuzz_ranges_are_valid():
+    # every range drawn above lies inside the attribute's valid range, so a
+    # "valid" draw that fails names a real cross-attribute problem
+    table = _table_ranges()
+    for key, (lo, hi) in {**LOG_RANGES, **LINEAR_RANGES, **INTEGER_RANGES}.items():
+        r = table[key]
+        assert (lo > r["lo"]) if r["lo_open"] else (lo >= r["lo"]), (key, lo, r)
+        assert (hi < r["hi"]) if r["hi_open"] else (hi <= r["hi"]), (key, hi, r)
+    for key, (lo, hi) in {"density": (1, 1e4), "depth": (1e-5, 2e-2), "noise": (1e-3, 100)}.items():
+        r = table[key]
+        assert r["kind"] == "per_class" and lo >= r["lo"] and hi <= r["hi"], (key, r)

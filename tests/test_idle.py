@@ -1,4 +1,4 @@
-"""An untouched skin skips its receptors (plugin/core/pipeline/skin.cc, idle
+"""An untouched skin skips its receptors (plugin/core/pipeline/step.cc, idle
 receptors) and makes the idle time up in one exact step when contact
 resumes. Skipping must not change what the receptors report."""
 
@@ -8,7 +8,7 @@ import numpy as np
 from mjtouch import scenes
 from mjtouch.sensor import SkinLayout
 
-IDLE_SLOT = 4  # plugin_state header: kStReceptorsIdle (plugin/core/pipeline/skin.h)
+IDLE_SLOT = 4  # plugin_state header: kStReceptorsIdle (plugin/core/pipeline/model.h)
 
 
 def run(outputs):

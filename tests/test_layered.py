@@ -443,17 +443,17 @@ def test_plugin_interface_side():
 
 
 BAD = [
-    ({"layers": "0.7e-3 -80e3 0.48"}, "`layers`", "layer 1 E", "(0, 1e+12] Pa"),
-    ({"layers": "0.7e-3 80e3 0.48; 0.8e-3 0 0.48"}, "`layers`", "layer 2 E", "(0, 1e+12] Pa"),
+    ({"layers": "0.7e-3 -80e3 0.48"}, "`layers`", "layer 1 E", "[100, 1e+12] Pa"),
+    ({"layers": "0.7e-3 80e3 0.48; 0.8e-3 0 0.48"}, "`layers`", "layer 2 E", "[100, 1e+12] Pa"),
     ({"layers": "0.7e-3 80e3 0.6"}, "`layers`", "layer 1 nu", "(-1, 0.5]"),
     ({"layers": "0.7e-3 80e3 -1"}, "`layers`", "layer 1 nu", "(-1, 0.5]"),
     ({"layers": "0 80e3 0.48"}, "`layers`", "layer 1 thickness", "(0, 1] m"),
     ({"layers": "-1e-3 80e3 0.48"}, "`layers`", "layer 1 thickness", "(0, 1] m"),
     ({"layers": ";"}, "`layers`", "empty stack", "1 to 64"),
     ({"layers": "0.7e-3 80e3"}, "`layers`", "needs 3 numbers", "thickness"),
-    ({"base": "0 0.3"}, "`base`", "E", "(0, 1e+12] Pa"),
+    ({"base": "0 0.3"}, "`base`", "E", "[100, 1e+12] Pa"),
     ({"base": "30e3 0.5001"}, "`base`", "nu", "(-1, 0.5]"),
-    ({"base": "bone"}, "`base`", "'rigid'", "E in (0, 1e+12] Pa"),
+    ({"base": "bone"}, "`base`", "'rigid'", "E in [100, 1e+12] Pa"),
     ({"depth": "0.75e-3 0.75e-3 5e-3"}, "`depth` entry 3", "rigid base", "(0, 0.004] m"),
     ({"depth": "0.75e-3 0.75e-3 4e-3", "interface_side": "lower"}, "`depth` entry 3",
      "rigid base", "(0, 0.004) m"),

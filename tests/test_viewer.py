@@ -357,7 +357,7 @@ def test_keys_change_force_speed_texture_and_ridges():
 
 
 # The first of the skin's attributes, in the order MuJoCo stores their values
-# (plugin/core/pipeline/skin.cc SkinAttributeKeys).
+# (plugin/core/pipeline/attributes.cc SkinAttributeKeys).
 FIRST_ATTRIBUTES = ("texture", "texture_group", "nx", "pitch", "ridges")
 
 

@@ -71,7 +71,7 @@ double ReceptorQuantity(Quantity q, const double s[6]) {
     case Quantity::kCompressiveSzz: return -s[2];
     case Quantity::kStrainEnergy:
     case Quantity::kCompressiveStrain:
-      return std::numeric_limits<double>::quiet_NaN();  // needs the material (skin.cc)
+      return std::numeric_limits<double>::quiet_NaN();  // needs the material (pipeline/step.cc)
     case Quantity::kVonMises: {
       const double a = s[0] - s[1], b = s[1] - s[2], c = s[2] - s[0];
       return std::sqrt(0.5 * (a * a + b * b + c * c) +

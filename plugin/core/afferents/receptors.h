@@ -17,7 +17,7 @@ const char* ClassName(ReceptorClass c);
 
 // Which stress measure drives a class.
 // kStrainEnergy (SED, J/m^3) and kCompressiveStrain (most compressive
-// principal strain, Wang 2016) need the material at the receptor: skin.cc
+// principal strain, Wang 2016) need the material at the receptor: pipeline/step.cc
 // converts them (ReceptorQuantity returns NaN for them).
 enum class Quantity { kCompressiveSzz, kMaxCompressive, kVonMises, kMaxShear, kStrainEnergy,
                       kCompressiveStrain };
@@ -125,7 +125,7 @@ class ReceptorStepper {
   // never fire again: refractory over, previous q zero, the constant drive
   // (SA1: the bias I0) below threshold, filter outputs bounded far below it.
   // Its membranes then only relax, so its steps may be skipped and made up
-  // later in one exact step (skin.cc: idle receptors).
+  // later in one exact step (pipeline/step.cc: idle receptors).
   bool Quiescent(ReceptorClass cls, const double* state) const;
 
  private:

@@ -78,7 +78,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
           }
         // Warm start: the last step's pressure field (plugin_state), so a
         // sliding contact needs a few iterations; cold: uniform.
-        const double* last = LastPressure(model, state);
+        const double* last = state + model.state_layout().last_pressure;
         ws->pressure_guess.assign(grid.Size(), 0.0);
         if (warm) std::copy(last, last + grid.Size(), ws->pressure_guess.begin());
         // The solve box: cells that can touch if the approach is at most 1.2
@@ -137,7 +137,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     FinishTraction(grid, cfg.shear, &tf);
     state[kStContactValid] = 1.0;
     if (cfg.pressure_model == PressureModel::kElastic)
-      std::copy(tf.pressure_pa.begin(), tf.pressure_pa.end(), LastPressure(model, state));
+      std::copy(tf.pressure_pa.begin(), tf.pressure_pa.end(), state + model.state_layout().last_pressure);
   }
   return touching;
 }

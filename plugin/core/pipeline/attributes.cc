@@ -1,0 +1,414 @@
+// The attribute table (one row per MJCF attribute) and the generic parsing,
+// cache key and README table built from it. Attributes with structure
+// (lists, per-class names, the layered stack) have parse functions here
+// (attribute_parsers.cc); their rows still give range, units and docs.
+#include "pipeline/attributes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "pipeline/attribute_parsers.h"
+#include "pipeline/text.h"
+
+namespace mjtouch {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDefaultRadius = 5e-3;  // receptor population, m
+
+using K = AttributeKind;
+using S = AttributeScope;
+
+// Accessors of one SkinConfig field (the parsed value, index unused).
+#define FIELD(expr)                                                        \
+  [](const SkinConfig& c, int) { return static_cast<double>(c.expr); },    \
+      [](SkinConfig* c, int, double v) { c->expr = static_cast<decltype(c->expr)>(v); }
+#define CLASS_FIELD(expr)                                                        \
+  [](const SkinConfig& c, int k) { return static_cast<double>(c.expr); },        \
+      [](SkinConfig* c, int k, double v) { c->expr = v; }
+#define NO_FIELD nullptr, nullptr
+#define NO_PARSE nullptr, nullptr
+
+// Lower bounds that keep the output finite and physical (values near 1e-300
+// gave inf/NaN sensordata or an all-zero force block):
+//   pitch >= 1 um: below any skin feature (ridges ~450 um); the kernel
+//     tables' cell integrals (areas ~pitch^2) lose all precision far below.
+//   moduli (young, layer and base E) >= 100 Pa: the softest tissues and gels
+//     (brain 0.1-1 kPa); the surface compliance goes as 1/E and overflows
+//     to inf near E = 1e-300 (NaN pressure).
+//   stiffness >= 1e5 Pa/m: a Winkler foundation is E / h, and 1 kPa tissue
+//     1 cm thick gives 1e5; the overlap is p / k, so far below it the
+//     overlap exceeds every pad and the approach solve finds no contact.
+constexpr double kMinPitchM = 1e-6;
+constexpr double kMinModulusPa = kMinLayerModulusPa;
+constexpr double kMinStiffnessPaPerM = 1e5;
+
+const std::vector<AttributeRow>& Rows() {
+  static const std::vector<AttributeRow> rows = {
+      // -- adapter and grid --------------------------------------------------
+      {"texture", K::kCustom, 0, 0, false, false, "geom names", "(none)",
+       "textures rendered by the skin (any geom type but sdf, not on the pad's body)",
+       "names of geoms in the model", NO_FIELD, ParseTextureAttribute, nullptr, S::kAdapter},
+      {"texture_group", K::kInteger, 0, 5, false, false, "", "(none)",
+       "non-colliding geoms in this geom group are textures", nullptr,
+       FIELD(texture_group), NO_PARSE, S::kModel},
+      {"nx", K::kInteger, 4, 512, false, false, "cells", "128", "taxels per side", nullptr,
+       FIELD(grid.n), NO_PARSE, S::kModel},
+      {"pitch", K::kNumber, kMinPitchM, 1e-2, false, false, "m", "1e-4", "taxel pitch", nullptr,
+       FIELD(grid.pitch_m), NO_PARSE, S::kModel},
+      {"ridges", K::kBool, 0, 0, false, false, "", "true", "fingerprint ridges on the skin",
+       nullptr, FIELD(ridges.enabled), NO_PARSE, S::kModel},
+      {"ridge_pitch", K::kNumber, 0, 1e-2, true, false, "m", "4.5e-4",
+       "ridge period (Shao et al. 2010); at least 2 taxels", nullptr,
+       [](const SkinConfig& c, int) { return c.ridges.pitch_m; },
+       [](SkinConfig* c, int, double v) {
+         c->ridges.pitch_m = v;
+         c->ridge_pitch_is_default = false;
+       },
+       NO_PARSE, S::kModel},
+      {"ridge_height", K::kNumber, 0, 1e-3, true, false, "m", "5e-5",
+       "crest-to-valley relief (Shao et al. 2010)", nullptr, FIELD(ridges.height_m), NO_PARSE,
+       S::kModel},
+      {"ridge_angle", K::kNumber, -180, 180, false, false, "deg", "0",
+       "ridge lines vs the pad's y axis (0: perpendicular to pad x)", nullptr,
+       [](const SkinConfig& c, int) { return c.ridges.angle_rad; },
+       [](SkinConfig* c, int, double deg) { c->ridges.angle_rad = deg * kPi / 180.0; },
+       NO_PARSE, S::kModel},
+      {"ridge_profile", K::kChoice, 0, 0, false, false, "", "sine", "ridge cross-section",
+       "sine triangle square", FIELD(ridges.profile), NO_PARSE, S::kModel},
+      // -- contact (stage 2) -------------------------------------------------
+      {"pressure", K::kChoice, 0, 0, false, false, "", "winkler",
+       "contact pressure model (the table above)", "contacts winkler elastic",
+       FIELD(pressure_model), NO_PARSE, S::kModel},
+      {"oversample", K::kCustom, 0, 0, false, false, "", "auto",
+       "tactile evaluations per physics step (\"Oversampling\" below)",
+       "auto or an integer in [1, 64]", NO_FIELD, ParseOversampleAttribute, WriteOversampleKey,
+       S::kModel},
+      {"young", K::kNumber, kMinModulusPa, 1e10, false, false, "Pa", "8e4",
+       "`elastic` on skin=\"halfspace\": Young's modulus", nullptr, FIELD(young_pa), NO_PARSE,
+       S::kModel},
+      {"tolerance", K::kNumber, 0, 0.1, true, false, "", "1e-4",
+       "`elastic`: relative L1 pressure change that stops the CG (about its error)", nullptr,
+       FIELD(tolerance), NO_PARSE, S::kModel},
+      {"stiffness", K::kNumber, kMinStiffnessPaPerM, 1e12, false, false, "Pa/m", "2e7",
+       "Winkler foundation stiffness (sets the contact size, not the force)", nullptr,
+       FIELD(stiffness_pa_per_m), NO_PARSE, S::kModel},
+      {"poisson", K::kNumber, -1, 0.5, true, false, "", "0.48",
+       "skin=\"halfspace\": Poisson's ratio", nullptr, FIELD(poisson), NO_PARSE, S::kModel},
+      {"shear", K::kBool, 0, 0, false, false, "", "true",
+       "shear traction from MuJoCo's friction force", nullptr, FIELD(shear), NO_PARSE,
+       S::kModel},
+      {"visual", K::kChoice, 0, 0, false, false, "", "both",
+       "drawing: `pad` (heatmap on the skin, seen from below), `above` (a copy 2 mm over the "
+       "pad), `both`, `none`",
+       "none pad above both", FIELD(visual), NO_PARSE, S::kDrawing},
+      // -- receptor population -----------------------------------------------
+      {"radius", K::kNumber, 0, 0.1, false, false, "m", "min(5e-3, grid)",
+       "receptors lie within this distance of the pole; at most 0.9 x the pad's smaller "
+       "semi-axis",
+       nullptr, FIELD(population_radius_m), NO_PARSE, S::kModel},
+      {"classes", K::kCustom, 0, 0, false, false, "", "SA1 RA PC", "receptor classes present",
+       "words of: SA1 RA PC", NO_FIELD, ParseClassesAttribute, WriteClassesKey, S::kModel},
+      {"density", K::kPerClass, 0, 1e4, false, false, "per cm^2", "70 140 21",
+       "SA1 RA PC densities (Johansson & Vallbo 1979)", nullptr,
+       CLASS_FIELD(classes[k].density_per_cm2), NO_PARSE, S::kModel},
+      {"depth", K::kPerClass, 0, 0.02, true, false, "m", "7.5e-4 7.5e-4 2e-3",
+       "SA1 RA PC depths below the surface, inside the skin", nullptr,
+       CLASS_FIELD(classes[k].depth_m), NO_PARSE, S::kModel},
+      {"quantity", K::kCustom, 0, 0, false, false, "", "maxcomp szz szz",
+       "driving quantity per class: `szz` (-s_zz), `maxcomp` (most compressive principal "
+       "stress, Wang 2016), `vonmises`, `maxshear`; layered skin also `sed` (strain energy "
+       "density), `strain` (most compressive principal strain)",
+       "3 names (SA1 RA PC) of: szz maxcomp vonmises maxshear sed strain", NO_FIELD,
+       ParseQuantityAttribute, WriteQuantityKey, S::kModel},
+      {"outputs", K::kCustom, 0, 0, false, false, "", "spikes stress force",
+       "sensordata blocks (\"Sensordata layout\" below)",
+       "words of: spikes stress voltage force pressure rate", NO_FIELD, ParseOutputsAttribute,
+       WriteOutputsKey, S::kModel},
+      // -- afferents (stage 4; README "Afferent models") ---------------------
+      {"sa1_merkel", K::kCustom, 0, 0, false, false, "cells per heminode", "8 5 3 1",
+       "SA1 Merkel cells per heminode (Wang 2016)", "1 to 4 numbers in [0, 1000]", NO_FIELD,
+       ParseMerkelAttribute, WriteMerkelKey, S::kModel},
+      {"sa1_k0", K::kNumber, 0, 1e-6, false, false, "A per unit of q", "1.40e-16",
+       "SA1 static gain (Wang 2016 Table 1 row of the SA1 `quantity`)", nullptr,
+       FIELD(receptor.sa1.k0_a_per_pa), NO_PARSE, S::kModel},
+      {"sa1_k1", K::kNumber, 0, 1e-6, false, false, "A s per unit of q", "1.68e-16",
+       "SA1 dynamic gain (Wang 2016 Table 1 row of the SA1 `quantity`)", nullptr,
+       FIELD(receptor.sa1.k1_a_s_per_pa), NO_PARSE, S::kModel},
+      {"sa1_i0", K::kNumber, -1e-6, 1e-6, false, false, "A", "4.94e-12",
+       "SA1 bias current (Wang 2016 Table 1 row of the SA1 `quantity`)", nullptr,
+       FIELD(receptor.sa1.i0_a), NO_PARSE, S::kModel},
+      {"sa1_c", K::kNumber, 0, 1, true, false, "F", "1e-11", "SA1 membrane capacitance",
+       nullptr, FIELD(receptor.sa1.capacitance_f), NO_PARSE, S::kModel},
+      {"sa1_r", K::kNumber, 0, 1e15, true, false, "Ohm", "1.5e9", "SA1 membrane resistance",
+       nullptr, FIELD(receptor.sa1.resistance_ohm), NO_PARSE, S::kModel},
+      {"sa1_vth", K::kNumber, 0, 10, true, false, "V", "0.03", "SA1 spike threshold", nullptr,
+       FIELD(receptor.sa1.threshold_v), NO_PARSE, S::kModel},
+      {"ra_gain", K::kNumber, 0, 1, false, false, "s/Pa", "1.02e-4", "RA drive gain", nullptr,
+       FIELD(receptor.ra.gain_s_per_pa), NO_PARSE, S::kModel},
+      {"ra_lowpass", K::kNumber, 0, 1e4, true, false, "Hz", "40", "RA low-pass corner",
+       nullptr, FIELD(receptor.ra.lowpass_hz), NO_PARSE, S::kModel},
+      {"ra_tau", K::kNumber, 0, 10, true, false, "s", "5e-3", "RA membrane time constant",
+       nullptr, FIELD(receptor.ra.tau_s), NO_PARSE, S::kModel},
+      {"pc_gain", K::kNumber, 0, 1, false, false, "s^2/Pa", "5.28e-6", "PC drive gain",
+       nullptr, FIELD(receptor.pc.gain_s2_per_pa), NO_PARSE, S::kModel},
+      {"pc_highpass", K::kNumber, 0, 1e5, true, false, "Hz", "150", "PC capsule high-pass corner",
+       nullptr, FIELD(receptor.pc.highpass_hz), NO_PARSE, S::kModel},
+      {"pc_lowpass", K::kNumber, 0, 1e5, true, false, "Hz", "250", "PC low-pass corner",
+       nullptr, FIELD(receptor.pc.lowpass_hz), NO_PARSE, S::kModel},
+      {"pc_tau", K::kNumber, 0, 10, true, false, "s", "1.5e-3", "PC membrane time constant",
+       nullptr, FIELD(receptor.pc.tau_s), NO_PARSE, S::kModel},
+      {"refractory", K::kNumber, 0, 1, true, false, "s", "1e-3",
+       "absolute refractory period, every class", nullptr,
+       [](const SkinConfig& c, int) { return c.receptor.sa1.refractory_s; },
+       [](SkinConfig* c, int, double v) {
+         c->receptor.sa1.refractory_s = c->receptor.ra.refractory_s =
+             c->receptor.pc.refractory_s = v;
+       },
+       NO_PARSE, S::kModel},
+      {"noise", K::kPerClass, 0, 100, false, false, "(threshold units)", "0 0 0",
+       "SA1 RA PC membrane noise standard deviation", nullptr,
+       CLASS_FIELD(receptor.noise.sd[k]), NO_PARSE, S::kModel},
+      {"noise_tau", K::kNumber, 0, 10, true, false, "s", "2e-3", "membrane noise correlation time",
+       nullptr, FIELD(receptor.noise.tau_s), NO_PARSE, S::kModel},
+      {"seed", K::kCustom, 0, 0, false, false, "", "0", "membrane noise seed",
+       "an integer in [0, 18446744073709551615]", NO_FIELD, ParseSeedAttribute, WriteSeedKey,
+       S::kModel},
+      {"rate_tau", K::kNumber, 0, 100, true, false, "s", "0.05",
+       "`rate` output: exponential smoothing time", nullptr, FIELD(receptor.rate_tau_s),
+       NO_PARSE, S::kModel},
+      {"sites", K::kCustom, 0, 0, false, false, "m", "(none)",
+       "explicit receptors \"CLASS x y depth; ...\" (pad frame), replacing the density "
+       "population",
+       "entries 'CLASS x y depth' (CLASS in SA1 RA PC; |x|, |y| inside the grid and under the "
+       "pad; depth in (0, 0.02] m, one per class)",
+       NO_FIELD, ParseSitesAttribute, WriteSitesKey, S::kModel},
+      // -- the elastic skin (stage 3) ----------------------------------------
+      {"stress_method", K::kChoice, 0, 0, false, false, "", "auto",
+       "stage 3: `auto` (direct or FFT, whichever is cheaper this step; exact), `direct`, "
+       "`fft`, `tree` (hierarchical, approximate)",
+       "tree direct fft auto",
+       [](const SkinConfig& c, int) { return static_cast<double>(c.stress_method); },
+       [](SkinConfig* c, int, double index) {
+         static const StressMethod kMethods[] = {StressMethod::kTree, StressMethod::kDirect,
+                                                 StressMethod::kFft, StressMethod::kAuto};
+         c->stress_method = kMethods[static_cast<int>(index)];
+       },
+       NO_PARSE, S::kModel},
+      {"stress_theta", K::kNumber, 0, 2, true, false, "(block side / distance)", "0.5",
+       "`tree`'s opening angle; RMS stress error 3e-4 to 1e-3 at 0.5", nullptr,
+       FIELD(stress_theta), NO_PARSE, S::kModel},
+      {"skin", K::kChoice, 0, 0, false, false, "", "layered",
+       "`layered` (`layers` over `base`) or `halfspace` (`poisson`)", "layered halfspace",
+       [](const SkinConfig& c, int) { return c.layered ? 1.0 : 0.0; },
+       [](SkinConfig* c, int, double index) { c->layered = index == 0; }, NO_PARSE, S::kModel},
+      {"layers", K::kCustom, 0, 0, false, false, "m Pa -", "Shao 2010",
+       "\"thickness E nu; ...\" top down; default 7e-4 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 "
+       "0.4 (epidermis, dermis, subcutis)",
+       "1 to 64 layers, thickness (0, 1] m, E {E} Pa, nu (-1, 0.5]", NO_FIELD,
+       ParseLayersAttribute, WriteLayersKey, S::kModel},
+      {"base", K::kCustom, 0, 0, false, false, "Pa -", "rigid",
+       "under the stack: `rigid` (bone) or \"E nu\" (an elastic half-space)",
+       "rigid, or E in {E} Pa and nu in (-1, 0.5]", NO_FIELD, ParseBaseAttribute, WriteBaseKey,
+       S::kModel},
+      {"interface_side", K::kChoice, 0, 0, false, false, "", "upper",
+       "a receptor exactly on an interface takes the layer `upper` or `lower`", "upper lower",
+       FIELD(interface_side), NO_PARSE, S::kModel},
+  };
+  return rows;
+}
+
+std::string NumberText(const AttributeRow& row) {
+  if (row.kind == K::kInteger) return Fmt("[%d, %d]", static_cast<int>(row.lo), static_cast<int>(row.hi));
+  return Fmt("%s%g, %g%s", row.lo_open ? "(" : "[", row.lo, row.hi, row.hi_open ? ")" : "]");
+}
+
+bool InRange(const AttributeRow& row, double x) {
+  const bool low = row.lo_open ? x <= row.lo : x < row.lo;
+  const bool high = row.hi_open ? x >= row.hi : x > row.hi;
+  return !low && !high;
+}
+
+// Parses one present, non-empty value of a table-driven row.
+bool ParseValue(const AttributeRow& row, const std::string& raw, SkinConfig* cfg,
+                AttributeParser* p) {
+  const char* key = row.key;
+  switch (row.kind) {
+    case K::kNumber: {
+      double x;
+      if (!ToDouble(raw, &x))
+        return p->Fail(Fmt("attribute `%s` = '%s' is not a number; valid range %s %s", key,
+                           raw.c_str(), NumberText(row).c_str(), row.units));
+      if (!InRange(row, x))
+        return p->Fail(Fmt("attribute `%s` = %g is out of range; valid range %s %s", key, x,
+                           NumberText(row).c_str(), row.units));
+      row.set(cfg, 0, x);
+      return true;
+    }
+    case K::kInteger: {
+      double x;
+      if (!ToDouble(raw, &x) || x != std::floor(x))
+        return p->Fail(Fmt("attribute `%s` = '%s' is not an integer; valid range %s", key,
+                           raw.c_str(), NumberText(row).c_str()));
+      if (x < row.lo || x > row.hi)
+        return p->Fail(Fmt("attribute `%s` = %g is out of range; valid range %s", key, x,
+                           NumberText(row).c_str()));
+      row.set(cfg, 0, x);
+      return true;
+    }
+    case K::kBool:
+      if (raw == "true" || raw == "1") { row.set(cfg, 0, 1); return true; }
+      if (raw == "false" || raw == "0") { row.set(cfg, 0, 0); return true; }
+      return p->Fail(Fmt("attribute `%s` = '%s' must be true or false", key, raw.c_str()));
+    case K::kChoice: {
+      const auto choices = Words(row.choices_or_range);
+      const auto it = std::find(choices.begin(), choices.end(), raw);
+      if (it == choices.end())
+        return p->Fail(Fmt("attribute `%s` = '%s' is unknown; valid: %s", key, raw.c_str(),
+                           row.choices_or_range));
+      row.set(cfg, 0, static_cast<double>(it - choices.begin()));
+      return true;
+    }
+    case K::kPerClass: {
+      const auto w = Words(raw);
+      if (w.size() != kNumClasses)
+        return p->Fail(Fmt("attribute `%s` = '%s' needs 3 numbers (SA1 RA PC), each in %s %s",
+                           key, raw.c_str(), NumberText(row).c_str(), row.units));
+      double x[kNumClasses];
+      for (int c = 0; c < kNumClasses; ++c) {
+        if (!ToDouble(w[c], &x[c]) || !InRange(row, x[c]))
+          return p->Fail(Fmt("attribute `%s` entry %d ('%s', %s) is out of range; valid range "
+                             "%s %s", key, c + 1, w[c].c_str(),
+                             ClassName(static_cast<ReceptorClass>(c)), NumberText(row).c_str(),
+                             row.units));
+      }
+      for (int c = 0; c < kNumClasses; ++c) row.set(cfg, c, x[c]);
+      return true;
+    }
+    case K::kCustom:
+      return row.parse(raw, cfg, p);
+  }
+  return false;
+}
+
+}  // namespace
+
+bool AttributeParser::Fail(const std::string& msg) {
+  if (ok_) *error_ = "mjtouch.skin: " + msg;
+  ok_ = false;
+  return false;
+}
+
+bool AttributeParser::Present(const char* key) const {
+  return std::find(present_.begin(), present_.end(), key) != present_.end();
+}
+
+const std::vector<AttributeRow>& SkinAttributes() { return Rows(); }
+
+std::string ValidRangeText(const AttributeRow& row) {
+  switch (row.kind) {
+    case K::kNumber:
+    case K::kInteger:
+      return NumberText(row);
+    case K::kBool: return "true false";
+    case K::kChoice: return row.choices_or_range;
+    case K::kPerClass:
+      return "3 numbers (SA1 RA PC), each in " + NumberText(row);
+    case K::kCustom: {
+      std::string text = row.choices_or_range;  // {E}: the layer moduli's range
+      const size_t at = text.find("{E}");
+      if (at != std::string::npos)
+        text.replace(at, 3, Fmt("[%g, %g]", kMinLayerModulusPa, kMaxLayerModulusPa));
+      return text;
+    }
+  }
+  return "";
+}
+
+const std::vector<const char*>& SkinAttributeKeys() {
+  static const std::vector<const char*> keys = [] {
+    std::vector<const char*> k;
+    for (const auto& row : Rows()) k.push_back(row.key);
+    return k;
+  }();
+  return keys;
+}
+
+bool ParseSkinAttributes(const AttributeLookup& lookup, SkinConfig* cfg, std::string* error) {
+  AttributeParser p(error);
+  std::vector<std::optional<std::string>> raw;
+  for (const auto& row : Rows()) {
+    raw.push_back(lookup(row.key));
+    if (raw.back()) p.MarkPresent(row.key);
+  }
+  // Defaults that depend on other attributes: the SA1 gains follow the SA1
+  // quantity (set again when `quantity` is parsed); an unset radius (-1) is
+  // fitted to the grid below.
+  WangTable1Gains(cfg->classes[0].quantity, &cfg->receptor.sa1);
+  cfg->population_radius_m = -1.0;
+  for (size_t i = 0; i < Rows().size() && p.ok(); ++i) {
+    const AttributeRow& row = Rows()[i];
+    if (!raw[i]) continue;
+    const std::string value = Trim(*raw[i]);
+    if (value.empty()) {
+      const bool units = *row.units && row.kind != K::kCustom;
+      p.Fail(Fmt("attribute `%s` is empty; remove it for the default (%s) or give a value: %s%s%s",
+                 row.key, row.default_text, ValidRangeText(row).c_str(), units ? " " : "",
+                 units ? row.units : ""));
+      break;
+    }
+    ParseValue(row, value, cfg, &p);
+  }
+  if (!p.ok()) return false;
+  return CheckAttributeCombinations(p, cfg, error);
+}
+
+bool ParseSkinConfig(const AttributeGetter& get, SkinConfig* cfg, std::string* error) {
+  return ParseSkinAttributes(
+      [&](const char* key) -> std::optional<std::string> {
+        std::string v = get(key);
+        if (v.empty()) return std::nullopt;  // "" is unset (MuJoCo stores both alike)
+        return v;
+      },
+      cfg, error);
+}
+
+std::string ConfigCacheKey(const SkinConfig& c) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "pad " << static_cast<int>(c.pad.shape) << ' ' << c.pad.semi_axes_m[0] << ' '
+    << c.pad.semi_axes_m[1] << ' ' << c.pad.semi_axes_m[2];
+  for (const auto& row : Rows()) {
+    if (row.scope != S::kModel) continue;
+    s << " | " << row.key << ' ';
+    switch (row.kind) {
+      case K::kCustom:
+        if (!row.cache_key)
+          throw std::logic_error(std::string("attribute row `") + row.key + "` has no cache key");
+        row.cache_key(c, s);
+        break;
+      case K::kPerClass:
+        for (int k = 0; k < kNumClasses; ++k) s << row.get(c, k) << ' ';
+        break;
+      default:
+        s << row.get(c, 0);
+    }
+  }
+  return s.str();
+}
+
+std::string AttributeTableMarkdown() {
+  std::string out = "| key | default | units | valid | meaning |\n|---|---|---|---|---|\n";
+  for (const auto& row : Rows()) {
+    std::string valid = ValidRangeText(row), pipe = "|";
+    for (size_t at = valid.find(pipe); at != std::string::npos; at = valid.find(pipe, at + 2))
+      valid.replace(at, 1, "\\|");  // a literal | inside a table cell
+    out += "| `" + std::string(row.key) + "` | " + row.default_text + " | " + row.units + " | " +
+           valid + " | " + row.meaning + " |\n";
+  }
+  return out;
+}
+
+}  // namespace mjtouch

@@ -1,0 +1,50 @@
+// The sensordata blocks (OutputBlock order) from the last evaluation.
+#include <algorithm>
+
+#include "pipeline/step.h"
+
+namespace mjtouch {
+
+void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching,
+                  const double* state, const Workspace& ws, double* out) {
+  const SkinConfig& cfg = model.config();
+  const int nrec = static_cast<int>(model.receptors().size());
+  const StateLayout& layout = model.state_layout();
+  const double* last_spikes = state + layout.last_spikes;
+  const double* last_voltage = state + layout.last_voltage;
+  const TractionField& tf = ws.traction;
+  double* cursor = out;
+  if (cfg.outputs[kOutSpikes]) {
+    std::copy(last_spikes, last_spikes + nrec, cursor);
+    cursor += nrec;
+  }
+  if (cfg.outputs[kOutStress]) {
+    if (touching) std::copy(ws.quantity.begin(), ws.quantity.end(), cursor);
+    else std::fill(cursor, cursor + nrec, 0.0);
+    cursor += nrec;
+  }
+  if (cfg.outputs[kOutVoltage]) {
+    std::copy(last_voltage, last_voltage + nrec, cursor);
+    cursor += nrec;
+  }
+  if (cfg.outputs[kOutForce]) {
+    cursor[0] = touching ? in.normal_force_n : 0.0;
+    cursor[1] = touching ? in.shear_x_n : 0.0;
+    cursor[2] = touching ? in.shear_y_n : 0.0;
+    cursor[3] = touching ? state[kStContactDepth] : 0.0;  // indentation depth
+    cursor += kForceBlockSize;
+  }
+  if (cfg.outputs[kOutPressure]) {
+    const size_t N = cfg.grid.Size();
+    if (touching) std::copy(tf.pressure_pa.begin(), tf.pressure_pa.begin() + N, cursor);
+    else std::fill(cursor, cursor + N, 0.0);
+    cursor += N;
+  }
+  if (cfg.outputs[kOutRate]) {
+    for (int r = 0; r < nrec; ++r)
+      cursor[r] = ReceptorRate(layout.receptor(state, r));
+    cursor += nrec;
+  }
+}
+
+}  // namespace mjtouch

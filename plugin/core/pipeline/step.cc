@@ -1,0 +1,239 @@
+// Step: stages 1-4 at one time (Evaluate), repeated over `oversample`
+// substeps with the pad's pose and MuJoCo's force interpolated, then the
+// outputs written (outputs.cc).
+#include <algorithm>
+#include <cmath>
+
+#include "pipeline/step.h"
+
+namespace mjtouch {
+
+void ResetState(const SkinModel& model, double* state) {
+  std::fill(state, state + model.state_size(), 0.0);
+}
+
+namespace {
+
+const ReceptorStepper& StepperFor(const ReceptorParams& p, double dt_s, Workspace* ws) {
+  if (!ws->stepper || ws->stepper->dt() != dt_s)
+    ws->stepper = std::make_shared<const ReceptorStepper>(p, dt_s);
+  return *ws->stepper;
+}
+
+// Receptor quantity from the stress; strain and SED from the material at the
+// receptor (the layer's E and nu).
+double QuantityAt(Quantity q, const Stress6& stress, const Material& m) {
+  switch (q) {
+    case Quantity::kStrainEnergy: return StrainEnergyDensity(stress, m);
+    case Quantity::kCompressiveStrain: {
+      const Stress6 strain = StrainFromStress(stress, m);
+      return ReceptorQuantity(Quantity::kMaxCompressive, strain.data());
+    }
+    default: return ReceptorQuantity(q, stress.data());
+  }
+}
+
+// Stages 1-4 at time_s: receptors advance over the time since the last
+// evaluation. Leaves the quantities in ws->quantity and each receptor's
+// spike count and voltage in `state`; returns whether the skin touches and
+// adds the spikes fired to *fired.
+bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double* state,
+              Workspace* ws, int* fired) {
+  const SkinConfig& cfg = model.config();
+  const auto& sites = model.receptors();
+  const int nrec = static_cast<int>(sites.size());
+  const StateLayout& layout = model.state_layout();
+  double* last_spikes = state + layout.last_spikes;
+  double* last_voltage = state + layout.last_voltage;
+  // Receptors integrate over the time elapsed since the previous call, so a
+  // repeated mj_forward at the same time changes nothing.
+  const bool time_valid = state[kStTimeValid] > 0.0;
+  const double elapsed = time_valid ? time_s - state[kStLastTime] : 0.0;
+  state[kStLastTime] = time_s;
+  state[kStTimeValid] = 1.0;
+
+  const TractionField& tf = ws->traction;
+  // Stages 1-2: gap and tractions (skin_traction.cc).
+  const bool touching = ComputeTraction(model, in, state, ws);
+  const bool need_receptors =
+      cfg.outputs[kOutSpikes] || cfg.outputs[kOutVoltage] || cfg.outputs[kOutRate];
+  // Idle receptors: untouched, quiescent receptors (ReceptorStepper::Quiescent)
+  // are not advanced while nothing touches and no output shows their
+  // relaxing membranes; the idle time is made up in one exact step when
+  // contact resumes. An untouched skin then costs O(1) per step.
+  const bool idle = state[kStReceptorsIdle] > 0.0;
+  if (!touching && idle && elapsed >= 0.0) {
+    // Nothing to do: the last spike counts are zero (idle is entered only
+    // after a step without spikes).
+    return false;
+  }
+  ws->quantity.assign(nrec, 0.0);
+  const KernelTables* kt = model.kernel();
+  if (touching && kt) {
+    // Stage 3: stress at the receptors (direct, FFT or tree).
+    ws->stress.resize(nrec);
+    ws->last_stress_method = ComputeStresses(
+        *kt, model.spectra(), model.tree(), cfg.stress_method, model.stress_sites(), tf.runs,
+        tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
+        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data());
+    for (int r = 0; r < nrec; ++r) {
+      const int c = static_cast<int>(sites[r].cls);
+      ws->quantity[r] = QuantityAt(cfg.classes[c].quantity, ws->stress[r], model.material(c));
+    }
+  }
+  // Stage 4: receptors advance every step (membranes relax without contact).
+  if (need_receptors && elapsed > 0.0) {
+    if (idle) {  // make up the idle time at q = 0, in one exact step
+      const double gap_s = (time_s - elapsed) - state[kStReceptorsTime];
+      if (gap_s > 0.0) {
+        const ReceptorStepper catch_up(cfg.receptor, gap_s);
+        double v;
+        for (int r = 0; r < nrec; ++r)
+          catch_up.Advance(sites[r].cls, 0.0, r,
+                           layout.receptor(state, r), &v);
+      }
+      state[kStReceptorsIdle] = 0.0;
+    }
+    const ReceptorStepper& stepper = StepperFor(cfg.receptor, elapsed, ws);
+    bool quiescent = !touching && !cfg.outputs[kOutVoltage] && !cfg.outputs[kOutRate];
+    for (int r = 0; r < nrec; ++r) {
+      double* st = layout.receptor(state, r);
+      double v;
+      const int k = stepper.Advance(sites[r].cls, ws->quantity[r], r, st, &v);
+      last_spikes[r] = k;
+      last_voltage[r] = v;
+      *fired += k;
+      quiescent = quiescent && k == 0 && stepper.Quiescent(sites[r].cls, st);
+    }
+    if (quiescent) {
+      state[kStReceptorsIdle] = 1.0;
+      state[kStReceptorsTime] = time_s;
+    }
+  } else if (need_receptors && !time_valid) {
+    for (int r = 0; r < nrec; ++r)
+      PrimeReceptor(cfg.receptor, sites[r].cls, ws->quantity[r], r,
+                    layout.receptor(state, r));
+  }
+  return touching;
+}
+
+// Unit quaternion (w, x, y, z) of a row-major rotation matrix, and back.
+void MatToQuat(const double* m, double* q) {
+  const double tr = m[0] + m[4] + m[8];
+  if (tr > 0.0) {
+    const double s = 2.0 * std::sqrt(tr + 1.0);
+    q[0] = 0.25 * s;
+    q[1] = (m[7] - m[5]) / s;
+    q[2] = (m[2] - m[6]) / s;
+    q[3] = (m[3] - m[1]) / s;
+  } else if (m[0] > m[4] && m[0] > m[8]) {
+    const double s = 2.0 * std::sqrt(1.0 + m[0] - m[4] - m[8]);
+    q[0] = (m[7] - m[5]) / s;
+    q[1] = 0.25 * s;
+    q[2] = (m[1] + m[3]) / s;
+    q[3] = (m[2] + m[6]) / s;
+  } else if (m[4] > m[8]) {
+    const double s = 2.0 * std::sqrt(1.0 + m[4] - m[0] - m[8]);
+    q[0] = (m[2] - m[6]) / s;
+    q[1] = (m[1] + m[3]) / s;
+    q[2] = 0.25 * s;
+    q[3] = (m[5] + m[7]) / s;
+  } else {
+    const double s = 2.0 * std::sqrt(1.0 + m[8] - m[0] - m[4]);
+    q[0] = (m[3] - m[1]) / s;
+    q[1] = (m[2] + m[6]) / s;
+    q[2] = (m[5] + m[7]) / s;
+    q[3] = 0.25 * s;
+  }
+}
+
+void QuatToMat(const double* q, double* m) {
+  const double w = q[0], x = q[1], y = q[2], z = q[3];
+  m[0] = 1 - 2 * (y * y + z * z); m[1] = 2 * (x * y - w * z); m[2] = 2 * (x * z + w * y);
+  m[3] = 2 * (x * y + w * z); m[4] = 1 - 2 * (x * x + z * z); m[5] = 2 * (y * z - w * x);
+  m[6] = 2 * (x * z - w * y); m[7] = 2 * (y * z + w * x); m[8] = 1 - 2 * (x * x + y * y);
+}
+
+// Pose at fraction s of the way from a to b: position linear, rotation
+// by spherical linear interpolation.
+Pose InterpolatePose(const Pose& a, const Pose& b, double s) {
+  Pose out;
+  for (int k = 0; k < 3; ++k) out.pos[k] = a.pos[k] + s * (b.pos[k] - a.pos[k]);
+  double qa[4], qb[4], q[4];
+  MatToQuat(a.mat, qa);
+  MatToQuat(b.mat, qb);
+  double dot = qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3];
+  if (dot < 0.0) {  // the shorter arc
+    for (double& v : qb) v = -v;
+    dot = -dot;
+  }
+  double wa = 1.0 - s, wb = s;
+  if (dot < 1.0 - 1e-12) {
+    const double theta = std::acos(std::min(1.0, dot));
+    wa = std::sin((1.0 - s) * theta) / std::sin(theta);
+    wb = std::sin(s * theta) / std::sin(theta);
+  }
+  double norm = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    q[k] = wa * qa[k] + wb * qb[k];
+    norm += q[k] * q[k];
+  }
+  for (double& v : q) v /= std::sqrt(norm);
+  QuatToMat(q, out.mat);
+  return out;
+}
+}  // namespace
+
+int Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
+         Workspace* ws, double* out) {
+  const SkinConfig& cfg = model.config();
+  const int K = cfg.oversample;
+  int fired = 0;
+  bool touching;
+  double* last = K > 1 ? state + model.state_layout().last_pose : nullptr;
+  const double elapsed = state[kStTimeValid] > 0.0 ? time_s - state[kStLastTime] : 0.0;
+  if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0) {
+    // Tactile substeps: the pad's pose and MuJoCo's force interpolated from
+    // the last step's (counter-surfaces at this step's pose); spikes summed.
+    const int nrec = static_cast<int>(model.receptors().size());
+    double* last_spikes = state + model.state_layout().last_spikes;
+    ws->spike_sum.assign(nrec, 0.0);
+    Pose from;
+    std::copy(last + kLpPos, last + kLpPos + 3, from.pos);
+    std::copy(last + kLpMat, last + kLpMat + 9, from.mat);
+    StepInput& sub = ws->substep;
+    sub.surfaces = in.surfaces;
+    sub.contacts = in.contacts;
+    sub.in_contact = in.in_contact;
+    const double t0 = time_s - elapsed;
+    for (int k = 1; k <= K; ++k) {
+      const double s = static_cast<double>(k) / K;
+      const StepInput* use = &in;
+      if (k < K) {
+        sub.pad_pose = InterpolatePose(from, in.pad_pose, s);
+        sub.normal_force_n = last[kLpNormalForce] + s * (in.normal_force_n - last[kLpNormalForce]);
+        sub.shear_x_n = last[kLpShearX] + s * (in.shear_x_n - last[kLpShearX]);
+        sub.shear_y_n = last[kLpShearY] + s * (in.shear_y_n - last[kLpShearY]);
+        use = &sub;
+      }
+      touching = Evaluate(model, *use, k < K ? t0 + s * elapsed : time_s, state, ws, &fired);
+      // (an idle evaluation leaves zero counts: idle follows a silent step)
+      for (int r = 0; r < nrec; ++r) ws->spike_sum[r] += last_spikes[r];
+    }
+    std::copy(ws->spike_sum.begin(), ws->spike_sum.end(), last_spikes);
+  } else {
+    touching = Evaluate(model, in, time_s, state, ws, &fired);
+  }
+  if (K > 1) {
+    std::copy(in.pad_pose.pos, in.pad_pose.pos + 3, last + kLpPos);
+    std::copy(in.pad_pose.mat, in.pad_pose.mat + 9, last + kLpMat);
+    last[kLpNormalForce] = in.in_contact ? in.normal_force_n : 0.0;
+    last[kLpShearX] = in.in_contact ? in.shear_x_n : 0.0;
+    last[kLpShearY] = in.in_contact ? in.shear_y_n : 0.0;
+    last[kLpValid] = 1.0;
+  }
+  WriteOutputs(model, in, touching, state, *ws, out);
+  return fired;
+}
+
+}  // namespace mjtouch

@@ -1,0 +1,63 @@
+// One step of the pipeline: the engine's inputs (StepInput), per-simulation
+// scratch (Workspace) and Step, which runs the stages and writes sensordata.
+#ifndef MJTOUCH_PIPELINE_STEP_H_
+#define MJTOUCH_PIPELINE_STEP_H_
+
+#include <memory>
+#include <vector>
+
+#include "pipeline/model.h"
+
+namespace mjtouch {
+
+// Per-step inputs from the physics engine (all in world frame except forces).
+struct StepInput {
+  Pose pad_pose;
+  std::vector<CounterSurface> surfaces;
+  double normal_force_n = 0;   // total contact force on the pad along pad +z
+  double shear_x_n = 0, shear_y_n = 0;  // along pad x, y
+  bool in_contact = false;
+  std::vector<ContactPoint> contacts;  // MuJoCo's contacts on the pad (pad frame)
+};
+
+// Scratch owned per simulation (no state that outlives a step).
+struct Workspace {
+  // Receptor propagators for the last step size (rebuilt when it changes).
+  std::shared_ptr<const ReceptorStepper> stepper;
+  std::vector<double> gap, coverage;
+  TractionField traction;
+  std::vector<double> quantity;  // per receptor
+  ElasticWork elastic;
+  ElasticSolveStats elastic_stats;  // the last `elastic` solve (diagnostics)
+  std::vector<double> pressure_guess;  // `elastic` initial guess, n*n
+  std::vector<Stress6> stress;   // per receptor, Pa
+  StressScratch stress_scratch;
+  StressMethod last_stress_method = StressMethod::kDirect;
+  StepInput substep;            // `oversample`: the interpolated input
+  std::vector<double> spike_sum;  // `oversample`: spikes over the substeps
+};
+
+// Stages 1-2 for one step (skin_traction.cc): render the gap and solve the
+// tractions into ws->traction with the configured pressure model. Reads and
+// updates the state header (contact depth, level, valid). Returns whether
+// the skin touches.
+bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state, Workspace* ws);
+
+// Reset the state array to its initial value.
+void ResetState(const SkinModel& model, double* state);
+
+// Writes the enabled output blocks (outputs.cc) from the last evaluation.
+void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching,
+                  const double* state, const Workspace& ws, double* out);
+
+// Run the pipeline at simulation time time_s: receptors integrate over the
+// time elapsed since the previous call (none on the first call or a repeated
+// call at the same time). Writes the enabled output blocks to `out` (length
+// model.output_size()) and updates `state`. Returns the number of spikes
+// fired in this evaluation (all receptors).
+int Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
+          Workspace* ws, double* out);
+
+}  // namespace mjtouch
+
+#endif  // MJTOUCH_PIPELINE_STEP_H_
