@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 
-import mujoco
 
 from mjtouch import bench, scenes
 
@@ -38,9 +37,8 @@ def measure(steps: int = 200, elastic_steps: int = 30, rounds: int = 3) -> list[
             nstep = elastic_steps if model == "elastic" else steps
             runs[n, model] = (bench.Run(m, state, warm, bench.slide_ctrl(proto, nstep)), nstep)
         tip, proto = bench.scene_parts({"nx": n, "pitch_m": 1e-4})
-        xml = scenes.scene_xml(tip, texture, proto)
-        native = mujoco.MjModel.from_xml_string(
-            bench.native_tactile_xml(xml, n, 1e-4, tip.semi_axes_m))
+        native = bench.add_native_tactile(scenes.scene_spec(tip, texture, proto), n, 1e-4,
+                                          tip.semi_axes_m).compile()
         state, warm = states.initial(native)
         runs[n, "native tactile"] = (bench.Run(native, state, warm, bench.slide_ctrl(proto, steps)),
                                      steps)

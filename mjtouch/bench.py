@@ -48,7 +48,6 @@ import json
 import math
 import os
 import platform
-import re
 import sys
 import time
 from typing import Callable
@@ -312,31 +311,29 @@ def lattice_sites(grids: list[tuple[int, float]], radius_m: float = SITE_RADIUS_
     return "; ".join(out)
 
 
-def strip_plugin(xml: str) -> str:
-    """The scene's MJCF without the mjtouch.skin plugin (the bare MuJoCo scene)."""
-    xml = re.sub(r"\s*<extension>.*?</extension>", "", xml, flags=re.S)
-    xml = re.sub(r'\s*<plugin name="skin".*?</plugin>', "", xml, flags=re.S)
-    return re.sub(r"\s*<sensor>\s*</sensor>", "", xml, flags=re.S)
+def strip_plugin(spec: mujoco.MjSpec) -> mujoco.MjSpec:
+    """The scene without the mjtouch.skin plugin (the bare MuJoCo scene)."""
+    return scenes.remove_skin(spec)
 
 
-def native_tactile_xml(xml: str, nx: int, pitch_m: float, semi_axes_m) -> str:
+def add_native_tactile(spec: mujoco.MjSpec, nx: int, pitch_m: float,
+                       semi_axes_m) -> mujoco.MjSpec:
     """The bare scene plus MuJoCo's native tactile sensor on an nx x nx
     vertex plate mesh (non-colliding, on the finger body at the pad's pole,
     the plugin grid's extent): it reports at every vertex while the pad
     touches the plate box."""
     half = nx * pitch_m / 2
-    bare = strip_plugin(xml)
-    mesh = (f'    <mesh name="tactile_plate" builtin="plate" params="{nx} {nx}" '
-            f'scale="{half:.9g} {half:.9g} 0.0005"/>\n')
-    bare = (bare.replace("<asset>\n", "<asset>\n" + mesh, 1) if "<asset>" in bare else
-            bare.replace("<worldbody>", f"<asset>\n{mesh}  </asset>\n  <worldbody>", 1))
-    geom = (f'\n      <geom name="tactile_surface" type="mesh" mesh="tactile_plate" '
-            f'pos="0 0 {-semi_axes_m[2]:.9g}" contype="0" conaffinity="0" group="4"/>')
-    bare, n = re.subn(r'(<geom name="pad"[^>]*/>)', lambda m: m.group(1) + geom, bare, count=1)
-    if n != 1:
-        raise RuntimeError("scene MJCF has no pad geom to carry the tactile mesh")
-    sensor = '  <sensor>\n    <tactile name="tactile" geom="tactile_surface" mesh="tactile_plate"/>\n  </sensor>\n'
-    return bare.replace("</mujoco>", sensor + "</mujoco>")
+    strip_plugin(spec)
+    mesh = spec.add_mesh(name="tactile_plate")
+    mesh.make_plate([nx, nx])
+    mesh.scale = [half, half, 0.0005]
+    spec.geom("pad").parent.add_geom(
+        name="tactile_surface", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="tactile_plate",
+        pos=[0, 0, -semi_axes_m[2]], contype=0, conaffinity=0, group=4)
+    spec.add_sensor(name="tactile", type=mujoco.mjtSensor.mjSENS_TACTILE,
+                    objtype=mujoco.mjtObj.mjOBJ_MESH, objname="tactile_plate",
+                    reftype=mujoco.mjtObj.mjOBJ_GEOM, refname="tactile_surface")
+    return spec
 
 
 class States:
@@ -380,7 +377,7 @@ class States:
 
 
 def bare_model(tip, texture, proto) -> mujoco.MjModel:
-    model = mujoco.MjModel.from_xml_string(strip_plugin(scenes.scene_xml(tip, texture, proto)))
+    model = scenes.scene_spec(tip, texture, proto, skin=False).compile()
     if model.nplugin:
         raise RuntimeError("the bare scene still holds a plugin")
     return model
@@ -635,13 +632,13 @@ class Bench:
             self.progress.step(label)
 
     def _run(self, overrides: dict, sites: str | None = None, pressed: bool = True,
-             nstep: int = 1, xml: Callable[[str], str] | None = None,
+             nstep: int = 1, edit: Callable[[mujoco.MjSpec], object] | None = None,
              disable_sensors: bool = False) -> tuple[Run, scenes.Protocol, scenes.Fingertip]:
         tip, proto = scene_parts(overrides, sites)
-        if xml is None:
-            model = scenes.build_model(tip, self.texture, proto)
-        else:
-            model = mujoco.MjModel.from_xml_string(xml(scenes.scene_xml(tip, self.texture, proto)))
+        spec = scenes.scene_spec(tip, self.texture, proto)
+        if edit is not None:
+            edit(spec)
+        model = spec.compile()
         if disable_sensors:
             model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
         state0, warm = self.states.initial(model, pressed)
@@ -684,20 +681,20 @@ class Bench:
         c = self.cfg
         grid = {"nx": c.nx, "pitch_m": c.pitch_m}
         tip = scene_parts(grid)[0]
-        tactile = lambda x: native_tactile_xml(x, tip.nx, tip.pitch_m, tip.semi_axes_m)  # noqa: E731
+        tactile = lambda s: add_native_tactile(s, tip.nx, tip.pitch_m, tip.semi_axes_m)  # noqa: E731
         cheap = max(c.cheap_steps, c.time_steps)  # ~20 ms per repeat: call overhead < 0.1%
         recorded = min(cheap, 1000)  # rollout's buffers stay small (23 kB of state per step)
         configs = {  # name: (options, steps per timed repeat, timed through mujoco.rollout)
-            "bare_mujoco": (dict(xml=strip_plugin), cheap, False),
-            "native_tactile": (dict(xml=tactile), c.time_steps, False),
-            "native_tactile_sensors_off": (dict(xml=tactile, disable_sensors=True),
+            "bare_mujoco": (dict(edit=strip_plugin), cheap, False),
+            "native_tactile": (dict(edit=tactile), c.time_steps, False),
+            "native_tactile_sensors_off": (dict(edit=tactile, disable_sensors=True),
                                            c.time_steps, False),
             "full_pipeline": ({}, c.time_steps, False),
             "homogeneous_kernel": (dict(extra={"skin.skin": "halfspace"}), c.time_steps, False),
             "idle_plugin": (dict(pressed=False), cheap, False),
-            "bare_mujoco_idle": (dict(xml=strip_plugin, pressed=False), cheap, False),
+            "bare_mujoco_idle": (dict(edit=strip_plugin, pressed=False), cheap, False),
             "idle_plugin_rollout": (dict(pressed=False), recorded, True),
-            "bare_mujoco_idle_rollout": (dict(xml=strip_plugin, pressed=False), recorded, True),
+            "bare_mujoco_idle_rollout": (dict(edit=strip_plugin, pressed=False), recorded, True),
         }
         self._baseline_results = {}
         models = {}
