@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 
-
 from mjtouch import bench, scenes
 
 GRIDS = (64, 128, 256)
