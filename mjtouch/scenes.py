@@ -355,13 +355,15 @@ def add_grating_hfield(spec: mujoco.MjSpec, name: str, texture: Texture, half_wi
                            userdata=[float(f"{v:.4g}") for v in np.concatenate([row, row])])
 
 
-def add_plate(spec: mujoco.MjSpec, texture: Texture) -> None:
-    """A plate: a colliding flat box proxy (MuJoCo's contact) and a
-    non-colliding geom named ``texture`` that the skin renders against."""
+def add_plate(spec: mujoco.MjSpec, texture: Texture,
+              parent: mujoco.MjsBody | None = None) -> None:
+    """A plate on ``parent`` (default: the world): a colliding flat box proxy
+    (MuJoCo's contact) and a non-colliding geom named ``texture`` that the
+    skin renders against."""
     texture.validate()
     L, W = texture.length_m, texture.width_m
     # 1 cm thick: a hard press (50 N) sinks ~3 mm into MuJoCo's soft contact
-    world = spec.worldbody
+    world = parent or spec.worldbody
     world.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=_qv(L / 2, W / 2, 0.01),
                    pos=[0, 0, -0.01], friction=[0.5, 0.005, 0.0001], rgba=[0.55, 0.6, 0.65, 1])
     hidden = dict(contype=0, conaffinity=0, group=TEXTURE_GROUP)

@@ -150,23 +150,24 @@ def test_pad_must_be_sphere_ellipsoid_capsule_or_box():
 def test_sdf_texture_cannot_be_rendered():
     # an sdf geom (MuJoCo's torus plugin) in the texture group: no geometry
     # the skin can query
-    torus = ('<plugin plugin="mujoco.sdf.torus"><instance name="torus">'
-             '<config key="radius1" value="0.01"/><config key="radius2" value="0.003"/>'
-             '</instance></plugin>')
-    xml = pad_scene({"texture_group": "2"}, extra=(
-        '<geom name="knob" type="sdf" mesh="torus" group="2" contype="0" conaffinity="0" '
-        'pos="0.03 0 0.01"><plugin instance="torus"/></geom>'))
-    xml = xml.replace('<extension><plugin plugin="mjtouch.skin"/></extension>',
-                      f'<extension><plugin plugin="mjtouch.skin"/>{torus}</extension>'
-                      '<asset><mesh name="torus"><plugin instance="torus"/></mesh></asset>')
+    spec = mujoco.MjSpec.from_string(pad_scene({"texture_group": "2"}))
+    spec.activate_plugin("mujoco.sdf.torus")
+    torus = spec.add_plugin(name="torus", plugin_name="mujoco.sdf.torus", active=True)
+    torus.config = {"radius1": "0.01", "radius2": "0.003"}
+    spec.add_mesh(name="torus").plugin = torus
+    knob = spec.worldbody.add_geom(name="knob", type=mujoco.mjtGeom.mjGEOM_SDF, meshname="torus",
+                                   group=2, contype=0, conaffinity=0, pos=[0.03, 0, 0.01])
+    knob.plugin = torus
     with pytest.raises(ValueError, match="geom 'knob' in `texture_group` 2 cannot be rendered"):
-        mujoco.MjModel.from_xml_string(xml)
+        spec.compile()
 
 
 def test_sensor_must_name_a_geom():
-    xml = pad_scene().replace('objtype="geom" objname="pad"', 'objtype="body" objname="finger"')
+    spec = mujoco.MjSpec.from_string(pad_scene())
+    spec.sensors[0].objtype = mujoco.mjtObj.mjOBJ_BODY
+    spec.sensors[0].objname = "finger"
     with pytest.raises(ValueError, match='objtype="geom"'):
-        mujoco.MjModel.from_xml_string(xml)
+        spec.compile()
 
 
 # -- messages that name the wrong thing, or twice (plugin bugs, see below) ---

@@ -20,7 +20,7 @@ def test_elastic_sphere_pad_matches_hertz():
     pitch, n = h.contact_radius_m / 32, 96
     skin = dict(nx=n, pitch=pitch, ridges="false", pressure="elastic", skin="halfspace",
                 young=E, poisson=NU, tolerance=1e-8, outputs="force pressure")
-    m = mujoco.MjModel.from_xml_string(scenes.sphere_press_xml(h.radius_m, skin))
+    m = scenes.sphere_press_spec(h.radius_m, skin).compile()
     d = mujoco.MjData(m)
     layout = SkinLayout.from_model(m)
     d.ctrl[0] = h.load_n

@@ -167,10 +167,10 @@ def named_in(msg: str, cfg: dict) -> bool:
        drop=st.floats(-0.002, 0.01))
 def test_random_attributes_and_geometry_error_or_finite(cfg, pad, euler, obstacles, drop):
     pad_xml, extra = geometry_xml(pad, euler, obstacles)
-    xml = pad_scene(cfg, pad=pad_xml, extra=extra)  # with a height-field texture
-    xml = xml.replace('pos="0 0 0.0071"', f'pos="0 0 {0.0071 + drop!r}"')
+    spec = mujoco.MjSpec.from_string(pad_scene(cfg, pad=pad_xml, extra=extra))  # with a texture
+    spec.body("finger").pos = [0, 0, 0.0071 + drop]
     try:
-        m = mujoco.MjModel.from_xml_string(xml)
+        m = spec.compile()
     except ValueError as e:
         # a clear error: the plugin's message names the attribute or geom
         assert named_in(str(e), cfg), (str(e), cfg)
