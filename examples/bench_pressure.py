@@ -7,7 +7,7 @@ The default sliding scene (ridged fingertip, 0.5 N, 25 mm/s over the 1 mm
 grating), taxels at 0.1 mm, the skin's outputs reduced to `force` so that
 only stages 1-2 run (surface rendering and the pressure model). Every
 configuration starts from the same settled, sliding state
-(mjtouch.bench.States) and is timed as the minimum over rounds of
+(mjtouch.bench.timing.States) and is timed as the minimum over rounds of
 `mj_step(nstep)`; in the same run: the bare MuJoCo step (plugin removed) and
 MuJoCo's native `tactile` sensor on a mesh with as many vertices as taxels.
 Prints us/step and the ratios to both baselines.
