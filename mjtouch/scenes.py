@@ -211,7 +211,7 @@ PAIR_SOLIMP = [0.5, 0.9999, 0.004, 0.5, 2.0]
 # and friction stays below mu * F_n (viscous). tau_f = 5 m V / F_n puts the
 # friction demand just past saturation: Coulomb friction (F_t = mu F_n) with
 # a steady normal force from 10 mm/s to 1 m/s and 0.05 to 50 N (measured:
-# tests/test_hard_cases.py).
+# tests/robustness/test_hard_cases.py).
 FRICTION_TAU_PER_MV_F = 5.0
 SLIDE_KP = 2e4  # N/m, sliding servo stiffness
 

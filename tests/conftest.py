@@ -1,4 +1,5 @@
 import pathlib
+import sys
 
 import mujoco
 import numpy as np
@@ -9,6 +10,12 @@ from mjtouch import scenes
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 MODELS = REPO / "models"
+# Tests are grouped like the code (unit, plugin, science, robustness); some
+# share helpers across groups (test_receptors.SA1, test_layered.BAD), so each
+# group's folder is importable whichever is collected first.
+for _group in ("unit", "plugin", "science", "robustness"):
+    if str(REPO / "tests" / _group) not in sys.path:
+        sys.path.insert(0, str(REPO / "tests" / _group))
 
 
 def fast_tip(**kw) -> scenes.Fingertip:

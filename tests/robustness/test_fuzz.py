@@ -13,7 +13,7 @@ from conftest import pad_scene, registered_attributes
 
 # Valid ranges of the numeric attributes (plugin/core/pipeline/skin.cc). Draws inside
 # a range are log-uniform where the range is positive; the nx and depth
-# ranges are narrowed to keep kernel builds fast (tests/test_hard_cases.py
+# ranges are narrowed to keep kernel builds fast (tests/robustness/test_hard_cases.py
 # covers 10 um and 20 mm); out-of-range and malformed values come from
 # `anything` below.
 LOG_RANGES = {

@@ -1,6 +1,6 @@
 """Stage 3b: the layered elastic skin (plugin/core/substrate/layered.*) and the stress
 stage (plugin/core/stress/stress_field.*), against an independent numpy/scipy
-computation (tests/layered_oracle.py: Navier equations with Lame constants,
+computation (tests/unit/layered_oracle.py: Navier equations with Lame constants,
 complex arithmetic, direct inverse 2D Fourier integration), closed forms and
 physical laws; and its wiring into the plugin (attributes, errors, outputs)."""
 

@@ -87,7 +87,7 @@ CASES = [
     ({"ra_lowpass": "2e4"}, "`ra_lowpass`", "(0, 10000] Hz"),
     ({"pc_lowpass": "-5"}, "`pc_lowpass`", "(0, 100000] Hz"),
     ({"pc_lowpass": "2e5"}, "`pc_lowpass`", "(0, 100000] Hz"),
-    # the elastic skin (more in tests/test_layered.py)
+    # the elastic skin (more in tests/unit/test_layered.py)
     ({"stress_method": "gpu"}, "`stress_method`", "tree direct fft auto"),
     ({"stress_method": "tree", "stress_theta": "0"}, "`stress_theta`", "(0, 2]"),
     ({"stress_method": "tree", "stress_theta": "2.5"}, "`stress_theta`", "(0, 2]"),
@@ -121,7 +121,7 @@ def test_bad_attribute_fails_at_compile(attrs, name, valid):
 
 def test_every_attribute_is_checked_here_or_in_test_layered():
     # every key the plugin registers has a bad-input case in CASES (or in
-    # tests/test_layered.py's BAD for the elastic skin)
+    # tests/unit/test_layered.py's BAD for the elastic skin)
     from test_layered import BAD
     covered = {k for attrs, *_ in CASES + BAD for k in attrs}
     assert set(registered_attributes()) - covered == set()
