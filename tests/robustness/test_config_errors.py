@@ -3,7 +3,7 @@
 import mujoco
 import pytest
 
-from conftest import pad_scene, registered_attributes
+from conftest import add_geom, pad_scene, pad_spec, registered_attributes
 
 CASES = [
     ({"nx": "-3"}, "`nx`", "[4, 512]"),
@@ -108,9 +108,11 @@ CASES = [
 @pytest.mark.parametrize("attrs,name,valid", CASES,
                          ids=[";".join(f"{k}={v}" for k, v in c[0].items()) for c in CASES])
 def test_bad_attribute_fails_at_compile(attrs, name, valid):
-    xml = pad_scene(attrs, extra='<geom name="plate_sphere" type="sphere" size="0.001" pos="0.03 0 0.01" contype="0" conaffinity="0"/>')
+    spec = pad_spec(attrs)
+    add_geom(spec.worldbody, "sphere", [0.001], name="plate_sphere", pos=[0.03, 0, 0.01],
+             contype=0, conaffinity=0)
     with pytest.raises(ValueError) as e:
-        mujoco.MjModel.from_xml_string(xml)
+        spec.compile()
     msg = str(e.value)
     # the plugin's own message (a line of MuJoCo's error) names the
     # attribute and its valid range
@@ -144,7 +146,7 @@ def test_unknown_attribute_fails_at_compile():
 
 def test_pad_must_be_sphere_ellipsoid_capsule_or_box():
     with pytest.raises(ValueError, match="must be a sphere, ellipsoid, capsule or box"):
-        mujoco.MjModel.from_xml_string(pad_scene(pad='type="cylinder" size="0.008 0.007"'))
+        pad_spec(pad={"kind": "cylinder", "size": [0.008, 0.007]}).compile()
 
 
 def test_sdf_texture_cannot_be_rendered():
