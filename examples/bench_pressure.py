@@ -7,7 +7,7 @@ The default sliding scene (ridged fingertip, 0.5 N, 25 mm/s over the 1 mm
 grating), taxels at 0.1 mm, the skin's outputs reduced to `force` so that
 only stages 1-2 run (surface rendering and the pressure model). Every
 configuration starts from the same settled, sliding state
-(mjtouch.bench.States) and is timed as the minimum over rounds of
+(mjtouch.bench.timing.States) and is timed as the minimum over rounds of
 `mj_step(nstep)`; in the same run: the bare MuJoCo step (plugin removed) and
 MuJoCo's native `tactile` sensor on a mesh with as many vertices as taxels.
 Prints us/step and the ratios to both baselines.
@@ -16,8 +16,6 @@ Prints us/step and the ratios to both baselines.
 from __future__ import annotations
 
 import argparse
-
-import mujoco
 
 from mjtouch import bench, scenes
 
@@ -38,9 +36,8 @@ def measure(steps: int = 200, elastic_steps: int = 30, rounds: int = 3) -> list[
             nstep = elastic_steps if model == "elastic" else steps
             runs[n, model] = (bench.Run(m, state, warm, bench.slide_ctrl(proto, nstep)), nstep)
         tip, proto = bench.scene_parts({"nx": n, "pitch_m": 1e-4})
-        xml = scenes.scene_xml(tip, texture, proto)
-        native = mujoco.MjModel.from_xml_string(
-            bench.native_tactile_xml(xml, n, 1e-4, tip.semi_axes_m))
+        native = bench.add_native_tactile(scenes.scene_spec(tip, texture, proto), n, 1e-4,
+                                          tip.semi_axes_m).compile()
         state, warm = states.initial(native)
         runs[n, "native tactile"] = (bench.Run(native, state, warm, bench.slide_ctrl(proto, steps)),
                                      steps)

@@ -28,7 +28,7 @@ def ladder(radius_m: float = 0.02, force_n: float = 0.5, steps: int = 1500) -> d
                     poisson=h.poisson, outputs="force pressure")
         if model == "elastic":
             skin.update(young=h.young_pa, tolerance=1e-8)
-        m = mujoco.MjModel.from_xml_string(scenes.sphere_press_xml(radius_m, skin))
+        m = scenes.sphere_press_spec(radius_m, skin).compile()
         d = mujoco.MjData(m)
         layout = SkinLayout.from_model(m)
         d.ctrl[0] = force_n

@@ -1,4 +1,11 @@
-"""MJCF builders: the ridged fingertip, textured plates and sliding scenes.
+"""Scene builders on ``mujoco.MjSpec``: the ridged fingertip, textured plates,
+the sliding scene and the sphere-press oracle scene.
+
+Each ``add_*`` function adds a part to a spec; ``scene_spec`` and
+``sphere_press_spec`` return whole scenes as specs that callers edit
+(``set_skin``, ``remove_skin``, attach, any MjSpec edit) and compile. No MJCF
+text is written by hand: ``scene_xml`` is ``MjSpec.to_xml`` (which writes 6
+significant digits: compile the spec, not its XML, when digits matter).
 
 The fingertip is a smooth ellipsoid pad that MuJoCo collides with a flat,
 colliding plate proxy; MuJoCo supplies the motion and the total contact force.
@@ -7,8 +14,9 @@ the ``mjtouch.skin`` plugin renders against, so a fine texture costs nothing in
 MuJoCo's collision (a colliding fine height field costs ~3 ms per step).
 The skin's fingerprint ridges are rendered by the plugin too.
 
-``write_models(dir)`` regenerates the committed files in ``models/``; a test
-checks they are in sync with these builders.
+``write_models(dir)`` regenerates the committed files in ``models/`` (the
+parts, and each shipped scene as one complete file); a test checks they are
+in sync with these builders.
 """
 
 from __future__ import annotations
@@ -65,8 +73,8 @@ class Texture:
     - ``dots``: hexagonal array of spherical-cap dots (``dot_spacing_m``,
       ``dot_radius_m``, ``height_m``);
     - ``flat``: no texture.
-    Gratings are 1D (a 2-row height field, inline in MJCF); random and dot
-    textures are 2D height fields set through MjSpec (:func:`build_model`)."""
+    Gratings are 1D (a 2-row height field); random and dot textures are 2D
+    height fields."""
 
     kind: TextureKind = "grating"
     period_m: float = 1.0e-3
@@ -192,18 +200,18 @@ def _fmt(x: float) -> str:
 # 0.95-0.99) makes MuJoCo's elliptic friction cone inflate the normal force
 # while sliding: the pad chatters at 100-600 Hz and lifts off (0.08 N rms at
 # 40 mm/s, measured).
-CONTACT_SOLREF = "0.01 1"
-CONTACT_SOLIMP = "0.5 0.9 0.001"
+CONTACT_SOLREF = [0.01, 1.0]
+CONTACT_SOLIMP = [0.5, 0.9, 0.001, 0.5, 2.0]  # the last two: MuJoCo's defaults
 # Pad-plate pair: impedance rising from 0.5 to 0.9999 over 4 mm stiffens like
 # a fingertip (~1.6 mm at 0.5 N, ~3 mm at 50 N) and never lets the pad through.
-PAIR_SOLIMP = "0.5 0.9999 0.004 0.5 2"
+PAIR_SOLIMP = [0.5, 0.9999, 0.004, 0.5, 2.0]
 # Soft constraints make friction rate dependent: its reference acceleration
 # grows as slip speed / solreffriction time constant. Too stiff for the slip
 # speed and the cone inflates the normal force (chatter, lift-off); too soft
 # and friction stays below mu * F_n (viscous). tau_f = 5 m V / F_n puts the
 # friction demand just past saturation: Coulomb friction (F_t = mu F_n) with
 # a steady normal force from 10 mm/s to 1 m/s and 0.05 to 50 N (measured:
-# tests/test_hard_cases.py).
+# tests/robustness/test_hard_cases.py).
 FRICTION_TAU_PER_MV_F = 5.0
 SLIDE_KP = 2e4  # N/m, sliding servo stiffness
 
@@ -231,20 +239,14 @@ def skin_config(tip: Fingertip) -> dict[str, str]:
     return cfg
 
 
-@dataclasses.dataclass
-class Fragment:
-    """Pieces of MJCF that a part contributes to each top-level section."""
+def _q(x: float) -> float:
+    """x as the 9 significant digits MJCF files carry, so a model built from
+    the spec and one read from its XML are the same bit for bit."""
+    return float(_fmt(x))
 
-    extension: str = ""
-    asset: str = ""
-    worldbody: str = ""
-    actuator: str = ""
-    sensor: str = ""
-    contact: str = ""
 
-    def standalone(self, model_name: str) -> str:
-        """The part as its own file, for <include>."""
-        return _document(model_name, [self])
+def _qv(*xs: float) -> list[float]:
+    return [_q(x) for x in xs]
 
 
 # Where the fingertip starts: above the plate's left quarter, so a slide of up
@@ -255,75 +257,129 @@ def _start_x(texture_length_m: float) -> float:
 
 PRESS_KP = 2e3  # N/m, the displacement-control servo (critically damped by kv)
 PAD_CLEARANCE_M = 3e-4  # the pad's pole starts this far above the plate
+SKIN_PLUGIN = "mjtouch.skin"
 
 
-def fingertip_fragment(tip: Fingertip, start_x_m: float = -0.02,
-                       travel_m: float = 0.04, control: str = "force") -> Fragment:
+def add_skin_sensor(spec: mujoco.MjSpec, geom: str, config: dict[str, str],
+                    name: str = "skin") -> mujoco.MjsPlugin:
+    """An ``mjtouch.skin`` sensor on ``geom`` with attributes ``config``
+    (key -> value string). Returns its plugin instance: edit the attributes
+    through ``plugin.config`` (MuJoCo 4.0.0's ``sensor.plugin.config`` of a
+    sensor made in Python crashes: read them through :func:`skin_plugins`)."""
+    spec.activate_plugin(SKIN_PLUGIN)
+    plugin = spec.add_plugin(plugin_name=SKIN_PLUGIN, active=True)
+    plugin.config = {str(k): str(v) for k, v in config.items()}
+    sensor = spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_PLUGIN,
+                             objtype=mujoco.mjtObj.mjOBJ_GEOM, objname=geom)
+    sensor.plugin = plugin
+    return plugin
+
+
+def skin_plugins(spec: mujoco.MjSpec) -> list[mujoco.MjsPlugin]:
+    """The spec's mjtouch.skin plugin instances (``.config`` to edit)."""
+    return [p for p in spec.plugins if p.plugin_name == SKIN_PLUGIN]
+
+
+def set_skin(spec: mujoco.MjSpec, **attributes: str) -> mujoco.MjSpec:
+    """Set (or, with value None, remove) attributes of every skin instance."""
+    for p in skin_plugins(spec):
+        cfg = dict(p.config)
+        for k, v in attributes.items():
+            if v is None:
+                cfg.pop(k, None)
+            else:
+                cfg[k] = str(v)
+        p.config = cfg
+    return spec
+
+
+def remove_skin(spec: mujoco.MjSpec) -> mujoco.MjSpec:
+    """Delete every mjtouch.skin sensor and instance: the bare MuJoCo scene
+    (a sensor plugin does not change the physics)."""
+    for s in list(spec.sensors):
+        if s.type == mujoco.mjtSensor.mjSENS_PLUGIN:
+            spec.delete(s)
+    for p in skin_plugins(spec):
+        spec.delete(p)
+    return spec
+
+
+def add_fingertip(spec: mujoco.MjSpec, tip: Fingertip, start_x_m: float = -0.02,
+                  travel_m: float = 0.04, control: str = "force",
+                  skin: bool = True) -> mujoco.MjsBody:
     """The fingertip: slide joints in x (sliding) and z (pressing), the pad
-    geom, its actuators and the skin sensor plugin instance. The `press`
-    actuator is a motor (ctrl = -force, N) or, for control="displacement", a
-    position servo on press_z (ctrl = the joint's target, m; the pole's depth
-    below the plate top is -ctrl - PAD_CLEARANCE_M)."""
+    geom, its actuators and (``skin``) the skin sensor plugin instance. The
+    `press` actuator is a motor (ctrl = -force, N) or, for
+    control="displacement", a position servo on press_z (ctrl = the joint's
+    target, m; the pole's depth below the plate top is -ctrl - PAD_CLEARANCE_M)."""
     tip.validate()
+    if control not in ("force", "displacement"):
+        raise ValueError(f"control = {control!r} is not one of 'force', 'displacement'")
     a, b, c = tip.semi_axes_m
     z0 = c + PAD_CLEARANCE_M
-    cfg = skin_config(tip)
-    slide_damping = 2 * math.sqrt(SLIDE_KP * tip.mass_kg)
-    config = "\n".join(f'        <config key="{k}" value="{v}"/>' for k, v in cfg.items())
+    finger = spec.worldbody.add_body(name="finger", pos=_qv(start_x_m, 0, z0), gravcomp=1)
+    finger.add_joint(name="slide_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
+                     damping=_q(2 * math.sqrt(SLIDE_KP * tip.mass_kg)))
+    finger.add_joint(name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], damping=2)
+    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, size=_qv(a, b, c),
+                    mass=_q(tip.mass_kg), friction=[_q(tip.friction), 0.005, 0.0001],
+                    solref=CONTACT_SOLREF, solimp=CONTACT_SOLIMP, rgba=[0.93, 0.72, 0.62, 1])
+    # intvelocity: ctrl is the sliding speed (m/s), integrated into a
+    # position setpoint, so the mean speed is exact despite friction;
+    # stiff and critically damped (joint damping) so it does not ring.
+    slide = spec.add_actuator(name="slide", target="slide_x", trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    slide.set_to_intvelocity(kp=SLIDE_KP)
+    slide.actrange = _qv(-travel_m, travel_m)
+    slide.ctrlrange = [-2, 2]
+    press = spec.add_actuator(name="press", target="press_z", trntype=mujoco.mjtTrn.mjTRN_JOINT)
     if control == "displacement":
-        kv = 2 * math.sqrt(PRESS_KP * tip.mass_kg)
-        press = (f'    <position name="press" joint="press_z" kp="{_fmt(PRESS_KP)}" '
-                 f'kv="{_fmt(kv)}" ctrlrange="-0.01 0.01"/>\n')
-    elif control == "force":
-        press = '    <motor name="press" joint="press_z" ctrlrange="-100 100"/>\n'
+        press.set_to_position(kp=PRESS_KP, kv=_q(2 * math.sqrt(PRESS_KP * tip.mass_kg)))
+        press.ctrlrange = [-0.01, 0.01]
     else:
-        raise ValueError(f"control = {control!r} is not one of 'force', 'displacement'")
-    return Fragment(
-        extension='    <plugin plugin="mjtouch.skin"/>\n',
-        worldbody=f"""    <body name="finger" pos="{_fmt(start_x_m)} 0 {_fmt(z0)}" gravcomp="1">
-      <joint name="slide_x" type="slide" axis="1 0 0" damping="{_fmt(slide_damping)}"/>
-      <joint name="press_z" type="slide" axis="0 0 1" damping="2"/>
-      <geom name="pad" type="ellipsoid" size="{_fmt(a)} {_fmt(b)} {_fmt(c)}" mass="{_fmt(tip.mass_kg)}"
-            friction="{_fmt(tip.friction)} 0.005 0.0001" solref="{CONTACT_SOLREF}" solimp="{CONTACT_SOLIMP}"
-            rgba="0.93 0.72 0.62 1"/>
-    </body>
-""",
-        # intvelocity: ctrl is the sliding speed (m/s), integrated into a
-        # position setpoint, so the mean speed is exact despite friction;
-        # stiff and critically damped (joint damping) so it does not ring.
-        actuator=f"""    <intvelocity name="slide" joint="slide_x" kp="{_fmt(SLIDE_KP)}" actrange="{_fmt(-travel_m)} {_fmt(travel_m)}" ctrlrange="-2 2"/>
-{press}""",
-        sensor=f"""    <plugin name="skin" plugin="mjtouch.skin" objtype="geom" objname="pad">
-{config}
-    </plugin>
-""")
+        press.set_to_motor()
+        press.ctrlrange = [-100, 100]
+    if skin:
+        add_skin_sensor(spec, "pad", skin_config(tip))
+    return finger
 
 
-def plate_fragment(texture: Texture) -> Fragment:
-    """A plate: a colliding flat box proxy (MuJoCo's contact) and a
-    non-colliding geom named ``texture`` that the skin renders against.
-    2D textures declare the height field without data: :func:`build_model`
-    fills it."""
+def add_grating_hfield(spec: mujoco.MjSpec, name: str, texture: Texture, half_width_m: float,
+                       x_m: np.ndarray | None = None) -> mujoco.MjsHField:
+    """A 2-row height field of a grating's profile, ``texture.height_m`` tall
+    (samples at 4 digits, as the committed MJCF carries them)."""
+    if x_m is None:
+        x_m = np.linspace(-texture.length_m / 2, texture.length_m / 2, texture.ncol)
+    row = texture.profile(x_m) / texture.height_m
+    return spec.add_hfield(name=name, nrow=2, ncol=len(x_m),
+                           size=_qv(texture.length_m / 2, half_width_m, texture.height_m, 0.001),
+                           userdata=[float(f"{v:.4g}") for v in np.concatenate([row, row])])
+
+
+def add_plate(spec: mujoco.MjSpec, texture: Texture,
+              parent: mujoco.MjsBody | None = None) -> None:
+    """A plate on ``parent`` (default: the world): a colliding flat box proxy
+    (MuJoCo's contact) and a non-colliding geom named ``texture`` that the
+    skin renders against."""
     texture.validate()
     L, W = texture.length_m, texture.width_m
     # 1 cm thick: a hard press (50 N) sinks ~3 mm into MuJoCo's soft contact
-    proxy = (f'    <geom name="plate" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.01" '
-             f'pos="0 0 -0.01" friction="0.5 0.005 0.0001" rgba="0.55 0.6 0.65 1"/>\n')
+    world = parent or spec.worldbody
+    world.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=_qv(L / 2, W / 2, 0.01),
+                   pos=[0, 0, -0.01], friction=[0.5, 0.005, 0.0001], rgba=[0.55, 0.6, 0.65, 1])
+    hidden = dict(contype=0, conaffinity=0, group=TEXTURE_GROUP)
     if texture.kind == "flat":
-        return Fragment(worldbody=proxy + (
-            f'    <geom name="texture" type="box" size="{_fmt(L / 2)} {_fmt(W / 2)} 0.01" '
-            f'pos="0 0 -0.01" contype="0" conaffinity="0" group="{TEXTURE_GROUP}" rgba="0 0 0 0"/>\n'))
-    relief = _relief(texture)
-    data = ""
+        world.add_geom(name="texture", type=mujoco.mjtGeom.mjGEOM_BOX,
+                       size=_qv(L / 2, W / 2, 0.01), pos=[0, 0, -0.01], rgba=[0, 0, 0, 0], **hidden)
+        return
     if texture.nrow == 2:
+        add_grating_hfield(spec, "texture", texture, W / 2)
+    else:  # a million samples: exact values, no 4-digit rounding
         h = texture.heights()
-        data = ("\n            elevation=\"" + " ".join(f"{v:.4g}" for v in (h / relief).ravel())
-                + "\"")
-    asset = (f'    <hfield name="texture" nrow="{texture.nrow}" ncol="{texture.ncol}" '
-             f'size="{_fmt(L / 2)} {_fmt(W / 2)} {_fmt(relief)} 0.001"{data}/>\n')
-    body = proxy + ('    <geom name="texture" type="hfield" hfield="texture" contype="0" '
-                    f'conaffinity="0" group="{TEXTURE_GROUP}" rgba="0.45 0.5 0.55 1"/>\n')
-    return Fragment(asset=asset, worldbody=body)
+        spec.add_hfield(name="texture", nrow=texture.nrow, ncol=texture.ncol,
+                        size=_qv(L / 2, W / 2, _relief(texture), 0.001),
+                        userdata=(h.ravel() / (h.max() - h.min())).tolist())
+    world.add_geom(name="texture", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="texture",
+                   rgba=[0.45, 0.5, 0.55, 1], **hidden)
 
 
 def _relief(texture: Texture) -> float:
@@ -334,61 +390,72 @@ def _relief(texture: Texture) -> float:
     return float(h.max() - h.min())
 
 
-def build_model(tip: Fingertip | None = None, texture: Texture | None = None,
-                protocol: Protocol | None = None) -> mujoco.MjModel:
-    """Compile a scene; 2D textures' height data are set through MjSpec
-    (a million-sample height field does not belong in XML text)."""
+def add_pad_plate_contact(spec: mujoco.MjSpec, tip: Fingertip, protocol: Protocol) -> None:
+    """The pad-plate contact pair, its friction tuned to the protocol."""
+    mu = _q(tip.friction)
+    spec.add_pair(geomname1="pad", geomname2="plate", condim=3,
+                  friction=[mu, mu, 0.005, 0.0001, 0.0001], solref=CONTACT_SOLREF,
+                  solimp=PAIR_SOLIMP, solreffriction=[_q(friction_timeconst(tip, protocol)), 1])
+
+
+def set_options(spec: mujoco.MjSpec, protocol: Protocol) -> None:
+    spec.option.timestep = _q(protocol.timestep_s)
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+
+
+def add_light(spec: mujoco.MjSpec) -> None:
+    spec.worldbody.add_light(pos=[0, 0, 0.3], dir=[0, 0, -1])
+
+
+def fingertip_spec(tip: Fingertip, start_x_m: float = -0.02, travel_m: float = 0.04,
+                   model_name: str = "fingertip") -> mujoco.MjSpec:
+    """The fingertip alone (the part file models/fingertip.xml)."""
+    spec = mujoco.MjSpec()
+    spec.modelname = model_name
+    add_fingertip(spec, tip, start_x_m, travel_m)
+    return spec
+
+
+def plate_spec(texture: Texture, model_name: str = "plate") -> mujoco.MjSpec:
+    """The plate alone (the part files models/plate_*.xml)."""
+    spec = mujoco.MjSpec()
+    spec.modelname = model_name
+    add_plate(spec, texture)
+    return spec
+
+
+def scene_spec(tip: Fingertip | None = None, texture: Texture | None = None,
+               protocol: Protocol | None = None, model_name: str = "mjtouch_slide",
+               skin: bool = True) -> mujoco.MjSpec:
+    """The sliding scene, fingertip over a plate, as an MjSpec to edit
+    (:func:`set_skin`, attach, ...) and compile.
+    ``skin=False``: the bare MuJoCo scene without the plugin."""
+    tip = tip or Fingertip()
     texture = texture or Texture()
-    xml = scene_xml(tip, texture, protocol)
-    if texture.kind == "flat" or texture.nrow == 2:
-        return mujoco.MjModel.from_xml_string(xml)
-    spec = mujoco.MjSpec.from_string(xml)
-    h = texture.heights()
-    spec.hfields[0].userdata = (h.ravel() / (h.max() - h.min())).tolist()
-    return spec.compile()
-
-
-def _options(protocol: Protocol) -> str:
-    return (f'  <option timestep="{_fmt(protocol.timestep_s)}" integrator="implicitfast" '
-            'cone="elliptic"/>\n')
-
-
-def _document(model_name: str, parts: list[Fragment], head: str = "",
-              includes: list[str] = ()) -> str:
-    out = [f'<mujoco model="{model_name}">\n']
-    out += [f'  <include file="{f}"/>\n' for f in includes]
-    out.append(head)
-    for section in ("extension", "asset", "worldbody", "contact", "actuator", "sensor"):
-        body = "".join(getattr(p, section) for p in parts)
-        if section == "worldbody" and head:
-            body = '    <light pos="0 0 0.3" dir="0 0 -1"/>\n' + body
-        if body:
-            out.append(f"  <{section}>\n{body}  </{section}>\n")
-    out.append("</mujoco>\n")
-    return "".join(out)
+    protocol = protocol or Protocol()
+    protocol.validate()
+    spec = mujoco.MjSpec()
+    spec.modelname = model_name
+    set_options(spec, protocol)
+    add_plate(spec, texture)
+    add_fingertip(spec, tip, _start_x(texture.length_m), texture.length_m, protocol.control,
+                  skin=skin)
+    add_light(spec)
+    add_pad_plate_contact(spec, tip, protocol)
+    return spec
 
 
 def scene_xml(tip: Fingertip | None = None, texture: Texture | None = None,
               protocol: Protocol | None = None, model_name: str = "mjtouch_slide") -> str:
     """A complete single-file MJCF scene: fingertip over a plate."""
-    tip = tip or Fingertip()
-    texture = texture or Texture()
-    protocol = protocol or Protocol()
-    protocol.validate()
-    parts = [plate_fragment(texture),
-             fingertip_fragment(tip, _start_x(texture.length_m), texture.length_m,
-                                protocol.control),
-             pad_plate_contact(tip, protocol)]
-    return _document(model_name, parts, head=_options(protocol))
+    return scene_spec(tip, texture, protocol, model_name).to_xml()
 
 
-def pad_plate_contact(tip: Fingertip, protocol: Protocol) -> Fragment:
-    """The pad-plate contact pair, its friction tuned to the protocol."""
-    mu = _fmt(tip.friction)
-    return Fragment(contact=(
-        f'    <pair geom1="pad" geom2="plate" condim="3" friction="{mu} {mu} 0.005 0.0001 0.0001"\n'
-        f'          solref="{CONTACT_SOLREF}" solimp="{PAIR_SOLIMP}" '
-        f'solreffriction="{_fmt(friction_timeconst(tip, protocol))} 1"/>\n'))
+def build_model(tip: Fingertip | None = None, texture: Texture | None = None,
+                protocol: Protocol | None = None) -> mujoco.MjModel:
+    """Compile the sliding scene (:func:`scene_spec`)."""
+    return scene_spec(tip, texture, protocol).compile()
 
 
 def controls(protocol: Protocol, duration_s: float) -> np.ndarray:
@@ -406,57 +473,56 @@ def controls(protocol: Protocol, duration_s: float) -> np.ndarray:
     return ctrl
 
 
-def sphere_press_xml(radius_m: float, skin: dict[str, str], timestep_s: float = 1e-3) -> str:
+def sphere_press_spec(radius_m: float, skin: dict[str, str],
+                      timestep_s: float = 1e-3) -> mujoco.MjSpec:
     """A rigid-plate oracle scene: a sphere pad (the skin) on a slide joint,
     pushed down onto a flat box plate by the motor `press` (ctrl = force, N),
     no gravity. The Hertz set-up of mjtouch.oracles."""
     _positive("radius_m", radius_m)
-    conf = "".join(f'<config key="{k}" value="{v}"/>' for k, v in skin.items())
-    return f"""<mujoco model="sphere_press">
-  <extension><plugin plugin="mjtouch.skin"/></extension>
-  <option timestep="{_fmt(timestep_s)}" gravity="0 0 0"/>
-  <worldbody>
-    <geom name="plate" type="box" size="0.05 0.05 0.002" pos="0 0 -0.002"/>
-    <body name="finger" pos="0 0 {_fmt(radius_m)}">
-      <joint name="press_z" type="slide" axis="0 0 1" damping="5"/>
-      <geom name="pad" type="sphere" size="{_fmt(radius_m)}" mass="0.01" solref="0.01 1"/>
-    </body>
-  </worldbody>
-  <actuator><motor name="press" joint="press_z" gear="-1"/></actuator>
-  <sensor>
-    <plugin name="skin" plugin="mjtouch.skin" objtype="geom" objname="pad">{conf}</plugin>
-  </sensor>
-</mujoco>
-"""
+    spec = mujoco.MjSpec()
+    spec.modelname = "sphere_press"
+    spec.option.timestep = _q(timestep_s)
+    spec.option.gravity = [0, 0, 0]
+    spec.worldbody.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX,
+                            size=[0.05, 0.05, 0.002], pos=[0, 0, -0.002])
+    finger = spec.worldbody.add_body(name="finger", pos=[0, 0, _q(radius_m)])
+    finger.add_joint(name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], damping=5)
+    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[_q(radius_m), 0, 0],
+                    mass=0.01, solref=[0.01, 1])
+    press = spec.add_actuator(name="press", target="press_z", trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    press.set_to_motor()
+    press.gear[0] = -1
+    add_skin_sensor(spec, "pad", skin)
+    return spec
+
+
+def sphere_press_xml(radius_m: float, skin: dict[str, str], timestep_s: float = 1e-3) -> str:
+    return sphere_press_spec(radius_m, skin, timestep_s).to_xml()
 
 
 def write_models(directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Regenerate the committed MJCF files in ``models/``: parts (fingertips,
-    plates) and scenes that include them."""
+    """Regenerate the committed MJCF files in ``models/`` from the same
+    specs the Python scenes compile: the parts (fingertips, plates) and the
+    three shipped scenes, each scene a complete file (MjSpec.to_xml)."""
     d = pathlib.Path(directory)
     d.mkdir(parents=True, exist_ok=True)
     texture = Texture()
     x0 = _start_x(texture.length_m)
-    files = {
-        "fingertip.xml": fingertip_fragment(Fingertip(), x0, texture.length_m).standalone(
-            "fingertip"),
-        "fingertip_smooth.xml": fingertip_fragment(Fingertip(ridges=False), x0,
-                                                   texture.length_m).standalone("fingertip_smooth"),
-        "plate_grating.xml": plate_fragment(texture).standalone("plate_grating"),
-        "plate_flat.xml": plate_fragment(Texture(kind="flat")).standalone("plate_flat"),
+    specs = {
+        "fingertip.xml": fingertip_spec(Fingertip(), x0, texture.length_m, "fingertip"),
+        "fingertip_smooth.xml": fingertip_spec(Fingertip(ridges=False), x0, texture.length_m,
+                                               "fingertip_smooth"),
+        "plate_grating.xml": plate_spec(texture, "plate_grating"),
+        "plate_flat.xml": plate_spec(Texture(kind="flat"), "plate_flat"),
+        "slide_grating.xml": scene_spec(texture=texture, model_name="slide_grating"),
+        "slide_grating_smooth.xml": scene_spec(Fingertip(ridges=False), texture,
+                                               model_name="slide_grating_smooth"),
+        "slide_flat.xml": scene_spec(texture=Texture(kind="flat"), model_name="slide_flat"),
     }
-    head = _options(Protocol())
-    contact = pad_plate_contact(Fingertip(), Protocol())
-    for scene, parts in {
-        "slide_grating.xml": ["plate_grating.xml", "fingertip.xml"],
-        "slide_grating_smooth.xml": ["plate_grating.xml", "fingertip_smooth.xml"],
-        "slide_flat.xml": ["plate_flat.xml", "fingertip.xml"],
-    }.items():
-        files[scene] = _document(scene[:-4], [contact], head=head, includes=parts)
     paths = []
-    for name, xml in files.items():
+    for name, spec in specs.items():
         p = d / name
-        p.write_text(xml)
+        p.write_text(spec.to_xml())
         paths.append(p)
     return paths
 

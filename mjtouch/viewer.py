@@ -110,8 +110,8 @@ class SlideSession:
             texture = dataclasses.replace(TEXTURES[s.texture][1])
             protocol = scenes.Protocol(force_n=s.force_n, speed_m_s=s.speed_m_s,
                                        timestep_s=s.timestep_s)
-            xml = scenes.scene_xml(tip, texture, protocol, model_name="mjtouch_view")
-            self.model = mujoco.MjModel.from_xml_string(xml)
+            self.model = scenes.scene_spec(tip, texture, protocol,
+                                           model_name="mjtouch_view").compile()
         else:
             self.model = mujoco.MjModel.from_xml_path(str(self.scene_path))
         self.data = mujoco.MjData(self.model)

@@ -1,4 +1,5 @@
 import pathlib
+import sys
 
 import mujoco
 import numpy as np
@@ -9,6 +10,12 @@ from mjtouch import scenes
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 MODELS = REPO / "models"
+# Tests are grouped like the code (unit, plugin, science, robustness); some
+# share helpers across groups (test_receptors.SA1, test_layered.BAD), so each
+# group's folder is importable whichever is collected first.
+for _group in ("unit", "plugin", "science", "robustness"):
+    if str(REPO / "tests" / _group) not in sys.path:
+        sys.path.insert(0, str(REPO / "tests" / _group))
 
 
 def fast_tip(**kw) -> scenes.Fingertip:
@@ -19,31 +26,47 @@ def fast_tip(**kw) -> scenes.Fingertip:
     return scenes.Fingertip(**kw)
 
 
-def pad_scene(skin: dict[str, str] | None = None, pad: str = 'type="ellipsoid" size="0.008 0.007 0.007"',
-              texture: bool = True, extra: str = "") -> str:
-    """A minimal scene: a free pad resting on a plate (+ optional grating)."""
+def geom_type(name: str) -> mujoco.mjtGeom:
+    return getattr(mujoco.mjtGeom, f"mjGEOM_{name.upper()}")
+
+
+def add_geom(parent, kind: str, size, euler_deg=None, **kw):
+    """A geom of type ``kind`` ("sphere", "box", ...); size has 1 to 3 numbers."""
+    size = list(size) + [0.0] * (3 - len(size))
+    g = parent.add_geom(type=geom_type(kind), size=size, **kw)
+    if euler_deg is not None:
+        g.alt.type = mujoco.mjtOrientation.mjORIENTATION_EULER
+        g.alt.euler = list(euler_deg)
+    return g
+
+
+def pad_spec(skin: dict[str, str] | None = None, pad: dict | None = None,
+             texture: bool = True) -> mujoco.MjSpec:
+    """A minimal scene: a free pad resting on a plate (+ optional grating).
+    ``pad``: add_geom arguments (kind, size, euler_deg) for the pad geom;
+    skin attributes with value "" are left out (their defaults)."""
     cfg = {"nx": "48", "pitch": "1.5e-4", "texture": "texture" if texture else ""}
     cfg.update(skin or {})
-    config = "".join(f'<config key="{k}" value="{v}"/>' for k, v in cfg.items() if v != "")
-    tex = ""
-    asset = ""
+    spec = mujoco.MjSpec()  # angles in degrees (compiler.degree)
+    spec.option.timestep = 2e-4
+    spec.worldbody.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX,
+                            size=[0.04, 0.02, 0.002], pos=[0, 0, -0.002])
     if texture:
-        asset = ('<asset><hfield name="h" nrow="2" ncol="5" size="0.01 0.01 0.0001 0.001" '
-                 'elevation="0 1 0 1 0 0 1 0 1 0"/></asset>')
-        tex = '<geom name="texture" type="hfield" hfield="h" contype="0" conaffinity="0"/>'
-    return f"""<mujoco>
-  <extension><plugin plugin="mjtouch.skin"/></extension>
-  <option timestep="2e-4"/>
-  {asset}
-  <worldbody>
-    <geom name="plate" type="box" size="0.04 0.02 0.002" pos="0 0 -0.002"/>
-    {tex}
-    <body name="finger" pos="0 0 0.0071"><freejoint/>
-      <geom name="pad" {pad} mass="0.05" solref="0.004 1"/></body>
-    {extra}
-  </worldbody>
-  <sensor><plugin name="skin" plugin="mjtouch.skin" objtype="geom" objname="pad">{config}</plugin></sensor>
-</mujoco>"""
+        spec.add_hfield(name="h", nrow=2, ncol=5, size=[0.01, 0.01, 0.0001, 0.001],
+                        userdata=[0, 1, 0, 1, 0, 0, 1, 0, 1, 0])
+        spec.worldbody.add_geom(name="texture", type=mujoco.mjtGeom.mjGEOM_HFIELD,
+                                hfieldname="h", contype=0, conaffinity=0)
+    finger = spec.worldbody.add_body(name="finger", pos=[0, 0, 0.0071])
+    finger.add_freejoint()
+    add_geom(finger, **(pad or {"kind": "ellipsoid", "size": [0.008, 0.007, 0.007]}),
+             name="pad", mass=0.05, solref=[0.004, 1])
+    scenes.add_skin_sensor(spec, "pad", {k: v for k, v in cfg.items() if v != ""})
+    return spec
+
+
+def pad_scene(skin: dict[str, str] | None = None, texture: bool = True) -> str:
+    """:func:`pad_spec` as MJCF text (MjSpec.to_xml)."""
+    return pad_spec(skin, texture=texture).to_xml()
 
 
 def assert_no_warnings(data: mujoco.MjData) -> None:

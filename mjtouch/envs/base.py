@@ -98,7 +98,7 @@ class TouchEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
 
-    def __init__(self, xml: str, *, touch: str, pressure_image: int, frame_skip: int,
+    def __init__(self, model_spec: mujoco.MjSpec, *, touch: str, pressure_image: int, frame_skip: int,
                  user_spec: int, render_mode: str | None, render_size: tuple[int, int],
                  max_force_n: float, max_friction: float,
                  refractory_s: float = REFRACTORY_DEFAULT_S):
@@ -108,7 +108,7 @@ class TouchEnv(gym.Env):
         self.touch = touch
         self.render_mode = render_mode
         self._render_size = render_size
-        self.model = mujoco.MjModel.from_xml_string(xml)
+        self.model = model_spec.compile()
         self.data = mujoco.MjData(self.model)
         self.frame_skip = int(frame_skip)
         self.control_dt_s = self.frame_skip * self.model.opt.timestep

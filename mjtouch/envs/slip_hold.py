@@ -54,60 +54,60 @@ GRIP_DAMPING_N_S_M = 2.0  # the grip joint's damping
 GRIP_X_FULL_SCALE_M = 2 * BLOCK_HALF_M[0]
 
 
-def slip_hold_xml(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3,
-                  skin: bool = True) -> str:
+def _euler_deg(element, *angles_deg: float) -> None:
+    element.alt.type = mujoco.mjtOrientation.mjORIENTATION_EULER
+    element.alt.euler = angles_deg
+
+
+def slip_hold_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3,
+                   skin: bool = True) -> mujoco.MjSpec:
     """A block between the fingertip pad (pressing along +x) and a wall."""
     tip = tip or env_fingertip()
     tip.validate()
+    q = scenes._qv
     a, b, c = tip.semi_axes_m
     bx, by, bz = BLOCK_HALF_M
     length = 2 * bz + 0.02
     tex = scenes.Texture(period_m=GRATING_PERIOD_M, length_m=length, resolution_m=5e-5)
-    x = np.linspace(-length / 2, length / 2, tex.ncol)
-    row = tex.profile(x) / tex.height_m
-    elevation = " ".join(f"{v:.4g}" for v in np.concatenate([row, row]))
-    cfg = scenes.skin_config(tip)
-    config = "\n".join(f'        <config key="{k}" value="{v}"/>' for k, v in cfg.items())
+    spec = mujoco.MjSpec()
+    spec.modelname = "mjtouch_slip_hold"
+    spec.compiler.degree = True
+    spec.option.timestep = scenes._q(timestep_s)
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    # stiff friction, so a held block creeps < 0.1 mm/s (MuJoCo's soft
+    # friction otherwise lets it slide at ~mm/s under any grip)
+    spec.option.impratio = 100
+    spec.visual.global_.offwidth, spec.visual.global_.offheight = 640, 480
+    scenes.add_grating_hfield(spec, "face", tex, by)
+    world = spec.worldbody
+    world.add_light(pos=[0, -0.3, 0.3], dir=[0, 1, -1])
+    world.add_geom(name="wall", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.005, 0.03, 0.04],
+                   pos=q(bx + 0.005, 0, 0), priority=2, condim=1, rgba=[0.55, 0.6, 0.65, 1])
+    block = world.add_body(name="object")
+    block.add_joint(name="object_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0], damping=0.1)
+    block.add_joint(name="object_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
+    block.add_geom(name="object", type=mujoco.mjtGeom.mjGEOM_BOX, size=q(bx, by, bz),
+                   mass=BLOCK_MASS_KG, friction=[0.5, 0.005, 0.0001], rgba=[0.3, 0.5, 0.8, 1])
+    face = block.add_geom(name="face", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="face",
+                          pos=q(-bx, 0, 0), contype=0, conaffinity=0, group=scenes.TEXTURE_GROUP,
+                          rgba=[0.25, 0.4, 0.7, 1])
+    _euler_deg(face, 0, -90, 0)
     # The finger's frame: pad -z (the skin) along world +x, pad x along world +z.
-    return f"""<mujoco model="mjtouch_slip_hold">
-  <!-- impratio: stiff friction, so a held block creeps < 0.1 mm/s (MuJoCo's
-       soft friction otherwise lets it slide at ~mm/s under any grip) -->
-  <option timestep="{timestep_s:.9g}" integrator="implicitfast" cone="elliptic" impratio="100"/>
-  <visual><global offwidth="640" offheight="480"/></visual>
-{'  <extension><plugin plugin="mjtouch.skin"/></extension>' if skin else ''}
-  <asset>
-    <hfield name="face" nrow="2" ncol="{tex.ncol}" size="{length / 2:.9g} {by:.9g} {tex.height_m:.9g} 0.001"
-            elevation="{elevation}"/>
-  </asset>
-  <worldbody>
-    <light pos="0 -0.3 0.3" dir="0 1 -1"/>
-    <geom name="wall" type="box" size="0.005 0.03 0.04" pos="{bx + 0.005:.9g} 0 0"
-          priority="2" condim="1" rgba="0.55 0.6 0.65 1"/>
-    <body name="object" pos="0 0 0">
-      <joint name="object_x" type="slide" axis="1 0 0" damping="0.1"/>
-      <joint name="object_z" type="slide" axis="0 0 1"/>
-      <geom name="object" type="box" size="{bx:.9g} {by:.9g} {bz:.9g}" mass="{BLOCK_MASS_KG}"
-            friction="0.5 0.005 0.0001" rgba="0.3 0.5 0.8 1"/>
-      <geom name="face" type="hfield" hfield="face" pos="{-bx:.9g} 0 0" euler="0 -90 0"
-            contype="0" conaffinity="0" group="{scenes.TEXTURE_GROUP}" rgba="0.25 0.4 0.7 1"/>
-    </body>
-    <body name="finger" pos="{-(bx + c + 3e-4):.9g} 0 0" euler="0 -90 0" gravcomp="1">
-      <joint name="grip" type="slide" axis="0 0 -1" damping="{GRIP_DAMPING_N_S_M:g}"/>
-      <geom name="pad" type="ellipsoid" size="{a:.9g} {b:.9g} {c:.9g}" mass="{tip.mass_kg:.9g}"
-            friction="{PAD_FRICTION} 0.005 0.0001" solref="{scenes.CONTACT_SOLREF}"
-            solimp="{scenes.CONTACT_SOLIMP}" rgba="0.93 0.72 0.62 1"/>
-    </body>
-  </worldbody>
-  <actuator>
-    <motor name="grip" joint="grip" ctrlrange="0 5"/>
-  </actuator>
-{f'''  <sensor>
-    <plugin name="skin" plugin="mjtouch.skin" objtype="geom" objname="pad">
-{config}
-    </plugin>
-  </sensor>''' if skin else ''}
-</mujoco>
-"""
+    finger = world.add_body(name="finger", pos=q(-(bx + c + 3e-4), 0, 0), gravcomp=1)
+    _euler_deg(finger, 0, -90, 0)
+    finger.add_joint(name="grip", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, -1],
+                     damping=GRIP_DAMPING_N_S_M)
+    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, size=q(a, b, c),
+                    mass=scenes._q(tip.mass_kg), friction=[PAD_FRICTION, 0.005, 0.0001],
+                    solref=scenes.CONTACT_SOLREF, solimp=scenes.CONTACT_SOLIMP,
+                    rgba=[0.93, 0.72, 0.62, 1])
+    grip = spec.add_actuator(name="grip", target="grip", trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    grip.set_to_motor()
+    grip.ctrlrange = [0, 5]
+    if skin:
+        scenes.add_skin_sensor(spec, "pad", scenes.skin_config(tip))
+    return spec
 
 
 class SlipHoldEnv(TouchEnv):
@@ -143,9 +143,9 @@ class SlipHoldEnv(TouchEnv):
             raise ValueError(f"control_dt_s = {control_dt_s} must be a multiple of timestep_s = "
                              f"{timestep_s}")
         outputs = "spikes force pressure" if pressure_image else "spikes force"
-        xml = slip_hold_xml(env_fingertip(outputs=outputs), timestep_s, skin=touch != "none")
+        model_spec = slip_hold_spec(env_fingertip(outputs=outputs), timestep_s, skin=touch != "none")
         spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED
-        super().__init__(xml, touch=touch, pressure_image=pressure_image, frame_skip=frame_skip,
+        super().__init__(model_spec, touch=touch, pressure_image=pressure_image, frame_skip=frame_skip,
                          user_spec=int(spec), render_mode=render_mode, render_size=render_size,
                          max_force_n=self.force_range_n[1], max_friction=self.friction_range[1])
         self.force_cost, self.slip_cost = float(force_cost), float(slip_cost)

@@ -69,51 +69,34 @@ def env_fingertip(nx: int = 48, pitch_m: float = 2e-4, radius_m: float = 4e-3,
                                   "stress_method": "tree"})
 
 
-def texture_explore_xml(classes=DEFAULT_CLASSES, tip: scenes.Fingertip | None = None,
-                        timestep_s: float = 1e-3, skin: bool = True) -> str:
+def texture_explore_spec(classes=DEFAULT_CLASSES, tip: scenes.Fingertip | None = None,
+                         timestep_s: float = 1e-3, skin: bool = True) -> mujoco.MjSpec:
     """Fingertip over a flat colliding plate; one non-colliding grating per
     textured class on a mocap body (placed under the pad, or parked)."""
     tip = tip or env_fingertip()
-    finger = scenes.fingertip_fragment(tip, start_x_m=0.0, travel_m=TRAVEL_M)
-    # The project's pad-plate contact, its friction tuned to a mid exploration
-    # (0.5 N, 25 mm/s): Coulomb friction with a steady normal force.
-    contact = scenes.pad_plate_contact(tip, scenes.Protocol(force_n=0.5, speed_m_s=0.025,
-                                                            timestep_s=timestep_s)).contact
-    if not skin:
-        finger.extension = finger.sensor = ""
-    assets, bodies = [], []
+    spec = mujoco.MjSpec()
+    spec.modelname = "mjtouch_texture_explore"
+    scenes.set_options(spec, scenes.Protocol(timestep_s=timestep_s))
+    spec.visual.global_.offwidth, spec.visual.global_.offheight = 640, 480
+    world = spec.worldbody
+    world.add_light(pos=[0, 0, 0.3], dir=[0, 0, -1])
+    world.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.04, 0.015, 0.002],
+                   pos=[0, 0, -0.002], friction=[0.5, 0.005, 0.0001], rgba=[0.55, 0.6, 0.65, 1])
     res = 5e-5  # height-field spacing: >= 12 samples per period for D >= 0.6 mm
     for k, period in enumerate(classes):
         if period == 0:
             continue
         tex = scenes.Texture(period_m=period, length_m=TEXTURE_LENGTH_M, resolution_m=res)
-        x = np.linspace(-TEXTURE_LENGTH_M / 2, TEXTURE_LENGTH_M / 2, tex.ncol)
-        row = tex.profile(x) / tex.height_m
-        elevation = " ".join(f"{v:.4g}" for v in np.concatenate([row, row]))
-        assets.append(f'    <hfield name="tex{k}" nrow="2" ncol="{tex.ncol}" '
-                      f'size="{TEXTURE_LENGTH_M / 2:.9g} 0.012 {tex.height_m:.9g} 0.001" '
-                      f'elevation="{elevation}"/>\n')
-        bodies.append(f'    <body name="tex{k}" mocap="true" pos="0 {PARK_Y_M} 0">\n'
-                      f'      <geom type="hfield" hfield="tex{k}" contype="0" conaffinity="0" '
-                      f'group="{scenes.TEXTURE_GROUP}" rgba="0.45 0.5 0.55 1"/>\n    </body>\n')
-    return f"""<mujoco model="mjtouch_texture_explore">
-  <option timestep="{timestep_s:.9g}" integrator="implicitfast" cone="elliptic"/>
-  <visual><global offwidth="640" offheight="480"/></visual>
-{"  <extension>" + chr(10) + finger.extension + "  </extension>" if skin else ""}
-  <asset>
-{"".join(assets)}  </asset>
-  <worldbody>
-    <light pos="0 0 0.3" dir="0 0 -1"/>
-    <geom name="plate" type="box" size="0.04 0.015 0.002" pos="0 0 -0.002"
-          friction="0.5 0.005 0.0001" rgba="0.55 0.6 0.65 1"/>
-{"".join(bodies)}{finger.worldbody}  </worldbody>
-  <contact>
-{contact}  </contact>
-  <actuator>
-{finger.actuator}  </actuator>
-{"  <sensor>" + chr(10) + finger.sensor + "  </sensor>" if skin else ""}
-</mujoco>
-"""
+        scenes.add_grating_hfield(spec, f"tex{k}", tex, 0.012)
+        body = world.add_body(name=f"tex{k}", mocap=True, pos=[0, PARK_Y_M, 0])
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname=f"tex{k}", contype=0,
+                      conaffinity=0, group=scenes.TEXTURE_GROUP, rgba=[0.45, 0.5, 0.55, 1])
+    scenes.add_fingertip(spec, tip, start_x_m=0.0, travel_m=TRAVEL_M, skin=skin)
+    # The project's pad-plate contact, its friction tuned to a mid exploration
+    # (0.5 N, 25 mm/s): Coulomb friction with a steady normal force.
+    scenes.add_pad_plate_contact(spec, tip, scenes.Protocol(force_n=0.5, speed_m_s=0.025,
+                                                            timestep_s=timestep_s))
+    return spec
 
 
 class TextureExploreEnv(TouchEnv):
@@ -146,9 +129,9 @@ class TextureExploreEnv(TouchEnv):
                              f"{timestep_s}")
         outputs = "spikes force pressure" if pressure_image else "spikes force"
         tip = env_fingertip(outputs=outputs)
-        xml = texture_explore_xml(classes, tip, timestep_s, skin=touch != "none")
+        model_spec = texture_explore_spec(classes, tip, timestep_s, skin=touch != "none")
         spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_POS
-        super().__init__(xml, touch=touch, pressure_image=pressure_image, frame_skip=frame_skip,
+        super().__init__(model_spec, touch=touch, pressure_image=pressure_image, frame_skip=frame_skip,
                          user_spec=int(spec), render_mode=render_mode, render_size=render_size,
                          max_force_n=hi, max_friction=tip.friction)
         self.classes = classes

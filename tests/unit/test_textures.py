@@ -16,10 +16,11 @@ def test_hfield_orientation_matches_mujoco_ray():
     data = rng.random((nrow, ncol))
     data[0, 0], data[-1, -1] = 0.0, 1.0  # MuJoCo normalises to [0, 1]
     rx, ry, hz = 0.01, 0.006, 0.002
-    xml = f"""<mujoco><asset><hfield name="h" nrow="{nrow}" ncol="{ncol}" size="{rx} {ry} {hz} 0.001"
-      elevation="{' '.join(map(str, data.ravel()))}"/></asset>
-      <worldbody><geom type="hfield" hfield="h" pos="0.1 -0.2 0.3"/></worldbody></mujoco>"""
-    m = mujoco.MjModel.from_xml_string(xml)
+    spec = mujoco.MjSpec()
+    spec.add_hfield(name="h", nrow=nrow, ncol=ncol, size=[rx, ry, hz, 0.001],
+                    userdata=data.ravel().tolist())
+    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="h", pos=[0.1, -0.2, 0.3])
+    m = spec.compile()
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
     samples = m.hfield_data.reshape(nrow, ncol)

@@ -224,13 +224,13 @@ def test_lattice_sites_are_the_same_receptors_on_every_grid():
 
 def test_bare_and_native_tactile_scenes():
     tip = scenes.Fingertip(nx=16, pitch_m=4e-4, ridges=False)
-    xml = scenes.scene_xml(tip, scenes.Texture(), scenes.Protocol(timestep_s=2e-4))
-    full = mujoco.MjModel.from_xml_string(xml)
-    bare = mujoco.MjModel.from_xml_string(bench.strip_plugin(xml))
+    def spec():
+        return scenes.scene_spec(tip, scenes.Texture(), scenes.Protocol(timestep_s=2e-4))
+    full = spec().compile()
+    bare = bench.strip_plugin(spec()).compile()
     assert full.nplugin == 1 and bare.nplugin == 0 and bare.nsensor == 0
     assert (bare.nq, bare.nv, bare.nu, bare.ngeom) == (full.nq, full.nv, full.nu, full.ngeom)
-    tact = mujoco.MjModel.from_xml_string(
-        bench.native_tactile_xml(xml, tip.nx, tip.pitch_m, tip.semi_axes_m))
+    tact = bench.add_native_tactile(spec(), tip.nx, tip.pitch_m, tip.semi_axes_m).compile()
     assert tact.mesh_vertnum[0] == 16 * 16 and tact.nsensordata == 3 * 16 * 16
     proto = scenes.Protocol(timestep_s=2e-4)
     for pressed in (True, False):

@@ -12,8 +12,8 @@ from mjtouch.sensor import SkinLayout
 
 def layout(dt, **skin):
     tip = scenes.Fingertip(nx=32, pitch_m=2e-4, skin={k: str(v) for k, v in skin.items()})
-    xml = scenes.scene_xml(tip, scenes.Texture(period_m=1e-3), scenes.Protocol(timestep_s=dt))
-    return SkinLayout.from_model(mujoco.MjModel.from_xml_string(xml))
+    return SkinLayout.from_model(
+        scenes.build_model(tip, scenes.Texture(period_m=1e-3), scenes.Protocol(timestep_s=dt)))
 
 
 def test_auto_oversample_resolves_the_afferents():

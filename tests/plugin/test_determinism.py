@@ -11,8 +11,7 @@ from conftest import fast_tip
 
 def _model():
     proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
-    xml = scenes.scene_xml(fast_tip(), scenes.Texture(period_m=0.6e-3), proto)
-    return mujoco.MjModel.from_xml_string(xml), proto
+    return scenes.build_model(fast_tip(), scenes.Texture(period_m=0.6e-3), proto), proto
 
 
 def _run(m, d, n, speed=0.03):

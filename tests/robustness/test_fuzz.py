@@ -9,12 +9,12 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from conftest import pad_scene, registered_attributes
+from conftest import add_geom, pad_scene, pad_spec, registered_attributes
 
 # Ranges drawn for the numeric attributes, inside their valid ranges
 # (plugin/core/pipeline/attributes.cc; test_fuzz_ranges_are_valid). Draws inside
 # a range are log-uniform where the range is positive; the nx and depth
-# ranges are narrowed to keep kernel builds fast (tests/test_hard_cases.py
+# ranges are narrowed to keep kernel builds fast (tests/robustness/test_hard_cases.py
 # covers 10 um and 20 mm); out-of-range and malformed values come from
 # `anything` below.
 LOG_RANGES = {
@@ -140,15 +140,14 @@ obstacles = st.lists(st.tuples(st.sampled_from(["sphere", "box", "capsule", "cyl
 angles = st.tuples(st.floats(-180, 180), st.floats(-180, 180), st.floats(-180, 180))
 
 
-def _sizes(p):
-    return " ".join(repr(v) for v in p[1:])
-
-
-def geometry_xml(pad, euler, obstacles):
-    pad_xml = f'type="{pad[0]}" size="{_sizes(pad)}" euler="{" ".join(repr(a) for a in euler)}"'
-    extra = "".join(f'<geom type="{t}" size="{" ".join(repr(v) for v in s)}" '
-                    f'pos="{" ".join(repr(v) for v in p)}"/>' for t, s, p in obstacles)
-    return pad_xml, extra
+def scene(cfg, pad, euler, obstacles, drop):
+    """pad_spec with the drawn pad (kind, sizes...), its orientation (degrees),
+    the obstacles (kind, size, pos) and the pad dropped from drop m higher."""
+    spec = pad_spec(cfg, pad={"kind": pad[0], "size": pad[1:], "euler_deg": euler})
+    for kind, size, pos in obstacles:
+        add_geom(spec.worldbody, kind, size, pos=list(pos))
+    spec.body("finger").pos = [0, 0, 0.0071 + drop]
+    return spec
 
 
 def named_in(msg: str, cfg: dict) -> bool:
@@ -167,11 +166,9 @@ def named_in(msg: str, cfg: dict) -> bool:
 @given(cfg=attribute_sets(), pad=pads, euler=angles, obstacles=obstacles,
        drop=st.floats(-0.002, 0.01))
 def test_random_attributes_and_geometry_error_or_finite(cfg, pad, euler, obstacles, drop):
-    pad_xml, extra = geometry_xml(pad, euler, obstacles)
-    xml = pad_scene(cfg, pad=pad_xml, extra=extra)  # with a height-field texture
-    xml = xml.replace('pos="0 0 0.0071"', f'pos="0 0 {0.0071 + drop!r}"')
+    spec = scene(cfg, pad, euler, obstacles, drop)  # with a height-field texture
     try:
-        m = mujoco.MjModel.from_xml_string(xml)
+        m = spec.compile()
     except ValueError as e:
         # a clear error: the plugin's message names the attribute or geom
         assert named_in(str(e), cfg), (str(e), cfg)

@@ -27,15 +27,17 @@ def tip(skin=None) -> scenes.Fingertip:
     return scenes.Fingertip(nx=48, pitch_m=1.5e-4, ridges=False, skin=dict(skin or {}))
 
 
-def flat_scene_xml(skin=None, timestep_s=1e-4, mocap_plate=False) -> str:
-    xml = scenes.scene_xml(tip(skin), scenes.Texture(kind="flat"),
-                           scenes.Protocol(timestep_s=timestep_s))
-    if mocap_plate:  # the plate proxy and the rendered texture ride on one mocap body
-        a = xml.index('    <geom name="plate"')
-        b = xml.index("\n", xml.index('<geom name="texture"')) + 1
-        xml = (xml[:a] + '    <body name="plate_body" mocap="true">\n' + xml[a:b]
-               + "    </body>\n" + xml[b:])
-    return xml
+def flat_scene(skin=None, timestep_s=1e-4, mocap_plate=False) -> mujoco.MjModel:
+    texture, protocol = scenes.Texture(kind="flat"), scenes.Protocol(timestep_s=timestep_s)
+    if not mocap_plate:
+        return scenes.build_model(tip(skin), texture, protocol)
+    # the plate proxy and the rendered texture ride on one mocap body
+    spec = mujoco.MjSpec()
+    scenes.set_options(spec, protocol)
+    scenes.add_plate(spec, texture, parent=spec.worldbody.add_body(name="plate_body", mocap=True))
+    scenes.add_fingertip(spec, tip(skin), scenes._start_x(texture.length_m), texture.length_m)
+    scenes.add_pad_plate_contact(spec, tip(skin), protocol)
+    return spec.compile()
 
 
 def initial_state(m, d=None):
@@ -155,8 +157,7 @@ class RampRuns:
 def ramp_runs():
     """Press with a force ramp (0.1 s) to each of FORCES_N, hold 0.3 s, ramp
     back to the preload; one batch, two threads."""
-    m = mujoco.MjModel.from_xml_string(
-        flat_scene_xml({"outputs": "spikes stress"}, timestep_s=RAMP_DT))
+    m = flat_scene({"outputs": "spikes stress"}, timestep_s=RAMP_DT)
     layout = SkinLayout.from_model(m)
     n = int(round((T_ON + 2 * RAMP + HOLD + REST) / RAMP_DT))
     t = np.arange(n) * RAMP_DT  # row k is evaluated at k dt, before step k
@@ -327,8 +328,7 @@ def sweep(request):
     1.25x the threshold check the threshold itself
     (test_pc_phase_locks_one_to_one_at_best_frequency)."""
     kind, amp = request.param, VIB_DRIVES[request.param]
-    m = mujoco.MjModel.from_xml_string(
-        flat_scene_xml(VIB_SKIN, timestep_s=VIB_DT, mocap_plate=kind == "plate"))
+    m = flat_scene(VIB_SKIN, timestep_s=VIB_DT, mocap_plate=kind == "plate")
     layout = SkinLayout.from_model(m)
     d = mujoco.MjData(m)
     d.ctrl[:] = [0.0, -PRESS_N]
@@ -442,7 +442,7 @@ NOISE_SKIN = {"outputs": "spikes stress", "noise": "0.3 0.3 0.3", "noise_tau": "
 
 def noise_model(**extra):
     skin = dict(NOISE_SKIN, **extra)
-    return mujoco.MjModel.from_xml_string(flat_scene_xml(skin, timestep_s=2e-4)), skin
+    return flat_scene(skin, timestep_s=2e-4), skin
 
 
 def press_controls(n, dt):
@@ -497,7 +497,7 @@ def test_noise_seeds_differ_and_zero_noise_is_no_noise():
         m, _ = noise_model(**extra)
         runs[name] = run_serial(m, mujoco.MjData(m), ctrl)
     plain_skin = {"outputs": NOISE_SKIN["outputs"]}
-    m = mujoco.MjModel.from_xml_string(flat_scene_xml(plain_skin, timestep_s=2e-4))
+    m = flat_scene(plain_skin, timestep_s=2e-4)
     layout = SkinLayout.from_model(m)
     plain = run_serial(m, mujoco.MjData(m), ctrl)
     s7, s8 = (layout.block(runs[k], "spikes") for k in ("seed7", "seed8"))
@@ -531,7 +531,7 @@ def test_sites_place_receptors_where_asked():
     # exact stress summation (as core's), no shear traction, q = -s_zz
     skin = {"outputs": "spikes stress pressure", "sites": sites, "shear": "false",
             "quantity": "szz szz szz", "stress_method": "direct"}
-    m = mujoco.MjModel.from_xml_string(flat_scene_xml(skin, timestep_s=2e-4))
+    m = flat_scene(skin, timestep_s=2e-4)
     layout = SkinLayout.from_model(m)
     # classes in SA1, RA, PC order, each in the order given
     order = sorted(range(len(asked)), key=lambda k: ("SA1", "RA", "PC").index(asked[k][0]))
@@ -561,8 +561,7 @@ def test_sites_place_receptors_where_asked():
 
 def test_rate_output_is_the_smoothed_spike_count():
     tau, dt = 0.02, 2e-4
-    m = mujoco.MjModel.from_xml_string(
-        flat_scene_xml({"outputs": "spikes rate", "rate_tau": str(tau)}, timestep_s=dt))
+    m = flat_scene({"outputs": "spikes rate", "rate_tau": str(tau)}, timestep_s=dt)
     layout = SkinLayout.from_model(m)
     sd = run_serial(m, mujoco.MjData(m), press_controls(1500, dt))
     spikes, rate = layout.block(sd, "spikes"), layout.block(sd, "rate")

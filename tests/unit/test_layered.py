@@ -1,6 +1,6 @@
 """Stage 3b: the layered elastic skin (plugin/core/substrate/layered.*) and the stress
 stage (plugin/core/stress/stress_field.*), against an independent numpy/scipy
-computation (tests/layered_oracle.py: Navier equations with Lame constants,
+computation (tests/unit/layered_oracle.py: Navier equations with Lame constants,
 complex arithmetic, direct inverse 2D Fourier integration), closed forms and
 physical laws; and its wiring into the plugin (attributes, errors, outputs)."""
 
@@ -11,6 +11,7 @@ import os
 import pathlib
 import shutil
 import subprocess
+import sys
 
 import mujoco
 import numpy as np
@@ -482,18 +483,22 @@ def test_bad_elastic_skin_fails_at_compile(attrs, name, what, valid):
 
 def test_cpp_layered_checks(tmp_path):
     # The standalone C++ checks of layered.* (tests/cpp/test_layered.cc),
-    # compiled with the system compiler.
-    cxx = os.environ.get("CXX") or shutil.which("g++") or shutil.which("c++")
-    assert cxx, "no C++ compiler on PATH"
-    exe = tmp_path / "test_layered"
-    core_dir = REPO / "plugin" / "core"
-    build = subprocess.run([cxx, "-O2", "-std=c++17", f"-I{core_dir}", str(core_dir / "substrate" / "half_space.cc"),
-                            str(core_dir / "substrate" / "layered.cc"),
-                            str(core_dir / "substrate" / "layered_radial.cc"),
-                            str(core_dir / "stress" / "kernel_tables.cc"),
-                            str(REPO / "tests" / "cpp" / "test_layered.cc"), "-o", str(exe)],
+    # built by CMake (option MJTOUCH_BUILD_TESTS) in a fresh build tree.
+    cmake = shutil.which("cmake")
+    assert cmake, "cmake (>= 3.18, as for building mjtouch) not on PATH"
+    build_dir = tmp_path / "build"
+    generator = ["-G", "Ninja"] if shutil.which("ninja") else []
+    configure = subprocess.run(
+        [cmake, "-S", str(REPO), "-B", str(build_dir), *generator, "-DSKBUILD=1",
+         "-DMJTOUCH_BUILD_TESTS=ON", "-DCMAKE_BUILD_TYPE=Release",
+         f"-DPython_EXECUTABLE={sys.executable}"],
+        capture_output=True, text=True, timeout=120)
+    assert configure.returncode == 0, configure.stdout[-2000:] + configure.stderr[-4000:]
+    build = subprocess.run([cmake, "--build", str(build_dir), "--target", "mjtouch_cpp_tests",
+                            "--parallel", str(os.cpu_count() or 2)],
                            capture_output=True, text=True, timeout=300)
-    assert build.returncode == 0, build.stderr
-    run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=300)
+    assert build.returncode == 0, build.stdout[-4000:] + build.stderr[-4000:]
+    run = subprocess.run([str(build_dir / "tests" / "cpp" / "test_layered")],
+                         capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stdout[-4000:]
     assert "PASS: 0 failure(s)" in run.stdout

@@ -15,12 +15,12 @@ def test_elastic_sphere_pad_matches_hertz():
     # R = 0.2 m keeps a / R = 0.045: the sphere's departure from Hertz's
     # paraboloid, ~(a / R)^2 / 4 = 5e-4, stays below the 1e-3 tolerance; at
     # 32 cells per contact radius the boundary elements' own error is 1e-4
-    # (tests/test_pressure.py).
+    # (tests/unit/test_pressure.py).
     h = oracles.Hertz(load_n=0.5, radius_m=0.2, young_pa=E, poisson=NU)
     pitch, n = h.contact_radius_m / 32, 96
     skin = dict(nx=n, pitch=pitch, ridges="false", pressure="elastic", skin="halfspace",
                 young=E, poisson=NU, tolerance=1e-8, outputs="force pressure")
-    m = mujoco.MjModel.from_xml_string(scenes.sphere_press_xml(h.radius_m, skin))
+    m = scenes.sphere_press_spec(h.radius_m, skin).compile()
     d = mujoco.MjData(m)
     layout = SkinLayout.from_model(m)
     d.ctrl[0] = h.load_n
@@ -42,7 +42,7 @@ def test_pressure_ladder_example():
     # what the ladder shows.
     import runpy
     import pathlib
-    ex = runpy.run_path(str(pathlib.Path(__file__).parents[1] / "examples" / "pressure_ladder.py"))
+    ex = runpy.run_path(str(pathlib.Path(__file__).parents[2] / "examples" / "pressure_ladder.py"))
     out = ex["ladder"](radius_m=0.02, force_n=0.5, steps=1500)
     h = oracles.Hertz(load_n=0.5, radius_m=0.02, young_pa=E, poisson=NU)
     bound = (h.contact_radius_m / h.radius_m) ** 2 / 4

@@ -2,7 +2,7 @@
 documented task logic, and the benchmark's smoke run.
 
 Rendering (check_env's render check) needs an OpenGL backend chosen before
-mujoco is imported, so it runs in a subprocess in tests/test_viewer.py.
+mujoco is imported, so it runs in a subprocess in tests/plugin/test_viewer.py.
 """
 
 import math

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = pathlib.Path(__file__).resolve().parents[2] / "examples"
 RIDGE_PITCH_M = 0.45e-3  # scenes.Fingertip's default lambda
 
 

@@ -22,7 +22,7 @@ from scipy.special import j1
 
 from mjtouch import core
 
-EXAMPLE = pathlib.Path(__file__).resolve().parents[1] / "examples" / "wang2016_specimens.py"
+EXAMPLE = pathlib.Path(__file__).resolve().parents[2] / "examples" / "wang2016_specimens.py"
 W = runpy.run_path(str(EXAMPLE), run_name="example")
 PITCH_M = 12.5e-6  # the example's default: 8 cells across the 0.1 mm fillet
 DEPTH_M = W["MERKEL_DEPTH_M"]

@@ -3,7 +3,7 @@
 import mujoco
 import pytest
 
-from conftest import pad_scene, registered_attributes
+from conftest import add_geom, pad_scene, pad_spec, registered_attributes
 
 CASES = [
     ({"nx": "-3"}, "`nx`", "[4, 512]"),
@@ -87,7 +87,7 @@ CASES = [
     ({"ra_lowpass": "2e4"}, "`ra_lowpass`", "(0, 10000] Hz"),
     ({"pc_lowpass": "-5"}, "`pc_lowpass`", "(0, 100000] Hz"),
     ({"pc_lowpass": "2e5"}, "`pc_lowpass`", "(0, 100000] Hz"),
-    # the elastic skin (more in tests/test_layered.py)
+    # the elastic skin (more in tests/unit/test_layered.py)
     ({"stress_method": "gpu"}, "`stress_method`", "tree direct fft auto"),
     ({"stress_method": "tree", "stress_theta": "0"}, "`stress_theta`", "(0, 2]"),
     ({"stress_method": "tree", "stress_theta": "2.5"}, "`stress_theta`", "(0, 2]"),
@@ -128,9 +128,11 @@ CASES = [
 @pytest.mark.parametrize("attrs,name,valid", CASES,
                          ids=[";".join(f"{k}={v}" for k, v in c[0].items()) for c in CASES])
 def test_bad_attribute_fails_at_compile(attrs, name, valid):
-    xml = pad_scene(attrs, extra='<geom name="plate_sphere" type="sphere" size="0.001" pos="0.03 0 0.01" contype="0" conaffinity="0"/>')
+    spec = pad_spec(attrs)
+    add_geom(spec.worldbody, "sphere", [0.001], name="plate_sphere", pos=[0.03, 0, 0.01],
+             contype=0, conaffinity=0)
     with pytest.raises(ValueError) as e:
-        mujoco.MjModel.from_xml_string(xml)
+        spec.compile()
     msg = str(e.value)
     # the plugin's own message (a line of MuJoCo's error) names the
     # attribute and its valid range
@@ -141,7 +143,7 @@ def test_bad_attribute_fails_at_compile(attrs, name, valid):
 
 def test_every_attribute_is_checked_here_or_in_test_layered():
     # every key the plugin registers has a bad-input case in CASES (or in
-    # tests/test_layered.py's BAD for the elastic skin)
+    # tests/unit/test_layered.py's BAD for the elastic skin)
     from test_layered import BAD
     covered = {k for attrs, *_ in CASES + BAD for k in attrs}
     assert set(registered_attributes()) - covered == set()
@@ -164,29 +166,30 @@ def test_unknown_attribute_fails_at_compile():
 
 def test_pad_must_be_sphere_ellipsoid_capsule_or_box():
     with pytest.raises(ValueError, match="must be a sphere, ellipsoid, capsule or box"):
-        mujoco.MjModel.from_xml_string(pad_scene(pad='type="cylinder" size="0.008 0.007"'))
+        pad_spec(pad={"kind": "cylinder", "size": [0.008, 0.007]}).compile()
 
 
 def test_sdf_texture_cannot_be_rendered():
     # an sdf geom (MuJoCo's torus plugin) in the texture group: no geometry
     # the skin can query
-    torus = ('<plugin plugin="mujoco.sdf.torus"><instance name="torus">'
-             '<config key="radius1" value="0.01"/><config key="radius2" value="0.003"/>'
-             '</instance></plugin>')
-    xml = pad_scene({"texture_group": "2"}, extra=(
-        '<geom name="knob" type="sdf" mesh="torus" group="2" contype="0" conaffinity="0" '
-        'pos="0.03 0 0.01"><plugin instance="torus"/></geom>'))
-    xml = xml.replace('<extension><plugin plugin="mjtouch.skin"/></extension>',
-                      f'<extension><plugin plugin="mjtouch.skin"/>{torus}</extension>'
-                      '<asset><mesh name="torus"><plugin instance="torus"/></mesh></asset>')
+    spec = mujoco.MjSpec.from_string(pad_scene({"texture_group": "2"}))
+    spec.activate_plugin("mujoco.sdf.torus")
+    torus = spec.add_plugin(name="torus", plugin_name="mujoco.sdf.torus", active=True)
+    torus.config = {"radius1": "0.01", "radius2": "0.003"}
+    spec.add_mesh(name="torus").plugin = torus
+    knob = spec.worldbody.add_geom(name="knob", type=mujoco.mjtGeom.mjGEOM_SDF, meshname="torus",
+                                   group=2, contype=0, conaffinity=0, pos=[0.03, 0, 0.01])
+    knob.plugin = torus
     with pytest.raises(ValueError, match="geom 'knob' in `texture_group` 2 cannot be rendered"):
-        mujoco.MjModel.from_xml_string(xml)
+        spec.compile()
 
 
 def test_sensor_must_name_a_geom():
-    xml = pad_scene().replace('objtype="geom" objname="pad"', 'objtype="body" objname="finger"')
+    spec = mujoco.MjSpec.from_string(pad_scene())
+    spec.sensors[0].objtype = mujoco.mjtObj.mjOBJ_BODY
+    spec.sensors[0].objname = "finger"
     with pytest.raises(ValueError, match='objtype="geom"'):
-        mujoco.MjModel.from_xml_string(xml)
+        spec.compile()
 
 
 # -- messages that name the wrong thing, or twice (plugin bugs, see below) ---

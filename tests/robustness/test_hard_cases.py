@@ -131,16 +131,25 @@ def press_slide(force=0.5, speed=0.025, t_press=0.05):
 
 
 def model(tip=None, texture=None, protocol=None, edit=None):
-    xml = scenes.scene_xml(tip or fast_tip(), texture or scenes.Texture(period_m=0.6e-3),
-                           protocol or scenes.Protocol(timestep_s=2e-4))
+    """The sliding scene; ``edit(spec)`` changes its MjSpec before compiling."""
+    spec = scenes.scene_spec(tip or fast_tip(), texture or scenes.Texture(period_m=0.6e-3),
+                             protocol or scenes.Protocol(timestep_s=2e-4))
     if edit:
-        xml = edit(xml)
-    return mujoco.MjModel.from_xml_string(xml)
+        edit(spec)
+    return spec.compile()
+
+
+def box(spec, name, half_m, pos_m, **kw):
+    spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=half_m, pos=pos_m,
+                            **kw)
 
 
 @pytest.mark.parametrize("solref", ["0.002 1", "0.05 1"], ids=["stiff", "soft"])
 def test_very_stiff_and_very_soft_contact(solref):
-    m = model(edit=lambda s: s.replace('solref="0.01 1" solimp="0.5 0.9999', f'solref="{solref}" solimp="0.5 0.9999'))
+    def edit(spec):
+        spec.pairs[0].solref = [float(v) for v in solref.split()]
+    m = model(edit=edit)
+    assert list(m.pair_solref[0]) == [float(v) for v in solref.split()]
     r = simulate(m, press_slide(), 1000)
     check(r, m.opt.timestep)
     assert r.contact_steps > 500
@@ -188,9 +197,9 @@ def cell_centres(layout):
 def test_contact_at_plate_edge_and_corner(corner):
     # The pad's pole sits over the plate's +x edge (and its +y edge): the
     # plate ends under the middle of the skin.
-    def edit(s):
-        y = PLATE_HALF_M[1] if corner else 0.0
-        return s.replace('<body name="finger" pos="-0.02 0', f'<body name="finger" pos="{PLATE_HALF_M[0]} {y}')
+    def edit(spec):
+        finger = spec.body("finger")
+        finger.pos = [PLATE_HALF_M[0], PLATE_HALF_M[1] if corner else 0.0, finger.pos[2]]
     m = model(texture=scenes.Texture(kind="flat"), edit=edit)
     r = simulate(m, press_slide(speed=0.0), 800)
     check(r, m.opt.timestep)
@@ -256,10 +265,9 @@ def test_receptors_under_a_sharp_step_edge(skin):
     cfg = {"outputs": "spikes stress force pressure", "shear": "false",
            "quantity": "szz szz szz", "sites": sites, **STEP_SKINS[skin]}
 
-    def edit(s):
-        s = s.replace('<body name="finger" pos="-0.02 0 0.0073"', '<body name="finger" pos="-0.02 0 0.0103"')
-        return s.replace('</worldbody>', '  <geom name="step" type="box" size="0.01 0.01 0.0015" '
-                         'pos="-0.01 0 0.0015"/>\n  </worldbody>', 1)
+    def edit(spec):
+        spec.body("finger").pos = [-0.02, 0, 0.0103]
+        box(spec, "step", [0.01, 0.01, 0.0015], [-0.01, 0, 0.0015])
     m = model(tip=fast_tip(skin=cfg, ridges=False, pitch_m=h), texture=scenes.Texture(kind="flat"),
               edit=edit)
     r = simulate(m, press_slide(speed=0.0), 600)
@@ -500,11 +508,12 @@ def test_timesteps_from_1e5_to_2e3(dt):
 def test_fingertip_rotated_ninety_degrees_side_contact():
     # The finger lies on its side: the pad's -z pole faces +x, pressed
     # against a vertical wall by the press actuator.
-    def edit(s):
-        s = s.replace('<body name="finger" pos="-0.02 0 0.0073"',
-                      '<body name="finger" pos="-0.02 0 0.02" euler="0 -90 0"')
-        return s.replace('</worldbody>', '  <geom name="wall" type="box" size="0.002 0.02 0.02" '
-                         'pos="-0.0107 0 0.02" rgba="0.5 0.5 0.5 1"/>\n  </worldbody>', 1)
+    def edit(spec):
+        finger = spec.body("finger")
+        finger.pos = [-0.02, 0, 0.02]
+        finger.alt.type = mujoco.mjtOrientation.mjORIENTATION_EULER
+        finger.alt.euler = [0, -90, 0]  # degrees (compiler.degree)
+        box(spec, "wall", [0.002, 0.02, 0.02], [-0.0107, 0, 0.02], rgba=[0.5, 0.5, 0.5, 1])
     m = model(texture=scenes.Texture(kind="flat"), edit=edit)
     # After the -90 degree turn about y the finger's local z is world -x, so
     # the press actuator's ctrl < 0 drives the pad towards +x, into the wall.
@@ -515,10 +524,9 @@ def test_fingertip_rotated_ninety_degrees_side_contact():
 
 def test_several_objects_touching_at_once():
     # Two raised blocks under the pad, both in contact with it.
-    def edit(s):
-        extra = ('  <geom name="block_a" type="box" size="0.002 0.01 0.0002" pos="-0.0225 0 0.0002"/>\n'
-                 '  <geom name="block_b" type="box" size="0.002 0.01 0.0002" pos="-0.0175 0 0.0002"/>\n')
-        return s.replace('</worldbody>', extra + '  </worldbody>', 1)
+    def edit(spec):
+        box(spec, "block_a", [0.002, 0.01, 0.0002], [-0.0225, 0, 0.0002])
+        box(spec, "block_b", [0.002, 0.01, 0.0002], [-0.0175, 0, 0.0002])
     m = model(texture=scenes.Texture(kind="flat"), edit=edit)
     seen = set()
     def ctrl(d, k):

@@ -20,8 +20,8 @@ pushes into the skin, shear tractions along +x / +y; components in Voigt
 order (xx, yy, zz, xy, xz, yz). Layers are (thickness_m, young_pa, poisson);
 base is None for a rigid base (bone) or (young_pa, poisson) for a half-space.
 
-Run `python tests/layered_oracle.py` for the self-checks, or
-`python tests/layered_oracle.py DUMP.json` to compare with values written by
+Run `python tests/unit/layered_oracle.py` for the self-checks, or
+`python tests/unit/layered_oracle.py DUMP.json` to compare with values written by
 `test_layered --dump DUMP.json` (the C++ standalone test).
 """
 

@@ -84,7 +84,7 @@ def test_shao2010_fine_grating_lines_need_ridges():
     # README's comparison) nothing is.
     import pathlib
     import runpy
-    ex = runpy.run_path(str(pathlib.Path(__file__).parents[1] / "examples" / "shao2010.py"))
+    ex = runpy.run_path(str(pathlib.Path(__file__).parents[2] / "examples" / "shao2010.py"))
     ridged, smooth = ex["run"](quick=True)
     assert ridged["ridges"] and not smooth["ridges"]
     fd = ridged["v_over_d_hz"]

@@ -13,8 +13,7 @@ IDLE_SLOT = 4  # plugin_state header: kStReceptorsIdle (plugin/core/pipeline/mod
 
 def run(outputs):
     tip = scenes.Fingertip(nx=48, pitch_m=1.5e-4, ridges=False, skin={"outputs": outputs})
-    m = mujoco.MjModel.from_xml_string(
-        scenes.scene_xml(tip, scenes.Texture(kind="flat"), scenes.Protocol(timestep_s=2e-4)))
+    m = scenes.build_model(tip, scenes.Texture(kind="flat"), scenes.Protocol(timestep_s=2e-4))
     d = mujoco.MjData(m)
     layout = SkinLayout.from_model(m)
     spikes, idle = [], []
