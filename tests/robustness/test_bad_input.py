@@ -3,8 +3,8 @@ samples, one plugin instance shared by two sensors; and copying / pickling an
 MjData that carries the plugin (README "Copying and pickling MjData")."""
 
 import copy
+import os
 import pickle
-import re
 import subprocess
 import sys
 import textwrap
@@ -13,14 +13,15 @@ import mujoco
 import numpy as np
 import pytest
 
-from conftest import REPO, pad_scene
+from conftest import REPO, pad_spec
+from mjtouch import scenes
 
-NAN_ELEVATION = 'elevation="0 1 0 nan 0 0 1 0 1 0"'
+NAN_SAMPLES = [0, 1, 0, np.nan, 0, 0, 1, 0, 1, 0]
 
 
-def _compile_error(xml: str) -> str:
+def _compile_error(spec: mujoco.MjSpec) -> str:
     with pytest.raises(ValueError) as e:
-        mujoco.MjModel.from_xml_string(xml)
+        spec.compile()
     ours = [line for line in str(e.value).splitlines() if line.startswith("mjtouch.skin: ")]
     assert ours, str(e.value)
     return ours[0]
@@ -29,12 +30,12 @@ def _compile_error(xml: str) -> str:
 # -- non-finite height-field samples --------------------------------------
 
 def test_nan_in_texture_hfield_fails_at_compile():
-    # MuJoCo stores the XML's first elevation row last: XML row 0, col 3 is
-    # hfield_data row 1, col 3.
-    xml = pad_scene().replace('elevation="0 1 0 1 0 0 1 0 1 0"', NAN_ELEVATION)
-    msg = _compile_error(xml)
+    # userdata is stored as given (row-major): sample 3 is row 0, col 3.
+    spec = pad_spec()
+    spec.hfield("h").userdata = NAN_SAMPLES
+    msg = _compile_error(spec)
     assert "height field 'h' (geom 'texture')" in msg, msg
-    assert "sample nan at row 1, col 3 of 2 x 5" in msg, msg
+    assert "sample nan at row 0, col 3 of 2 x 5" in msg, msg
     assert "valid: finite" in msg, msg
 
 
@@ -42,12 +43,12 @@ def test_inf_in_colliding_hfield_fails_at_mjdata(capfd):
     # a colliding height field (no `texture`): the pad may touch it. Samples
     # edited after compiling are checked when the plugin starts (MjData):
     # MuJoCo raises its generic init error, our message is its warning.
-    plate = ('<asset><hfield name="ground" nrow="3" ncol="3" size="0.02 0.02 0.001 0.001" '
-             'elevation="0 0 0 0 0 0 0 0 0"/></asset>')
-    bumps = '<geom name="bumps" type="hfield" hfield="ground" pos="0 0 -0.01"/>'
-    xml = pad_scene(texture=False, extra=bumps)
-    m = mujoco.MjModel.from_xml_string(xml.replace('<option timestep="2e-4"/>',
-                                                   '<option timestep="2e-4"/>' + plate))
+    spec = pad_spec(texture=False)
+    spec.add_hfield(name="ground", nrow=3, ncol=3, size=[0.02, 0.02, 0.001, 0.001],
+                    userdata=[0.0] * 9)
+    spec.worldbody.add_geom(name="bumps", type=mujoco.mjtGeom.mjGEOM_HFIELD,
+                            hfieldname="ground", pos=[0, 0, -0.01])
+    m = spec.compile()
     mujoco.MjData(m)  # finite: fine
     m.hfield_data[4] = np.inf
     capfd.readouterr()
@@ -59,20 +60,18 @@ def test_inf_in_colliding_hfield_fails_at_mjdata(capfd):
 
 def test_nan_in_hfield_the_skin_never_renders_is_accepted():
     # non-colliding and not a texture: the skin never reads it
-    xml = pad_scene(texture=False).replace(
-        '<option timestep="2e-4"/>',
-        '<option timestep="2e-4"/><asset><hfield name="h" nrow="2" ncol="5" '
-        f'size="0.01 0.01 0.0001 0.001" {NAN_ELEVATION}/></asset>')
-    xml = xml.replace("</worldbody>",
-                      '<geom name="decor" type="hfield" hfield="h" contype="0" conaffinity="0" '
-                      'group="4" pos="0.05 0 0"/></worldbody>')
-    m = mujoco.MjModel.from_xml_string(xml)
+    spec = pad_spec(texture=False)
+    spec.add_hfield(name="h", nrow=2, ncol=5, size=[0.01, 0.01, 0.0001, 0.001],
+                    userdata=NAN_SAMPLES)
+    spec.worldbody.add_geom(name="decor", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="h",
+                            contype=0, conaffinity=0, group=4, pos=[0.05, 0, 0])
+    m = spec.compile()
     assert np.isnan(m.hfield_data).sum() == 1
     mujoco.MjData(m)
 
 
 def test_nan_set_after_compile_fails_at_mjdata(capfd):
-    m = mujoco.MjModel.from_xml_string(pad_scene())
+    m = pad_spec().compile()
     m.hfield_data[7] = np.nan
     capfd.readouterr()
     with pytest.raises(mujoco.FatalError, match="plugin->init failed"):
@@ -85,16 +84,16 @@ def test_nan_set_after_compile_fails_at_mjdata(capfd):
 
 def test_two_sensors_sharing_an_instance_fail_at_compile():
     # MuJoCo accepts it (the second sensor would stay all zero)
-    xml = pad_scene().replace(
-        '<extension><plugin plugin="mjtouch.skin"/></extension>',
-        '<extension><plugin plugin="mjtouch.skin"><instance name="x">'
-        '<config key="nx" value="48"/><config key="pitch" value="1.5e-4"/>'
-        '<config key="texture" value="texture"/></instance></plugin></extension>')
-    xml = re.sub(r"<sensor>.*</sensor>",
-                 '<sensor><plugin name="left" instance="x" objtype="geom" objname="pad"/>'
-                 '<plugin name="right" instance="x" objtype="geom" objname="pad"/></sensor>',
-                 xml, flags=re.S)
-    msg = _compile_error(xml)
+    spec = pad_spec()
+    plugin = scenes.skin_plugins(spec)[0]
+    plugin.name = "x"
+    left = spec.sensor("skin")
+    left.name = "left"
+    left.plugin = plugin  # the sensor holds a copy of the reference: renew it
+    right = spec.add_sensor(name="right", type=mujoco.mjtSensor.mjSENS_PLUGIN,
+                            objtype=mujoco.mjtObj.mjOBJ_GEOM, objname="pad")
+    right.plugin = plugin
+    msg = _compile_error(spec)
     assert "plugin instance 'x' is used by two sensors, 'left' and 'right'" in msg, msg
     assert "valid: one sensor per instance" in msg, msg
 
@@ -102,7 +101,7 @@ def test_two_sensors_sharing_an_instance_fail_at_compile():
 # -- copying and pickling MjData --------------------------------------------
 
 def _model():
-    return mujoco.MjModel.from_xml_string(pad_scene())
+    return pad_spec().compile()
 
 
 def _rollout(m, d, n):
@@ -149,7 +148,8 @@ def test_copy_continues_bit_identically(make_copy):
 
 
 def _python(code: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], cwd=REPO / "tests",
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], cwd=REPO / "tests" / "robustness",
+                          env={**os.environ, "PYTHONPATH": str(REPO / "tests")},
                           capture_output=True, text=True, timeout=300)
 
 
@@ -158,7 +158,7 @@ def test_pickle_round_trip_does_not_crash_the_process():
     # (double free at exit); an unpickled copy stepped another's scratch.
     run = _python("""
         import pickle, mujoco, mjtouch
-        m = mujoco.MjModel.from_xml_path("../models/slide_flat.xml")
+        m = mujoco.MjModel.from_xml_path("../../models/slide_flat.xml")
         d = mujoco.MjData(m)
         mujoco.mj_step(m, d)
         d2 = pickle.loads(pickle.dumps(d))
@@ -183,9 +183,9 @@ def test_pickle_into_another_process_continues_bit_identically(tmp_path):
     fresh = _rollout(m, mujoco.MjData(m), 100)
     run = _python(f"""
         import pickle, mujoco, numpy as np, mjtouch
-        from conftest import pad_scene
+        from conftest import pad_spec
         from test_bad_input import _rollout
-        m = mujoco.MjModel.from_xml_string(pad_scene())
+        m = pad_spec().compile()
         d = pickle.loads(open({str(tmp_path / "data.pkl")!r}, "rb").read())
         np.save({str(tmp_path / "cont.npy")!r}, _rollout(m, d, 150))
         d = pickle.loads(open({str(tmp_path / "data.pkl")!r}, "rb").read())

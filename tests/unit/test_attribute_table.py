@@ -7,7 +7,7 @@ import pathlib
 
 from conftest import registered_attributes
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 def _tool():
