@@ -2,6 +2,7 @@
 // and coverage against counter-surfaces, pad and ridge surfaces) and contact
 // pressure (contacts splat, Winkler, elastic boundary-element solve, shear).
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <initializer_list>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -33,6 +34,11 @@ using Out = nb::ndarray<nb::numpy, T>;
 // A numpy array owning `v` (moved, not copied), of the given shape.
 template <typename T>
 Out<T> ToNumpy(std::vector<T>&& v, std::initializer_list<size_t> shape) {
+  size_t count = 1;
+  for (size_t s : shape) count *= s;
+  if (count != v.size())  // a stage broke its output size: never hand out a short buffer
+    throw std::logic_error("mjtouch._core: stage output has " + std::to_string(v.size()) +
+                           " values, expected " + std::to_string(count));
   auto* owned = new std::vector<T>(std::move(v));
   nb::capsule owner(owned, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
   return Out<T>(owned->data(), shape.size(), shape.begin(), owner);
