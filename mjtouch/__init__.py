@@ -10,7 +10,28 @@ uses it loads with ``mujoco.MjModel.from_xml_path``. Submodules:
 - :mod:`mjtouch.core`     the C++ stages called directly (no MuJoCo scene)
 """
 
+import importlib.metadata as _metadata
+import pathlib as _pathlib
+
 from mjtouch._loader import PluginNotBuiltError, library_path, load as _load
+
+
+def _compiled_dirs() -> list[str]:
+    """Directories of the installed distribution's compiled extension
+    (mjtouch._core) that are not this package's: importing mjtouch from a
+    source tree (tests, ``python -m``) still finds the built extension, as
+    _loader finds the built plugin library."""
+    here = _pathlib.Path(__file__).resolve().parent
+    try:
+        files = _metadata.files("mjtouch") or []
+    except _metadata.PackageNotFoundError:
+        return []
+    found = {str(_pathlib.Path(f.locate()).resolve().parent) for f in files
+             if f.name.startswith("_core.") and f.suffix in (".so", ".pyd")}
+    return sorted(d for d in found if d != str(here))
+
+
+__path__ += _compiled_dirs()
 
 __version__ = "0.1.0"
 MUJOCO_VERSION = "4.0.0"  # the plugin is compiled against exactly this release

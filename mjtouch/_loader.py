@@ -1,7 +1,9 @@
 """Locates and loads the compiled plugin library (libmjtouch.so).
 
 Loading the library registers the ``mjtouch.skin`` MuJoCo plugin (its
-constructor calls ``mjp_registerPlugin``). This module must not import
+constructor calls ``mjp_registerPlugin``). Nothing else is called through
+ctypes: the stages and live plugin instances are reached through the
+extension ``mjtouch._core`` (see mjtouch.core). This module must not import
 ``mujoco``: ``import mujoco`` calls :func:`register` through the
 ``mujoco.plugins`` entry point while it is still initialising.
 """
@@ -62,14 +64,18 @@ def _preload_mujoco() -> None:
         ctypes.CDLL(str(libs[0]), mode=ctypes.RTLD_GLOBAL)
 
 
+def loaded_path() -> str:
+    """Path of the plugin library as loaded (loads it if needed)."""
+    return load()._name
+
+
 def load() -> ctypes.CDLL:
-    """Load the plugin library once and return its handle."""
+    """Load the plugin library once and return its handle (ctypes.CDLL)."""
     global _handle
     if _handle is None:
         path = library_path()
         _preload_mujoco()
         lib = ctypes.CDLL(str(path))
-        _declare(lib)
         _check_versions(lib)
         _handle = lib
     return _handle
@@ -98,45 +104,3 @@ def register() -> None:
     """Entry point for ``mujoco.plugins``: registers ``mjtouch.skin``."""
     load()
 
-
-def _declare(lib: ctypes.CDLL) -> None:
-    c_double_p = ctypes.POINTER(ctypes.c_double)
-    c_float_p = ctypes.POINTER(ctypes.c_float)
-    c_int_p = ctypes.POINTER(ctypes.c_int)
-    lib.mjtouch_abi_version.restype = ctypes.c_int
-    lib.mjtouch_built_mujoco_version.restype = ctypes.c_int
-    lib.mjtouch_halfspace_stress.argtypes = [ctypes.c_double, ctypes.c_int] + [ctypes.c_double] * 4 + [c_double_p]
-    lib.mjtouch_halfspace_field_stress.argtypes = [
-        ctypes.c_double, ctypes.c_int, ctypes.c_double, ctypes.c_double,
-        c_float_p, c_float_p, c_float_p, ctypes.c_int, c_int_p, c_int_p, c_double_p]
-    lib.mjtouch_skin_surface.argtypes = [ctypes.c_char_p] + [ctypes.c_double] * 3 + [
-        c_double_p, ctypes.c_char_p, ctypes.c_int]
-    lib.mjtouch_hfield_box_mean.restype = ctypes.c_double
-    lib.mjtouch_hfield_box_mean.argtypes = [ctypes.c_int, ctypes.c_int, c_float_p] + [ctypes.c_double] * 7
-    lib.mjtouch_winkler_pressure.argtypes = [
-        ctypes.c_int, ctypes.c_double, c_double_p, c_double_p, ctypes.c_double, ctypes.c_double,
-        c_float_p, c_double_p]
-    lib.mjtouch_receptor_run.argtypes = [
-        ctypes.c_char_p, ctypes.c_int, c_double_p, ctypes.c_int, ctypes.c_double, c_double_p,
-        c_double_p, c_double_p, ctypes.c_ulonglong, ctypes.c_char_p, ctypes.c_int]
-    lib.mjtouch_check_config.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_int]
-    lib.mjtouch_surface_compliance.argtypes = [ctypes.c_double] * 3 + [ctypes.c_int, c_float_p]
-    lib.mjtouch_elastic_pressure.argtypes = [
-        ctypes.c_int, ctypes.c_int, ctypes.c_double, c_double_p, ctypes.c_double, ctypes.c_double,
-        ctypes.c_double, ctypes.c_int, ctypes.c_double, ctypes.c_int, c_double_p, c_double_p]
-    lib.mjtouch_elastic_pressure_table.argtypes = [
-        ctypes.c_int, ctypes.c_double, c_double_p, c_float_p, ctypes.c_double, ctypes.c_double,
-        ctypes.c_int, c_double_p, c_double_p]
-    lib.mjtouch_render_gap.argtypes = [
-        ctypes.c_int, ctypes.c_double, c_double_p, c_double_p, c_double_p, ctypes.c_int, c_double_p,
-        ctypes.c_int, ctypes.c_int, c_float_p, ctypes.c_int, c_double_p, c_double_p]
-    lib.mjtouch_ridge_cell_mean.restype = ctypes.c_double
-    lib.mjtouch_ridge_cell_mean.argtypes = [ctypes.c_int] + [ctypes.c_double] * 5
-    lib.mjtouch_pad_surface.argtypes = [ctypes.c_int, ctypes.c_double, ctypes.c_int] + [
-        ctypes.c_double] * 3 + [ctypes.c_int] + [ctypes.c_double] * 3 + [c_double_p]
-    lib.mjtouch_slip_shear.argtypes = [ctypes.c_int, ctypes.c_double, c_double_p] + [
-        ctypes.c_double] * 3 + [c_double_p, c_double_p]
-    lib.mjtouch_splat_contacts.argtypes = [ctypes.c_int, ctypes.c_double, ctypes.c_int,
-                                           c_double_p, c_double_p, c_double_p, c_double_p]
-    lib.mjtouch_describe.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_int]
-    lib.mjtouch_last_evaluation.argtypes = [ctypes.c_void_p, ctypes.c_int, c_double_p]

@@ -9,7 +9,6 @@ solved approach in m), ``pressure`` (nx*nx taxel pressures, Pa).
 
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import json
 
@@ -17,6 +16,7 @@ import mujoco
 import numpy as np
 
 from mjtouch import _loader
+from mjtouch.core import _core
 
 CLASSES = ("SA1", "RA", "PC")
 
@@ -40,15 +40,7 @@ class SkinLayout:
     def from_model(cls, model: mujoco.MjModel, instance: int | str | None = None) -> "SkinLayout":
         """Layout of one mjtouch.skin instance (by index or sensor name)."""
         inst = _find_instance(model, instance)
-        lib = _loader.load()
-        size = 1 << 16
-        while True:
-            buf = ctypes.create_string_buffer(size)
-            need = lib.mjtouch_describe(ctypes.c_void_p(model._address), inst, buf, size)
-            if need == 0:
-                break
-            size = need
-        info = json.loads(buf.value.decode())
+        info = json.loads(_core.describe_instance(_loader.loaded_path(), model._address, inst))
         if "error" in info:
             raise ValueError(info["error"])
         blocks = {b["name"]: slice(b["offset"], b["offset"] + b["size"]) for b in info["blocks"]}
@@ -85,15 +77,7 @@ class SkinLayout:
         plugin's scratch, not its state): the stress path taken, the
         ``elastic`` solve's iterations, convergence, last relative pressure
         change, contact cells and FFT size, and the cells with traction."""
-        lib = _loader.load()
-        out = np.zeros(8)
-        if lib.mjtouch_last_evaluation(ctypes.c_void_p(data._address), self.instance,
-                                       out.ctypes.data_as(ctypes.POINTER(ctypes.c_double))):
-            raise ValueError("the data has no mjtouch.skin plugin data for this instance")
-        return {"stress_method": {1: "direct", 2: "fft", 3: "tree"}.get(int(out[0]), "none"),
-                "elastic_iterations": int(out[1]), "elastic_converged": bool(out[2]),
-                "elastic_change": float(out[3]), "elastic_contact_cells": int(out[4]),
-                "elastic_fft_size": (int(out[5]), int(out[6])), "active_cells": int(out[7])}
+        return _core.last_evaluation(_loader.loaded_path(), data._address, self.instance)
 
     def mask(self, cls_name: str) -> np.ndarray:
         if cls_name not in CLASSES:

@@ -9,6 +9,14 @@
 
 #include "skin_plugin.h"
 
+// The C interface mjtouch._core reads live instances through (dlsym on this
+// library); bump on any change of these signatures or their meaning, with
+// kInstanceAbiVersion in plugin/python/instance.cc.
+constexpr int kInstanceAbiVersion = 1;
+extern "C" __attribute__((visibility("default"))) int mjtouch_instance_abi_version() {
+  return kInstanceAbiVersion;
+}
+
 extern "C" __attribute__((visibility("default"))) int mjtouch_describe(const mjModel* m,
                                                                       int instance, char* buf,
                                                                       int len) {

@@ -214,16 +214,8 @@ def test_model_load_unload_does_not_grow_memory():
 
 def _table_ranges():
     """The plugin's own valid ranges (plugin/core/pipeline/attributes.cc)."""
-    import ctypes
-    import json
-
-    from mjtouch import _loader
-    fn = _loader.load().mjtouch_attribute_ranges_json
-    fn.restype = ctypes.c_int
-    fn.argtypes = [ctypes.c_char_p, ctypes.c_int]
-    buf = ctypes.create_string_buffer(fn(None, 0))
-    fn(buf, len(buf))
-    return {r["key"]: r for r in json.loads(buf.value.decode())}
+    from mjtouch import _core
+    return {r["key"]: r for r in _core.attribute_ranges()}
 
 
 def test_fuzz_ranges_are_valid():

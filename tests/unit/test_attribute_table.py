@@ -65,18 +65,8 @@ NOT_PHYSICS = {"texture", "visual"}  # adapter and drawing only
 
 
 def _cache_key(attrs: dict) -> str:
-    import ctypes
-
-    from mjtouch import _loader
-    fn = _loader.load().mjtouch_config_cache_key
-    fn.restype = ctypes.c_int
-    fn.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_int]
-    text = "\n".join(f"{k}={v}" for k, v in attrs.items()).encode()
-    buf = ctypes.create_string_buffer(fn(text, None, 0))
-    fn(text, buf, len(buf))
-    key = buf.value.decode()
-    assert not key.startswith("error"), (attrs, key)
-    return key
+    from mjtouch import _core
+    return _core.config_cache_key({k: str(v) for k, v in attrs.items()})
 
 
 def test_every_physics_attribute_changes_the_model_cache_key():

@@ -1,0 +1,243 @@
+// mjtouch._core: the pure-C++ stages (plugin/core) for Python, without a
+// MuJoCo scene. Arrays in and out are numpy arrays of checked rank and dtype;
+// a stage's error message reaches Python as ValueError. This file: the module,
+// half-space stress, skin configuration, skin surface and receptors.
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nanobind/stl/map.h>
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
+
+#include "afferents/receptors.h"
+#include "pipeline/skin.h"
+#include "stress/kernel_tables.h"
+#include "stress/stress_field.h"
+#include "substrate/substrate.h"
+#include "surface/surface.h"
+#include "python/convert.h"
+
+namespace mjtouch::py {
+namespace {
+
+using Config = std::map<std::string, std::string>;
+
+SurfaceLoad ParseLoad(const std::string& load) {
+  if (load == "pressure") return kLoadPressure;
+  if (load == "shear_x") return kLoadShearX;
+  if (load == "shear_y") return kLoadShearY;
+  Fail("load '" + load + "' is not one of ['pressure', 'shear_x', 'shear_y']");
+}
+
+void CheckPoisson(double poisson) {
+  if (!(poisson > -1 && poisson <= 0.5))
+    Fail("poisson = " + std::to_string(poisson) + " is out of range; valid range (-1, 0.5]");
+}
+
+// The plugin's attribute parser over a dict of attribute -> value strings;
+// unknown keys are refused like the plugin refuses them.
+SkinConfig ParseConfig(const Config& config) {
+  const auto& keys = SkinAttributeKeys();
+  for (const auto& kv : config) {
+    bool known = false;
+    for (const char* key : keys) known = known || kv.first == key;
+    if (!known) Fail("mjtouch.skin: unknown attribute `" + kv.first + "`");
+  }
+  SkinConfig cfg;
+  std::string error;
+  const bool ok = ParseSkinConfig(
+      [&](const char* key) {
+        const auto it = config.find(key);
+        return it == config.end() ? std::string() : it->second;
+      },
+      &cfg, &error);
+  if (!ok) Fail(error);
+  return cfg;
+}
+
+Out<double> HalfspaceStress(const F64_2& points_m, const std::string& load, double poisson,
+                            double cell_m) {
+  const SurfaceLoad l = ParseLoad(load);
+  CheckPoisson(poisson);
+  if (!(cell_m >= 0)) Fail("cell_m = " + std::to_string(cell_m) + " must be >= 0");
+  if (points_m.shape(1) != 3)
+    Fail("points_m must have shape (npoint, 3), got shape " + ShapeOf(points_m));
+  const size_t np = points_m.shape(0);
+  const double* p = points_m.data();
+  for (size_t k = 0; k < np; ++k)
+    if (!(p[3 * k + 2] > 0)) Fail("z_m must be > 0 (points strictly below the surface)");
+  const HalfSpace hs(poisson);
+  std::vector<double> out(6 * np);
+  for (size_t k = 0; k < np; ++k) {
+    const double x = p[3 * k], y = p[3 * k + 1], z = p[3 * k + 2];
+    Stress6 s;
+    if (cell_m > 0) {
+      s = hs.CellStress(l, x, y, z, cell_m);
+    } else {
+      s = l == kLoadPressure ? hs.Boussinesq(x, y, z)
+          : l == kLoadShearX ? hs.CerrutiX(x, y, z)
+                                      : hs.CerrutiY(x, y, z);
+    }
+    for (int c = 0; c < 6; ++c) out[6 * k + c] = s[c];
+  }
+  return ToNumpy(std::move(out), {np, 6});
+}
+
+Out<double> FieldStress(const F32_2& pressure_pa, double pitch_m, double depth_m,
+                        const I32_2& receptors_ij, std::optional<F32_2> shear_x_pa,
+                        std::optional<F32_2> shear_y_pa, double poisson) {
+  const int n = SquareSide(pressure_pa, "pressure_pa");
+  CheckPoisson(poisson);
+  if (!(pitch_m > 0) || !(depth_m > 0)) Fail("pitch_m and depth_m must be > 0");
+  if (receptors_ij.shape(1) != 2)
+    Fail("receptors_ij must have shape (nrec, 2), got shape " + ShapeOf(receptors_ij));
+  const size_t nrec = receptors_ij.shape(0);
+  const int* ij = receptors_ij.data();
+  for (size_t r = 0; r < 2 * nrec; ++r)
+    if (ij[r] < 0 || ij[r] >= n)
+      Fail("receptor cell indices must be in [0, " + std::to_string(n - 1) + "]");
+  if (shear_x_pa.has_value() != shear_y_pa.has_value())
+    Fail("give both shear_x_pa and shear_y_pa, or neither");
+  const float* sx = nullptr;
+  const float* sy = nullptr;
+  if (shear_x_pa) {
+    RequireShape(*shear_x_pa, "shear_x_pa", n, n, "(the pressure field's)");
+    RequireShape(*shear_y_pa, "shear_y_pa", n, n, "(the pressure field's)");
+    sx = shear_x_pa->data();
+    sy = shear_y_pa->data();
+  }
+  const HalfSpace hs(poisson);
+  std::array<bool, kNumStress> all;
+  all.fill(true);
+  const auto kt = BuildKernelTables(hs, n, pitch_m, {depth_m}, all);
+  ActiveRuns runs;
+  for (int j = 0; j < n; ++j) {
+    runs.row.push_back(j);
+    runs.begin.push_back(0);
+    runs.end.push_back(n);
+  }
+  std::vector<double> out(6 * nrec);
+  for (size_t r = 0; r < nrec; ++r) {
+    Stress6 s;
+    StressAtReceptor(*kt, 0, ij[2 * r], ij[2 * r + 1], runs, pressure_pa.data(), sx, sy, all, &s);
+    for (int c = 0; c < 6; ++c) out[6 * r + c] = s[c];
+  }
+  return ToNumpy(std::move(out), {nrec, 6});
+}
+
+Out<double> SkinSurfaceOf(std::array<double, 3> semi_axes_m, const Config& config) {
+  SkinConfig cfg = ParseConfig(config);
+  for (int k = 0; k < 3; ++k) cfg.pad.semi_axes_m[k] = semi_axes_m[k];
+  std::string error;
+  if (!FinalizeSkinConfig(&cfg, &error)) Fail(error);
+  const size_t n = cfg.grid.n;
+  return ToNumpy(SkinSurface(cfg.grid, cfg.pad, cfg.ridges), {n, n});
+}
+
+Out<double> HfieldBoxMean(const F32_2& samples, double half_x_m, double half_y_m,
+                          double elevation_m, const F64_2& boxes) {
+  if (samples.shape(0) < 2 || samples.shape(1) < 2)
+    Fail("samples must be (nrow >= 2, ncol >= 2), got shape " + ShapeOf(samples));
+  if (boxes.shape(1) != 4)
+    Fail("boxes must have shape (nbox, 4): x0, x1, y0, y1; got shape " + ShapeOf(boxes));
+  CounterSurface s;
+  s.type = CounterSurface::Type::kHeightField;
+  s.nrow = static_cast<int>(samples.shape(0));
+  s.ncol = static_cast<int>(samples.shape(1));
+  s.samples = samples.data();
+  s.half_x_m = half_x_m;
+  s.half_y_m = half_y_m;
+  s.elevation_m = elevation_m;
+  const size_t nb = boxes.shape(0);
+  const double* b = boxes.data();
+  std::vector<double> out(nb);
+  for (size_t k = 0; k < nb; ++k)
+    out[k] = HeightFieldBoxMean(s, b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]);
+  return ToNumpy(std::move(out), {nb});
+}
+
+std::tuple<Out<double>, Out<double>, Out<double>> ReceptorRun(const std::string& cls,
+                                                              const F64_1& quantity_pa,
+                                                              double dt_s, const Config& config,
+                                                              uint64_t stream) {
+  const SkinConfig cfg = ParseConfig(config);
+  int c = -1;
+  for (int k = 0; k < kNumClasses; ++k)
+    if (cls == ClassName(static_cast<ReceptorClass>(k))) c = k;
+  if (c < 0) Fail("receptor class '" + cls + "' is not one of ['PC', 'RA', 'SA1']");
+  if (!(dt_s > 0)) Fail("dt_s = " + std::to_string(dt_s) + " must be > 0");
+  const size_t nsteps = quantity_pa.shape(0);
+  const double* q = quantity_pa.data();
+  if (nsteps == 0) Fail("quantity_pa must be a non-empty finite array");
+  for (size_t k = 0; k < nsteps; ++k)
+    if (!std::isfinite(q[k])) Fail("quantity_pa must be a non-empty finite array");
+  // As in the plugin: primed at rest with the first value (no step, no
+  // output), then one step of dt per further value; stream = the receptor's
+  // index in a plugin instance (its noise sequence).
+  const auto rc = static_cast<ReceptorClass>(c);
+  const ReceptorStepper stepper(cfg.receptor, dt_s);
+  double state[kReceptorStateSize] = {0};
+  PrimeReceptor(cfg.receptor, rc, q[0], stream, state);
+  std::vector<double> spikes(nsteps, 0.0), voltage(nsteps, 0.0), rate(nsteps, 0.0);
+  for (size_t k = 1; k < nsteps; ++k) {
+    double v = 0;
+    spikes[k] = stepper.Advance(rc, q[k], stream, state, &v);
+    voltage[k] = v;
+    rate[k] = ReceptorRate(state);
+  }
+  return {ToNumpy(std::move(spikes), {nsteps}), ToNumpy(std::move(voltage), {nsteps}),
+          ToNumpy(std::move(rate), {nsteps})};
+}
+
+}  // namespace
+
+void BindStages(nb::module_& m) {
+  m.def("halfspace_stress", &HalfspaceStress, nb::arg("points_m").noconvert(), nb::arg("load") = "pressure",
+        nb::arg("poisson") = 0.5, nb::arg("cell_m") = 0.0,
+        "Stress (npoint x 6, Pa, Voigt xx yy zz xy xz yz; z into the solid, tension\n"
+        "positive) in a homogeneous half-space at points_m (npoint x 3: x, y, z > 0)\n"
+        "for a 1 N point force (cell_m = 0) or a uniform 1 Pa traction on a square\n"
+        "cell of side cell_m at the origin. load: 'pressure', 'shear_x', 'shear_y'.");
+  m.def("field_stress", &FieldStress, nb::arg("pressure_pa").noconvert(), nb::arg("pitch_m"),
+        nb::arg("depth_m"), nb::arg("receptors_ij").noconvert(), nb::arg("shear_x_pa").noconvert().none() = nb::none(),
+        nb::arg("shear_y_pa").noconvert().none() = nb::none(), nb::arg("poisson") = 0.5,
+        "Stress (nrec x 6, Pa) at depth_m under the taxel cells receptors_ij (nrec x 2\n"
+        "int32: i along x, j along y) from float32 traction fields on an n x n grid\n"
+        "(indexed [j, i]) of square cells of side pitch_m; homogeneous half-space.\n"
+        "Shear fields: both or neither.");
+  m.def("check_config", [](const Config& config) { ParseConfig(config); }, nb::arg("config"),
+        "Validate plugin attributes (dict attribute -> value string) as the plugin\n"
+        "does at model compile time; ValueError with the plugin's message.");
+  m.def("skin_surface", &SkinSurfaceOf, nb::arg("semi_axes_m"), nb::arg("config"),
+        "Cell-averaged skin height (pad frame z, m; +inf outside the pad) on the\n"
+        "nx x nx taxel grid, indexed [j, i], for a pad with semi-axes semi_axes_m and\n"
+        "the attributes in config (dict attribute -> value string).");
+  m.def("hfield_box_mean", &HfieldBoxMean, nb::arg("samples").noconvert(), nb::arg("half_x_m"),
+        nb::arg("half_y_m"), nb::arg("elevation_m"), nb::arg("boxes").noconvert(),
+        "Exact mean of MuJoCo's bilinear height field (samples: nrow x ncol float32\n"
+        "in [0, 1]) over each box (nbox x 4: x0, x1, y0, y1, m); returns (nbox,).");
+  m.def("receptor_run", &ReceptorRun, nb::arg("cls"), nb::arg("quantity_pa").noconvert(), nb::arg("dt_s"),
+        nb::arg("config"), nb::arg("stream") = 0,
+        "Drive one receptor of class cls ('SA1', 'RA', 'PC') with the quantity trace\n"
+        "(one value per step of dt_s) as the plugin does; afferent parameters from\n"
+        "config (dict attribute -> value string), stream = the receptor's noise\n"
+        "sequence. Returns (spikes per step, membrane over threshold, rate Hz).");
+}
+
+NB_MODULE(_core, m) {
+  m.doc() =
+      "mjtouch's C++ stages (plugin/core) called directly, without a MuJoCo scene;\n"
+      "wrapped by mjtouch.core. Errors from the stages raise ValueError.";
+  BindStages(m);
+  BindContact(m);
+  BindLayered(m);
+  BindInstance(m);
+  BindAttributes(m);
+}
+
+}  // namespace mjtouch::py
