@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <initializer_list>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -76,6 +77,19 @@ void RequireShape(const A& a, const char* name, size_t rows, size_t cols, const 
   if (a.shape(0) != rows || a.shape(1) != cols)
     Fail(std::string(name) + " must have shape (" + std::to_string(rows) + ", " +
          std::to_string(cols) + ") " + why + ", got shape " + ShapeOf(a));
+}
+
+// The optional shear fields (both or neither, each n x n) as data pointers
+// (null when absent).
+inline std::pair<const float*, const float*> ShearFields(const std::optional<F32_2>& shear_x_pa,
+                                                         const std::optional<F32_2>& shear_y_pa,
+                                                         size_t n) {
+  if (shear_x_pa.has_value() != shear_y_pa.has_value())
+    Fail("give both shear_x_pa and shear_y_pa, or neither");
+  if (!shear_x_pa) return {nullptr, nullptr};
+  RequireShape(*shear_x_pa, "shear_x_pa", n, n, "(the pressure field's)");
+  RequireShape(*shear_y_pa, "shear_y_pa", n, n, "(the pressure field's)");
+  return {shear_x_pa->data(), shear_y_pa->data()};
 }
 
 void BindStages(nb::module_& m);

@@ -223,16 +223,7 @@ class StressEngine {
     const StressMethod m = ParseMethod(method);
     const size_t n = tables_->n;
     RequireShape(pressure_pa, "pressure_pa", n, n, "(the engine's grid)");
-    if (shear_x_pa.has_value() != shear_y_pa.has_value())
-      Fail("give both shear_x_pa and shear_y_pa, or neither");
-    const float* sx = nullptr;
-    const float* sy = nullptr;
-    if (shear_x_pa) {
-      RequireShape(*shear_x_pa, "shear_x_pa", n, n, "(the pressure field's)");
-      RequireShape(*shear_y_pa, "shear_y_pa", n, n, "(the pressure field's)");
-      sx = shear_x_pa->data();
-      sy = shear_y_pa->data();
-    }
+    const auto [sx, sy] = ShearFields(shear_x_pa, shear_y_pa, n);
     if (repeats < 1) Fail("repeats must be >= 1");
     if (m == StressMethod::kFft && !spectra_)
       Fail("method 'fft' needs FFT spectra: create the engine with method='fft'");

@@ -101,16 +101,7 @@ Out<double> FieldStress(const F32_2& pressure_pa, double pitch_m, double depth_m
   for (size_t r = 0; r < 2 * nrec; ++r)
     if (ij[r] < 0 || ij[r] >= n)
       Fail("receptor cell indices must be in [0, " + std::to_string(n - 1) + "]");
-  if (shear_x_pa.has_value() != shear_y_pa.has_value())
-    Fail("give both shear_x_pa and shear_y_pa, or neither");
-  const float* sx = nullptr;
-  const float* sy = nullptr;
-  if (shear_x_pa) {
-    RequireShape(*shear_x_pa, "shear_x_pa", n, n, "(the pressure field's)");
-    RequireShape(*shear_y_pa, "shear_y_pa", n, n, "(the pressure field's)");
-    sx = shear_x_pa->data();
-    sy = shear_y_pa->data();
-  }
+  const auto [sx, sy] = ShearFields(shear_x_pa, shear_y_pa, n);
   const HalfSpace hs(poisson);
   std::array<bool, kNumStress> all;
   all.fill(true);
