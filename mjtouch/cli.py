@@ -94,6 +94,9 @@ def slide(args) -> dict:
     expected = {"texture": args.speed / periodic if periodic else None,
                 "ridges": args.speed / args.ridge_pitch if args.ridges else None}
     power_expected = {k: (analysis.power_at(f, p, v) if v else None) for k, v in expected.items()}
+    # at V/lambda of the configured ridge pitch for smooth skin too, so ridged
+    # and smooth runs compare from the CLI
+    power_expected["ridges"] = analysis.power_at(f, p, args.speed / args.ridge_pitch)
     fn = res.force[w, 0]
     out = {
         "rates_hz": rates,

@@ -4,6 +4,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 
@@ -25,6 +26,18 @@ def test_slide_json_keys_and_peak():
     assert o["expected_hz"]["ridges"] == pytest.approx(0.03 / 0.45e-3)
     assert abs(o["peaks_hz"][0] - 30.0) <= o["fft_bin_hz"]
     assert all(np.isfinite(v) for v in o["rates_hz"].values())
+    assert o["power_at_expected"]["ridges"] > 0
+
+
+def test_slide_json_reports_ridge_line_power_for_smooth_skin():
+    # smooth skin: no expected ridge line, but the power at V/lambda of the
+    # configured pitch is reported for comparison with a ridged run
+    out = run("slide", "--json", "--no-ridges", "--duration", "0.2", "--nx", "48",
+              "--pitch", "1.5e-4", "--dt", "2e-4", "--speed", "0.03", "--ridge-pitch", "6e-4")
+    assert out.returncode == 0, out.stderr
+    o = json.loads(out.stdout)
+    assert o["expected_hz"]["ridges"] is None
+    assert np.isfinite(o["power_at_expected"]["ridges"]) and o["power_at_expected"]["ridges"] >= 0
 
 
 def test_slide_human_output_and_plot(tmp_path):
@@ -48,5 +61,3 @@ def test_slide_bad_arguments(args, msg):
     assert out.returncode != 0
     assert msg in out.stderr
 
-
-import numpy as np  # noqa: E402
