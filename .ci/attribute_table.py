@@ -3,7 +3,7 @@ table (plugin/core/pipeline/attributes.cc), between marker comments:
     python .ci/attribute_table.py           # print the generated table
     python .ci/attribute_table.py --check   # exit 1 with a diff if README differs
     python .ci/attribute_table.py --write   # rewrite README's section
-(tests/test_attribute_table.py runs the check.)"""
+(tests/unit/test_attribute_table.py runs the check.)"""
 import difflib
 import pathlib
 import sys
