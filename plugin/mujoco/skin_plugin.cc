@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
-#include <mutex>
+#include <shared_mutex>
 #include <sstream>
 #include <unordered_map>
 
@@ -126,8 +126,10 @@ CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mj
 
 // Live plugins and the mjData each belongs to (see SkinPlugin::Owned).
 // Never destroyed: an mjData may be freed after static destructors run.
-std::mutex& RegistryMutex() {
-  static auto* mu = new std::mutex();
+// Shared for the per-step lookups (rollout threads do not serialise on it),
+// exclusive to add, remove or reset.
+std::shared_mutex& RegistryMutex() {
+  static auto* mu = new std::shared_mutex();
   return *mu;
 }
 std::unordered_map<const SkinPlugin*, const mjData*>& Registry() {
@@ -164,7 +166,7 @@ std::string CheckHeightFieldSamples(const mjModel* m, int geom) {
 SkinPlugin* SkinPlugin::Owned(const mjData* d, int instance) {
   auto* p = reinterpret_cast<const SkinPlugin*>(d->plugin_data[instance]);
   if (!p) return nullptr;
-  std::lock_guard<std::mutex> lock(RegistryMutex());
+  std::shared_lock<std::shared_mutex> lock(RegistryMutex());
   auto it = Registry().find(p);
   return it != Registry().end() && it->second == d ? const_cast<SkinPlugin*>(p) : nullptr;
 }
@@ -174,7 +176,7 @@ SkinPlugin* SkinPlugin::OwnedOrRebuilt(const mjModel* m, mjData* d, int instance
   SkinPlugin* p = Create(m, d, instance);
   if (!p) return nullptr;
   {
-    std::lock_guard<std::mutex> lock(RegistryMutex());
+    std::unique_lock<std::shared_mutex> lock(RegistryMutex());
     Registry()[p] = d;
   }
   // A pointer copied from elsewhere is not ours to free: overwrite it.
@@ -473,7 +475,7 @@ void SkinPlugin::RegisterPlugin() {
     SkinPlugin* p = SkinPlugin::Create(m, d, instance);
     if (!p) return -1;
     {
-      std::lock_guard<std::mutex> lock(RegistryMutex());
+      std::unique_lock<std::shared_mutex> lock(RegistryMutex());
       Registry()[p] = d;
     }
     d->plugin_data[instance] = reinterpret_cast<uintptr_t>(p);
@@ -484,7 +486,7 @@ void SkinPlugin::RegisterPlugin() {
     // Only the owner frees (an unpickled mjData shares or dangles its copy).
     if (SkinPlugin* p = Owned(d, instance)) {
       {
-        std::lock_guard<std::mutex> lock(RegistryMutex());
+        std::unique_lock<std::shared_mutex> lock(RegistryMutex());
         Registry().erase(p);
       }
       delete p;
@@ -507,7 +509,7 @@ void SkinPlugin::RegisterPlugin() {
     // too) or, for a pointer copied from another process, the model's own.
     auto* p = static_cast<SkinPlugin*>(plugin_data);
     {
-      std::lock_guard<std::mutex> lock(RegistryMutex());
+      std::unique_lock<std::shared_mutex> lock(RegistryMutex());
       if (p && Registry().count(p)) {
         p->Reset(m, plugin_state, instance);
         return;
