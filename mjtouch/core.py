@@ -323,19 +323,35 @@ class StressEngine:
         self.table_bytes_per_depth = self._e.table_bytes_per_depth
         self.tree_build_s, self.tree_terms_per_site = self._e.tree_build_s, self._e.tree_terms_per_site
 
-    def estimated_cost(self, active_cells: int, shear: bool = True) -> tuple[float, float]:
-        """The cost model's (direct, fft) seconds per call."""
-        return self._e.estimated_cost(int(active_cells), bool(shear))
+    def estimated_cost(self, active_cells: int, shear: bool = True,
+                       folded: bool | None = None) -> tuple[float, float]:
+        """The cost model's (direct, fft) seconds per call. folded: whether the
+        direct path is the folded one (default: as stress() without slip, i.e.
+        folded when there is no shear)."""
+        folded = (not shear) if folded is None else bool(folded)
+        return self._e.estimated_cost(int(active_cells), bool(shear), folded)
 
     def stress(self, pressure_pa, shear_x_pa=None, shear_y_pa=None, method: str = "auto",
-               repeats: int = 1, timing: bool = False):
+               repeats: int = 1, timing: bool = False, slip=None, fold: bool = True,
+               threads: int = 1):
         """Stress (nrec x 6, Pa). With timing=True also returns (seconds per
-        call, method used, active cells)."""
+        call, method used, active cells). slip = (rx, ry): the shear is
+        (rx, ry) x pressure (full slip, as the plugin's winkler and elastic
+        models), so the direct path folds its tables (shear fields default to
+        float32(r x pressure)); fold=False: the reference direct sum.
+        threads: the stage's thread count (the same bits for any count)."""
         p = np.ascontiguousarray(pressure_pa, dtype=np.float32)
         if p.shape != (self.n, self.n):
             raise ValueError(f"pressure_pa must have shape ({self.n}, {self.n}), got {p.shape}")
+        if slip is not None:
+            rx, ry = (float(v) for v in slip)
+            slip = (rx, ry)
+            if shear_x_pa is None and shear_y_pa is None:
+                shear_x_pa = (rx * p.astype(np.float64)).astype(np.float32)
+                shear_y_pa = (ry * p.astype(np.float64)).astype(np.float32)
         sx, sy = _shear_pair(p, shear_x_pa, shear_y_pa)
-        out, seconds, used, active = self._e.stress(p, sx, sy, method, int(repeats))
+        out, seconds, used, active = self._e.stress(p, sx, sy, method, int(repeats), slip,
+                                                    bool(fold), int(threads))
         return (out, seconds, used, active) if timing else out
 
 

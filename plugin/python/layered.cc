@@ -9,11 +9,13 @@
 #include <vector>
 
 #include <nanobind/stl/optional.h>
+#include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/unique_ptr.h>
 #include <nanobind/stl/vector.h>
 
+#include "common/thread_pool.h"
 #include "stress/kernel_tables.h"
 #include "stress/stress_field.h"
 #include "stress/stress_tree.h"
@@ -207,8 +209,8 @@ class StressEngine {
   double tree_build_s() const { return tree_ ? tree_->build_seconds() : 0.0; }
   double tree_terms_per_site() const { return tree_ ? tree_->mean_terms() : 0.0; }
 
-  std::tuple<double, double> Cost(int active_cells, bool shear) const {
-    const StressCost c = EstimateStressCost(*tables_, sites_, active_cells, shear);
+  std::tuple<double, double> Cost(int active_cells, bool shear, bool folded) const {
+    const StressCost c = EstimateStressCost(*tables_, sites_, active_cells, shear, folded);
     return {c.direct_s, c.fft_s};
   }
 
@@ -219,8 +221,21 @@ class StressEngine {
                                                           std::optional<F32_2> shear_x_pa,
                                                           std::optional<F32_2> shear_y_pa,
                                                           const std::string& method,
-                                                          int repeats) {
+                                                          int repeats,
+                                                          std::optional<std::pair<double, double>> slip,
+                                                          bool fold, int threads) {
     const StressMethod m = ParseMethod(method);
+    if (threads < 1 || threads > ThreadPool::kMaxThreads)
+      Fail("threads = " + std::to_string(threads) + " is out of range; valid range [1, " +
+           std::to_string(ThreadPool::kMaxThreads) + "]");
+    StressOptions opt;
+    opt.fold = fold;
+    opt.threads = threads;
+    if (slip) {
+      opt.uniform_slip = true;
+      opt.slip_x = slip->first;
+      opt.slip_y = slip->second;
+    }
     const size_t n = tables_->n;
     RequireShape(pressure_pa, "pressure_pa", n, n, "(the engine's grid)");
     const auto [sx, sy] = ShearFields(shear_x_pa, shear_y_pa, n);
@@ -229,12 +244,13 @@ class StressEngine {
       Fail("method 'fft' needs FFT spectra: create the engine with method='fft'");
     if (m == StressMethod::kTree && !tree_)
       Fail("method 'tree' needs the tree: create the engine with method='tree'");
+    if (slip && !sx) Fail("slip needs the shear fields it describes (shear_x_pa, shear_y_pa)");
     FindActiveRuns(static_cast<int>(n), pressure_pa.data(), sx, sy, &runs_);
     StressMethod used = StressMethod::kDirect;
     const auto t0 = std::chrono::steady_clock::now();
     for (int k = 0; k < repeats; ++k)
       used = ComputeStresses(*tables_, spectra_.get(), tree_.get(), m, sites_, runs_,
-                             pressure_pa.data(), sx, sy, &scratch_, out_.data());
+                             pressure_pa.data(), sx, sy, &scratch_, out_.data(), opt);
     const double dt =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::vector<double> out(6 * sites_.size());
@@ -335,12 +351,16 @@ void BindLayered(nb::module_& m) {
       .def_prop_ro("tree_terms_per_site", &StressEngine::tree_terms_per_site,
                    "Mean tree terms per site (0: no tree).")
       .def("estimated_cost", &StressEngine::Cost, nb::arg("active_cells"), nb::arg("shear"),
-           "The cost model's (direct, fft) seconds per call.")
+           nb::arg("folded") = false,
+           "The cost model's (direct, fft) seconds per call; folded: the folded direct path.")
       .def("stress", &StressEngine::Stress, nb::arg("pressure_pa").noconvert(),
            nb::arg("shear_x_pa").noconvert().none() = nb::none(), nb::arg("shear_y_pa").noconvert().none() = nb::none(),
            nb::arg("method") = "auto", nb::arg("repeats") = 1,
+           nb::arg("slip").none() = nb::none(), nb::arg("fold") = true, nb::arg("threads") = 1,
            "(stress nrec x 6 Pa, seconds per call, path used, active cells) from float32\n"
-           "traction fields (n x n, [j, i]); shear both or neither.");
+           "traction fields (n x n, [j, i]); shear both or neither. slip = (rx, ry): the\n"
+           "shear is (rx, ry) x pressure, so the direct path folds its tables; fold=False:\n"
+           "the reference direct sum. threads in [1, 64]: the same bits for any count.");
 }
 
 }  // namespace mjtouch::py

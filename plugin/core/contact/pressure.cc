@@ -211,6 +211,9 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
 void UniformSlipShear(const TaxelGrid& grid, double fn, double fx, double fy,
                       TractionField* field) {
   const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
+  field->uniform_slip = true;
+  field->slip_x = rx;
+  field->slip_y = ry;
   ForBox(grid, field->box, [&](size_t i) {
     field->shear_x_pa[i] = rx * field->pressure_pa[i];
     field->shear_y_pa[i] = ry * field->pressure_pa[i];

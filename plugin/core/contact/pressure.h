@@ -34,6 +34,11 @@ struct TractionField {
   ActiveRuns runs;              // cells with nonzero traction, by grid row
   double approach_m = 0;        // solved rigid approach of the pad
   int active_cells = 0;
+  // Set by UniformSlipShear: shear = slip ratio x pressure in every cell,
+  // which lets stage 3 fold its tables (stress/stress_fold.h). Only
+  // UniformSlipShear writes shear in the models that set it.
+  bool uniform_slip = false;
+  double slip_x = 0, slip_y = 0;  // shear / pressure along pad x, y
   // Solver scratch (no meaning between calls): the packed candidates.
   std::vector<double> scratch_gap, scratch_cov;
   std::vector<size_t> scratch_index;

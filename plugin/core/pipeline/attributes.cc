@@ -200,6 +200,10 @@ const std::vector<AttributeRow>& Rows() {
       {"stress_theta", K::kNumber, 0, 2, true, false, "(block side / distance)", "0.5",
        "`tree`'s opening angle; RMS stress error 3e-4 to 1e-3 at 0.5", nullptr,
        FIELD(stress_theta), NO_PARSE, S::kModel},
+      {"threads", K::kInteger, 1, 64, false, false, "", "1",
+       "stage 3's threads per step (a shared pool; the same bits for any count). 1: outer "
+       "parallelism (rollout, sweeps) keeps every core busy without oversubscription",
+       nullptr, FIELD(threads), NO_PARSE, S::kModel},
       {"skin", K::kChoice, 0, 0, false, false, "", "layered",
        "`layered` (`layers` over `base`) or `halfspace` (`poisson`)", "layered halfspace",
        [](const SkinConfig& c, int) { return c.layered ? 1.0 : 0.0; },

@@ -154,7 +154,8 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
       constexpr double kMaxSpectraBytes = 256.0 * 1024 * 1024;
       const double bytes = KernelSpectraBytes(kt, model->stress_sites_);
       const StressCost widest =
-          EstimateStressCost(kt, model->stress_sites_, cfg.grid.n * cfg.grid.n, cfg.shear);
+          EstimateStressCost(kt, model->stress_sites_, cfg.grid.n * cfg.grid.n, cfg.shear,
+                             cfg.pressure_model != PressureModel::kContacts || !cfg.shear);
       if (cfg.stress_method == StressMethod::kFft && bytes > kMaxSpectraBytes) {
         *error = Fmt("mjtouch.skin: attribute `stress_method` = fft needs %.0f MiB of kernel "
                      "spectra at nx = %d; the limit is %.0f MiB (use tree, auto or direct)",

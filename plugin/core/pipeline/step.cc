@@ -75,7 +75,8 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
     ws->last_stress_method = ComputeStresses(
         *kt, model.spectra(), model.tree(), cfg.stress_method, model.stress_sites(), tf.runs,
         tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
-        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data());
+        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data(),
+        StressOptions{tf.uniform_slip, tf.slip_x, tf.slip_y, true, cfg.threads});
     for (int r = 0; r < nrec; ++r) {
       const int c = static_cast<int>(sites[r].cls);
       ws->quantity[r] = QuantityAt(cfg.classes[c].quantity, ws->stress[r], model.material(c));

@@ -95,12 +95,13 @@ std::shared_ptr<const KernelSpectra> BuildKernelSpectra(const KernelTables& kt,
 }
 
 StressCost EstimateStressCost(const KernelTables& kt, const std::vector<StressSite>& sites,
-                              int active_cells, bool shear) {
+                              int active_cells, bool shear, bool folded) {
   StressCost c;
   const int loads = shear ? kNumLoads : 1;
   double macs = 0;
   for (const StressSite& s : sites) macs += CountWanted(s.want);
-  c.direct_s = kDirectSecondsPerMac * macs * loads * active_cells;
+  c.direct_s = folded ? EstimateFoldedSeconds(kt, sites, active_cells)
+                      : kDirectSecondsPerMac * macs * loads * active_cells;
   const double N = NextFftSize(2 * kt.n - 1);
   const double points = N * N;
   int pairs = 0;
@@ -261,8 +262,9 @@ StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectr
                              const StressTree* tree, StressMethod method,
                              const std::vector<StressSite>& sites, const ActiveRuns& runs,
                              const float* pressure, const float* shear_x, const float* shear_y,
-                             StressScratch* scratch, Stress6* out) {
+                             StressScratch* scratch, Stress6* out, const StressOptions& opt) {
   const bool shear = shear_x && shear_y;
+  const bool folded = UsesFoldedPath(shear, opt);
   if (method == StressMethod::kTree) {
     if (tree) {
       tree->Compute(runs, pressure, shear ? shear_x : nullptr, shear ? shear_y : nullptr,
@@ -273,38 +275,25 @@ StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectr
   }
   if (method == StressMethod::kAuto) {
     if (spectra) {
-      const StressCost c = EstimateStressCost(kt, sites, runs.Count(), shear);
+      const StressCost c = EstimateStressCost(kt, sites, runs.Count(), shear, folded);
       method = c.fft_s < c.direct_s ? StressMethod::kFft : StressMethod::kDirect;
     } else {
       method = StressMethod::kDirect;
     }
   }
   if (method == StressMethod::kFft && !spectra) method = StressMethod::kDirect;
-  for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
   if (method == StressMethod::kFft) {
+    for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
     FftStresses(kt, *spectra, sites, pressure, shear ? shear_x : nullptr,
                 shear ? shear_y : nullptr, scratch, out);
     return method;
   }
-  // Component-major, depth by depth: the three tables of one (depth,
-  // component), ~0.8 MB at n = 128, stay in cache while every site reads its
-  // window of them (site-major order streamed all 18 tables per site from L3:
-  // 2-3x slower). Per (site, component) the arithmetic is StressAtReceptor's.
-  std::array<bool, kNumStress> one{};
-  Stress6 tmp;
-  for (size_t d = 0; d < kt.depths_m.size(); ++d)
-    for (int c = 0; c < kNumStress; ++c) {
-      if (!kt.components[c]) continue;
-      one.fill(false);
-      one[c] = true;
-      for (size_t s = 0; s < sites.size(); ++s) {
-        const StressSite& site = sites[s];
-        if (site.depth_index != static_cast<int>(d) || !site.want[c]) continue;
-        StressAtReceptor(kt, site.depth_index, site.i, site.j, runs, pressure,
-                         shear ? shear_x : nullptr, shear ? shear_y : nullptr, one, &tmp);
-        out[s][c] = tmp[c];
-      }
-    }
+  if (folded)
+    FoldedDirectStresses(kt, sites, runs, pressure, shear, opt.slip_x, opt.slip_y, opt.threads,
+                         &scratch->fold, out);
+  else
+    ReferenceDirectStresses(kt, sites, runs, pressure, shear ? shear_x : nullptr,
+                            shear ? shear_y : nullptr, opt.threads, out);
   return method;
 }
 

@@ -22,6 +22,7 @@
 
 #include "common/fft.h"
 #include "stress/kernel_tables.h"
+#include "stress/stress_fold.h"
 #include "stress/stress_tree.h"
 
 namespace mjtouch {
@@ -53,18 +54,36 @@ std::shared_ptr<const KernelSpectra> BuildKernelSpectra(const KernelTables& kt,
 // Bytes that BuildKernelSpectra would allocate.
 double KernelSpectraBytes(const KernelTables& kt, const std::vector<StressSite>& sites);
 
-// Estimated seconds per evaluation of each path (one core).
+// Estimated seconds per evaluation of each path (one core). folded: the
+// direct path is the folded one (stress_fold.h).
 struct StressCost {
   double direct_s = 0, fft_s = 0;
 };
 StressCost EstimateStressCost(const KernelTables& kt, const std::vector<StressSite>& sites,
-                              int active_cells, bool shear);
+                              int active_cells, bool shear, bool folded = false);
 
 // Per-simulation scratch (no state that outlives a call).
 struct StressScratch {
   std::vector<double> in_re, in_im, spec_re[3], spec_im[3], out_re, out_im, fft;
   TreeScratch tree;
+  FoldScratch fold;
 };
+
+// How the direct path runs. uniform_slip: the shear fields are exactly
+// (slip_x, slip_y) x pressure (UniformSlipShear), so the folded path
+// applies; without shear it always does. fold = false: the reference direct
+// sum (StressAtReceptor). threads: ThreadPool callers for the direct paths
+// (any count gives the same bits).
+struct StressOptions {
+  bool uniform_slip = false;
+  double slip_x = 0, slip_y = 0;
+  bool fold = true;
+  int threads = 1;
+};
+// Whether the direct path is the folded one for these fields and options.
+inline bool UsesFoldedPath(bool shear, const StressOptions& opt) {
+  return opt.fold && (!shear || opt.uniform_slip);
+}
 
 // Stress (Pa) at every site into out[site]. pressure / shear arrays: n*n,
 // row-major (j * n + i); shear may be null (both or neither). runs: the
@@ -74,7 +93,8 @@ struct StressScratch {
 StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectra,
                              const StressTree* tree, StressMethod method, const std::vector<StressSite>& sites,
                              const ActiveRuns& runs, const float* pressure, const float* shear_x,
-                             const float* shear_y, StressScratch* scratch, Stress6* out);
+                             const float* shear_y, StressScratch* scratch, Stress6* out,
+                             const StressOptions& options = StressOptions());
 
 // Active row runs of the cells where any traction is nonzero.
 void FindActiveRuns(int n, const float* pressure, const float* shear_x, const float* shear_y,

@@ -1,0 +1,65 @@
+// Stage 3, the folded direct path: when the shear is a uniform multiple of
+// the pressure (full-slip Coulomb shear, contact/pressure.h
+// UniformSlipShear: q_x = r_x p, q_y = r_y p) or absent, the stress is
+//   sigma_c(site) = sum_cells (K_p,c + r_x K_x,c + r_y K_y,c) p,
+// so one effective table per step and (depth, component) replaces three:
+// a third of the multiply-adds and of the table reads per site. Tables are
+// folded only over the window of offsets (active cells - sites) that some
+// site reads, and the pressure is copied into rows of whole 8-cell chunks,
+// so the inner loop has no tails; a site's wanted components share each
+// pressure load. Same result as the reference path (StressAtReceptor) to
+// float rounding (tests/unit/test_stress_fold.py: rel. RMS <= 1e-5).
+//
+// Threads: work in chunks fixed by the inputs (table row blocks, then site
+// blocks), each site's sum on one thread in a fixed order, so the output is
+// bit-identical for any thread count. Pure C++: no MuJoCo types.
+#ifndef MJTOUCH_STRESS_STRESS_FOLD_H_
+#define MJTOUCH_STRESS_STRESS_FOLD_H_
+
+#include <array>
+#include <vector>
+
+#include "stress/kernel_tables.h"
+
+namespace mjtouch {
+
+// Per-simulation scratch of the folded path (no meaning between calls).
+struct FoldScratch {
+  std::vector<float> pressure;       // padded window, rows of `width` cells
+  std::vector<int> row_lo, row_hi;   // per window row: chunk-aligned cell range
+  std::vector<std::vector<float>> eff;  // [depth * kNumStress + comp] folded window
+  std::vector<int> sites_by_depth;   // site indices grouped by depth
+  std::vector<int> depth_begin;      // ranges into sites_by_depth
+  struct Window {
+    int x0 = 0, y0 = 0, w = 0, h = 0;  // offsets (cell - site) of element 0; size
+    int si1 = 0, sj1 = 0;              // largest site i, j at this depth
+    std::array<bool, kNumStress> comps{};
+  };
+  std::vector<Window> window;  // per depth
+  double fold_seconds = 0, sum_seconds = 0;  // the last call's phases (diagnostics)
+};
+
+// Stress (Pa) at every site into out[site] (components a site does not want
+// are zero). shear: whether the tractions include the uniform-slip shear
+// (slip_x, slip_y: shear / pressure); false: pressure only. threads: callers
+// of ThreadPool::Shared(); any value gives the same bits.
+void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
+                          const ActiveRuns& runs, const float* pressure, bool shear,
+                          double slip_x, double slip_y, int threads, FoldScratch* w,
+                          Stress6* out);
+
+// The reference direct sum (StressAtReceptor per site and component), with
+// the sites split over threads the same way (bit-identical for any count).
+void ReferenceDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
+                             const ActiveRuns& runs, const float* pressure,
+                             const float* shear_x, const float* shear_y, int threads,
+                             Stress6* out);
+
+// Seconds per evaluation of the folded path (one core): the fold of the
+// window and the sums; fitted by examples/bench_kernel.py.
+double EstimateFoldedSeconds(const KernelTables& kt, const std::vector<StressSite>& sites,
+                             int active_cells);
+
+}  // namespace mjtouch
+
+#endif  // MJTOUCH_STRESS_STRESS_FOLD_H_
