@@ -97,6 +97,47 @@ def calibrate(n, pitch, ij, p, qx, qy, repeats):
     c = td / (len(ij) * 6 * 3 * active)
     print(f"cost model fit (N = {N}): kDirectSecondsPerMac = {c:.3g}, kFftSecondsPerPoint = "
           f"{a:.3g}, kMulSecondsPerPoint = {b:.3g}")
+    # Folded path (stress_fold.cc): t = m (sites x comps x active) + f (tables x window),
+    # window as the cost model takes it (the contact's box a square of its cells).
+    slip = (float(qx.sum() / p.sum()), float(qy.sum() / p.sum()))
+    _, f1, _, _ = e1.stress(p, qx, qy, method="direct", repeats=repeats, timing=True, slip=slip)
+    _, f2, _, _ = e2.stress(p, qx, qy, method="direct", repeats=repeats, timing=True, slip=slip)
+    side = math.sqrt(active) + 8
+    window = (side + np.ptp(ij[:, 0])) * (side + np.ptp(ij[:, 1]))
+    m, f = np.linalg.solve([[len(ij) * active, window], [len(ij) * 6 * active, 12 * window]],
+                           [f1, f2])
+    print(f"folded path fit: kFoldedSecondsPerMac = {m:.3g}, kFoldSecondsPerCell = {f:.3g}")
+
+
+def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
+    """The stress stage by three paths, interleaved (each round times each
+    path over `repeats` calls, in turn): the reference direct sum (three
+    tables per component), the folded direct path (one effective table per
+    step, plugin/core/stress/stress_fold.h) on one thread, and folded on
+    `threads` threads. Prints min / median per call and the ratios."""
+    paths = {"reference": dict(fold=False, threads=1), "folded": dict(fold=True, threads=1),
+             f"folded+{threads}threads": dict(fold=True, threads=threads)}
+    times = {k: [] for k in paths}
+    outs = {}
+    for _ in range(rounds):
+        for name, kw in paths.items():
+            outs[name], t, _, _ = e.stress(p, slip=ratio, method="direct", repeats=repeats,
+                                           timing=True, **kw)
+            times[name].append(t)
+    ref = outs["reference"]
+    for name, ts in times.items():
+        d = outs[name] - ref
+        rms = math.sqrt(float((d**2).sum() / (ref**2).sum()))
+        print(f"  {name:22s} min {min(ts) * 1e6:8.1f} us  median {np.median(ts) * 1e6:8.1f} us"
+              f"  | rel. RMS vs reference {rms:.1e}")
+    r = {k: (min(times["reference"]) / min(v), np.median(times["reference"]) / np.median(v))
+         for k, v in times.items()}
+    f1, ft = "folded", f"folded+{threads}threads"
+    print(f"  ratios (min / median): reference / folded {r[f1][0]:.2f} / {r[f1][1]:.2f}, "
+          f"reference / {ft} {r[ft][0]:.2f} / {r[ft][1]:.2f}, folded / {ft} "
+          f"{min(times[f1]) / min(times[ft]):.2f} / "
+          f"{np.median(times[f1]) / np.median(times[ft]):.2f}")
+    return times
 
 
 def main(argv=None):
@@ -105,6 +146,10 @@ def main(argv=None):
     ap.add_argument("--receptors", type=int, default=250)
     ap.add_argument("--repeats", type=int, default=200)
     ap.add_argument("--calibrate", action="store_true", help="fit the cost model's constants")
+    ap.add_argument("--stage-only", action="store_true",
+                    help="only the stress stage by path: reference / folded / folded+threads")
+    ap.add_argument("--threads", type=int, default=2, help="threads for folded+threads")
+    ap.add_argument("--rounds", type=int, default=15, help="interleaved rounds (stage table)")
     args = ap.parse_args(argv)
 
     tip, p, ratio, f = default_contact(args.force)
@@ -118,6 +163,12 @@ def main(argv=None):
 
     if args.calibrate:
         calibrate(n, pitch, ij, p, qx, qy, args.repeats)
+    print(f"stress stage, layered skin, slip ratio ({ratio[0]:.3f}, {ratio[1]:.2g}), "
+          f"{args.rounds} interleaved rounds of {max(1, args.repeats // 20)} calls:")
+    folded_stage(engine(core.LayeredSkin(), n, pitch, ij, cls), p, ratio, args.rounds,
+                 max(1, args.repeats // 20), args.threads)
+    if args.stage_only:
+        return
     skins = {"layered (Shao)": core.LayeredSkin(), "homogeneous (nu 0.48)": 0.48}
     results = {}
     for name, skin in skins.items():

@@ -82,3 +82,49 @@ def test_rollout_one_and_two_threads_bit_identical():
         mujoco.mj_step(m, d)
         serial[k] = d.sensordata
     assert np.array_equal(serial, one[2])
+
+
+def _threads_model(threads: int, pressure: str = "winkler"):
+    proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
+    tip = fast_tip(skin={"threads": str(threads), "pressure": pressure,
+                         "outputs": "spikes stress force", "stress_method": "direct"})
+    return scenes.build_model(tip, scenes.Texture(period_m=0.6e-3), proto)
+
+
+def test_stress_threads_one_and_two_bit_identical():
+    # The stage's thread pool splits work into chunks fixed by the inputs,
+    # each receptor's sum on one thread: sensordata may not depend on the
+    # count. `winkler` takes the folded path, `contacts` the reference one.
+    for pressure in ("winkler", "contacts"):
+        runs = []
+        for threads in (1, 2):
+            m = _threads_model(threads, pressure)
+            runs.append(_run(m, mujoco.MjData(m), 450))
+        assert np.array_equal(runs[0], runs[1])
+        assert np.abs(runs[0]).max() > 0  # stresses were compared
+
+
+def test_rollout_two_threads_with_stress_threads_equals_serial():
+    # Two rollout threads share the pool with the plugin's own threads=2: a
+    # busy pool makes the caller run its chunks itself (no deadlock) and the
+    # result equals a serial run.
+    m = _threads_model(2)
+    proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
+    ctrl = scenes.controls(proto, 0.07)
+    speeds = np.array([0.02, 0.04])
+    controls = np.repeat(ctrl[None], len(speeds), axis=0)
+    controls[:, int(round(proto.press_s / proto.timestep_s)):, 0] = speeds[:, None]
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    s0 = np.empty(mujoco.mj_stateSize(m, spec))
+    mujoco.mj_getState(m, mujoco.MjData(m), s0, spec)
+    s0 = np.repeat(s0[None], len(speeds), axis=0)
+    _, two = mujoco.rollout.rollout(m, [mujoco.MjData(m), mujoco.MjData(m)], s0, controls)
+    for b in range(len(speeds)):
+        d = mujoco.MjData(m)
+        serial = np.empty_like(two[b])
+        for k in range(controls.shape[1]):
+            d.ctrl[:] = controls[b, k]
+            mujoco.mj_step(m, d)
+            serial[k] = d.sensordata
+        assert np.array_equal(serial, two[b])
+    assert np.abs(two).max() > 0

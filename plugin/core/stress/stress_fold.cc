@@ -12,14 +12,16 @@ namespace {
 
 constexpr int kLanes = 8;           // cells per chunk (one AVX2 vector)
 constexpr int kFoldRowsPerChunk = 16;
-constexpr int kSitesPerChunk = 4;
+constexpr int kSitesPerChunk = 8;
 // Float lanes are widened to double every this many rows (a site's sum has
 // ~10^3-10^4 terms; float over a few rows keeps the error ~1e-7).
 constexpr int kRowsPerFlush = 8;
-// Cost model of the folded path (one core; examples/bench_kernel.py fits
-// them): per site x component x active cell, and per folded table cell.
-constexpr double kFoldedSecondsPerMac = 0.045e-9;
-constexpr double kFoldSecondsPerCell = 0.6e-9;
+// Cost model of the folded path (one core; examples/bench_kernel.py
+// --calibrate fits them): per site x component x active cell, and per folded
+// table cell. Measured on the 2-core development machine under load, scaled
+// by the reference path's measured / fixed constant in the same run (0.65).
+constexpr double kFoldedSecondsPerMac = 0.055e-9;
+constexpr double kFoldSecondsPerCell = 0.45e-9;
 
 typedef float v8f __attribute__((vector_size(32)));
 typedef float v4f __attribute__((vector_size(16)));
@@ -39,59 +41,70 @@ inline __attribute__((always_inline)) void Flush(v8f a, v4d* d) {
   d[1] += __builtin_convertvector(hi, v4d);
 }
 
-// One site's NC components: sum over the window rows of E_c * p in float
-// lanes (U interleaved accumulators per component, so one-component sites
-// are not bound by the add latency), widened to double per row. The order
-// of every operation is fixed by the inputs.
+// Rows [r0, r1) of one site's NC components: E_c * p summed in float lanes
+// (U interleaved accumulators per component, so one-component sites are not
+// bound by the add latency), then widened into the site's double sums d.
+// The order of every operation is fixed by the inputs.
 template <int NC, int U>
-inline __attribute__((always_inline)) void SumSite(const float* const* E, size_t base, int ew,
+inline __attribute__((always_inline)) void SumRows(const float* const* E, size_t base, int ew,
                                                    const float* P, int pw, const int* lo,
-                                                   const int* hi, int rows, double* out) {
-  v4d d[NC][2];
-  for (int c = 0; c < NC; ++c) d[c][0] = d[c][1] = v4d{0, 0, 0, 0};
-  for (int r0 = 0; r0 < rows; r0 += kRowsPerFlush) {
-    v8f acc[U][NC];
-    for (int u = 0; u < U; ++u)
-      for (int c = 0; c < NC; ++c) acc[u][c] = v8f{0, 0, 0, 0, 0, 0, 0, 0};
-    const int r1 = std::min(rows, r0 + kRowsPerFlush);
-    for (int r = r0; r < r1; ++r) {
-      const int x1 = hi[r];
-      const float* prow = P + static_cast<size_t>(r) * pw;
-      const float* erow[NC];
-      for (int c = 0; c < NC; ++c) erow[c] = E[c] + base + static_cast<size_t>(r) * ew;
-      int x = lo[r];
-      for (; x + U * kLanes <= x1; x += U * kLanes)
-        for (int u = 0; u < U; ++u) {
-          const v8f p = Load(prow + x + u * kLanes);
-          for (int c = 0; c < NC; ++c) acc[u][c] += Load(erow[c] + x + u * kLanes) * p;
-        }
-      for (; x < x1; x += kLanes) {
-        const v8f p = Load(prow + x);
-        for (int c = 0; c < NC; ++c) acc[0][c] += Load(erow[c] + x) * p;
+                                                   const int* hi, int r0, int r1, v4d* d) {
+  v8f acc[U][NC];
+  for (int u = 0; u < U; ++u)
+    for (int c = 0; c < NC; ++c) acc[u][c] = v8f{0, 0, 0, 0, 0, 0, 0, 0};
+  for (int r = r0; r < r1; ++r) {
+    const int x1 = hi[r];
+    const float* prow = P + static_cast<size_t>(r) * pw;
+    const float* erow[NC];
+    for (int c = 0; c < NC; ++c) erow[c] = E[c] + base + static_cast<size_t>(r) * ew;
+    int x = lo[r];
+    for (; x + U * kLanes <= x1; x += U * kLanes)
+      for (int u = 0; u < U; ++u) {
+        const v8f p = Load(prow + x + u * kLanes);
+        for (int c = 0; c < NC; ++c) acc[u][c] += Load(erow[c] + x + u * kLanes) * p;
       }
-    }
-    for (int c = 0; c < NC; ++c) {
-      v8f a = acc[0][c];
-      for (int u = 1; u < U; ++u) a += acc[u][c];
-      Flush(a, d[c]);
+    for (; x < x1; x += kLanes) {
+      const v8f p = Load(prow + x);
+      for (int c = 0; c < NC; ++c) acc[0][c] += Load(erow[c] + x) * p;
     }
   }
   for (int c = 0; c < NC; ++c) {
-    const v4d s = d[c][0] + d[c][1];
-    out[c] = (s[0] + s[1]) + (s[2] + s[3]);
+    v8f a = acc[0][c];
+    for (int u = 1; u < U; ++u) a += acc[u][c];
+    Flush(a, d + 2 * c);
   }
 }
 
+// One chunk's sites (at most kSitesPerChunk), band by band of kRowsPerFlush
+// pressure rows, so the table rows a band needs are reused from L1 by every
+// site of the chunk. Each site's sum is the same sequence of operations as
+// summing it alone.
+struct SiteSum {
+  int nc = 0;
+  const float* E[kNumStress];
+  size_t base = 0;
+  v4d d[2 * kNumStress];
+};
+
 __attribute__((target_clones("avx2", "default")))
-void SumSiteDispatch(int nc, const float* const* E, size_t base, int ew, const float* P, int pw,
-                     const int* lo, const int* hi, int rows, double* out) {
-  switch (nc) {
-    case 1: SumSite<1, 4>(E, base, ew, P, pw, lo, hi, rows, out); break;
-    case 2: SumSite<2, 2>(E, base, ew, P, pw, lo, hi, rows, out); break;
-    case 3: SumSite<3, 2>(E, base, ew, P, pw, lo, hi, rows, out); break;
-    case 4: SumSite<4, 1>(E, base, ew, P, pw, lo, hi, rows, out); break;
-    case 5: SumSite<5, 1>(E, base, ew, P, pw, lo, hi, rows, out); break;
-    default: SumSite<6, 1>(E, base, ew, P, pw, lo, hi, rows, out); break;
+void SumChunk(SiteSum* sites, int count, int ew, const float* P, int pw, const int* lo,
+              const int* hi, int rows) {
+  for (int q = 0; q < count; ++q)
+    for (auto& v : sites[q].d) v = v4d{0, 0, 0, 0};
+  for (int r0 = 0; r0 < rows; r0 += kRowsPerFlush) {
+    const int r1 = std::min(rows, r0 + kRowsPerFlush);
+    for (int q = 0; q < count; ++q) {
+      SiteSum& s = sites[q];
+      switch (s.nc) {
+        case 0: break;
+        case 1: SumRows<1, 4>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
+        case 2: SumRows<2, 2>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
+        case 3: SumRows<3, 2>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
+        case 4: SumRows<4, 1>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
+        case 5: SumRows<5, 1>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
+        default: SumRows<6, 1>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
+      }
+    }
   }
 }
 
@@ -144,7 +157,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     w->row_lo[y] = std::min(w->row_lo[y], b / kLanes * kLanes);
     w->row_hi[y] = std::max(w->row_hi[y], (e + kLanes - 1) / kLanes * kLanes);
   }
-  // Sites grouped by depth (in index order), and each depth's table window.
+  // Sites grouped by depth, and each depth's table window.
   w->window.assign(D, FoldScratch::Window{});
   w->depth_begin.assign(D + 1, 0);
   std::vector<int> si0(D, n), sj0(D, n);
@@ -164,6 +177,14 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     std::vector<int> fill(w->depth_begin.begin(), w->depth_begin.end() - 1);
     for (size_t s = 0; s < sites.size(); ++s)
       w->sites_by_depth[fill[sites[s].depth_index]++] = static_cast<int>(s);
+    // Each depth's sites by row, then column: a chunk's sites read nearby
+    // table rows (fixed by the sites alone, so the same order every step).
+    for (int d = 0; d < D; ++d)
+      std::sort(w->sites_by_depth.begin() + w->depth_begin[d],
+                w->sites_by_depth.begin() + w->depth_begin[d + 1], [&](int a, int b) {
+                  const StressSite &sa = sites[a], &sb = sites[b];
+                  return sa.j != sb.j ? sa.j < sb.j : (sa.i != sb.i ? sa.i < sb.i : a < b);
+                });
   }
   w->eff.resize(static_cast<size_t>(D) * kNumStress);
   struct FoldJob { int d, c, y0, y1; };
@@ -219,23 +240,29 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
   pool.Run(static_cast<int>(sums.size()), threads, [&](int k) {
     const SumJob& job = sums[k];
     const auto& win = w->window[job.d];
-    for (int q = job.s0; q < job.s1; ++q) {
-      const int si = w->sites_by_depth[q];
-      const StressSite& site = sites[si];
-      const float* E[kNumStress];
-      int comp[kNumStress], nc = 0;
+    SiteSum chunk[kSitesPerChunk];
+    int comp[kSitesPerChunk][kNumStress];
+    int count = 0;
+    for (int q = job.s0; q < job.s1; ++q, ++count) {
+      const StressSite& site = sites[w->sites_by_depth[q]];
+      SiteSum& ss = chunk[count];
+      ss.nc = 0;
       for (int c = 0; c < kNumStress; ++c)
         if (site.want[c] && win.comps[c]) {
-          E[nc] = w->eff[job.d * kNumStress + c].data();
-          comp[nc++] = c;
+          ss.E[ss.nc] = w->eff[job.d * kNumStress + c].data();
+          comp[count][ss.nc++] = c;
         }
-      if (nc == 0) continue;
       // Window element of (row j0, column i0) for this site.
-      const size_t base = static_cast<size_t>(win.sj1 - site.j) * win.w + (win.si1 - site.i);
-      double v[kNumStress];
-      SumSiteDispatch(nc, E, base, win.w, w->pressure.data(), pw, w->row_lo.data(),
-                      w->row_hi.data(), rows, v);
-      for (int c = 0; c < nc; ++c) out[si][comp[c]] = v[c];
+      ss.base = static_cast<size_t>(win.sj1 - site.j) * win.w + (win.si1 - site.i);
+    }
+    SumChunk(chunk, count, win.w, w->pressure.data(), pw, w->row_lo.data(), w->row_hi.data(),
+             rows);
+    for (int q = 0; q < count; ++q) {
+      const int si = w->sites_by_depth[job.s0 + q];
+      for (int c = 0; c < chunk[q].nc; ++c) {
+        const v4d s = chunk[q].d[2 * c] + chunk[q].d[2 * c + 1];
+        out[si][comp[q][c]] = (s[0] + s[1]) + (s[2] + s[3]);
+      }
     }
   });
   const auto t2 = std::chrono::steady_clock::now();

@@ -1,0 +1,136 @@
+"""The folded direct stress path (plugin/core/stress/stress_fold.h) against
+the reference direct sum, on the default skin's real lattice tables and a real
+contact field, and the stage's thread pool (bit-identical for any count)."""
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from mjtouch import core, scenes
+from mjtouch.sensor import SkinLayout
+
+# Stated tolerance of the folded path (issue 13): relative RMS over every
+# site and component. Folding rounds each table entry once more in float
+# (~6e-8 relative) and widens the float lanes to double every 8 rows.
+REL_RMS_TOL = 1e-5
+
+
+def _rel_rms(a, ref):
+    return math.sqrt(float(((a - ref) ** 2).sum()) / float((ref**2).sum()))
+
+
+@pytest.fixture(scope="module")
+def sliding_contact():
+    """The default fingertip (128 x 0.1 mm, ridged) pressed with 0.5 N onto
+    the default grating and slid for 20 ms: the plugin's pressure field and
+    MuJoCo's friction ratio (F_t / F_n) of the last step."""
+    tip = scenes.Fingertip(skin={"outputs": "force pressure"})
+    proto = scenes.Protocol(force_n=0.5)
+    model = scenes.build_model(tip, scenes.Texture(), proto)
+    data = mujoco.MjData(model)
+    layout = SkinLayout.from_model(model)
+    for row in scenes.controls(proto, 0.02):
+        data.ctrl[:] = row
+        mujoco.mj_step(model, data)
+    n = layout.nx
+    p = layout.block(data.sensordata, "pressure").reshape(n, n).astype(np.float32)
+    f = layout.block(data.sensordata, "force")
+    assert f[0] > 0.1 and (p > 0).sum() > 500, "the pad must press on the grating"
+    return tip, p, (f[1] / f[0], f[2] / f[0])
+
+
+@pytest.fixture(scope="module")
+def engine(sliding_contact):
+    """The plugin's stress stage for the default skin: SA1 (all six
+    components) and RA (s_zz) at 0.75 mm, PC (s_zz) at 2 mm, on a spiral of
+    sites over the contact and beyond."""
+    tip, _, _ = sliding_contact
+    n, h = tip.nx, tip.pitch_m
+    golden = math.pi * (3 - math.sqrt(5))
+    ij, cls = [], []
+    for s in range(120):
+        r = 5e-3 * math.sqrt((s + 0.5) / 120)
+        ij.append((int(np.clip(round(r * math.cos(s * golden) / h + n / 2), 0, n - 1)),
+                   int(np.clip(round(r * math.sin(s * golden) / h + n / 2), 0, n - 1))))
+        cls.append(s % 3)
+    cls = np.array(cls)
+    comps = [range(6) if c == 0 else (2,) for c in cls]
+    return core.StressEngine(core.LayeredSkin(), n, h, [0.75e-3, 2e-3], ij,
+                             depth_index=np.where(cls == 2, 1, 0), components=comps,
+                             method="direct")
+
+
+def test_folded_matches_reference_on_sliding_contact(sliding_contact, engine):
+    _, p, ratio = sliding_contact
+    assert abs(ratio[0]) > 0.1, "the pad must slide (friction shear present)"
+    ref = engine.stress(p, slip=ratio, method="direct", fold=False)
+    got = engine.stress(p, slip=ratio, method="direct")
+    assert np.abs(ref).max() > 1e3  # kPa-scale stresses were compared
+    assert _rel_rms(got, ref) <= REL_RMS_TOL
+    # every component, not only the large ones
+    for c in range(6):
+        scale = np.abs(ref[:, c]).max()
+        if scale > 0:
+            assert np.abs(got[:, c] - ref[:, c]).max() <= REL_RMS_TOL * scale
+    # the shear matters: without it the stress differs far beyond the tolerance
+    no_shear = engine.stress(p, method="direct", fold=False)
+    assert _rel_rms(no_shear, ref) > 100 * REL_RMS_TOL
+
+
+def test_folded_pressure_only_matches_reference(sliding_contact, engine):
+    _, p, _ = sliding_contact
+    ref = engine.stress(p, method="direct", fold=False)
+    got = engine.stress(p, method="direct")
+    assert _rel_rms(got, ref) <= REL_RMS_TOL
+
+
+def test_folded_path_handles_oblique_slip_and_edge_contact(engine):
+    # A contact at the grid's corner (table offsets beyond the window's
+    # edge) with slip along both axes; reference from explicit shear fields.
+    n = engine.n
+    p = np.zeros((n, n), np.float32)
+    yy, xx = np.mgrid[0:n, 0:n]
+    p[(xx - 3) ** 2 + (yy - n + 5) ** 2 < 60] = 2e3
+    p[n // 2, n // 2 + 7] = 5e2  # a lone cell
+    rx, ry = 0.3, -0.45
+    qx = (rx * p.astype(np.float64)).astype(np.float32)
+    qy = (ry * p.astype(np.float64)).astype(np.float32)
+    ref = engine.stress(p, qx, qy, method="direct", fold=False)
+    got = engine.stress(p, qx, qy, method="direct", slip=(rx, ry))
+    assert _rel_rms(got, ref) <= REL_RMS_TOL
+
+
+@pytest.mark.parametrize("fold", [True, False])
+def test_stress_bit_identical_for_any_thread_count(sliding_contact, engine, fold):
+    _, p, ratio = sliding_contact
+    one = engine.stress(p, slip=ratio, method="direct", fold=fold, threads=1)
+    for threads in (2, 3, 8):
+        assert np.array_equal(engine.stress(p, slip=ratio, method="direct", fold=fold,
+                                            threads=threads), one)
+
+
+def test_fold_false_is_the_reference_sum(sliding_contact, engine):
+    # fold=False with explicit shear fields is the same arithmetic as the
+    # shear fields without slip information (the `contacts` model's path).
+    _, p, ratio = sliding_contact
+    qx = (ratio[0] * p.astype(np.float64)).astype(np.float32)
+    qy = (ratio[1] * p.astype(np.float64)).astype(np.float32)
+    a = engine.stress(p, qx, qy, method="direct")
+    b = engine.stress(p, qx, qy, method="direct", slip=ratio, fold=False)
+    assert np.array_equal(a, b)
+
+
+def test_bad_thread_count_names_range(sliding_contact, engine):
+    _, p, _ = sliding_contact
+    with pytest.raises(ValueError, match=r"threads = 0 .*\[1, 64\]"):
+        engine.stress(p, threads=0)
+    with pytest.raises(ValueError, match=r"threads = 65 .*\[1, 64\]"):
+        engine.stress(p, threads=65)
+
+
+def test_cost_model_folded_direct_is_cheaper(engine):
+    direct, fft = engine.estimated_cost(3000, shear=True, folded=False)
+    folded, fft2 = engine.estimated_cost(3000, shear=True, folded=True)
+    assert fft == fft2 and folded < direct / 2
