@@ -60,6 +60,9 @@ NON_DEFAULT = {
     "stress_method": "direct", "stress_theta": ("0.4", {"stress_method": "tree"}),
     "skin": "halfspace", "layers": "7e-4 8e4 0.48; 3e-3 3e4 0.45", "base": "3e4 0.45",
     "interface_side": "lower",
+    # not physics (the same bits for any count), but read from the shared
+    # SkinModel's config, so models with different counts must not share one
+    "threads": "2",
 }
 NOT_PHYSICS = {"texture", "visual"}  # adapter and drawing only
 
