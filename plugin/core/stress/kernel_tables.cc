@@ -20,6 +20,27 @@ std::shared_ptr<const KernelTables> BuildKernelTables(
   for (size_t d = 0; d < depths_m.size(); ++d) {
     substrate.LatticeTable(depths_m[d], pitch_m, n, components, &kt->tables[d]);
   }
+  const int L = 2 * n - 1;
+  bool symmetric = true;
+  for (size_t d = 0; d < depths_m.size() && symmetric; ++d)
+    for (int load = 0; load < kNumLoads; ++load)
+      for (int c = 0; c < kNumStress; ++c) {
+        if (!components[c]) continue;
+        const auto l = static_cast<SurfaceLoad>(load);
+        const auto comp = static_cast<StressComponent>(c);
+        const float* K = kt->At(static_cast<int>(d), l, comp);
+        const float sx = MirrorSign(0, l, comp), sy = MirrorSign(1, l, comp);
+        float peak = 0, err = 0;
+        for (int y = 0; y < L; ++y)
+          for (int x = 0; x < L; ++x) {
+            const float k = K[static_cast<size_t>(y) * L + x];
+            peak = std::max(peak, std::fabs(k));
+            err = std::max(err, std::fabs(k - sx * K[static_cast<size_t>(y) * L + (L - 1 - x)]));
+            err = std::max(err, std::fabs(k - sy * K[static_cast<size_t>(L - 1 - y) * L + x]));
+          }
+        symmetric = symmetric && err <= 1e-6f * peak;
+      }
+  kt->mirror_symmetric = symmetric;
   kt->build_seconds = std::chrono::duration<double>(
                           std::chrono::steady_clock::now() - t0).count();
   return kt;

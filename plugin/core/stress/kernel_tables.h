@@ -21,6 +21,10 @@ struct KernelTables {
   std::vector<double> depths_m;               // one table per depth
   std::vector<std::vector<float>> tables;     // layout as Substrate::LatticeTable
   std::array<bool, kNumStress> components{};  // components filled
+  // Every table even or odd under x -> -x and y -> -y as a laterally
+  // isotropic substrate's must be (MirrorSign), to 1e-6 of its largest
+  // entry: the folded path then reads only offsets >= 0 (stress_fold.h).
+  bool mirror_symmetric = false;
   double build_seconds = 0;
 
   const float* At(int depth_index, SurfaceLoad load, StressComponent comp) const {
@@ -37,6 +41,15 @@ struct StressSite {
   int depth_index = 0;
   std::array<bool, kNumStress> want{};
 };
+
+// Sign s with K(load, comp) at (-dx, dy) = s K at (dx, dy) (axis 0), or at
+// (dx, -dy) (axis 1): shear along an axis and the stresses xy, xz (x) / xy,
+// yz (y) are odd under that axis's reflection, everything else even.
+inline float MirrorSign(int axis, SurfaceLoad load, StressComponent comp) {
+  const bool odd_load = load == (axis == 0 ? kLoadShearX : kLoadShearY);
+  const bool odd_comp = comp == kSxy || comp == (axis == 0 ? kSxz : kSyz);
+  return odd_load != odd_comp ? -1.0f : 1.0f;
+}
 
 std::shared_ptr<const KernelTables> BuildKernelTables(
     const Substrate& substrate, int n, double pitch_m,

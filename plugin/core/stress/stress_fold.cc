@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 
 #include "common/thread_pool.h"
@@ -119,6 +120,61 @@ void FoldRow(const float* kp, const float* kx, const float* ky, float rx, float 
   }
 }
 
+// The same from a mirrored source, read backwards (k[-x]), times sign
+// (+-1, exact): a table row at negative offsets from its row at positive ones.
+__attribute__((target_clones("avx2", "default")))
+void FoldRowReversed(const float* kp, const float* kx, const float* ky, float rx, float ry,
+                     float sign, bool shear, int len, float* e) {
+  if (shear) {
+    for (int x = 0; x < len; ++x) e[x] = sign * ((kp[-x] + rx * kx[-x]) + ry * ky[-x]);
+  } else {
+    for (int x = 0; x < len; ++x) e[x] = sign * kp[-x];
+  }
+}
+
+// One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
+// the tables' rows at |dy| and columns |dx| only (KernelTables::
+// mirror_symmetric): the signs of the reflections folded into the ratios,
+// E = sp (Kp + (sp sx rx) Kx + (sp sy ry) Ky), exactly the value the full
+// tables give when they are mirror images.
+void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy, int x0, int w,
+                     float rx, float ry, bool shear, float* e) {
+  const int n = kt.n, L = 2 * n - 1;
+  std::fill(e, e + w, 0.0f);
+  const int ady = dy < 0 ? -dy : dy;
+  if (ady > n - 1) return;
+  const size_t row = static_cast<size_t>(ady + n - 1) * L + (n - 1);  // offset (0, |dy|)
+  const float* Kp = kt.At(d, kLoadPressure, comp) + row;
+  const float* Kx = kt.At(d, kLoadShearX, comp) + row;
+  const float* Ky = kt.At(d, kLoadShearY, comp) + row;
+  for (int side = 0; side < 2; ++side) {  // dx >= 0, then dx < 0
+    const int lo = side == 0 ? std::max(0, x0) : std::max(-(n - 1), x0);
+    const int hi = side == 0 ? std::min(n - 1, x0 + w - 1) : std::min(-1, x0 + w - 1);
+    if (lo > hi) continue;
+    float sp = 1, sx = 1, sy = 1;
+    if (side == 1) {
+      sp *= MirrorSign(0, kLoadPressure, comp);
+      sx *= MirrorSign(0, kLoadShearX, comp);
+      sy *= MirrorSign(0, kLoadShearY, comp);
+    }
+    if (dy < 0) {
+      sp *= MirrorSign(1, kLoadPressure, comp);
+      sx *= MirrorSign(1, kLoadShearX, comp);
+      sy *= MirrorSign(1, kLoadShearY, comp);
+    }
+    const float a = sp * sx * rx, b = sp * sy * ry;
+    if (side == 0) {
+      float* out = e + (lo - x0);
+      FoldRow(Kp + lo, Kx + lo, Ky + lo, a, b, shear, hi - lo + 1, out);
+      if (sp < 0)
+        for (int x = 0; x <= hi - lo; ++x) out[x] = -out[x];
+    } else {
+      // e at dx = lo .. hi reads the positive-offset row at -lo .. -hi.
+      FoldRowReversed(Kp - lo, Kx - lo, Ky - lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
+    }
+  }
+}
+
 int CountWanted(const std::array<bool, kNumStress>& w) {
   int c = 0;
   for (bool b : w) c += b;
@@ -187,6 +243,9 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
                 });
   }
   w->eff.resize(static_cast<size_t>(D) * kNumStress);
+  // Fold jobs: blocks of window rows, or with mirrored tables blocks of
+  // |dy| (the rows dy and -dy share their source rows, read once).
+  const bool mirrored = kt.mirror_symmetric;
   struct FoldJob { int d, c, y0, y1; };
   std::vector<FoldJob> folds;
   for (int d = 0; d < D; ++d) {
@@ -199,8 +258,10 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     for (int c = 0; c < kNumStress; ++c) {
       if (!win.comps[c]) continue;
       w->eff[d * kNumStress + c].resize(static_cast<size_t>(win.w) * win.h);
-      for (int y = 0; y < win.h; y += kFoldRowsPerChunk)
-        folds.push_back({d, c, y, std::min(win.h, y + kFoldRowsPerChunk)});
+      const int end = mirrored ? std::max(std::abs(win.y0), std::abs(win.y0 + win.h - 1)) + 1
+                               : win.h;
+      for (int y = 0; y < end; y += kFoldRowsPerChunk)
+        folds.push_back({d, c, y, std::min(end, y + kFoldRowsPerChunk)});
     }
   }
   const float rx = static_cast<float>(slip_x), ry = static_cast<float>(slip_y);
@@ -214,6 +275,17 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     const float* Kx = kt.At(f.d, kLoadShearX, comp);
     const float* Ky = kt.At(f.d, kLoadShearY, comp);
     float* E = w->eff[f.d * kNumStress + f.c].data();
+    if (mirrored) {
+      for (int a = f.y0; a < f.y1; ++a)
+        for (int sign = 0; sign < (a == 0 ? 1 : 2); ++sign) {
+          const int dy = sign ? -a : a;
+          const int y = dy - win.y0;
+          if (y < 0 || y >= win.h) continue;
+          FoldMirroredRow(kt, f.d, comp, dy, win.x0, win.w, rx, ry, shear,
+                          E + static_cast<size_t>(y) * win.w);
+        }
+      return;
+    }
     // Offsets outside the table (|offset| > n - 1) are zero.
     const int xa = std::max(0, -(win.x0 + n - 1));
     const int xb = std::min(win.w, n - win.x0);
