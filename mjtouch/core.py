@@ -318,6 +318,7 @@ class StressEngine:
                                      mask, method, float(theta))
         self.n = self._e.n
         self.nrec = self._e.nrec
+        self.mirror_symmetric = self._e.mirror_symmetric
         self.table_build_s, self.spectra_build_s = self._e.table_build_s, self._e.spectra_build_s
         self.fft_n = self._e.fft_n
         self.table_bytes_per_depth = self._e.table_bytes_per_depth

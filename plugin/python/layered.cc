@@ -199,6 +199,7 @@ class StressEngine {
   }
 
   int n() const { return tables_->n; }
+  bool mirror_symmetric() const { return tables_->mirror_symmetric; }
   size_t nrec() const { return sites_.size(); }
   double table_build_s() const { return tables_->build_seconds; }
   double spectra_build_s() const { return spectra_ ? spectra_->build_seconds : 0.0; }
@@ -341,6 +342,8 @@ void BindLayered(nb::module_& m) {
            "they can win), 'direct', 'fft', 'tree' (opening angle theta).")
       .def_prop_ro("n", &StressEngine::n, "Grid side (cells).")
       .def_prop_ro("nrec", &StressEngine::nrec, "Number of sites.")
+      .def_prop_ro("mirror_symmetric", &StressEngine::mirror_symmetric,
+                   "Whether the tables are mirror images (the folded path needs it).")
       .def_prop_ro("table_build_s", &StressEngine::table_build_s, "Kernel table build time, s.")
       .def_prop_ro("spectra_build_s", &StressEngine::spectra_build_s,
                    "FFT spectra build time, s (0: none).")

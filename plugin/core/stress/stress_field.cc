@@ -264,7 +264,7 @@ StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectr
                              const float* pressure, const float* shear_x, const float* shear_y,
                              StressScratch* scratch, Stress6* out, const StressOptions& opt) {
   const bool shear = shear_x && shear_y;
-  const bool folded = UsesFoldedPath(shear, opt);
+  const bool folded = UsesFoldedPath(kt, shear, opt);
   if (method == StressMethod::kTree) {
     if (tree) {
       tree->Compute(runs, pressure, shear ? shear_x : nullptr, shear ? shear_y : nullptr,

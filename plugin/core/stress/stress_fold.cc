@@ -8,6 +8,10 @@
 
 #include "common/thread_pool.h"
 
+// The 8-lane helpers below are always inlined into the target_clones
+// functions, so their by-value vector ABI never applies.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 namespace mjtouch {
 namespace {
 
@@ -189,7 +193,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
                           Stress6* out) {
   for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
   if (runs.row.empty() || sites.empty()) return;
-  const int n = kt.n, L = 2 * n - 1;
+  const int n = kt.n;
   const int D = static_cast<int>(kt.depths_m.size());
   // Active box, its columns padded to whole chunks.
   int i0 = n, i1 = -1, j0 = runs.row.front(), j1 = runs.row.back();
@@ -243,9 +247,8 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
                 });
   }
   w->eff.resize(static_cast<size_t>(D) * kNumStress);
-  // Fold jobs: blocks of window rows, or with mirrored tables blocks of
-  // |dy| (the rows dy and -dy share their source rows, read once).
-  const bool mirrored = kt.mirror_symmetric;
+  // Fold jobs: blocks of |dy| (the rows dy and -dy share their source rows,
+  // read once).
   struct FoldJob { int d, c, y0, y1; };
   std::vector<FoldJob> folds;
   for (int d = 0; d < D; ++d) {
@@ -258,8 +261,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     for (int c = 0; c < kNumStress; ++c) {
       if (!win.comps[c]) continue;
       w->eff[d * kNumStress + c].resize(static_cast<size_t>(win.w) * win.h);
-      const int end = mirrored ? std::max(std::abs(win.y0), std::abs(win.y0 + win.h - 1)) + 1
-                               : win.h;
+      const int end = std::max(std::abs(win.y0), std::abs(win.y0 + win.h - 1)) + 1;
       for (int y = 0; y < end; y += kFoldRowsPerChunk)
         folds.push_back({d, c, y, std::min(end, y + kFoldRowsPerChunk)});
     }
@@ -271,36 +273,15 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     const FoldJob& f = folds[k];
     const auto& win = w->window[f.d];
     const auto comp = static_cast<StressComponent>(f.c);
-    const float* Kp = kt.At(f.d, kLoadPressure, comp);
-    const float* Kx = kt.At(f.d, kLoadShearX, comp);
-    const float* Ky = kt.At(f.d, kLoadShearY, comp);
     float* E = w->eff[f.d * kNumStress + f.c].data();
-    if (mirrored) {
-      for (int a = f.y0; a < f.y1; ++a)
-        for (int sign = 0; sign < (a == 0 ? 1 : 2); ++sign) {
-          const int dy = sign ? -a : a;
-          const int y = dy - win.y0;
-          if (y < 0 || y >= win.h) continue;
-          FoldMirroredRow(kt, f.d, comp, dy, win.x0, win.w, rx, ry, shear,
-                          E + static_cast<size_t>(y) * win.w);
-        }
-      return;
-    }
-    // Offsets outside the table (|offset| > n - 1) are zero.
-    const int xa = std::max(0, -(win.x0 + n - 1));
-    const int xb = std::min(win.w, n - win.x0);
-    for (int y = f.y0; y < f.y1; ++y) {
-      float* e = E + static_cast<size_t>(y) * win.w;
-      const int ty = win.y0 + y + n - 1;
-      if (ty < 0 || ty >= L || xa >= xb) {
-        std::fill(e, e + win.w, 0.0f);
-        continue;
+    for (int a = f.y0; a < f.y1; ++a)
+      for (int sign = 0; sign < (a == 0 ? 1 : 2); ++sign) {
+        const int dy = sign ? -a : a;
+        const int y = dy - win.y0;
+        if (y < 0 || y >= win.h) continue;
+        FoldMirroredRow(kt, f.d, comp, dy, win.x0, win.w, rx, ry, shear,
+                        E + static_cast<size_t>(y) * win.w);
       }
-      std::fill(e, e + xa, 0.0f);
-      std::fill(e + std::max(xa, xb), e + win.w, 0.0f);
-      const size_t t = static_cast<size_t>(ty) * L + (win.x0 + xa + n - 1);
-      FoldRow(Kp + t, Kx + t, Ky + t, rx, ry, shear, xb - xa, e + xa);
-    }
   });
   const auto t1 = std::chrono::steady_clock::now();
   // Sums: blocks of sites of one depth.

@@ -40,7 +40,7 @@ struct FoldScratch {
 };
 
 // Stress (Pa) at every site into out[site] (components a site does not want
-// are zero). shear: whether the tractions include the uniform-slip shear
+// are zero). Needs kt.mirror_symmetric (every laterally isotropic substrate). shear: whether the tractions include the uniform-slip shear
 // (slip_x, slip_y: shear / pressure); false: pressure only. threads: callers
 // of ThreadPool::Shared(); any value gives the same bits.
 void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
