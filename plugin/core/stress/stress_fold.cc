@@ -24,9 +24,9 @@ constexpr int kRowsPerFlush = 8;
 // Cost model of the folded path (one core; examples/bench_kernel.py
 // --calibrate fits them): per site x component x active cell, and per folded
 // table cell. Measured on the 2-core development machine under load, scaled
-// by the reference path's measured / fixed constant in the same run (0.65).
-constexpr double kFoldedSecondsPerMac = 0.055e-9;
-constexpr double kFoldSecondsPerCell = 0.45e-9;
+// by the reference path's fixed / measured constant in the same run (0.65).
+constexpr double kFoldedSecondsPerMac = 0.05e-9;
+constexpr double kFoldSecondsPerCell = 0.22e-9;
 
 typedef float v8f __attribute__((vector_size(32)));
 typedef float v4f __attribute__((vector_size(16)));
