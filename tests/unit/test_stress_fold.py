@@ -136,3 +136,23 @@ def test_cost_model_folded_direct_is_cheaper(engine):
     direct, fft = engine.estimated_cost(3000, shear=True, folded=False)
     folded, fft2 = engine.estimated_cost(3000, shear=True, folded=True)
     assert fft == fft2 and folded < direct / 2
+
+
+def test_bench_stage_table_runs(sliding_contact, engine, capsys):
+    # examples/bench_kernel.py's stage table (reference / folded / threads),
+    # one short round: the three paths run and agree to the tolerance.
+    import importlib.util
+    import pathlib
+    path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_kernel.py"
+    spec = importlib.util.spec_from_file_location("bench_kernel", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    _, p, ratio = sliding_contact
+    times = bench.folded_stage(engine, p, ratio, rounds=1, repeats=1, threads=2)
+    assert set(times) == {"reference", "folded", "folded+2threads"}
+    assert all(len(t) == 1 and t[0] > 0 for t in times.values())
+    out = capsys.readouterr().out
+    assert "reference / folded" in out
+    for line in out.splitlines():
+        if "rel. RMS vs reference" in line:
+            assert float(line.rsplit(" ", 1)[1]) <= REL_RMS_TOL
