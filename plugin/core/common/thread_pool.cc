@@ -18,6 +18,11 @@ inline void CpuRelax() {
 #endif
 }
 
+inline void Backoff(int k) {
+  if (k < 512) CpuRelax();
+  else std::this_thread::yield();
+}
+
 }  // namespace
 
 ThreadPool& ThreadPool::Shared() {
@@ -113,9 +118,11 @@ void ThreadPool::Run(int num_chunks, int threads, const std::function<void(int)>
   }
   wake_.notify_all();
   RunChunks();
-  while (done_chunks_.load() < num_chunks) CpuRelax();
+  // Wait for chunks that workers hold: spin briefly, then yield, so that a
+  // worker descheduled on a busy machine gets the core back.
+  for (int k = 0; done_chunks_.load() < num_chunks; ++k) Backoff(k);
   job_open_ = false;
-  while (helpers_active_.load() > 0) CpuRelax();
+  for (int k = 0; helpers_active_.load() > 0; ++k) Backoff(k);
   fn_ = nullptr;
 }
 
