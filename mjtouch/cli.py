@@ -1,4 +1,4 @@
-"""Command line: ``python -m mjtouch slide | view | bench`` (also the ``mjtouch`` script)."""
+"""Command line: ``python -m mjtouch slide | view | bench | sweep`` (also the ``mjtouch`` script)."""
 
 from __future__ import annotations
 
@@ -236,13 +236,26 @@ def _bench_parser(sub):
     return p
 
 
+def _sweep_parser(sub):
+    from mjtouch import sweep
+    p = sub.add_parser("sweep", help="slide over the product of several values of its options, "
+                                     "on Ray (or --serial); one Parquet row per run",
+                       description=sweep.__doc__.split("\n\n")[1])
+    sweep.add_arguments(p)
+    return p
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="mjtouch", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     _slide_parser(sub)
     _view_parser(sub)
     _bench_parser(sub)
+    _sweep_parser(sub)
     args = parser.parse_args(argv)
+    if args.command == "sweep":
+        from mjtouch import sweep
+        return sweep.main(args)
     if args.command == "bench":
         from mjtouch import bench
         return bench.main(args)
