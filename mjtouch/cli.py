@@ -1,4 +1,4 @@
-"""Command line: ``python -m mjtouch slide | view | bench | sweep`` (also the ``mjtouch`` script)."""
+"""Command line: ``python -m mjtouch {slide,view,bench,sweep}`` (also the ``mjtouch`` script)."""
 
 from __future__ import annotations
 

@@ -113,7 +113,10 @@ def _convert(action: argparse.Action, token: str, where: str):
     try:
         value = action.type(token) if action.type else token
     except (argparse.ArgumentTypeError, ValueError) as e:
-        raise ValueError(f"{where}: {e}") from None
+        if action.type is int:
+            raise ValueError(f"{where} {token!r} is not an integer") from None
+        msg = str(e)  # slide's own checks name the option already
+        raise ValueError(msg if msg.startswith(where) else f"{where}: {msg}") from None
     if action.choices is not None and value not in action.choices:
         raise ValueError(f"{where} {token!r} is not one of {', '.join(map(str, action.choices))}")
     return value
@@ -312,14 +315,15 @@ class SweepResult:
     failed: list[tuple[dict, str]]  # (parameters, error) of runs that raised
     backend: str  # "serial" or "ray"
     workers: set[str]  # host:pid of the processes that ran (ray: workers, not the driver)
-    wall_s: float
+    wall_s: float  # the whole sweep, startup included
+    startup_s: float  # starting or joining Ray (0 serially)
 
     def summary(self) -> dict:
         return {"runs": self.table.num_rows + len(self.failed), "ran": self.ran,
                 "skipped": self.skipped, "failed": [{"params": columns(p), "error": e}
                                                     for p, e in self.failed],
                 "backend": self.backend, "workers": len(self.workers),
-                "wall_s": self.wall_s, "table": str(self.path)}
+                "wall_s": self.wall_s, "startup_s": self.startup_s, "table": str(self.path)}
 
 
 def run(values: Mapping[str, Any] | None = None, out: str | os.PathLike = "sweep", *,
@@ -345,6 +349,7 @@ def run(values: Mapping[str, Any] | None = None, out: str | os.PathLike = "sweep
     with contextlib.ExitStack() as stack:
         # Ray starts (seconds) before the bar, so its rate and ETA are the runs'
         ray = None if serial or not todo else stack.enter_context(_ray_session(address, num_cpus))
+        startup = time.perf_counter() - t0
         bar = stack.enter_context(Progress(len(runs), progress, desc="sweep", unit="run",
                                            initial=len(runs) - len(todo)))
         if ray is None:
@@ -364,7 +369,7 @@ def run(values: Mapping[str, Any] | None = None, out: str | os.PathLike = "sweep
     path = out / TABLE
     pa.parquet.write_table(table, path)
     return SweepResult(table, path, len(todo) - len(failed), len(runs) - len(todo), failed,
-                       "serial" if serial else "ray", workers, wall)
+                       "serial" if serial else "ray", workers, wall, startup)
 
 
 def _label(p: Mapping[str, Any]) -> str:
@@ -464,9 +469,11 @@ def main(args) -> int:
     if args.json:
         print(json.dumps(s))
     else:
-        print(f"mjtouch sweep: {s['runs']} run{'s' if s['runs'] != 1 else ''} ({s['ran']} ran, {s['skipped']} already in "
-              f"{args.out}, {len(s['failed'])} failed) on {s['backend']} "
-              f"({s['workers']} worker process{'es' if s['workers'] != 1 else ''}), wall {s['wall_s']:.1f} s -> {s['table']}")
+        n, w = s["runs"], s["workers"]
+        print(f"mjtouch sweep: {n} run{'s' * (n != 1)} ({s['ran']} ran, {s['skipped']} already "
+              f"in {args.out}, {len(s['failed'])} failed) on {s['backend']} ({w} worker "
+              f"process{'es' * (w != 1)}), wall {s['wall_s']:.1f} s ({s['startup_s']:.1f} s "
+              f"starting) -> {s['table']}")
     for f in s["failed"]:
         print(f"mjtouch sweep: run failed: {f['error']}  ({f['params']})", file=sys.stderr)
     return 1 if s["failed"] else 0
