@@ -3,6 +3,9 @@ a local two-worker Ray cluster, rows that agree with `mjtouch slide`, resume."""
 
 import importlib.util
 import json
+import math
+import pathlib
+import runpy
 import subprocess
 import sys
 
@@ -11,6 +14,7 @@ import pytest
 
 from mjtouch import sweep
 
+EXAMPLES = pathlib.Path(__file__).resolve().parents[2] / "examples"
 # tiny runs: 24 x 24 taxels, 0.5 ms steps, 0.15 s of sliding (~0.3 s each)
 SMALL = ["--duration", "0.15", "--dt", "5e-4", "--nx", "24", "--pitch", "2e-4"]
 # four runs: two periods x two speeds
@@ -20,8 +24,9 @@ GRID = ["--period", "0.8e-3", "1.2e-3", "--speed", "0.02:0.04:0.02", *SMALL]
 def require(module: str):
     """The sweep needs the `ray` extra; CI installs it with `test`. Missing, the
     test fails (a skipped sweep test would pass CI without ever running Ray)."""
-    if importlib.util.find_spec(module) is None:
-        pytest.fail(f"{module} is not installed: the sweep tests need mjtouch's 'ray' extra, "
+    top = module.split(".")[0]
+    if importlib.util.find_spec(top) is None:
+        pytest.fail(f"{top} is not installed: the sweep tests need mjtouch's 'ray' extra, "
                     "which the 'test' extra includes: pip install '.[test]'", pytrace=False)
     return importlib.import_module(module)
 
@@ -180,3 +185,16 @@ def test_bad_arguments_exit_2_before_running(tmp_path):
     r = mjtouch("sweep", "--out", str(tmp_path), "--num-cpus", "0")
     assert r.returncode == 2 and "--num-cpus 0 must be >= 1" in r.stderr
     assert not (tmp_path / "runs").exists() or not any((tmp_path / "runs").iterdir())
+
+
+def test_bench_sweep_example(capsys):
+    # examples/bench_sweep.py (the README's speed-up) on two tiny runs
+    require("ray")
+    main = runpy.run_path(str(EXAMPLES / "bench_sweep.py"), run_name="example")["main"]
+    assert main(["--repeats", "1", "--num-cpus", "2", "--json", "--",
+                 "--period", "0.8e-3", "1.2e-3", *SMALL]) == 0
+    o = json.loads(capsys.readouterr().out)
+    assert o["runs"] == 2 and o["tables_identical"] is True
+    for key in ("speedup_min", "speedup_median", "speedup_runs_only_median"):
+        assert math.isfinite(o[key]) and o[key] > 0, key
+    assert o["ray_startup_median_s"] > 0
