@@ -60,6 +60,7 @@ COLUMN = {"period": "period_m", "plateau": "plateau_m", "height": "height_m", "r
           "ridge_pitch": "ridge_pitch_m", "duration": "duration_s", "dt": "dt_s",
           "pitch": "pitch_m"}
 TABLE = "sweep.parquet"
+RAY_NICENESS_ENV = "RAY_worker_niceness"
 RUNS = "runs"
 TRUE, FALSE = ("true", "on", "yes", "1"), ("false", "off", "no", "0")
 
@@ -86,10 +87,14 @@ def slide_options() -> list[argparse.Action]:
 
 
 def _kind(action: argparse.Action) -> str:
-    if isinstance(action, argparse.BooleanOptionalAction):
+    """bool, str, int or float: how a sweep parses and stores the option."""
+    flags = (argparse.BooleanOptionalAction, argparse._StoreTrueAction,
+             argparse._StoreFalseAction)
+    if isinstance(action, flags):
         return "bool"
-    if action.choices is not None:
+    if action.choices is not None or action.type in (None, str):
         return "str"
+    # slide's float options parse with checking closures (cli._positive_float)
     return "int" if action.type is int else "float"
 
 
@@ -382,7 +387,9 @@ def _run_ray(ray, todo, runs_dir, bar, failed, workers) -> None:
     remote = ray.remote(num_cpus=1, max_retries=0)(_remote_run)
     pending = {remote.remote(p): p for _, p in todo}
     while pending:
-        ready, _ = ray.wait(list(pending), num_returns=1)
+        # whatever finished within a second: one wait per batch, not per run
+        # (each wait walks all pending refs; sweeps have thousands)
+        ready, _ = ray.wait(list(pending), num_returns=len(pending), timeout=1.0)
         for ref in ready:
             p = pending.pop(ref)
             try:
@@ -413,7 +420,15 @@ def _ray_session(address: str | None, num_cpus: int | None):
         return
     import logging
     kw = dict(logging_level=logging.WARNING, include_dashboard=False)
-    ray.init(address=address, **kw) if address else ray.init(num_cpus=num_cpus, **kw)
+    if address:
+        ray.init(address=address, **kw)
+    else:
+        # Ray renices its workers by +15 to keep its control plane responsive;
+        # here the runs are the cluster's only work, and on a shared machine
+        # +15 made a Ray sweep slower than --serial (README, Sweeps). The
+        # workers run at the driver's niceness, unless RAY_worker_niceness says.
+        config = {} if RAY_NICENESS_ENV in os.environ else {"worker_niceness": 0}
+        ray.init(num_cpus=num_cpus, _system_config=config, **kw)
     try:
         yield ray
     finally:
@@ -455,8 +470,15 @@ def main(args) -> int:
     from mjtouch import progress
     given = {a.dest: getattr(args, a.dest) for a in slide_options()
              if getattr(args, a.dest) is not None}
+    problem = None
     if args.num_cpus is not None and args.num_cpus < 1:
-        print(f"mjtouch sweep: error: --num-cpus {args.num_cpus} must be >= 1", file=sys.stderr)
+        problem = f"--num-cpus {args.num_cpus} must be >= 1"
+    elif args.num_cpus is not None and (args.address or args.serial):
+        problem = "--num-cpus sizes the local Ray cluster; not with --address or --serial"
+    elif args.address and args.serial:
+        problem = "--address joins a Ray cluster; not with --serial"
+    if problem:
+        print(f"mjtouch sweep: error: {problem}", file=sys.stderr)
         return 2
     try:
         result = run(given, args.out, config=args.config, serial=args.serial,

@@ -184,6 +184,8 @@ def test_bad_arguments_exit_2_before_running(tmp_path):
     assert r.returncode == 2 and "--nx 2 is out of range; valid range [4, 512]" in r.stderr
     r = mjtouch("sweep", "--out", str(tmp_path), "--num-cpus", "0")
     assert r.returncode == 2 and "--num-cpus 0 must be >= 1" in r.stderr
+    r = mjtouch("sweep", "--out", str(tmp_path), "--serial", "--address", "auto")
+    assert r.returncode == 2 and "--address joins a Ray cluster; not with --serial" in r.stderr
     assert not (tmp_path / "runs").exists() or not any((tmp_path / "runs").iterdir())
 
 
@@ -198,3 +200,10 @@ def test_bench_sweep_example(capsys):
     for key in ("speedup_min", "speedup_median", "speedup_runs_only_median"):
         assert math.isfinite(o[key]) and o[key] > 0, key
     assert o["ray_startup_median_s"] > 0
+
+
+def test_example_sweep_file():
+    v = sweep.read_config(EXAMPLES / "sweep.toml")
+    assert v["period"] == [0.8e-3, 1.0e-3, 1.2e-3, 1.5e-3] and v["speed"] == [0.02, 0.04, 0.06]
+    assert v["ridges"] == [True, False] and v["duration"] == [0.5]
+    assert len(sweep.expand(v)) == 48  # as the file says
