@@ -421,18 +421,39 @@ def _ray_session(address: str | None, num_cpus: int | None):
     import logging
     kw = dict(logging_level=logging.WARNING, include_dashboard=False)
     if address:
-        ray.init(address=address, **kw)
+        _check_reachable(address)
+        try:
+            ray.init(address=address, **kw)
+        except (ConnectionError, RuntimeError) as e:  # no cluster, wrong token, ...
+            raise ConnectionError(f"could not join the Ray cluster at --address {address}: "
+                                  f"{str(e).splitlines()[0]} (see `ray status` on the head "
+                                  "node; Ray's token authentication: README, Sweeps)") from e
     else:
         # Ray renices its workers by +15 to keep its control plane responsive;
         # here the runs are the cluster's only work, and on a shared machine
         # +15 made a Ray sweep slower than --serial (README, Sweeps). The
         # workers run at the driver's niceness, unless RAY_worker_niceness says.
         config = {} if RAY_NICENESS_ENV in os.environ else {"worker_niceness": 0}
-        ray.init(num_cpus=num_cpus, _system_config=config, **kw)
+        # "local": a new cluster even when `ray start` runs one here (--address auto joins that)
+        ray.init(address="local", num_cpus=num_cpus, _system_config=config, **kw)
     try:
         yield ray
     finally:
         ray.shutdown()
+
+
+def _check_reachable(address: str, timeout_s: float = 5.0) -> None:
+    """A HOST:PORT address must answer: ray.init retries an absent cluster
+    without end (measured: still waiting after 12 min with Ray 2.60)."""
+    host, sep, port = address.rpartition(":")
+    if not sep or not port.isdigit() or "://" in address:
+        return  # "auto", ray:// client addresses: Ray resolves them
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout_s).close()
+    except OSError as e:
+        raise ConnectionError(f"could not join the Ray cluster at --address {address}: nothing "
+                              f"answers there ({e}); start one with `ray start --head --port "
+                              f"{port}`") from None
 
 
 # --- command line ------------------------------------------------------------
@@ -484,7 +505,7 @@ def main(args) -> int:
         result = run(given, args.out, config=args.config, serial=args.serial,
                      address=args.address, num_cpus=args.num_cpus,
                      progress=progress.wanted(args.progress, args.json))
-    except (ValueError, ImportError) as e:
+    except (ValueError, ImportError, ConnectionError) as e:
         print(f"mjtouch sweep: error: {e}", file=sys.stderr)
         return 2
     s = result.summary()

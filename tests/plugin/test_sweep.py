@@ -184,6 +184,10 @@ def test_bad_arguments_exit_2_before_running(tmp_path):
     assert r.returncode == 2 and "--nx 2 is out of range; valid range [4, 512]" in r.stderr
     r = mjtouch("sweep", "--out", str(tmp_path), "--num-cpus", "0")
     assert r.returncode == 2 and "--num-cpus 0 must be >= 1" in r.stderr
+    require("ray")  # an address where no cluster answers (port 1): an error, not a hang
+    r = mjtouch("sweep", "--out", str(tmp_path), "--address", "127.0.0.1:1", *SMALL)
+    assert r.returncode == 2 and "could not join the Ray cluster at --address 127.0.0.1:1: " \
+        "nothing answers there" in r.stderr
     r = mjtouch("sweep", "--out", str(tmp_path), "--serial", "--address", "auto")
     assert r.returncode == 2 and "--address joins a Ray cluster; not with --serial" in r.stderr
     assert not (tmp_path / "runs").exists() or not any((tmp_path / "runs").iterdir())
