@@ -1,4 +1,4 @@
-"""Command line: ``python -m mjtouch slide | view | bench`` (also the ``mjtouch`` script)."""
+"""Command line: ``python -m mjtouch {slide,view,bench,sweep}`` (also the ``mjtouch`` script)."""
 
 from __future__ import annotations
 
@@ -62,11 +62,18 @@ def _slide_parser(sub):
                         "load in partial contact, which fingerprint filtering needs; slower)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="write a PNG of the spectrum and raster")
+    from mjtouch import progress
+    progress.add_argument(p)
     return p
 
 
 def slide(args) -> dict:
-    from mjtouch import analysis, rollout, scenes
+    return slide_with_result(args)[0]
+
+
+def slide_with_result(args):
+    """slide(args) and the run's rollout.SlideResult (spikes, stress, force)."""
+    from mjtouch import analysis, progress, rollout, scenes
 
     tip = scenes.Fingertip(ridges=args.ridges, ridge_pitch_m=args.ridge_pitch, nx=args.nx,
                            pitch_m=args.pitch, skin={"pressure": args.pressure})
@@ -83,7 +90,13 @@ def slide(args) -> dict:
         texture.length_m = max(texture.length_m, need)
     protocol = scenes.Protocol(force_n=args.force, speed_m_s=args.speed, timestep_s=args.dt)
     t0 = time.perf_counter()
-    res = rollout.run_slide(tip, texture, protocol, duration_s=args.duration)
+    # the step count scenes.controls will make (not the array: a bad --duration is
+    # reported by run_slide, not by an allocation)
+    nstep = round(protocol.press_s / args.dt) + round(args.duration / args.dt)
+    with progress.Progress(nstep, progress.wanted(args.progress, args.json), desc="slide",
+                           unit="step") as bar:
+        res = rollout.run_slide(tip, texture, protocol, duration_s=args.duration,
+                                progress=bar.update if bar.enabled else None)
     wall = time.perf_counter() - t0
     w = res.window()
     dt = res.dt
@@ -120,7 +133,7 @@ def slide(args) -> dict:
     }
     if args.plot:
         _plot(args.plot, res, f, p, expected, w)
-    return out
+    return out, res
 
 
 def _plot(path, res, f, p, expected, w):
@@ -223,13 +236,26 @@ def _bench_parser(sub):
     return p
 
 
+def _sweep_parser(sub):
+    from mjtouch import sweep
+    p = sub.add_parser("sweep", help="slide over the product of several values of its options, "
+                                     "on Ray (or --serial); one Parquet row per run",
+                       description=sweep.__doc__.split("\n\n")[1])
+    sweep.add_arguments(p)
+    return p
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="mjtouch", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     _slide_parser(sub)
     _view_parser(sub)
     _bench_parser(sub)
+    _sweep_parser(sub)
     args = parser.parse_args(argv)
+    if args.command == "sweep":
+        from mjtouch import sweep
+        return sweep.main(args)
     if args.command == "bench":
         from mjtouch import bench
         return bench.main(args)

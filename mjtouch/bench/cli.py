@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import sys
 
+from mjtouch import progress
 from mjtouch.bench.configs import BenchConfig
 from mjtouch.bench.report import plot, print_report
 from mjtouch.bench.runner import Bench, Progress
@@ -35,7 +36,8 @@ def add_arguments(p) -> None:
                         "stress_method, receptors, timestep, presets)")
     p.add_argument("--no-effects", action="store_true", help="skip the effects table")
     p.add_argument("--no-threads", action="store_true", help="skip the threads measurement")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (--progress off)")
+    progress.add_argument(p)
 
 
 def config_from_args(args) -> BenchConfig:
@@ -88,7 +90,9 @@ def main(args) -> int:
             return 2
     else:
         bench = Bench(cfg)
-        bench.progress = Progress(bench.count_tasks(), enabled=not args.no_progress)
+        mode = "off" if args.no_progress else args.progress
+        bench.progress = Progress(bench.count_tasks(), desc="bench",
+                                  enabled=progress.wanted(mode, args.json))
         out = bench.run()
         bench.progress.close()
     if args.plot:

@@ -8,7 +8,6 @@ import dataclasses
 import math
 import os
 import platform
-import sys
 import time
 from typing import Callable
 
@@ -23,38 +22,8 @@ from mjtouch.bench.configs import (LEAD_IN_S, MIN_WINDOW_STEPS, SITE_RADIUS_M, S
                                    default_knobs, lattice_sites, scene_parts)
 from mjtouch.bench.timing import (Run, States, add_native_tactile, slide_ctrl,
                                   strip_plugin)
+from mjtouch.progress import Progress  # the bar every long command shares
 from mjtouch.sensor import SkinLayout
-
-
-# --- progress ----------------------------------------------------------------
-
-
-class Progress:
-    """A text progress bar on stderr (one line per item when not a TTY)."""
-
-    def __init__(self, total: int, enabled: bool = True, stream=None, width: int = 30):
-        self.total, self.done, self.enabled, self.width = max(total, 1), 0, enabled, width
-        self.stream = stream or sys.stderr
-        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
-        self.t0 = time.perf_counter()
-
-    def step(self, label: str) -> None:
-        self.done += 1
-        if not self.enabled:
-            return
-        k = int(self.width * min(self.done, self.total) / self.total)
-        line = (f"[{'#' * k}{'.' * (self.width - k)}] {self.done}/{self.total} "
-                f"{time.perf_counter() - self.t0:6.1f} s  {label}")
-        if self.tty:
-            self.stream.write("\r" + line[:110].ljust(110))
-        else:
-            self.stream.write(line + "\n")
-        self.stream.flush()
-
-    def close(self) -> None:
-        if self.enabled and self.tty:
-            self.stream.write("\n")
-            self.stream.flush()
 
 
 # --- the benchmark -----------------------------------------------------------

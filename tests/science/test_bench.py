@@ -24,8 +24,11 @@ ERROR_KEYS = ("stress_rms_rel", "stress_rms_pa", "peak_freq_hz", "peak_amp_rel",
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     png = tmp_path_factory.mktemp("bench") / "bench.png"
+    # --progress on: the bar is quiet with --json and off a terminal, and its
+    # count is checked below
     out = subprocess.run([sys.executable, "-m", "mjtouch", "bench", "--quick", "--json",
-                          "--plot", str(png)], capture_output=True, text=True, timeout=600)
+                          "--progress", "on", "--plot", str(png)], capture_output=True, text=True,
+                         timeout=600)
     assert out.returncode == 0, out.stderr
     return json.loads(out.stdout), out.stderr, png
 
@@ -65,10 +68,11 @@ def test_quick_structure_and_finiteness(quick):
     active = [p[0] for p in s["active_taxels"]["points"]]
     assert active == sorted(active)
     assert png.stat().st_size > 10_000
-    lines = stderr.strip().splitlines()  # not a TTY: one progress line per finished item
-    done = [re.match(r"\[[#.]+\] (\d+)/(\d+) ", line) for line in lines]
-    assert all(done) and [int(m.group(1)) for m in done] == list(range(1, len(lines) + 1))
-    assert int(done[-1].group(2)) == len(lines)
+    # the progress bar (tqdm: "done/total [") counts exactly the items it announced
+    seen = [(int(a), int(b)) for a, b in re.findall(r"(\d+)/(\d+) \[", stderr)]
+    done = [d for d, _ in seen]
+    assert seen and len({t for _, t in seen}) == 1 and done == sorted(done)
+    assert done[-1] == seen[-1][1]
 
 
 def test_quick_references_are_exact_and_runs_repeat(quick):
