@@ -408,3 +408,224 @@ def plate_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-4,
     scenes.add_fingertip(spec, tip, scenes._start_x(texture.length_m), texture.length_m)
     scenes.add_pad_plate_contact(spec, tip, protocol)
     return spec
+
+
+# --- runners ---------------------------------------------------------------------------------
+
+@dataclasses.dataclass
+class StimulusResult:
+    """One stimulus: rows are steps from the stimulus onset, row k evaluated
+    at time k dt (sensordata of that step's forward pass)."""
+
+    waveform: Waveform
+    dt_s: float
+    commanded_m: np.ndarray  # (n,) probe: total indentation asked (pre-indent + waveform);
+    #                          plate: the plate's displacement (waveform)
+    achieved_m: np.ndarray  # (n,) the same, relative to the finger: commanded minus the
+    #                         finger's z displacement since settling
+    finger_m: np.ndarray  # (n, 2) finger x, z displacement since settling
+    force_n: np.ndarray  # (n,) normal force on the pad (the skin's force block)
+    spikes: np.ndarray  # (n, nrec) spike counts per step
+    stress: np.ndarray  # (n, nrec) receptor quantity, Pa
+    layout: SkinLayout
+    centre_m: tuple[float, float]  # where the stimulus is centred in the pad frame
+
+    @property
+    def time_s(self) -> np.ndarray:
+        return np.arange(self.spikes.shape[0]) * self.dt_s
+
+    def window(self, part: str = "steady") -> slice:
+        """Rows of the waveform's steady part ("steady") or all ("all")."""
+        if part == "all":
+            return slice(0, self.spikes.shape[0])
+        if part != "steady":
+            raise ValueError(f"part = {part!r} is not one of 'steady', 'all'")
+        a, b = self.waveform.steady_s
+        return slice(int(round(a / self.dt_s)), max(int(round(b / self.dt_s)),
+                                                     int(round(a / self.dt_s)) + 1))
+
+    def centred_units(self) -> dict[str, int]:
+        """Per class, the receptor nearest the stimulus centre (the afferent
+        a physiologist would record: receptive field centred on the probe)."""
+        out = {}
+        for c in ("SA1", "RA", "PC"):
+            idx = np.nonzero(self.layout.classes == c)[0]
+            if idx.size:
+                d = np.hypot(*(self.layout.positions_m[idx, :2] - self.centre_m).T)
+                out[c] = int(idx[np.argmin(d)])
+        return out
+
+    def rates_hz(self, part: str = "steady") -> dict[str, dict[str, float]]:
+        """Per class: ``mean`` over all its receptors, ``max`` over receptors,
+        ``centre`` of the receptor nearest the stimulus centre (Hz)."""
+        w = self.window(part)
+        sp = self.spikes[w]
+        dur = max(sp.shape[0], 1) * self.dt_s
+        per = sp.sum(axis=0) / dur
+        mean = analysis.rates_hz(sp, self.dt_s, self.layout.classes)
+        cen = self.centred_units()
+        out = {}
+        for c in cen:
+            m = self.layout.classes == c
+            out[c] = dict(mean=mean[c], max=float(per[m].max()), centre=float(per[cen[c]]))
+        return out
+
+    def summary(self) -> dict:
+        """JSON-ready description: waveform, rates, displacement and force."""
+        w = self.window("steady")
+        err = np.abs(self.achieved_m - self.commanded_m)
+        return dict(waveform=dict(kind=self.waveform.kind, **self.waveform.params),
+                    dt_s=self.dt_s, rates_hz=self.rates_hz(),
+                    peak_commanded_m=float(np.abs(self.commanded_m).max()),
+                    max_displacement_error_m=float(err.max()),
+                    finger_motion_max_m=float(np.abs(self.finger_m).max()),
+                    force_steady_mean_n=float(self.force_n[w].mean()),
+                    receptors={c: int((self.layout.classes == c).sum()) for c in
+                               ("SA1", "RA", "PC")})
+
+
+_FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS
+_CTRL_MOCAP = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_POS
+
+
+class _Scene:
+    """A compiled stimulus scene, settled once; each run starts from the
+    settled state (same model and inputs: bit-identical outputs)."""
+
+    spec: mujoco.MjSpec
+    model: mujoco.MjModel
+    centre_m: tuple[float, float]
+
+    def _finish(self, settle_ctrl: np.ndarray, settle_mocap: np.ndarray) -> None:
+        self.model = self.spec.compile()
+        self.layout = SkinLayout.from_model(self.model)
+        self.dt_s = float(self.model.opt.timestep)
+        d = mujoco.MjData(self.model)
+        for c, p in zip(settle_ctrl, settle_mocap):
+            d.ctrl[:] = c
+            d.mocap_pos[:] = p.reshape(d.mocap_pos.shape)
+            mujoco.mj_step(self.model, d)
+        self.hold_ctrl = np.array(settle_ctrl[-1]) if len(settle_ctrl) else np.array(d.ctrl)
+        self.rest_mocap = np.array(d.mocap_pos).ravel()
+        self.state = np.empty(mujoco.mj_stateSize(self.model, _FULL))
+        mujoco.mj_getState(self.model, d, self.state, _FULL)
+        self._qadr = [int(self.model.jnt_qposadr[mujoco.mj_name2id(
+            self.model, mujoco.mjtObj.mjOBJ_JOINT, j)]) for j in ("slide_x", "press_z")]
+
+    def _mocap_rows(self, w: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def _commanded(self, w: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def run(self, waveforms: Waveform | Sequence[Waveform], threads: int = 1
+            ) -> StimulusResult | list[StimulusResult]:
+        """Run each waveform from the settled state (one mujoco.rollout batch,
+        ``threads`` threads). One waveform in, one result out."""
+        single = isinstance(waveforms, Waveform)
+        ws = [waveforms] if single else list(waveforms)
+        if not ws or not all(isinstance(w, Waveform) for w in ws):
+            raise ValueError("waveforms must be a Waveform or a non-empty list of them")
+        nthread = int(_check("threads", threads, 1, 64, "threads"))
+        samples = [w.sample(self.dt_s) for w in ws]
+        n = max(s.size for s in samples)
+        ctrl = np.zeros((len(ws), n, self.model.nu + 3 * self.model.nmocap))
+        for i, s in enumerate(samples):
+            s = np.concatenate([s, np.full(n - s.size, s[-1])])  # hold the last value
+            ctrl[i, :, :self.model.nu] = self.hold_ctrl
+            ctrl[i, :, self.model.nu:] = self._mocap_rows(s)
+        datas = [mujoco.MjData(self.model) for _ in range(min(nthread, len(ws)))]
+        state, sd = mujoco.rollout.rollout(self.model, datas if len(datas) > 1 else datas[0],
+                                           np.repeat(self.state[None], len(ws), axis=0), ctrl,
+                                           control_spec=_CTRL_MOCAP)
+        # qpos before each step (the state row k is after step k)
+        q0 = self.state[1 + np.array(self._qadr)]
+        out = []
+        for i, s in enumerate(samples):
+            m = s.size
+            q = np.vstack([q0[None], state[i, :m - 1][:, 1 + np.array(self._qadr)]])
+            finger = q - q0
+            commanded = self._commanded(s)
+            out.append(StimulusResult(
+                waveform=ws[i], dt_s=self.dt_s, commanded_m=commanded,
+                achieved_m=commanded - finger[:, 1], finger_m=finger,
+                force_n=self.layout.block(sd[i, :m], "force")[:, 0].copy(),
+                spikes=self.layout.block(sd[i, :m], "spikes").astype(np.int32),
+                stress=self.layout.block(sd[i, :m], "stress").copy(), layout=self.layout,
+                centre_m=self.centre_m))
+        return out[0] if single else out
+
+
+class ProbeScene(_Scene):
+    """The probe scene (:func:`probe_spec`) compiled and settled: the probe
+    ramps to ``preindent_m`` over ``settle_s`` / 2 and holds for the rest, so
+    sines and noise start in contact. ``run(waveform)`` then moves the probe
+    by the waveform (m, positive into the skin) about the pre-indentation."""
+
+    def __init__(self, probe: Probe | None = None, tip: scenes.Fingertip | None = None,
+                 preindent_m: float = 0.0, settle_s: float = 0.1, timestep_s: float = 1e-4,
+                 skin: dict | None = None):
+        self.probe = probe or Probe()
+        self.tip = tip or PROBE_TIP
+        self.preindent_m = _check("preindent_m", preindent_m, 0, 3e-3, "m")
+        settle = _check("settle_s", settle_s, 0, 10, "s")
+        self.spec = probe_spec(self.probe, self.tip, timestep_s, skin)
+        self.z_contact = probe_contact_z(self.probe, self.tip)
+        self.centre_m = (self.probe.x_m, self.probe.y_m)
+        n = int(round(settle / timestep_s))
+        depth = self.preindent_m * np.clip(np.arange(n) * timestep_s / max(settle / 2, 1e-9), 0, 1)
+        self.dt_s = timestep_s
+        self._finish(np.zeros((n, 2)), self._rows(depth))
+
+    def _rows(self, depth_m):
+        """mocap rows of the probe at total indentation depth_m (m)."""
+        rows = np.empty((depth_m.size, 3))
+        rows[:, 0], rows[:, 1] = self.probe.x_m, self.probe.y_m
+        rows[:, 2] = self.z_contact + depth_m
+        return rows
+
+    def _mocap_rows(self, w):
+        return self._rows(self.preindent_m + w)
+
+    def _commanded(self, w):
+        return self.preindent_m + w
+
+
+class PlateScene(_Scene):
+    """The vibrating plate (:func:`plate_spec`): the finger lands and is held
+    at ``press_n`` by :func:`press_force_controls` over ``settle_s``, then
+    keeps its last press control (a constant force) while ``run(waveform)``
+    moves the plate up (+) and down by the waveform (m)."""
+
+    def __init__(self, press_n: float = 0.5, tip: scenes.Fingertip | None = None,
+                 settle_s: float = 0.1, timestep_s: float = 1e-4, skin: dict | None = None):
+        self.press_n = _check("press_n", press_n, 0, 20, "N", lo_open=True)
+        settle = _check("settle_s", settle_s, 0.02, 10, "s")
+        self.tip = tip or PROBE_TIP
+        self.spec = plate_spec(self.tip, timestep_s, skin)
+        self.centre_m = (0.0, 0.0)
+        n = int(round(settle / timestep_s))
+        self.press = press_force_controls(self.spec, np.full(n, self.press_n))
+        ctrl = np.zeros((n, 2))
+        ctrl[:, 1] = self.press.ctrl
+        self.dt_s = timestep_s
+        self._finish(ctrl, np.zeros((n, 3)))
+
+    def _mocap_rows(self, w):
+        rows = np.zeros((w.size, 3))
+        rows[:, 2] = w
+        return rows
+
+    def _commanded(self, w):
+        return w.copy()
+
+
+def run_probe(waveform: Waveform, probe: Probe | None = None, preindent_m: float = 0.0,
+              **kwargs) -> StimulusResult:
+    """One probe stimulus (builds a :class:`ProbeScene`; reuse the scene for many)."""
+    return ProbeScene(probe, preindent_m=preindent_m, **kwargs).run(waveform)
+
+
+def run_plate(waveform: Waveform, press_n: float = 0.5, **kwargs) -> StimulusResult:
+    """One vibrating-plate stimulus (builds a :class:`PlateScene`)."""
+    return PlateScene(press_n, **kwargs).run(waveform)
