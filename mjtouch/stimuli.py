@@ -36,6 +36,8 @@ from mjtouch.sensor import SkinLayout
 
 def _check(name: str, value, lo: float, hi: float, units: str, lo_open=False) -> float:
     """value as float, or a ValueError naming it, its value and its range."""
+    if isinstance(value, np.generic):
+        value = value.item()
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -362,7 +364,7 @@ def probe_spec(probe: Probe | None = None, tip: scenes.Fingertip | None = None,
                timestep_s: float = 1e-4, skin: dict | None = None) -> mujoco.MjSpec:
     """The fingertip held still by a stiff servo (press target 0) and a mocap
     probe under it, its top touching the pad's surface at mocap z =
-    :func:`probe_contact_z`. Controls: (slide, press) = (0, 0); mocap_pos =
+    :func:`probe_contact_z` (the probe body's initial z). Controls: (slide, press) = (0, 0); mocap_pos =
     the probe's (x, y, z)."""
     probe = probe or Probe()
     tip = _skin(tip or PROBE_TIP, skin)
@@ -375,22 +377,34 @@ def probe_spec(probe: Probe | None = None, tip: scenes.Fingertip | None = None,
     # stiff and critically damped: the finger stays put under the probe
     press = _actuator(spec, "press")
     press.set_to_position(kp=HOLD_KP, kv=2 * math.sqrt(HOLD_KP * tip.mass_kg))
+    # placed by probe_contact_z once the scene is whole
     body = spec.worldbody.add_body(name="probe", mocap=True,
-                                   pos=[probe.x_m, probe.y_m, probe_contact_z(probe, tip)])
+                                   pos=[probe.x_m, probe.y_m, scenes.PAD_CLEARANCE_M])
     body.add_geom(name="probe", rgba=[0.7, 0.7, 0.75, 1], **probe.geom())
     mu = tip.friction
     spec.add_pair(geomname1="pad", geomname2="probe", condim=3,
                   friction=[mu, mu, 0.005, 0.0001, 0.0001], solref=scenes.CONTACT_SOLREF,
                   solimp=scenes.PAIR_SOLIMP)
     scenes.add_light(spec)
+    body.pos = [probe.x_m, probe.y_m, probe_contact_z(spec)]
     return spec
 
 
-def probe_contact_z(probe: Probe, tip: scenes.Fingertip) -> float:
-    """z of the pad's surface above (x_m, y_m) with the finger at rest."""
-    a, b, c = tip.semi_axes_m
-    z0 = c + scenes.PAD_CLEARANCE_M
-    return z0 - c * math.sqrt(1 - (probe.x_m / a) ** 2 - (probe.y_m / b) ** 2)
+def probe_contact_z(spec: mujoco.MjSpec) -> float:
+    """The probe body's z at which the probe just touches the pad (finger at
+    rest), from MuJoCo's own distance between the two geoms: exact for any
+    geom and any place under the pad (a flat face meets the pad's lowest
+    point under the face, not under its centre)."""
+    bare = scenes.remove_skin(spec.copy()).compile()
+    d = mujoco.MjData(bare)
+    pad = mujoco.mj_name2id(bare, mujoco.mjtObj.mjOBJ_GEOM, "pad")
+    probe = mujoco.mj_name2id(bare, mujoco.mjtObj.mjOBJ_GEOM, "probe")
+    z = float(d.mocap_pos[0, 2]) - 1e-3  # 1 mm clear of the pad
+    for _ in range(2):  # the second pass refines the convex solver's estimate
+        d.mocap_pos[0, 2] = z
+        mujoco.mj_forward(bare, d)
+        z += mujoco.mj_geomDistance(bare, d, pad, probe, 0.05, None)
+    return z
 
 
 def plate_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-4,
@@ -570,7 +584,7 @@ class ProbeScene(_Scene):
         self.preindent_m = _check("preindent_m", preindent_m, 0, 3e-3, "m")
         settle = _check("settle_s", settle_s, 0, 10, "s")
         self.spec = probe_spec(self.probe, self.tip, timestep_s, skin)
-        self.z_contact = probe_contact_z(self.probe, self.tip)
+        self.z_contact = float(next(b for b in self.spec.bodies if b.name == "probe").pos[2])
         self.centre_m = (self.probe.x_m, self.probe.y_m)
         n = int(round(settle / timestep_s))
         depth = self.preindent_m * np.clip(np.arange(n) * timestep_s / max(settle / 2, 1e-9), 0, 1)
