@@ -198,3 +198,26 @@ def test_run_rejects_what_is_not_a_waveform(probe_scene):
         probe_scene.run([np.zeros(10)])
     with pytest.raises(ValueError, match=r"threads = 0 is out of range"):
         probe_scene.run(stimuli.sine(1e-6, 10.0, 0.1), threads=0)
+
+
+def test_force_control_example_beats_the_motor(capsys):
+    import json
+    import pathlib
+    import runpy
+    path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "force_control.py"
+    main = runpy.run_path(str(path), run_name="example")["main"]
+    assert main(["--forces", "0.01", "--duration", "0.3", "--json"]) == 0
+    o = json.loads(capsys.readouterr().out)
+    (land,) = o["landing"]
+    assert land["closed_s"] < 0.05 and land["closed_s"] < land["motor_s"]
+    ramp = o["ramp_50ms_0p05_to_0p5_n"]
+    assert abs(ramp["closed"]["end_fraction"] - 1) <= 0.05
+    assert ramp["closed"]["max_error_fraction"] <= 0.05
+    assert ramp["motor"]["max_error_fraction"] > ramp["closed"]["max_error_fraction"]
+
+
+def test_force_control_works_on_the_sliding_scene():
+    # the same controller on scenes.scene_spec (pad, plate, press, press_z)
+    spec = scenes.scene_spec(scenes.Fingertip(nx=16), scenes.Texture(kind="flat"))
+    press = stimuli.press_force_controls(spec, np.full(int(0.15 / DT), 0.5))
+    assert press.landed_s < 0.05
