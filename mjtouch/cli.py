@@ -351,17 +351,16 @@ def tuning_main(args) -> dict:
 
 def _print_tuning(o: dict) -> None:
     th = o["thresholds"]
-    print(f"mjtouch tuning: thresholds (um) of each class's most sensitive unit "
-          f"(wall {o['wall_s']:.1f} s)")
-    print("  f (Hz)   " + "  ".join(f"{c + ' abs':>9s} {c + ' 1:1':>9s}" for c in th["thresholds_m"]))
+    print(f"mjtouch tuning: thresholds (um) of the unit under the probe, absolute / 1:1, "
+          f"[most sensitive unit's absolute] (wall {o['wall_s']:.1f} s)")
+    print("  f (Hz) " + "".join(f"{c:>26s}" for c in th["thresholds_m"]))
     for i, f in enumerate(th["freqs_hz"]):
         cells = []
-        for c, v in th["thresholds_m"].items():
-            for crit in ("absolute", "entrainment"):
-                x = v[crit][i]
-                cells.append(f"{'-' if x is None else x * 1e6:>9.3g}" if x is not None
-                             else f"{'-':>9s}")
-        print(f"  {f:7.1f}  " + "  ".join(" ".join(cells[k:k + 2]) for k in range(0, len(cells), 2)))
+        for v in th["thresholds_m"].values():
+            a, e, b = (v["centred"]["absolute"][i], v["centred"]["entrainment"][i],
+                       v["best"]["absolute"][i])
+            cells.append(f"{a * 1e6:8.3g} /{e * 1e6:8.3g} [{b * 1e6:6.3g}]")
+        print(f"  {f:6.1f} " + "".join(f"{x:>26s}" for x in cells))
     ri = o["rate_intensity"]
     print("rate-intensity (centred unit, Hz): depth (mm) " +
           " ".join(f"{d * 1e3:.2f}" for d in ri["depths_m"]))

@@ -10,16 +10,23 @@ Muniak, Ray, Hsiao, Dammann & Bensmaia 2007, J Neurosci 27:11687-11699; used
 to validate TouchSim, Saal, Delhaye, Rayhaun & Bensmaia 2017, PNAS
 114:E5693-E5702). A sine of amplitude A (m) and frequency f on a pin held at a
 pre-indentation, counted over the sine's steady part (after its ramp):
-- absolute threshold: the lowest A at which the afferent responds, i.e. fires
-  at least ``ABSOLUTE_SPIKES_PER_CYCLE`` spikes per cycle more than with the
-  pin held still, and at least one extra spike (the unstimulated count is
-  subtracted: SA1s fire tonically under the pre-indentation);
-- entrainment threshold: the lowest A at which it fires at least one extra
-  spike per cycle on average (1:1).
-A class's threshold is its most sensitive unit's (the afferent a recording
-would find under the probe). Each threshold is found on a log-spaced grid,
-then refined by bisection in log A; all runs of a round are one
-mujoco.rollout batch over threads.
+- absolute threshold: the lowest A at which the afferent responds: its spikes
+  are locked to the stimulus (Rayleigh test p < ``LOCK_P`` at f or 2f) and it fires at
+  least ``ABSOLUTE_SPIKES_PER_CYCLE`` spikes per cycle (and one). Locking,
+  not a count over the unstimulated one, because SA1s fire tonically under
+  the pre-indentation: their count barely changes while the sine captures
+  their timing;
+- entrainment threshold: the lowest A at which it fires at least one spike
+  per cycle on average (1:1), locked to the stimulus. For a unit already
+  firing faster than f under the pre-indentation the two coincide.
+Per class, two afferents: the ``centred`` unit (nearest the probe's axis, the
+afferent a recording centres the probe on) and the ``best`` (most sensitive)
+unit. In a noise-free model a unit whose static drive sits just below its
+rheobase fires for any sine, so ``best`` can fall to the range's floor; real
+afferents' noise hides such units, and ``centred`` is the curve to compare
+with published data. Each threshold is found on a log-spaced grid, then
+refined by bisection in log A; all runs of a round are one mujoco.rollout
+batch over threads.
 
 Rate-intensity: ramp-and-hold indentations with the same pin: the centred
 unit's rate in the hold (SA1) and on the ramps (RA, PC), per class.
@@ -33,9 +40,11 @@ from typing import Sequence
 
 import numpy as np
 
-from mjtouch import scenes, stimuli
+from mjtouch import analysis, scenes, stimuli
 
 ABSOLUTE_SPIKES_PER_CYCLE = 0.1
+LOCK_P = 0.01  # Rayleigh test: phases locked to the sine
+UNITS = ("centred", "best")
 CLASSES = ("SA1", "RA", "PC")
 CRITERIA = ("absolute", "entrainment")
 
@@ -74,8 +83,8 @@ class TuningConfig:
     freqs_hz: Sequence[float] = (5.0, 10.0, 20.0, 40.0, 80.0, 150.0, 250.0, 400.0, 600.0)
     amp_range_m: tuple[float, float] = (1e-8, 5e-4)
     grid_points: int = 12  # log-spaced amplitudes of the first round
-    refine: int = 5  # bisection rounds in log A after the grid
-    steady_s: float = 0.2  # counting window (at least 2 cycles)
+    refine: int = 4  # bisection rounds in log A after the grid: (5e4^(1/11))^(1/16), 6%
+    steady_s: float = 0.2  # counting window (at least 5 cycles)
     ramp_s: float = 0.03
     preindent_m: float = 0.5e-3
     pin_radius_m: float = 0.5e-3  # a 1 mm diameter flat probe
@@ -109,83 +118,81 @@ class TuningConfig:
             stimuli._check("depths_m", d, 0, 3e-3, "m", lo_open=True)
 
 
-def _window_counts(results, dt):
-    """(nrun, nrec) spikes in each result's steady window."""
-    return np.stack([r.spikes[r.window("steady")].sum(axis=0) for r in results])
-
-
-def _meets(extra: np.ndarray, cycles: float, criterion: str) -> np.ndarray:
-    """Per receptor: does the extra spike count meet the criterion?"""
-    if criterion == "entrainment":
-        return extra >= cycles
-    return extra >= max(1.0, ABSOLUTE_SPIKES_PER_CYCLE * cycles)
+def _responses(result: stimuli.StimulusResult, freq_hz: float, cycles: float
+               ) -> dict[str, np.ndarray]:
+    """Per criterion, (nrec,) bool: does each receptor meet it in this run?"""
+    sp = result.spikes[result.window("steady")]
+    count = sp.sum(axis=0)
+    # locked at f or at 2f: a unit driven by rectified velocity fires on both
+    # half-cycles, and its phases then cancel at f
+    locked = np.array([count[r] > 0 and min(analysis.vector_strength_counts(
+        sp[:, r], result.dt_s, h * freq_hz).p_value for h in (1, 2)) < LOCK_P
+        for r in range(sp.shape[1])])
+    return dict(absolute=locked & (count >= max(1.0, ABSOLUTE_SPIKES_PER_CYCLE * cycles)),
+                entrainment=locked & (count >= cycles))
 
 
 def threshold_curves(cfg: TuningConfig, scene: stimuli.ProbeScene) -> dict:
-    """Absolute and entrainment thresholds (m) per class and frequency, and
-    the grid's rates (vibratory rate-intensity)."""
+    """Absolute and entrainment thresholds (m) per class, unit and frequency,
+    and the grid's rates (vibratory rate-intensity)."""
     freqs = [float(f) for f in cfg.freqs_hz]
     grid = np.geomspace(*cfg.amp_range_m, cfg.grid_points)
     classes = scene.layout.classes
 
+    def steady(f):  # >= 5 cycles: a Rayleigh p < 0.01 needs >= 4 locked spikes
+        return max(cfg.steady_s, 5.0 / f)
+
     def wave(a, f):
-        dur = 2 * cfg.ramp_s + max(cfg.steady_s, 2.0 / f)
-        # whole cycles in the steady window
-        return stimuli.sine(a, f, duration_s=dur, ramp_s=cfg.ramp_s)
+        return stimuli.sine(a, f, duration_s=2 * cfg.ramp_s + steady(f), ramp_s=cfg.ramp_s)
 
-    def cycles(f):
-        return max(cfg.steady_s, 2.0 / f) * f
-
-    # round 0: baseline (A = 0 is a sine of amplitude 0) and the grid
+    # round 0: the grid (and amplitude 0: the unstimulated rates)
     runs = [(f, a) for f in freqs for a in [0.0, *grid]]
     res = scene.run([wave(a, f) for f, a in runs], threads=cfg.threads)
-    counts = _window_counts(res, scene.dt_s)
-    base = {f: counts[i] for i, (f, a) in enumerate(runs) if a == 0.0}
-    at = {(f, a): counts[i] for i, (f, a) in enumerate(runs)}
-    rates = {c: {str(f): [] for f in freqs} for c in CLASSES}
     cen = res[0].centred_units()
+    unit_of = {c: dict(centred=np.arange(classes.size) == cen[c], best=classes == c)
+               for c in cen}
+    meets = {}
+    rates = {c: {str(f): [] for f in freqs} for c in cen}
     for (f, a), r in zip(runs, res):
         if a > 0:
-            for c in CLASSES:
-                if c in cen:
-                    m = classes == c
-                    win = r.window("steady")
-                    dur = (win.stop - win.start) * scene.dt_s
-                    rates[c][str(f)].append(float(r.spikes[win][:, m].sum(axis=0).max() / dur))
+            meets[(f, a)] = _responses(r, f, steady(f) * f)
+            w = r.window("steady")
+            for c in cen:
+                n = r.spikes[w][:, cen[c]].sum()
+                rates[c][str(f)].append(float(n / ((w.stop - w.start) * scene.dt_s)))
 
-    def any_meets(c, crit, f, cnt):
-        m = classes == c
-        return bool(np.any(_meets(cnt[m] - base[f][m], cycles(f), crit)))
+    def hit(c, unit, crit, f, m):
+        return bool(np.any(m[crit] & unit_of[c][unit]))
 
-    # bracket each (class, criterion, frequency) on the grid
+    # bracket each (class, unit, criterion, frequency) on the grid
     tasks = {}
-    for c in CLASSES:
-        if not np.any(classes == c):
-            continue
-        for crit in CRITERIA:
-            for f in freqs:
-                hit = [a for a in grid if any_meets(c, crit, f, at[(f, a)])]
-                if not hit:
-                    tasks[(c, crit, f)] = (None, math.inf)  # above the range
-                elif hit[0] == grid[0]:
-                    tasks[(c, crit, f)] = (None, grid[0])  # at or below the range's floor
-                else:
-                    k = int(np.nonzero(grid == hit[0])[0][0])
-                    tasks[(c, crit, f)] = (grid[k - 1], grid[k])
+    for c in cen:
+        for unit in UNITS:
+            for crit in CRITERIA:
+                for f in freqs:
+                    ok = [a for a in grid if hit(c, unit, crit, f, meets[(f, a)])]
+                    if not ok:
+                        tasks[(c, unit, crit, f)] = (None, math.inf)  # above the range
+                    elif ok[0] == grid[0]:
+                        tasks[(c, unit, crit, f)] = (None, grid[0])  # at the range's floor
+                    else:
+                        k = int(np.nonzero(grid == ok[0])[0][0])
+                        tasks[(c, unit, crit, f)] = (grid[k - 1], grid[k])
     # bisection in log A, every open bracket of a round in one batch
     for _ in range(cfg.refine):
         open_ = [(k, math.sqrt(lo * hi)) for k, (lo, hi) in tasks.items() if lo is not None]
         if not open_:
             break
-        res = scene.run([wave(mid, k[2]) for k, mid in open_], threads=cfg.threads)
-        cnt = _window_counts(res, scene.dt_s)
-        for (k, mid), row in zip(open_, cnt):
+        res = scene.run([wave(mid, k[3]) for k, mid in open_], threads=cfg.threads)
+        for (k, mid), r in zip(open_, res):
+            c, unit, crit, f = k
             lo, hi = tasks[k]
-            tasks[k] = (lo, mid) if any_meets(k[0], k[1], k[2], row) else (mid, hi)
-    thresholds = {c: {crit: [tasks[(c, crit, f)][1] if (c, crit, f) in tasks else None
-                             for f in freqs] for crit in CRITERIA} for c in CLASSES}
+            m = _responses(r, f, steady(f) * f)
+            tasks[k] = (lo, mid) if hit(c, unit, crit, f, m) else (mid, hi)
+    thresholds = {c: {unit: {crit: [tasks[(c, unit, crit, f)][1] for f in freqs]
+                             for crit in CRITERIA} for unit in UNITS} for c in cen}
     return dict(freqs_hz=freqs, thresholds_m=thresholds, grid_m=grid.tolist(),
-                grid_rates_hz=rates, at_floor_m=cfg.amp_range_m[0],
+                grid_rates_centred_hz=rates, floor_m=cfg.amp_range_m[0],
                 precision=float((grid[1] / grid[0]) ** (0.5 ** cfg.refine)))
 
 
@@ -227,10 +234,12 @@ def run(cfg: TuningConfig | None = None) -> dict:
     return dict(
         config={k: (list(v) if isinstance(v, (tuple, list)) else v)
                 for k, v in dataclasses.asdict(cfg).items()},
-        definitions=dict(absolute=f">= {ABSOLUTE_SPIKES_PER_CYCLE} extra spikes per cycle "
-                                  "(and >= 1) over the unstimulated count in the steady window",
-                         entrainment=">= 1 extra spike per cycle on average",
-                         class_threshold="the most sensitive unit of the class"),
+        definitions=dict(absolute=f"spikes phase-locked (Rayleigh p < {LOCK_P}), >= "
+                                  f"{ABSOLUTE_SPIKES_PER_CYCLE} per cycle and >= 1 in the "
+                                  "steady window",
+                         entrainment=">= 1 spike per cycle on average, phase-locked",
+                         centred="the unit nearest the probe's axis",
+                         best="the class's most sensitive unit"),
         receptors={c: int((vib.layout.classes == c).sum()) for c in CLASSES},
         thresholds=threshold_curves(cfg, vib),
         rate_intensity=rate_intensity(cfg, touch),
@@ -254,8 +263,8 @@ def plot(result: dict, path: str) -> None:
     f = np.array(th["freqs_hz"])
     for c in CLASSES:
         for crit, ls in (("absolute", "-o"), ("entrainment", "--s")):
-            y = np.array([np.nan if v is None or not np.isfinite(v) else v * 1e6
-                          for v in th["thresholds_m"][c][crit]])
+            y = np.array([np.nan if not np.isfinite(v) else v * 1e6
+                          for v in th["thresholds_m"][c]["centred"][crit]])
             a.loglog(f, y, ls, c=colors[c], ms=4, label=f"{c} {crit}")
         for box in result["published"]["thresholds"].get(c, []):
             (f0, f1), (y0, y1) = box["band_hz"], box["amplitude_m"]

@@ -40,12 +40,18 @@ def test_tuning_json_structure(quick):
     assert th["freqs_hz"] == list(cfg.freqs_hz)
     for c in tuning.CLASSES:
         assert quick["receptors"][c] > 0
-        for crit in tuning.CRITERIA:
-            v = th["thresholds_m"][c][crit]
-            assert len(v) == len(cfg.freqs_hz)
-            # a threshold is inside the searched range or inf (none found)
-            assert all(x == math.inf or cfg.amp_range_m[0] <= x <= cfg.amp_range_m[1]
-                       for x in v), v
+        for unit in tuning.UNITS:
+            for crit in tuning.CRITERIA:
+                v = th["thresholds_m"][c][unit][crit]
+                assert len(v) == len(cfg.freqs_hz)
+                # a threshold is inside the searched range or inf (none found)
+                assert all(x == math.inf or cfg.amp_range_m[0] <= x <= cfg.amp_range_m[1]
+                           for x in v), v
+            # the most sensitive unit is at least as sensitive as the centred one
+            for crit in tuning.CRITERIA:
+                best = np.array(th["thresholds_m"][c]["best"][crit])
+                centred = np.array(th["thresholds_m"][c]["centred"][crit])
+                assert np.all(best <= centred * th["precision"] * (1 + 1e-12)), (c, crit)
     ri = quick["rate_intensity"]
     assert ri["depths_m"] == list(cfg.depths_m)
     for c in tuning.CLASSES:
@@ -59,14 +65,16 @@ def test_tuning_json_structure(quick):
 
 
 def test_entrainment_needs_at_least_the_absolute_amplitude(quick):
-    # Entrainment (>= 1 extra spike per cycle) implies the absolute criterion
-    # (>= 0.1 per cycle and >= 1), so whatever the model its threshold is not
-    # lower, up to the bisection's final bracket ratio.
+    # Entrainment (>= 1 locked spike per cycle, over >= 5 cycles)
+    # implies the absolute criterion (>= 0.1 per cycle and >= 1, locked), so
+    # whatever the model its threshold is not lower, up to the bisection's
+    # final bracket ratio.
     th = quick["thresholds"]
     for c in tuning.CLASSES:
-        a = np.array(th["thresholds_m"][c]["absolute"], dtype=float)
-        e = np.array(th["thresholds_m"][c]["entrainment"], dtype=float)
-        assert np.all(a <= e * th["precision"] * (1 + 1e-12)), (c, a, e)
+        for unit in tuning.UNITS:
+            a = np.array(th["thresholds_m"][c][unit]["absolute"], dtype=float)
+            e = np.array(th["thresholds_m"][c][unit]["entrainment"], dtype=float)
+            assert np.all(a <= e * th["precision"] * (1 + 1e-12)), (c, unit, a, e)
 
 
 def test_sa1_rate_rises_monotonically_with_indentation(quick):
