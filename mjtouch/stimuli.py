@@ -219,9 +219,9 @@ def contact_normal_force(model: mujoco.MjModel, data: mujoco.MjData, geom_id: in
 class PressTrace:
     """The press controls that track a force trace, and what they achieved."""
 
-    ctrl: np.ndarray  # (n,) press actuator control per step (-force-ish, N)
+    ctrl: np.ndarray  # (n,) press motor control per step (N along +z: negative presses)
     target_n: np.ndarray  # (n,) target normal force per step
-    force_n: np.ndarray  # (n,) MuJoCo's normal force on the pad after each step
+    force_n: np.ndarray  # (n,) normal force on the pad in step k (what sensordata row k reports)
     landed_s: float  # first time the contact force stays within 5% of target (inf if never)
 
 
