@@ -4,7 +4,9 @@
   geom) pressed up into a fingertip held still by a stiff servo: the probe is
   a mocap body, so its displacement is exactly the commanded one; the finger
   sits on a 1e6 N/m critically damped servo, so it moves ~1 um per N
-  (reported, and tested).
+  (reported, and tested). Not welded: MuJoCo gives no contact force between
+  a mocap body and a body fixed to the world (neither has a degree of
+  freedom), and the skin needs that force.
 - A **vibrating plate** (a mocap body) under a fingertip pressed with a set
   force.
 - **Waveforms** (displacement in m as functions of time): ramp-and-hold, sine
