@@ -162,7 +162,7 @@ def noise(rms_m: float, band_hz: tuple[float, float] = (10.0, 500.0), duration_s
                          f"{1 / dur:g} Hz; widen the band or lengthen the stimulus")
     phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, freqs.size)
     a = rms * math.sqrt(2.0 / freqs.size)  # each sine carries a^2/2 of the power
-    w = sum_of_sines(np.full(freqs.size, min(a, 2e-3)), freqs, dur, _check(
+    w = sum_of_sines(np.full(freqs.size, a), freqs, dur, _check(
         "ramp_s", ramp_s, 0, dur / 2, "s"), phases, kind="noise")
     return dataclasses.replace(w, params=dict(rms_m=rms, band_hz=[lo, hi], duration_s=dur,
                                               seed=int(seed), ramp_s=ramp_s,
