@@ -1,4 +1,5 @@
-"""Command line: ``python -m mjtouch {slide,view,bench,sweep}`` (also the ``mjtouch`` script)."""
+"""Command line: ``python -m mjtouch slide | view | bench | sweep | probe | tuning`` (also the
+``mjtouch`` script)."""
 
 from __future__ import annotations
 
@@ -245,6 +246,151 @@ def _sweep_parser(sub):
     return p
 
 
+# --- probe and tuning (issue 14): stimuli a physiologist uses ----------------------------------
+
+def _probe_parser(sub):
+    p = sub.add_parser("probe", help="a stimulus on the fingertip (displacement-controlled pin, "
+                                     "sphere, or a vibrating plate under a pressed finger); "
+                                     "prints firing rates per class")
+    p.add_argument("--waveform", choices=["ramp", "sine", "sines", "noise", "trace"],
+                   default="ramp", help="ramp-and-hold (default), sine, sum of sines, "
+                                        "band-limited noise, or a trace from --trace FILE")
+    p.add_argument("--probe", choices=["pin", "sphere", "plate"], default="pin",
+                   help="flat pin (default), sphere, or a vibrating plate under the finger "
+                        "pressed with --press")
+    p.add_argument("--radius", type=_positive_float("--radius"), default=0.5e-3,
+                   help="pin / sphere radius (m), default 5e-4")
+    p.add_argument("--depth", type=_positive_float("--depth"), default=0.5e-3,
+                   help="ramp: indentation (m), default 5e-4")
+    p.add_argument("--ramp", type=_positive_float("--ramp"), default=0.05,
+                   help="ramp time (s) of ramp-and-hold and of the sine envelopes, default 0.05")
+    p.add_argument("--hold", type=_positive_float("--hold"), default=0.5,
+                   help="ramp: hold time (s), default 0.5")
+    p.add_argument("--amplitude", type=_positive_float("--amplitude"), nargs="+",
+                   default=[10e-6], help="sine(s): amplitude(s) (m), default 1e-5")
+    p.add_argument("--freq", type=_positive_float("--freq"), nargs="+", default=[40.0],
+                   help="sine(s): frequency(ies) (Hz), default 40")
+    p.add_argument("--duration", type=_positive_float("--duration"), default=1.0,
+                   help="sine / noise duration (s), default 1")
+    p.add_argument("--rms", type=_positive_float("--rms"), default=5e-6,
+                   help="noise: RMS displacement (m), default 5e-6")
+    p.add_argument("--band", type=float, nargs=2, default=[10.0, 500.0], metavar=("LO", "HI"),
+                   help="noise: band (Hz), default 10 500")
+    p.add_argument("--seed", type=int, default=0, help="noise: seed, default 0")
+    p.add_argument("--trace", metavar="FILE", help="trace: displacement samples (m), a .npy "
+                                                   "or a text file of numbers")
+    p.add_argument("--trace-dt", type=_positive_float("--trace-dt"), default=1e-3,
+                   help="trace: sample spacing (s), default 1e-3")
+    p.add_argument("--preindent", type=float, default=None,
+                   help="pin/sphere: static indentation (m) under the waveform; default 0 for "
+                        "ramp, 5e-4 otherwise (so the probe stays in contact)")
+    p.add_argument("--press", type=_positive_float("--press"), default=0.5,
+                   help="plate: the finger's press force (N), default 0.5")
+    p.add_argument("--dt", type=_positive_float("--dt"), default=1e-4,
+                   help="simulation timestep (s), default 1e-4")
+    p.add_argument("--nx", type=int, default=48, help="taxels per side, default 48")
+    p.add_argument("--pitch", type=_positive_float("--pitch"), default=1.5e-4,
+                   help="taxel pitch (m), default 1.5e-4")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    return p
+
+
+def probe(args) -> dict:
+    from mjtouch import scenes, stimuli
+    if args.waveform == "ramp":
+        w = stimuli.ramp_and_hold(args.depth, ramp_s=args.ramp, hold_s=args.hold)
+    elif args.waveform == "sine":
+        w = stimuli.sine(args.amplitude[0], args.freq[0], args.duration, args.ramp)
+    elif args.waveform == "sines":
+        w = stimuli.sum_of_sines(args.amplitude, args.freq, args.duration, args.ramp)
+    elif args.waveform == "noise":
+        w = stimuli.noise(args.rms, tuple(args.band), args.duration, args.seed, args.ramp)
+    else:
+        if not args.trace:
+            raise ValueError("--waveform trace needs --trace FILE")
+        vals = (np.load(args.trace) if args.trace.endswith(".npy")
+                else np.loadtxt(args.trace).ravel())
+        w = stimuli.trace(vals, args.trace_dt)
+    tip = scenes.Fingertip(nx=args.nx, pitch_m=args.pitch, ridges=False)
+    t0 = time.perf_counter()
+    if args.probe == "plate":
+        res = stimuli.PlateScene(args.press, tip, timestep_s=args.dt).run(w)
+    else:
+        pre = args.preindent if args.preindent is not None else (
+            0.0 if args.waveform == "ramp" else 0.5e-3)
+        shape = stimuli.Probe(args.probe, radius_m=args.radius)
+        res = stimuli.ProbeScene(shape, tip, preindent_m=pre, timestep_s=args.dt).run(w)
+    out = res.summary()
+    out.update(probe=args.probe, wall_s=time.perf_counter() - t0)
+    return out
+
+
+def _print_probe(o: dict) -> None:
+    w = o["waveform"]
+    print(f"mjtouch probe: {o['probe']}, {w['kind']} "
+          + " ".join(f"{k}={v}" for k, v in w.items() if k != "kind" and not isinstance(v, list))
+          + f" (wall {o['wall_s']:.1f} s)")
+    print("rates in the steady part (Hz), mean / max / centred unit:")
+    for c, r in o["rates_hz"].items():
+        print(f"  {c:3s} {r['mean']:8.1f} {r['max']:8.1f} {r['centre']:8.1f}   "
+              f"({o['receptors'][c]} receptors)")
+    print(f"force {o['force_steady_mean_n']:.4g} N; displacement achieved to "
+          f"{o['max_displacement_error_m'] * 1e6:.3g} um of commanded; finger moved "
+          f"{o['finger_motion_max_m'] * 1e6:.3g} um")
+
+
+def _tuning_parser(sub):
+    p = sub.add_parser("tuning", help="threshold-frequency (absolute, entrainment) and "
+                                      "rate-intensity curves per afferent class, with "
+                                      "published ranges")
+    p.add_argument("--quick", action="store_true",
+                   help="a few seconds: 2 frequencies, coarse grid, small skin (for tests)")
+    p.add_argument("--freqs", type=_positive_float("--freqs"), nargs="+", default=None,
+                   help="vibration frequencies (Hz); default 5-600 Hz in 9 steps")
+    p.add_argument("--threads", type=int, default=2, help="rollout threads, default 2")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--out", metavar="FILE", help="also write the JSON to FILE")
+    p.add_argument("--plot", metavar="FILE", help="write a PNG of both curves (matplotlib)")
+    return p
+
+
+def tuning_main(args) -> dict:
+    from mjtouch import tuning
+    cfg = tuning.TuningConfig.quick() if args.quick else tuning.TuningConfig()
+    if args.freqs:
+        cfg.freqs_hz = tuple(args.freqs)
+    cfg.threads = args.threads
+    t0 = time.perf_counter()
+    out = tuning.run(cfg)
+    out["wall_s"] = time.perf_counter() - t0
+    if args.out:
+        with open(args.out, "w") as f:
+            json.dump(out, f, indent=1)
+    if args.plot:
+        tuning.plot(out, args.plot)
+    return out
+
+
+def _print_tuning(o: dict) -> None:
+    th = o["thresholds"]
+    print(f"mjtouch tuning: thresholds (um) of the unit under the probe, absolute / 1:1, "
+          f"[most sensitive unit's absolute] (wall {o['wall_s']:.1f} s)")
+    print("  f (Hz) " + "".join(f"{c:>26s}" for c in th["thresholds_m"]))
+    for i, f in enumerate(th["freqs_hz"]):
+        cells = []
+        for v in th["thresholds_m"].values():
+            a, e, b = (v["centred"]["absolute"][i], v["centred"]["entrainment"][i],
+                       v["best"]["absolute"][i])
+            cells.append(f"{a * 1e6:8.3g} /{e * 1e6:8.3g} [{b * 1e6:6.3g}]")
+        print(f"  {f:6.1f} " + "".join(f"{x:>26s}" for x in cells))
+    ri = o["rate_intensity"]
+    print("rate-intensity (centred unit, Hz): depth (mm) " +
+          " ".join(f"{d * 1e3:.2f}" for d in ri["depths_m"]))
+    for c, r in ri["rates"].items():
+        print(f"  {c:3s} hold  " + " ".join(f"{x:.0f}" for x in r["hold_hz"])
+              + "   ramps " + " ".join(f"{x:.0f}" for x in r["ramp_hz"]))
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="mjtouch", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -252,10 +398,23 @@ def main(argv: list[str] | None = None) -> int:
     _view_parser(sub)
     _bench_parser(sub)
     _sweep_parser(sub)
+    _probe_parser(sub)
+    _tuning_parser(sub)
     args = parser.parse_args(argv)
     if args.command == "sweep":
         from mjtouch import sweep
         return sweep.main(args)
+    if args.command in ("probe", "tuning"):
+        try:
+            out = probe(args) if args.command == "probe" else tuning_main(args)
+        except ValueError as e:
+            print(f"mjtouch: error: {e}", file=sys.stderr)
+            return 2
+        if args.json:
+            print(json.dumps(out))
+        else:
+            (_print_probe if args.command == "probe" else _print_tuning)(out)
+        return 0
     if args.command == "bench":
         from mjtouch import bench
         return bench.main(args)

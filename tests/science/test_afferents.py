@@ -15,7 +15,7 @@ import mujoco.rollout
 import numpy as np
 import pytest
 
-from mjtouch import analysis, core, scenes
+from mjtouch import analysis, core, scenes, stimuli
 from mjtouch.sensor import SkinLayout
 
 from test_receptors import SA1, lif_rate
@@ -31,13 +31,8 @@ def flat_scene(skin=None, timestep_s=1e-4, mocap_plate=False) -> mujoco.MjModel:
     texture, protocol = scenes.Texture(kind="flat"), scenes.Protocol(timestep_s=timestep_s)
     if not mocap_plate:
         return scenes.build_model(tip(skin), texture, protocol)
-    # the plate proxy and the rendered texture ride on one mocap body
-    spec = mujoco.MjSpec()
-    scenes.set_options(spec, protocol)
-    scenes.add_plate(spec, texture, parent=spec.worldbody.add_body(name="plate_body", mocap=True))
-    scenes.add_fingertip(spec, tip(skin), scenes._start_x(texture.length_m), texture.length_m)
-    scenes.add_pad_plate_contact(spec, tip(skin), protocol)
-    return spec.compile()
+    # the vibrating plate of mjtouch.stimuli (a mocap body; adds the force output)
+    return stimuli.plate_spec(tip(skin), timestep_s).compile()
 
 
 def initial_state(m, d=None):
