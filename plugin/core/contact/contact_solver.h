@@ -26,8 +26,9 @@ namespace mjtouch {
 // operator's local stencil (SurfaceCompliance::Spectrum::inverse), after
 // Vollebregt (2014, J. Optim. Theory Appl. 162: an FFT-derived approximate
 // inverse of the influence matrix); cells that overlap (zero pressure,
-// negative gap) join the set with a restart, and the search direction is
-// projected onto zero net load. About half of P&K's iterations to the same
+// negative gap) join the set without a restart (a direction that stops
+// descending falls back to the preconditioned gradient), and the search
+// direction is projected onto zero net load. About half of P&K's iterations to the same
 // stopping test, at a lower error (tests/unit/test_contact_solver.py).
 // kPolonskyKeer: Polonsky & Keer (1999) as published.
 enum class ElasticMethod { kPreconditioned = 0, kPolonskyKeer };
