@@ -14,7 +14,8 @@ and a lead-in simulated without the plugin). Prints per configuration:
   difference (the force block's depth, m; its forces are MuJoCo's by
   construction);
 - us/step of stages 1-2 (outputs="force") and of the full pipeline (default
-  outputs), min and median over interleaved rounds, and the pk / pcg ratios.
+  outputs), min and median over interleaved rounds, and the pk / pcg ratios;
+  the winkler model in the same rounds as a yardstick of the machine's load.
 """
 
 from __future__ import annotations
@@ -62,7 +63,7 @@ def settled(name: str):
 
 
 def make_run(name: str, start, nstep: int, **skin) -> bench.Run:
-    m = scene_spec(name, pressure="elastic", **skin).compile()
+    m = scene_spec(name, **{"pressure": "elastic", **skin}).compile()
     d = mujoco.MjData(m)
     mujoco.mj_setState(m, d, start[0], _PHYSICS)
     full = np.empty(mujoco.mj_stateSize(m, _FULL))
@@ -99,9 +100,13 @@ def accuracy(name: str, start, steps: int) -> dict:
 
 
 def timing(name: str, start, steps: int, rounds: int) -> dict:
-    runs = {(s, stage): make_run(name, start, steps, contact_solver=s,
+    # winkler (the default model) in the same rounds: a yardstick for the
+    # machine's load, against the issue's quiet-machine figures
+    runs = {(s, stage): make_run(name, start, steps,
+                                 **({"pressure": "winkler"} if s == "winkler"
+                                    else {"contact_solver": s}),
                                  **({"outputs": "force"} if stage == "stages 1-2" else {}))
-            for s in SOLVERS for stage in ("stages 1-2", "full")}
+            for s in (*SOLVERS, "winkler") for stage in ("stages 1-2", "full")}
     times = {k: [] for k in runs}
     last = {}
     for _ in range(rounds):  # interleaved: a load change hits every configuration alike
@@ -133,6 +138,9 @@ def main() -> None:
             for stage in ("stages 1-2", "full"):
                 lo, med = t[s, stage]
                 print(f"       {stage:10s} us/step min {lo:8.1f} median {med:8.1f}")
+        for stage in ("stages 1-2", "full"):
+            lo, med = t["winkler", stage]
+            print(f"  winkler {stage:10s} us/step min {lo:8.1f} median {med:8.1f}")
         for stage in ("stages 1-2", "full"):
             r_min = t["pk", stage][0] / t["pcg", stage][0]
             r_med = t["pk", stage][1] / t["pcg", stage][1]

@@ -151,8 +151,9 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
     LayeredSkin.compliance_table(pitch_m, n)). Non-periodic grids must be
     square; periodic sizes products of 2, 3, 5 (half-space only).
     ``method``: ``"pcg"`` (preconditioned CG, the plugin's) or ``"pk"``
-    (Polonsky & Keer's plain CG, the reference path). Returns (pressure Pa, stats dict: iterations, converged, change,
-    approach_m, contact_cells, max_contact_gap_m)."""
+    (Polonsky & Keer's plain CG, the reference path). Returns (pressure Pa,
+    stats dict: iterations, converged, change, approach_m, contact_cells,
+    max_contact_gap_m, fft_applies: operator applications by FFT, the cost)."""
     g = np.ascontiguousarray(gap_m, dtype=np.float64)
     if g.ndim != 2:
         raise ValueError(f"gap_m must be 2D, got shape {g.shape}")

@@ -96,6 +96,7 @@ std::tuple<Out<double>, nb::dict> Solved(const mjtouch::SurfaceCompliance& K, co
   info["approach_m"] = st.approach_m;
   info["contact_cells"] = st.contact_cells;
   info["max_contact_gap_m"] = st.max_contact_gap_m;
+  info["fft_applies"] = st.applies;
   return {ToNumpy(std::move(p), {static_cast<size_t>(ny), static_cast<size_t>(nx)}), info};
 }
 

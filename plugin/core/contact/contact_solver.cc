@@ -22,7 +22,7 @@ struct Problem {
 // u = s (u - tau r + K delta) after a step p - tau t whose projection onto
 // p >= 0 added delta on the cells in w->changed: few cells change near
 // convergence, so sum them directly unless an FFT is cheaper.
-void UpdateDisplacement(const Problem& P, double tau, double s) {
+void UpdateDisplacement(const Problem& P, double tau, double s, ElasticSolveStats* st) {
   ElasticWork* w = P.w;
   double* u = w->u.data();
   double* r = w->r.data();
@@ -34,6 +34,7 @@ void UpdateDisplacement(const Problem& P, double tau, double s) {
       for (int c : w->changed) P.K.AddCell(c, dl[c], P.bx, P.by, u);
     } else {
       P.K.Apply(*P.spec, dl, P.bx, P.by, r, &w->fft);
+      ++st->applies;
       for (size_t b = 0; b < P.B; ++b) u[b] += r[b];
     }
     for (int c : w->changed) dl[c] = 0.0;
@@ -87,6 +88,7 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
     for (size_t b = 0; b < B; ++b) t[b] = p[b] > 0.0 ? g[b] + beta * t[b] : 0.0;
     G_old = G;
     P.K.Apply(*P.spec, t, P.bx, P.by, r, &w->fft);
+    ++st->applies;
     double sum_r = 0.0;
     for (size_t b = 0; b < B; ++b)
       if (p[b] > 0.0) sum_r += r[b];
@@ -129,7 +131,7 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
     if (!(sum_new > 0.0)) break;
     double s;
     st->change = Accept(P, sum_new, &s);
-    UpdateDisplacement(P, tau, s);
+    UpdateDisplacement(P, tau, s, st);
     if (st->change < tol) {
       st->converged = true;
       break;
@@ -241,6 +243,7 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     pn = w->p_new.data();
     for (int b : S) gp[pad_index(b)] = 0.0;
     P.K.Apply(*P.spec, t, bx, by, r, &w->fft);
+    ++st->applies;
     double den = 0.0;  // t sums to zero over S: t.(K t - mean) = t.K t
     for (int b : S) den += r[b] * t[b];
     if (!(den > 0.0) || !(num > 0.0)) {
@@ -264,7 +267,7 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     if (!(sum_new > 0.0)) break;
     double s;
     st->change = Accept(P, sum_new, &s);
-    UpdateDisplacement(P, tau, s);
+    UpdateDisplacement(P, tau, s, st);
     if (st->change < tol) {
       st->converged = true;
       break;
@@ -336,6 +339,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   const double fft_cost = 5.0 * static_cast<double>(spec->fft.nx()) * spec->fft.ny() *
                           std::log2(static_cast<double>(spec->fft.nx()) * spec->fft.ny());
   K.Apply(*spec, p, bx, by, w->u.data(), &w->fft);
+  st->applies = 1;
   const Problem P{K, spec, bx, by, B, periodic, target, fft_cost, w};
   if (method == ElasticMethod::kPolonskyKeer) {
     PolonskyKeer(P, tol, max_iter, st);
@@ -348,7 +352,10 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   // relative, not worth an FFT pair per step).
   p = w->p.data();
   double* u = w->u.data();
-  if (method == ElasticMethod::kPolonskyKeer) K.Apply(*spec, p, bx, by, u, &w->fft);
+  if (method == ElasticMethod::kPolonskyKeer) {
+    K.Apply(*spec, p, bx, by, u, &w->fft);
+    ++st->applies;
+  }
   size_t nc = 0;
   double sum_g = 0.0, max_g = -std::numeric_limits<double>::infinity();
   for (size_t b = 0; b < B; ++b) {

@@ -41,6 +41,7 @@ struct ElasticSolveStats {
   double max_contact_gap_m = 0;  // largest g0 among contact cells
   int contact_cells = 0;
   int fft_size_x = 0, fft_size_y = 0;
+  int applies = 0;  // compliance operator applications by FFT (the cost)
 };
 
 // Per-simulation scratch (no state that outlives a call).
