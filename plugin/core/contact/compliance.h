@@ -61,9 +61,10 @@ class SurfaceCompliance {
     std::vector<double> inverse;  // (2w + 1)^2, [(dj + w) * (2w + 1) + di + w]
     explicit Spectrum(int mx, int my) : fft(mx, my) {}
   };
-  // w of Spectrum::inverse. Measured on the sliding scenes (128 x 0.1 mm,
-  // layered skin): w = 1, 2, 3, 5 took 8, 7.5, 7, 7 median iterations; the
-  // full inverse (by FFT) 7, at the cost of a second FFT pair.
+  // w of Spectrum::inverse. Measured on slide_grating (128 x 0.1 mm,
+  // layered skin, last-step warm start, restarts on new contacts): w = 1, 2,
+  // 3, 5 took 8, 7.5, 7, 7 median iterations; the full inverse (by FFT) 7,
+  // at the cost of a second FFT pair per iteration.
   static constexpr int kInverseHalfWidth = 2;
   std::shared_ptr<const Spectrum> SpectrumFor(int bx, int by) const;
   // out = K * in over a bx x by box (arrays bx * by, row-major), with the

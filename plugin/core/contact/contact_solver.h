@@ -28,8 +28,10 @@ namespace mjtouch {
 // inverse of the influence matrix); cells that overlap (zero pressure,
 // negative gap) join the set without a restart (a direction that stops
 // descending falls back to the preconditioned gradient), and the search
-// direction is projected onto zero net load. About half of P&K's iterations to the same
-// stopping test, at a lower error (tests/unit/test_contact_solver.py).
+// direction is projected onto zero net load. On slide_grating (layered skin,
+// 128 x 0.1 mm) with the plugin's warm starts: 5 median iterations against
+// P&K's 15-16 to the same stopping test, at a lower error against a tight
+// reference (examples/bench_elastic.py, tests/unit/test_contact_solver.py).
 // kPolonskyKeer: Polonsky & Keer (1999) as published.
 enum class ElasticMethod { kPreconditioned = 0, kPolonskyKeer };
 
