@@ -143,15 +143,17 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
                      young_pa: float | None = None, poisson: float | None = None,
                      periodic: bool = False, tolerance: float = 1e-8,
                      max_iterations: int = 2000, initial_pa: np.ndarray | None = None,
-                     compliance_m_per_pa: np.ndarray | None = None):
+                     compliance_m_per_pa: np.ndarray | None = None, method: str = "pcg"):
     """Boundary-element contact of the skin against the rigid gap field
     (ny x nx, m; inf: cannot touch), total load force_n: a homogeneous
     half-space (young_pa, poisson), or any skin given by its surface
     compliance table ((2n - 1) x (2n - 1), m/Pa, e.g.
     LayeredSkin.compliance_table(pitch_m, n)). Non-periodic grids must be
     square; periodic sizes products of 2, 3, 5 (half-space only).
-    Returns (pressure Pa, stats dict: iterations, converged, change,
-    approach_m, contact_cells, max_contact_gap_m)."""
+    ``method``: ``"pcg"`` (preconditioned CG, the plugin's) or ``"pk"``
+    (Polonsky & Keer's plain CG, the reference path). Returns (pressure Pa,
+    stats dict: iterations, converged, change, approach_m, contact_cells,
+    max_contact_gap_m, fft_applies: operator applications by FFT, the cost)."""
     g = np.ascontiguousarray(gap_m, dtype=np.float64)
     if g.ndim != 2:
         raise ValueError(f"gap_m must be 2D, got shape {g.shape}")
@@ -162,12 +164,12 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
                              "table's solver is non-periodic)")
         t = np.ascontiguousarray(compliance_m_per_pa, dtype=np.float32)
         return _core.elastic_pressure_table(g, p0, float(pitch_m), float(force_n), t,
-                                            float(tolerance), int(max_iterations))
+                                            float(tolerance), int(max_iterations), method)
     if young_pa is None or poisson is None:
         raise ValueError("give young_pa and poisson (a half-space), or compliance_m_per_pa")
     return _core.elastic_pressure(g, p0, float(pitch_m), float(force_n), float(young_pa),
                                   float(poisson), bool(periodic), float(tolerance),
-                                  int(max_iterations))
+                                  int(max_iterations), method)
 
 
 # ---------------------------------------------------------------------------

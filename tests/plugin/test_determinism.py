@@ -128,3 +128,48 @@ def test_rollout_two_threads_with_stress_threads_equals_serial():
             serial[k] = d.sensordata
         assert np.array_equal(serial, two[b])
     assert np.abs(two).max() > 0
+
+
+def _elastic_model(solver: str):
+    # the elastic contact's warm start lives in plugin_state (p(n-1), and
+    # p(n-2) for pcg's extrapolation): copies and resets must carry it
+    proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
+    tip = fast_tip(skin={"pressure": "elastic", "contact_solver": solver,
+                         "outputs": "force pressure stress"})
+    return scenes.build_model(tip, scenes.Texture(period_m=0.6e-3), proto)
+
+
+def test_elastic_pcg_copy_and_reset_are_bit_identical():
+    m = _elastic_model("pcg")
+    d = mujoco.MjData(m)
+    first = _run(m, d, 320)
+    d2 = mujoco.MjData(m)
+    mujoco.mj_copyData(d2, m, d)
+    a = _run(m, d, 60)
+    b = _run(m, d2, 60)
+    assert np.array_equal(a, b)
+    assert a.any()
+    mujoco.mj_resetData(m, d)
+    assert np.array_equal(_run(m, d, 320), first)
+
+
+def test_elastic_pcg_matches_the_reference_solver_in_the_plugin():
+    # the same rollout with contact_solver = pk (Polonsky & Keer from the last
+    # step, the solver before #13): both stop at tolerance 1e-4 (about their
+    # error), so their pressures differ by about that much, not more
+    from mjtouch.sensor import SkinLayout
+    runs = {}
+    for solver in ("pcg", "pk"):
+        m = _elastic_model(solver)
+        out = _run(m, mujoco.MjData(m), 320)
+        layout = SkinLayout.from_model(m)
+        runs[solver] = {k: layout.block(out, k) for k in ("force", "pressure", "stress")}
+    a, b = runs["pcg"], runs["pk"]
+    assert np.array_equal(a["force"][:, :3], b["force"][:, :3])  # MuJoCo's forces: same physics
+    for block in ("pressure", "stress"):
+        diff = np.sqrt(((a[block] - b[block]) ** 2).sum(axis=1))
+        norm = np.sqrt((b[block] ** 2).sum(axis=1))
+        touching = norm > 0
+        assert touching.sum() > 100, block
+        worst = (diff[touching] / norm[touching]).max()
+        assert worst <= 1e-3, (block, worst)

@@ -121,3 +121,17 @@ def test_bench_pressure_runs_every_model_and_grid():
     for r in rows:
         for k in ("us_per_step", "over_bare", "over_native_tactile", "native_tactile_us_per_step"):
             assert np.isfinite(r[k]) and r[k] > 0, (r, k)
+
+
+def test_bench_elastic_compares_both_solvers_against_the_reference():
+    # a benchmark, so no timing assertion: both solvers report iterations and
+    # errors against the tight reference, and finite positive costs
+    ex = runpy.run_path(str(EXAMPLES / "bench_elastic.py"))
+    start = ex["settled"]("slide_grating")
+    acc = ex["accuracy"]("slide_grating", start, 4)
+    for s in ("pk", "pcg"):
+        assert acc[s]["iterations_median"] >= 1
+        assert 0 < acc[s]["pressure_rms_rel"] < 1e-2, acc
+    t = ex["timing"]("slide_grating", start, 2, 1)
+    assert set(t) == {(s, st) for s in ("pk", "pcg", "winkler") for st in ("stages 1-2", "full")}
+    assert all(np.isfinite(v).all() and min(v) > 0 for v in t.values()), t

@@ -31,6 +31,7 @@ CASES = [
     ({"pressure": "fem"}, "`pressure`", "valid: contacts winkler elastic"),
     ({"young": "0"}, "`young`", "[100, 1e+10] Pa"),
     ({"tolerance": "0"}, "`tolerance`", "(0, 0.1]"),
+    ({"contact_solver": "cg"}, "`contact_solver`", "valid: pcg pk"),
     ({"ridge_profile": "zigzag"}, "`ridge_profile`", "valid: sine triangle square"),
     ({"pressure": "2"}, "`pressure`", "valid: contacts winkler elastic"),
     ({"young": "soft"}, "`young`", "[100, 1e+10] Pa"),

@@ -31,6 +31,7 @@ INTEGER_RANGES = {"nx": (4, 40), "texture_group": (0, 5)}
 CHOICES = {
     "ridges": ["true", "false", "1", "0"], "shear": ["true", "false"],
     "ridge_profile": ["sine", "triangle", "square"], "pressure": ["contacts", "winkler", "elastic"],
+    "contact_solver": ["pcg", "pk"],
     "visual": ["none", "pad", "above", "both"], "skin": ["layered", "halfspace"],
     "interface_side": ["upper", "lower"], "stress_method": ["auto", "direct", "fft", "tree"],
     "oversample": ["auto", "1", "2", "3"],

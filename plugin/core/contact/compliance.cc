@@ -34,7 +34,30 @@ SurfaceCompliance::SurfaceCompliance(int nx, int ny, double pitch_m,
       s->k_hat[static_cast<size_t>(kx) * ls + ky] = c_of_k(k) * norm;
     }
   }
+  BuildInverse(s.get());
   periodic_spectrum_ = std::move(s);
+}
+
+void SurfaceCompliance::BuildInverse(Spectrum* s) {
+  // k_hat holds the kernel's DFT / (mx my); the inverse kernel's DFT is
+  // 1 / DFT = norm / k_hat, and the unnormalised inverse FFT needs norm again.
+  const int mx = s->fft.nx(), my = s->fft.ny(), w = kInverseHalfWidth;
+  const double norm = 1.0 / (static_cast<double>(mx) * my);
+  std::vector<double> re(s->fft.spectrum_size()), im(s->fft.spectrum_size(), 0.0), scratch;
+  for (size_t k = 0; k < re.size(); ++k) re[k] = s->k_hat[k] > 0.0 ? norm / s->k_hat[k] : 0.0;
+  const int rows = std::min(w + 1, my), cols = std::min(w + 1, mx);
+  std::vector<double> corner(static_cast<size_t>(rows) * cols);
+  s->fft.InverseReal(re.data(), im.data(), rows, cols, corner.data(), cols, &scratch);
+  // Even in both axes: the corner [0, w]^2 gives every offset.
+  const int L = 2 * w + 1;
+  s->inverse.assign(static_cast<size_t>(L) * L, 0.0);
+  for (int dj = -w; dj <= w; ++dj)
+    for (int di = -w; di <= w; ++di) {
+      const int aj = std::abs(dj), ai = std::abs(di);
+      if (aj < rows && ai < cols)
+        s->inverse[static_cast<size_t>(dj + w) * L + di + w] =
+            corner[static_cast<size_t>(aj) * cols + ai] * norm;
+    }
 }
 
 std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFor(
@@ -62,6 +85,7 @@ std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFo
   const double norm = 1.0 / (static_cast<double>(mx) * my);
   s->k_hat.resize(sre.size());
   for (size_t k = 0; k < sre.size(); ++k) s->k_hat[k] = sre[k] * norm;
+  BuildInverse(s.get());
   slot = std::move(s);
   return slot;
 }

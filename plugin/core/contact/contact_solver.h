@@ -5,7 +5,8 @@
 // where g0 is the rendered gap, alpha the rigid approach and u = K * p the
 // skin's normal surface displacement (K: the substrate's SurfaceCompliance,
 // compliance.h). Algorithm: Polonsky & Keer (1999) constrained conjugate
-// gradient, load-controlled.
+// gradient, load-controlled; by default preconditioned (kPreconditioned
+// below), with P&K's plain iteration kept as the reference path.
 //
 // Separated as in ContactMechanics / Tamaas: the substrate's Green's function
 // (substrate/), the compliance operator on the grid (compliance.h), and this
@@ -21,6 +22,19 @@
 
 namespace mjtouch {
 
+// kPreconditioned: the CG on the contact set preconditioned by the inverse
+// operator's local stencil (SurfaceCompliance::Spectrum::inverse), after
+// Vollebregt (2014, J. Optim. Theory Appl. 162: an FFT-derived approximate
+// inverse of the influence matrix); cells that overlap (zero pressure,
+// negative gap) join the set without a restart (a direction that stops
+// descending falls back to the preconditioned gradient), and the search
+// direction is projected onto zero net load. On slide_grating (layered skin,
+// 128 x 0.1 mm) with the plugin's warm starts: 5 median iterations against
+// P&K's 15-16 to the same stopping test, at a lower error against a tight
+// reference (examples/bench_elastic.py, tests/unit/test_contact_solver.py).
+// kPolonskyKeer: Polonsky & Keer (1999) as published.
+enum class ElasticMethod { kPreconditioned = 0, kPolonskyKeer };
+
 struct ElasticSolveStats {
   int iterations = 0;
   double change = 0;         // last relative L1 pressure change (the stopping test)
@@ -29,11 +43,14 @@ struct ElasticSolveStats {
   double max_contact_gap_m = 0;  // largest g0 among contact cells
   int contact_cells = 0;
   int fft_size_x = 0, fft_size_y = 0;
+  int applies = 0;  // compliance operator applications by FFT (the cost)
 };
 
 // Per-simulation scratch (no state that outlives a call).
 struct ElasticWork {
   std::vector<double> g0, p, u, g, t, r, p_new, delta;
+  std::vector<double> g_pad;  // preconditioner input with a zero border
+  std::vector<int> set;       // kPreconditioned: the cells of the working set
   std::vector<int> changed;
   ComplianceWork fft;
 };
@@ -48,7 +65,8 @@ struct ElasticWork {
 bool SolveElasticContact(const SurfaceCompliance& compliance, const std::vector<double>& gap_m,
                          const CellBox& box, double force_n, double tolerance,
                          int max_iterations, std::vector<double>* pressure_pa,
-                         ElasticWork* work, ElasticSolveStats* stats);
+                         ElasticWork* work, ElasticSolveStats* stats,
+                         ElasticMethod method = ElasticMethod::kPreconditioned);
 
 // One skin's elastic contact: its compliance operator (shared, immutable,
 // spectra cached per box size) bound to the solver.
@@ -65,7 +83,8 @@ class ElasticContact {
   // SolveElasticContact with this skin's operator.
   bool Solve(const std::vector<double>& gap_m, const CellBox& box, double force_n,
              double tolerance, int max_iterations, std::vector<double>* pressure_pa,
-             ElasticWork* work, ElasticSolveStats* stats) const;
+             ElasticWork* work, ElasticSolveStats* stats,
+             ElasticMethod method = ElasticMethod::kPreconditioned) const;
 
  private:
   std::shared_ptr<const SurfaceCompliance> compliance_;

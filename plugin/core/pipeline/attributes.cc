@@ -92,6 +92,10 @@ const std::vector<AttributeRow>& Rows() {
       {"tolerance", K::kNumber, 0, 0.1, true, false, "", "1e-4",
        "`elastic`: relative L1 pressure change that stops the CG (about its error)", nullptr,
        FIELD(tolerance), NO_PARSE, S::kModel},
+      {"contact_solver", K::kChoice, 0, 0, false, false, "", "pcg",
+       "`elastic`: `pcg` preconditioned CG, warm start extrapolated from the last two steps; "
+       "`pk` Polonsky & Keer's CG from the last step (the reference path)", "pcg pk",
+       FIELD(elastic_method), NO_PARSE, S::kModel},
       {"stiffness", K::kNumber, kMinStiffnessPaPerM, 1e12, false, false, "Pa/m", "2e7",
        "Winkler foundation stiffness (sets the contact size, not the force)", nullptr,
        FIELD(stiffness_pa_per_m), NO_PARSE, S::kModel},

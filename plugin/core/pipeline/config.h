@@ -8,6 +8,7 @@
 
 #include "afferents/receptors.h"
 #include "common/grid.h"
+#include "contact/contact_solver.h"
 #include "contact/pressure.h"
 #include "stress/stress_field.h"
 #include "substrate/layered.h"
@@ -47,6 +48,7 @@ struct SkinConfig {
   double stiffness_pa_per_m = 2e7;  // Winkler foundation
   double young_pa = 8e4;            // `elastic`: homogeneous skin (Shao 2010 epidermis)
   double tolerance = 1e-4;          // `elastic`: relative L1 pressure change per iteration (~ its error)
+  ElasticMethod elastic_method = ElasticMethod::kPreconditioned;  // `contact_solver`
   double poisson = 0.48;            // homogeneous skin (Shao 2010 epidermis)
   // Elastic skin: a layered stack (`skin` = layered: `layers` over `base`,
   // default the Shao et al. 2010 fingertip) or a homogeneous half-space

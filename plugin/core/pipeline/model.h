@@ -44,12 +44,15 @@ enum LastPoseSlot {
 // this order: the header (StateSlot), per-receptor membranes
 // (kReceptorStateSize each), the last step's spike counts and voltages
 // (re-output on repeated calls), for `elastic` the last pressure field (n*n,
-// Pa: the next step's warm start), and the last pose (LastPoseSlot; always
+// Pa: the next step's warm start) and, with contact_solver = pcg, the one
+// before it (n*n, Pa) and whether it is valid (1 double): the warm start
+// extrapolates 2 p(n-1) - p(n-2); then the last pose (LastPoseSlot; always
 // there: `auto` oversampling depends on the timestep, which MuJoCo's
 // state-size callback does not see).
 struct StateLayout {
   int receptors = 0, last_spikes = 0, last_voltage = 0, last_pressure = 0, last_pose = 0;
   int last_pressure_size = 0;
+  int prev_pressure = 0, prev_pressure_size = 0;  // p(n-2), then its valid flag
   int size = 0;
 
   StateLayout() = default;
@@ -60,7 +63,12 @@ struct StateLayout {
     last_pressure = last_voltage + nreceptor;
     last_pressure_size =
         cfg.pressure_model == PressureModel::kElastic ? static_cast<int>(cfg.grid.Size()) : 0;
-    last_pose = last_pressure + last_pressure_size;
+    prev_pressure = last_pressure + last_pressure_size;
+    prev_pressure_size = cfg.pressure_model == PressureModel::kElastic &&
+                                 cfg.elastic_method == ElasticMethod::kPreconditioned
+                             ? last_pressure_size + 1
+                             : 0;
+    last_pose = prev_pressure + prev_pressure_size;
     size = last_pose + kLastPoseSize;
   }
   // Receptor r's membrane block.

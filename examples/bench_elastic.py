@@ -1,0 +1,156 @@
+"""The `elastic` contact solve, old against new, in one process (a benchmark,
+not a test).
+
+    python examples/bench_elastic.py [--steps 200] [--rounds 5]
+
+models/slide_grating.xml and slide_flat.xml with pressure="elastic", each
+with contact_solver="pk" (Polonsky & Keer, warm-started from the last step:
+the solver before #13) and "pcg" (preconditioned CG, extrapolated warm
+start). Every configuration starts from one settled sliding state (the press
+and a lead-in simulated without the plugin). Prints per configuration:
+- CG iterations per step (median, max) over the sliding steps;
+- errors against a tight reference (pk, tolerance 1e-8) over the same steps:
+  pressure relative RMS (all steps pooled), and the largest indentation-depth
+  difference (the force block's depth, m; its forces are MuJoCo's by
+  construction);
+- us/step (process CPU time) of stages 1-2 (outputs="force") and of the full
+  pipeline (default outputs), min and median over interleaved rounds, and the pk / pcg ratios;
+  the winkler model in the same rounds as a yardstick of the machine's load.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import time
+
+import mujoco
+import numpy as np
+
+from mjtouch import bench, scenes
+from mjtouch.bench.configs import LEAD_IN_S
+from mjtouch.sensor import SkinLayout
+
+MODELS = pathlib.Path(__file__).resolve().parents[1] / "models"
+SCENES = ("slide_grating", "slide_flat")
+SOLVERS = ("pk", "pcg")
+_PHYSICS = int(mujoco.mjtState.mjSTATE_FULLPHYSICS) & ~int(mujoco.mjtState.mjSTATE_PLUGIN)
+_FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
+
+
+def scene_spec(name: str, **skin) -> mujoco.MjSpec:
+    """The scene with skin attributes set on its sensor's plugin config (the
+    shipped models embed the config in the <sensor><plugin>, which
+    scenes.set_skin, editing <plugin> instances, does not see)."""
+    spec = mujoco.MjSpec.from_file(str(MODELS / f"{name}.xml"))
+    for s in spec.sensors:
+        if s.type == mujoco.mjtSensor.mjSENS_PLUGIN:
+            cfg = dict(s.plugin.config)
+            cfg.update({k: str(v) for k, v in skin.items()})
+            s.plugin.config = cfg
+    return spec
+
+
+def settled(name: str):
+    """(physics state, qacc warm start) after the press and LEAD_IN_S of sliding."""
+    m = scenes.remove_skin(scene_spec(name)).compile()
+    d = mujoco.MjData(m)
+    for row in scenes.controls(scenes.Protocol(), LEAD_IN_S):
+        d.ctrl[:] = row
+        mujoco.mj_step(m, d)
+    state = np.empty(mujoco.mj_stateSize(m, _PHYSICS))
+    mujoco.mj_getState(m, d, state, _PHYSICS)
+    return state, d.qacc_warmstart.copy()
+
+
+def make_run(name: str, start, nstep: int, **skin) -> bench.Run:
+    m = scene_spec(name, **{"pressure": "elastic", **skin}).compile()
+    d = mujoco.MjData(m)
+    mujoco.mj_setState(m, d, start[0], _PHYSICS)
+    full = np.empty(mujoco.mj_stateSize(m, _FULL))
+    mujoco.mj_getState(m, d, full, _FULL)
+    return bench.Run(m, full, start[1], bench.slide_ctrl(scenes.Protocol(), nstep))
+
+
+def accuracy(name: str, start, steps: int) -> dict:
+    """Iterations and errors of each solver against the tight reference."""
+    out = {}
+    traces = {}
+    for label, skin in (("ref", dict(contact_solver="pk", tolerance="1e-8")),
+                        *((s, dict(contact_solver=s)) for s in SOLVERS)):
+        run = make_run(name, start, steps, outputs="force pressure", **skin)
+        layout = SkinLayout.from_model(run.model)
+        mujoco.mj_setState(run.model, run.data, run.state0, _FULL)
+        run.data.qacc_warmstart[:] = run.warm
+        run.data.ctrl[:] = run.ctrl[0]
+        p, depth, its = [], [], []
+        for _ in range(steps):
+            mujoco.mj_step(run.model, run.data)
+            p.append(layout.block(run.data.sensordata, "pressure").copy())
+            depth.append(layout.block(run.data.sensordata, "force")[3])
+            its.append(layout.last_evaluation(run.data)["elastic_iterations"])
+        traces[label] = (np.array(p), np.array(depth), np.array(its))
+    p_ref, d_ref, _ = traces["ref"]
+    for s in SOLVERS:
+        p, d, its = traces[s]
+        out[s] = dict(iterations_median=float(np.median(its)), iterations_max=int(its.max()),
+                      pressure_rms_rel=float(np.sqrt(((p - p_ref) ** 2).sum() / (p_ref ** 2).sum())),
+                      depth_max_abs_m=float(np.abs(d - d_ref).max()))
+    out["ref_iterations_median"] = float(np.median(traces["ref"][2]))
+    return out
+
+
+def timing(name: str, start, steps: int, rounds: int) -> dict:
+    # winkler (the default model) in the same rounds: a yardstick for the
+    # machine's load, against the issue's quiet-machine figures
+    runs = {(s, stage): make_run(name, start, steps,
+                                 **({"pressure": "winkler"} if s == "winkler"
+                                    else {"contact_solver": s}),
+                                 **({"outputs": "force"} if stage == "stages 1-2" else {}))
+            for s in (*SOLVERS, "winkler") for stage in ("stages 1-2", "full")}
+    times = {k: [] for k in runs}
+    last = {}
+    for _ in range(rounds):  # interleaved: a load change hits every configuration alike
+        for k, run in runs.items():
+            # process CPU time: on a shared, oversubscribed machine wall time
+            # also counts the time the process waits for a core
+            t0 = time.process_time()
+            _, sd = run.step(steps)
+            times[k].append((time.process_time() - t0) / steps * 1e6)
+            if k in last and not np.array_equal(last[k], sd):
+                raise RuntimeError(f"{name} {k}: repeated runs differ")
+            last[k] = sd
+    return {k: (min(v), float(np.median(v))) for k, v in times.items()}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=200, help="sliding steps per run")
+    ap.add_argument("--rounds", type=int, default=5, help="interleaved timing rounds")
+    args = ap.parse_args()
+    for name in SCENES:
+        start = settled(name)
+        acc = accuracy(name, start, args.steps)
+        t = timing(name, start, args.steps, args.rounds)
+        print(f"{name} ({args.steps} steps; reference pk at tolerance 1e-8: "
+              f"{acc['ref_iterations_median']:.0f} median iterations)")
+        for s in SOLVERS:
+            a = acc[s]
+            print(f"  {s:4s} iterations median {a['iterations_median']:5.1f} max "
+                  f"{a['iterations_max']:3d}  pressure rms rel {a['pressure_rms_rel']:.2e}  "
+                  f"depth max |diff| {a['depth_max_abs_m']:.2e} m")
+            for stage in ("stages 1-2", "full"):
+                lo, med = t[s, stage]
+                print(f"       {stage:10s} us/step min {lo:8.1f} median {med:8.1f}")
+        for stage in ("stages 1-2", "full"):
+            lo, med = t["winkler", stage]
+            print(f"  winkler {stage:10s} us/step min {lo:8.1f} median {med:8.1f}")
+        for stage in ("stages 1-2", "full"):
+            r_min = t["pk", stage][0] / t["pcg", stage][0]
+            r_med = t["pk", stage][1] / t["pcg", stage][1]
+            print(f"  ratio pk / pcg {stage:10s}: min {r_min:.2f}x  median {r_med:.2f}x")
+        print(f"  iterations pk / pcg: {acc['pk']['iterations_median'] / acc['pcg']['iterations_median']:.2f}x")
+
+
+if __name__ == "__main__":
+    main()
