@@ -133,6 +133,144 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
 bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
                      const std::vector<double>& cov, const CellBox& box, double k, double force,
                      double guess, TractionField* out) {
+  // The same solve as WinklerPressureReference, value for value: the same
+  // sums over the same terms in the same order, only fewer passes over the
+  // cells that cannot touch. Newton's iterate only decreases, so after the
+  // first evaluation at c0 every later pass skips the candidates with gap
+  // >= c0 (their terms are skipped by `d > 0` anyway), and the load is
+  // normalised over the touching cells alone (the others add exact zeros).
+  ClearTraction(grid, out);
+  const double A = grid.Area();
+  const double target = force / (k * A);
+  std::vector<double>& cg = out->scratch_gap;
+  std::vector<double>& cc = out->scratch_cov;
+  std::vector<size_t>& ci = out->scratch_index;
+  const size_t cells = box.empty() ? 0 : static_cast<size_t>(box.nx) * box.ny;
+  // All candidates, then (from index M on) the ones below c0.
+  cg.resize(2 * cells);
+  cc.resize(2 * cells);
+  ci.resize(2 * cells);
+  size_t M = 0;
+  double gmin = std::numeric_limits<double>::infinity();
+  double covmax = 0.0;
+  for (int j = box.j0; j < box.j0 + box.ny; ++j) {
+    const size_t row = static_cast<size_t>(j) * grid.n;
+    for (size_t i = row + box.i0; i < row + box.i0 + box.nx; ++i) {
+      if (cov[i] > 0.0 && std::isfinite(gap[i])) {
+        cg[M] = gap[i];
+        cc[M] = cov[i];
+        ci[M] = i;
+        ++M;
+        gmin = std::min(gmin, gap[i]);
+        covmax = std::max(covmax, cov[i]);
+      }
+    }
+  }
+  if (!std::isfinite(gmin) || !(force > 0.0)) return false;
+  double* const g_all = cg.data();
+  double* const c_all = cc.data();
+  double* const g_low = g_all + M;
+  double* const c_low = c_all + M;
+  size_t* const i_low = ci.data() + M;
+  size_t L = 0;
+  // f(c) and its slope over the first m candidates of (g, w), in order.
+  auto eval = [&](const double* g, const double* w, size_t m, double c, double* slope) {
+    double f = -target, sl = 0.0;
+    for (size_t i = 0; i < m; ++i) {
+      const double d = c - g[i];
+      if (d > 0.0) { f += w[i] * d; sl += w[i]; }
+    }
+    *slope = sl;
+    return f;
+  };
+  // The same over every candidate, keeping those below c (the only ones
+  // that can touch at c or to its left).
+  auto eval_all = [&](double c, double* slope) {
+    double f = -target, sl = 0.0;
+    L = 0;
+    for (size_t i = 0; i < M; ++i) {
+      const double d = c - g_all[i];
+      if (d > 0.0) {
+        f += c_all[i] * d;
+        sl += c_all[i];
+        g_low[L] = g_all[i];
+        c_low[L] = c_all[i];
+        i_low[L] = ci[i];
+        ++L;
+      }
+    }
+    *slope = sl;
+    return f;
+  };
+  double c = gmin + target / std::max(covmax, 1e-12);
+  double f, s;
+  bool have = false;
+  if (std::isfinite(guess) && guess > gmin) {
+    f = eval_all(guess, &s);
+    if (f >= 0.0) {
+      c = guess;
+      have = true;
+    }
+  }
+  if (!have) f = eval_all(c, &s);
+  const double c0 = c;
+  for (int it = 0; it < 200; ++it) {
+    if (f <= 0.0 || s <= 0.0) break;
+    const double next = c - f / s;
+    if (!(next < c)) break;
+    c = next;
+    if (it + 1 < 200) f = eval(g_low, c_low, L, c, &s);
+  }
+  // Closed form from the converged contact set (see the reference). It stays
+  // at or below c0 up to round-off; above it, every candidate is read.
+  for (int pass = 0; pass < 4; ++pass) {
+    const bool low = c <= c0;
+    const double* g = low ? g_low : g_all;
+    const double* w = low ? c_low : c_all;
+    const size_t m = low ? L : M;
+    double sum_cov = 0.0, sum_cov_g = 0.0;
+    for (size_t i = 0; i < m; ++i) {
+      if (c - g[i] > 0.0) {
+        sum_cov += w[i];
+        sum_cov_g += w[i] * g[i];
+      }
+    }
+    if (!(sum_cov > 0.0)) break;
+    const double next = (target + sum_cov_g) / sum_cov;
+    if (next == c) break;
+    c = next;
+  }
+  out->box = box;
+  out->approach_m = c;
+  // Pressure and NormalizeLoad's sum over the touching cells, box order.
+  const bool low = c <= c0;
+  const double* g = low ? g_low : g_all;
+  const double* w = low ? c_low : c_all;
+  const size_t* idx = low ? i_low : ci.data();
+  const size_t m = low ? L : M;
+  double* p = out->pressure_pa.data();
+  double total = 0.0;
+  size_t touching = 0;
+  for (size_t i = 0; i < m; ++i) {
+    const double d = c - g[i];
+    if (d > 0.0) {
+      p[idx[i]] = w[i] * d;
+      total += w[i] * d;
+      i_low[touching++] = idx[i];  // reuses the low list, read at or after i
+    }
+  }
+  if (!(total > 0.0) || !(force > 0.0)) {
+    for (size_t i = 0; i < touching; ++i) p[i_low[i]] = 0.0;
+    return false;
+  }
+  const double scale = force / (A * total);
+  for (size_t i = 0; i < touching; ++i) p[i_low[i]] *= scale;
+  return true;
+}
+
+bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& gap,
+                     const std::vector<double>& cov, const CellBox& box, double k, double force,
+                     double guess, TractionField* out) {
   ClearTraction(grid, out);
   const double A = grid.Area();
   // Solve f(c) = sum cov_i max(c - g_i, 0) - force / (k A) = 0 over the

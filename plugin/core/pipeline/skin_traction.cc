@@ -52,21 +52,23 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     // so if the solved approach reaches the cull level, render everything and
     // solve again: the result is exact either way.
     const double cull_rel = warm ? 1.5 * depth_prev + 20e-6 : kInf;
+    const bool fast = !ws->reference_paths;
     CellBox box;
     double cull = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_rel, &ws->gap,
-                            &ws->coverage, true, &model.skin_blocks(), &box);
+                            &ws->coverage, true, &model.skin_blocks(), &box, fast);
     for (int pass = 0; pass < 2 && !touching; ++pass) {
       if (pass == 1) {
         cull = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, kInf, &ws->gap,
-                         &ws->coverage, true, &model.skin_blocks(), &box);
+                         &ws->coverage, true, &model.skin_blocks(), &box, fast);
       }
       const double gmin = MinGap(grid, box, ws->gap, ws->coverage);
       if (!std::isfinite(gmin)) break;
       double approach = 0.0;
       if (cfg.pressure_model == PressureModel::kWinkler) {
         const double guess = warm ? gmin + depth_prev : std::nan("");
-        touching = WinklerPressure(grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m,
-                                   in.normal_force_n, guess, &tf);
+        touching = (fast ? WinklerPressure : WinklerPressureReference)(
+            grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m, in.normal_force_n, guess,
+            &tf);
         approach = tf.approach_m;
       } else {
         const ElasticContact& ec = *model.elastic();
