@@ -68,30 +68,39 @@ bool NormalizeLoad(const TaxelGrid& grid, double force, TractionField* out) {
 
 void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out) {
   const CellBox& b = out->box;
-  ForBox(grid, b, [&](size_t k) {
-    out->pressure[k] = static_cast<float>(out->pressure_pa[k]);
-    out->shear_x[k] = shear ? static_cast<float>(out->shear_x_pa[k]) : 0.0f;
-    out->shear_y[k] = shear ? static_cast<float>(out->shear_y_pa[k]) : 0.0f;
-  });
   out->runs.Clear();
   out->active_cells = 0;
+  // Row by row: the float copies (vectorised), then the runs of active cells
+  // while the row is in cache.
   for (int j = b.j0; j < b.j0 + b.ny; ++j) {
-    int begin = -1;
-    for (int i = b.i0; i <= b.i0 + b.nx; ++i) {
-      bool on = false;
-      if (i < b.i0 + b.nx) {
-        const size_t idx = static_cast<size_t>(j) * grid.n + i;
-        on = out->pressure_pa[idx] != 0.0 ||
-             (shear && (out->shear_x_pa[idx] != 0.0 || out->shear_y_pa[idx] != 0.0));
-        out->active_cells += on;
-      }
-      if (on && begin < 0) begin = i;
-      if (!on && begin >= 0) {
-        out->runs.row.push_back(j);
-        out->runs.begin.push_back(begin);
-        out->runs.end.push_back(i);
-        begin = -1;
-      }
+    const size_t row = static_cast<size_t>(j) * grid.n;
+    const double* p = out->pressure_pa.data() + row;
+    const double* sx = out->shear_x_pa.data() + row;
+    const double* sy = out->shear_y_pa.data() + row;
+    float* fp = out->pressure.data() + row;
+    float* fx = out->shear_x.data() + row;
+    float* fy = out->shear_y.data() + row;
+    const int i0 = b.i0, i1 = b.i0 + b.nx;
+    for (int i = i0; i < i1; ++i) fp[i] = static_cast<float>(p[i]);
+    if (shear) {
+      for (int i = i0; i < i1; ++i) fx[i] = static_cast<float>(sx[i]);
+      for (int i = i0; i < i1; ++i) fy[i] = static_cast<float>(sy[i]);
+    } else {
+      std::fill(fx + i0, fx + i1, 0.0f);
+      std::fill(fy + i0, fy + i1, 0.0f);
+    }
+    auto on = [&](int i) {
+      return p[i] != 0.0 || (shear && (sx[i] != 0.0 || sy[i] != 0.0));
+    };
+    for (int i = i0; i < i1;) {
+      while (i < i1 && !on(i)) ++i;
+      if (i == i1) break;
+      const int begin = i;
+      while (i < i1 && on(i)) ++i;
+      out->runs.row.push_back(j);
+      out->runs.begin.push_back(begin);
+      out->runs.end.push_back(i);
+      out->active_cells += i - begin;
     }
   }
 }
@@ -130,104 +139,117 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
   return total > 0.0;
 }
 
+namespace {
+
+// f(c) + target and its slope over (g, w)[0, m): the Newton step's sums, in
+// four interleaved partial sums (not latency-bound). Their round-off only
+// moves Newton's last iterate within round-off of the root; the approach is
+// then fixed by the closed form over the converged contact set, summed in
+// the reference's order.
+double NewtonSums(const double* g, const double* w, size_t m, double c, double* slope) {
+  double f[4] = {0, 0, 0, 0}, s[4] = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= m; i += 4)
+    for (int k = 0; k < 4; ++k) {
+      const double d = c - g[i + k];
+      const bool on = d > 0.0;
+      f[k] += on ? w[i + k] * d : 0.0;
+      s[k] += on ? w[i + k] : 0.0;
+    }
+  for (; i < m; ++i) {
+    const double d = c - g[i];
+    if (d > 0.0) { f[0] += w[i] * d; s[0] += w[i]; }
+  }
+  *slope = (s[0] + s[1]) + (s[2] + s[3]);
+  return (f[0] + f[1]) + (f[2] + f[3]);
+}
+
+// Whether the contact sets {g < a} and {g < b} (as c - g > 0) differ.
+bool SetsDiffer(const double* g, size_t m, double a, double b) {
+  int differ = 0;
+  for (size_t i = 0; i < m; ++i) differ |= (a - g[i] > 0.0) != (b - g[i] > 0.0);
+  return differ != 0;
+}
+
+}  // namespace
+
 bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
                      const std::vector<double>& cov, const CellBox& box, double k, double force,
                      double guess, TractionField* out) {
-  // The same solve as WinklerPressureReference, value for value: the same
-  // sums over the same terms in the same order, only fewer passes over the
-  // cells that cannot touch. Newton's iterate only decreases, so after the
-  // first evaluation at c0 every later pass skips the candidates with gap
-  // >= c0 (their terms are skipped by `d > 0` anyway), and the load is
-  // normalised over the touching cells alone (the others add exact zeros).
+  // WinklerPressureReference's result with fewer passes: Newton's iterate
+  // only decreases, so after the first point c0 every pass reads only the
+  // candidates below c0 (the others' terms are skipped by d > 0 anyway); a
+  // closed-form pass whose contact set did not change would repeat the last
+  // one exactly, so it is skipped; the load is normalised over the touching
+  // cells alone (the others add exact zeros to the sum). The closed form and
+  // the load sum keep the reference's order, so the values are its values.
   ClearTraction(grid, out);
   const double A = grid.Area();
   const double target = force / (k * A);
-  std::vector<double>& cg = out->scratch_gap;
-  std::vector<double>& cc = out->scratch_cov;
-  std::vector<size_t>& ci = out->scratch_index;
   const size_t cells = box.empty() ? 0 : static_cast<size_t>(box.nx) * box.ny;
-  // All candidates, then (from index M on) the ones below c0.
-  cg.resize(2 * cells);
-  cc.resize(2 * cells);
-  ci.resize(2 * cells);
-  size_t M = 0;
-  double gmin = std::numeric_limits<double>::infinity();
-  double covmax = 0.0;
+  // scratch [0, cells): every candidate; [cells, 2 cells): those below c0.
+  for (auto* v : {&out->scratch_gap, &out->scratch_cov})
+    if (v->size() < 2 * cells) v->resize(2 * cells);
+  if (out->scratch_index.size() < 2 * cells) out->scratch_index.resize(2 * cells);
+  double* const g_all = out->scratch_gap.data();
+  double* const w_all = out->scratch_cov.data();
+  size_t* const i_all = out->scratch_index.data();
+  double* const g_low = g_all + cells;
+  double* const w_low = w_all + cells;
+  size_t* const i_low = i_all + cells;
+  // Pack the candidates, and those below the warm start on the way.
+  const bool warm = std::isfinite(guess);
+  size_t M = 0, L = 0;
+  double gmin = std::numeric_limits<double>::infinity(), covmax = 0.0;
   for (int j = box.j0; j < box.j0 + box.ny; ++j) {
     const size_t row = static_cast<size_t>(j) * grid.n;
     for (size_t i = row + box.i0; i < row + box.i0 + box.nx; ++i) {
-      if (cov[i] > 0.0 && std::isfinite(gap[i])) {
-        cg[M] = gap[i];
-        cc[M] = cov[i];
-        ci[M] = i;
-        ++M;
-        gmin = std::min(gmin, gap[i]);
-        covmax = std::max(covmax, cov[i]);
-      }
+      const double gi = gap[i], wi = cov[i];
+      if (!(wi > 0.0 && std::isfinite(gi))) continue;
+      g_all[M] = gi;
+      w_all[M] = wi;
+      i_all[M] = i;
+      ++M;
+      gmin = std::min(gmin, gi);
+      covmax = std::max(covmax, wi);
+      g_low[L] = gi;  // kept (L advances) only below the guess
+      w_low[L] = wi;
+      i_low[L] = i;
+      L += warm && guess - gi > 0.0;
     }
   }
   if (!std::isfinite(gmin) || !(force > 0.0)) return false;
-  double* const g_all = cg.data();
-  double* const c_all = cc.data();
-  double* const g_low = g_all + M;
-  double* const c_low = c_all + M;
-  size_t* const i_low = ci.data() + M;
-  size_t L = 0;
-  // f(c) and its slope over the first m candidates of (g, w), in order.
-  auto eval = [&](const double* g, const double* w, size_t m, double c, double* slope) {
-    double f = -target, sl = 0.0;
-    for (size_t i = 0; i < m; ++i) {
-      const double d = c - g[i];
-      if (d > 0.0) { f += w[i] * d; sl += w[i]; }
-    }
-    *slope = sl;
-    return f;
-  };
-  // The same over every candidate, keeping those below c (the only ones
-  // that can touch at c or to its left).
-  auto eval_all = [&](double c, double* slope) {
-    double f = -target, sl = 0.0;
+  double c = gmin + target / std::max(covmax, 1e-12);
+  double s, f = warm ? NewtonSums(g_low, w_low, L, guess, &s) - target : 0.0;
+  if (warm && guess > gmin && f >= 0.0) {
+    c = guess;  // to the right of the root: Newton from there
+  } else {      // the cold start point and the candidates below it
     L = 0;
     for (size_t i = 0; i < M; ++i) {
-      const double d = c - g_all[i];
-      if (d > 0.0) {
-        f += c_all[i] * d;
-        sl += c_all[i];
-        g_low[L] = g_all[i];
-        c_low[L] = c_all[i];
-        i_low[L] = ci[i];
-        ++L;
-      }
+      g_low[L] = g_all[i];
+      w_low[L] = w_all[i];
+      i_low[L] = i_all[i];
+      L += c - g_all[i] > 0.0;
     }
-    *slope = sl;
-    return f;
-  };
-  double c = gmin + target / std::max(covmax, 1e-12);
-  double f, s;
-  bool have = false;
-  if (std::isfinite(guess) && guess > gmin) {
-    f = eval_all(guess, &s);
-    if (f >= 0.0) {
-      c = guess;
-      have = true;
-    }
+    f = NewtonSums(g_low, w_low, L, c, &s) - target;
   }
-  if (!have) f = eval_all(c, &s);
   const double c0 = c;
   for (int it = 0; it < 200; ++it) {
     if (f <= 0.0 || s <= 0.0) break;
     const double next = c - f / s;
     if (!(next < c)) break;
     c = next;
-    if (it + 1 < 200) f = eval(g_low, c_low, L, c, &s);
+    if (it + 1 < 200) f = NewtonSums(g_low, w_low, L, c, &s) - target;
   }
-  // Closed form from the converged contact set (see the reference). It stays
-  // at or below c0 up to round-off; above it, every candidate is read.
+  // Closed form from the converged contact set, as the reference. It stays
+  // at or below c0 up to round-off; above it every candidate is read.
+  double set_of = std::numeric_limits<double>::quiet_NaN();  // c of the last sums
   for (int pass = 0; pass < 4; ++pass) {
     const bool low = c <= c0;
     const double* g = low ? g_low : g_all;
-    const double* w = low ? c_low : c_all;
+    const double* w = low ? w_low : w_all;
     const size_t m = low ? L : M;
+    if (set_of == set_of && !SetsDiffer(g, m, set_of, c)) break;  // the sums would repeat
     double sum_cov = 0.0, sum_cov_g = 0.0;
     for (size_t i = 0; i < m; ++i) {
       if (c - g[i] > 0.0) {
@@ -238,15 +260,16 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
     if (!(sum_cov > 0.0)) break;
     const double next = (target + sum_cov_g) / sum_cov;
     if (next == c) break;
+    set_of = c;
     c = next;
   }
   out->box = box;
   out->approach_m = c;
-  // Pressure and NormalizeLoad's sum over the touching cells, box order.
+  // Pressure, and NormalizeLoad's sum in box order over the touching cells.
   const bool low = c <= c0;
   const double* g = low ? g_low : g_all;
-  const double* w = low ? c_low : c_all;
-  const size_t* idx = low ? i_low : ci.data();
+  const double* w = low ? w_low : w_all;
+  const size_t* idx = low ? i_low : i_all;
   const size_t m = low ? L : M;
   double* p = out->pressure_pa.data();
   double total = 0.0;
@@ -254,12 +277,13 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
   for (size_t i = 0; i < m; ++i) {
     const double d = c - g[i];
     if (d > 0.0) {
-      p[idx[i]] = w[i] * d;
-      total += w[i] * d;
-      i_low[touching++] = idx[i];  // reuses the low list, read at or after i
+      const double pi = w[i] * d;
+      p[idx[i]] = pi;
+      total += pi;
+      i_low[touching++] = idx[i];  // the touching cells (i_low is read at >= i)
     }
   }
-  if (!(total > 0.0) || !(force > 0.0)) {
+  if (!(total > 0.0)) {
     for (size_t i = 0; i < touching; ++i) p[i_low[i]] = 0.0;
     return false;
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace mjtouch {
@@ -413,9 +414,12 @@ void AlignedRow(const RowSpan& r, int i0, int i1, const double* z, const double*
   }
 }
 
-void RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
+// Renders the face into gap_m / coverage; `covers_only`: renders nothing
+// and returns whether every cell mean within reach is known per column and
+// >= 0 (so the texture's gap is at most its base plane's everywhere).
+bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
                        const AlignedFace& f, const SkinBlocks& blocks, const double* block_lb,
-                       double* gap_m, double* coverage, Extent* ext) {
+                       double* gap_m, double* coverage, Extent* ext, bool covers_only = false) {
   using T = CounterSurface::Type;
   const CounterSurface& s = f.s;
   const double* R = f.R;
@@ -430,7 +434,7 @@ void RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
         bj0 = std::min(bj0, bj);
         bj1 = std::max(bj1, bj);
       }
-  if (bi1 < 0) return;
+  if (bi1 < 0) return true;
   const int c0 = bi0 * B, c1 = std::min(n, bi1 * B + B);
   const int r0 = bj0 * B, r1 = std::min(n, bj1 * B + B);
   const bool plane = s.type == T::kPlane, hfield = s.type == T::kHeightField;
@@ -446,7 +450,7 @@ void RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
   double *oy = rows.data(), *y0 = oy + n, *y1 = y0 + n;
   const bool row_means = hfield && s.rows_identical && s.row_prefix;
   const double scx = hfield ? (s.ncol - 1) / (2.0 * s.half_x_m) : 0.0;
-  bool per_cell = false;
+  bool per_cell = false, negative = false;
   for (int i = c0; i < c1; ++i) {
     u[i] = grid.Centre(i);
     const double qx = f.t[0] + R[0] * u[i];
@@ -462,7 +466,9 @@ void RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
     }
     if (!hfield) mean[i] = 0.0;
     per_cell |= mean[i] != mean[i] && ox[i] > 0.0;
+    negative |= mean[i] < 0.0;
   }
+  if (covers_only) return !per_cell && !negative;
   for (int j = r0; j < r1; ++j) {
     const double qy = f.t[1] + R[4] * grid.Centre(j);
     oy[j] = Overlap1D(qy - f.hy, qy + f.hy, -s.half_y_m, s.half_y_m);
@@ -522,6 +528,7 @@ void RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
       ext->j_hi = std::max(ext->j_hi, j);
     }
   }
+  return true;
 }
 
 }  // namespace
@@ -642,6 +649,17 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
     }
     cull = lb_min + cull_above_m;
   }
+  // Whether surface k + 1 is a height field on rectangle k: the same frame
+  // (bit for bit), extents and reach, equal rows (per-column means).
+  auto texture_on_face = [&](size_t k) {
+    const CounterSurface &a = surfaces[k], &b = surfaces[k + 1];
+    const Frame &Fa = frames[k], &Fb = frames[k + 1];
+    return a.type == CounterSurface::Type::kRectangle &&
+           b.type == CounterSurface::Type::kHeightField && b.rows_identical && b.row_prefix &&
+           b.elevation_m >= 0.0 && a.half_x_m == b.half_x_m && a.half_y_m == b.half_y_m &&
+           a.max_height_m <= b.max_height_m && std::memcmp(Fa.R, Fb.R, sizeof(Fa.R)) == 0 &&
+           std::memcmp(Fa.t, Fb.t, sizeof(Fa.t)) == 0 && Fa.hx == Fb.hx && Fa.hy == Fb.hy;
+  };
   const double g = area_average ? 0.5 * h / std::sqrt(3.0) : 0.0;
   int i_lo = grid.n, i_hi = -1, j_lo = grid.n, j_hi = -1;
   for (size_t k = 0; k < surfaces.size(); ++k) {
@@ -649,6 +667,18 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
     const Frame& F = frames[k];
     const double* R = F.R;
     if (fast_paths && area_average && IsAlignedFace(s, R, F.hx, F.hy)) {
+      if (k + 1 < surfaces.size() && texture_on_face(k)) {
+        // A texture on this face (the plate proxy under its height field,
+        // next in the list) whose cell means are all >= 0: its gap is never
+        // above the face's and equal only with the same coverage, so the
+        // face would change no cell's result.
+        const Frame& T = frames[k + 1];
+        Extent none{};
+        if (RenderAlignedFace(grid, skin_z, AlignedFace{surfaces[k + 1], T.R, T.t, T.hx, T.hy, cull},
+                              *blocks, &block_lb[(k + 1) * nb * nb], nullptr, nullptr, &none,
+                              true))
+          continue;
+      }
       Extent ext{i_lo, i_hi, j_lo, j_hi};
       RenderAlignedFace(grid, skin_z, AlignedFace{s, R, F.t, F.hx, F.hy, cull}, *blocks,
                         &block_lb[k * nb * nb], gap_m->data(), coverage->data(), &ext);
