@@ -2,15 +2,19 @@
 scene, fast paths against the general (reference) code, interleaved in one
 process (a benchmark, not a test).
 
-    python examples/bench_surface.py [--scene models/slide_grating.xml] [--steps 200] [--repeats 15]
+    python examples/bench_surface.py [--scene models/slide_grating.xml] [--steps 200]
+                                     [--repeats 15] [--yaw-deg 0]
 
 The scene is simulated once with MuJoCo; its per-step inputs to the skin
 (pad pose, contact force, counter-surfaces: the plate's top face and the
 texture height field) are recorded after a lead-in and replayed through
 mjtouch._core.traction_steps, which runs stages 1-2 as the plugin does, from
 a fresh state, alternating the reference and the fast paths. Prints min and
-median per-step times over the repeats, their ratios, and the largest
-pressure difference between the paths (0: bit-identical).
+median per-step CPU times (the thread's, not wall time: the development
+machine is shared) over the repeats, their ratios, and the largest
+pressure difference between the paths (0: bit-identical). --yaw-deg turns
+the recorded pad about its z axis (the texture no longer aligned with the
+taxel grid: the general rendering path).
 """
 
 from __future__ import annotations
@@ -86,9 +90,16 @@ def main() -> None:
     ap.add_argument("--scene", default=str(ROOT / "models" / "slide_grating.xml"))
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--repeats", type=int, default=15)
+    ap.add_argument("--yaw-deg", type=float, default=0.0)
     args = ap.parse_args()
     path = pathlib.Path(args.scene)
     pos, mat, forces, surfaces, samples, semi_axes = record(path, args.steps)
+    if args.yaw_deg:
+        a = np.radians(args.yaw_deg)
+        yaw = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+        mat = np.ascontiguousarray([(m.reshape(3, 3) @ yaw).ravel() for m in mat])
+        forces = np.ascontiguousarray(  # the same force, seen in the turned pad frame
+            [[f[0], *(yaw[:2, :2].T @ f[1:])] for f in forces])
     config = skin_config(path)
     times = {True: [], False: []}
     results = {}
@@ -101,7 +112,8 @@ def main() -> None:
     diff = float(np.nanmax(np.abs(results[True][1] - results[False][1])))
     same = (np.array_equal(results[True][1], results[False][1])
             and np.array_equal(results[True][0], results[False][0], equal_nan=True))
-    print(f"{path.name}: {args.steps} steps, {args.repeats} interleaved repeats, "
+    print(f"{path.name}, pad yaw {args.yaw_deg:g} deg: {args.steps} steps, "
+          f"{args.repeats} interleaved repeats, "
           f"{np.mean(np.isfinite(results[False][0])):.0%} of steps in contact")
     print(f"{'stage':<28}{'reference us':>16}{'fast us':>16}{'ratio (min, median)':>24}")
     for col, name in enumerate(("1 render (RenderGap)", "2 pressure + shear", "1-2 (ComputeTraction)")):

@@ -142,7 +142,7 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
 namespace {
 
 // f(c) + target and its slope over (g, w)[0, m): the Newton step's sums, in
-// four interleaved partial sums (not latency-bound). Their round-off only
+// four interleaved partial sums (not one latency-bound chain). Their round-off only
 // moves Newton's last iterate within round-off of the root; the approach is
 // then fixed by the closed form over the converged contact set, summed in
 // the reference's order.
@@ -150,11 +150,9 @@ double NewtonSums(const double* g, const double* w, size_t m, double c, double* 
   double f[4] = {0, 0, 0, 0}, s[4] = {0, 0, 0, 0};
   size_t i = 0;
   for (; i + 4 <= m; i += 4)
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 4; ++k) {  // branches: the contact set comes in runs
       const double d = c - g[i + k];
-      const bool on = d > 0.0;
-      f[k] += on ? w[i + k] * d : 0.0;
-      s[k] += on ? w[i + k] : 0.0;
+      if (d > 0.0) { f[k] += w[i + k] * d; s[k] += w[i + k]; }
     }
   for (; i < m; ++i) {
     const double d = c - g[i];
@@ -197,7 +195,8 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
   double* const g_low = g_all + cells;
   double* const w_low = w_all + cells;
   size_t* const i_low = i_all + cells;
-  // Pack the candidates, and those below the warm start on the way.
+  // Pack the candidates below the warm start (all of them only if needed:
+  // every pass over memory costs here).
   const bool warm = std::isfinite(guess);
   size_t M = 0, L = 0;
   double gmin = std::numeric_limits<double>::infinity(), covmax = 0.0;
@@ -206,10 +205,6 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
     for (size_t i = row + box.i0; i < row + box.i0 + box.nx; ++i) {
       const double gi = gap[i], wi = cov[i];
       if (!(wi > 0.0 && std::isfinite(gi))) continue;
-      g_all[M] = gi;
-      w_all[M] = wi;
-      i_all[M] = i;
-      ++M;
       gmin = std::min(gmin, gi);
       covmax = std::max(covmax, wi);
       g_low[L] = gi;  // kept (L advances) only below the guess
@@ -219,11 +214,27 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
     }
   }
   if (!std::isfinite(gmin) || !(force > 0.0)) return false;
+  bool packed = false;
+  auto pack_all = [&]() {
+    if (packed) return;
+    packed = true;
+    for (int j = box.j0; j < box.j0 + box.ny; ++j) {
+      const size_t row = static_cast<size_t>(j) * grid.n;
+      for (size_t i = row + box.i0; i < row + box.i0 + box.nx; ++i) {
+        if (!(cov[i] > 0.0 && std::isfinite(gap[i]))) continue;
+        g_all[M] = gap[i];
+        w_all[M] = cov[i];
+        i_all[M] = i;
+        ++M;
+      }
+    }
+  };
   double c = gmin + target / std::max(covmax, 1e-12);
   double s, f = warm ? NewtonSums(g_low, w_low, L, guess, &s) - target : 0.0;
   if (warm && guess > gmin && f >= 0.0) {
     c = guess;  // to the right of the root: Newton from there
   } else {      // the cold start point and the candidates below it
+    pack_all();
     L = 0;
     for (size_t i = 0; i < M; ++i) {
       g_low[L] = g_all[i];
@@ -246,6 +257,7 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
   double set_of = std::numeric_limits<double>::quiet_NaN();  // c of the last sums
   for (int pass = 0; pass < 4; ++pass) {
     const bool low = c <= c0;
+    if (!low) pack_all();
     const double* g = low ? g_low : g_all;
     const double* w = low ? w_low : w_all;
     const size_t m = low ? L : M;
@@ -267,6 +279,7 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
   out->approach_m = c;
   // Pressure, and NormalizeLoad's sum in box order over the touching cells.
   const bool low = c <= c0;
+  if (!low) pack_all();
   const double* g = low ? g_low : g_all;
   const double* w = low ? w_low : w_all;
   const size_t* idx = low ? i_low : i_all;

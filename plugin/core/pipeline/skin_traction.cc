@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 
+#include <time.h>
+
 #include "pipeline/skin.h"
 
 namespace mjtouch {
@@ -14,6 +16,13 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kElasticMaxIterations = 500;
+
+// CPU time of the calling thread (benchmarks: Workspace::render_time_s).
+double ThreadCpuSeconds() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
 
 // Smallest gap over the covered cells of the box (+inf if none).
 double MinGap(const TaxelGrid& grid, const CellBox& box, const std::vector<double>& gap,
@@ -60,13 +69,17 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     const double cull_rel = warm ? 1.5 * depth_prev + 20e-6 : kInf;
     const bool fast = !ws->reference_paths;
     CellBox box;
-    double cull = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_rel, &ws->gap,
-                            &ws->coverage, true, &model.skin_blocks(), &box, fast);
+    auto render = [&](double cull_above_m) {
+      const double t0 = ws->render_time_s ? ThreadCpuSeconds() : 0.0;
+      const double level = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_above_m,
+                                     &ws->gap, &ws->coverage, true, &model.skin_blocks(), &box,
+                                     fast);
+      if (ws->render_time_s) *ws->render_time_s += ThreadCpuSeconds() - t0;
+      return level;
+    };
+    double cull = render(cull_rel);
     for (int pass = 0; pass < 2 && !touching; ++pass) {
-      if (pass == 1) {
-        cull = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, kInf, &ws->gap,
-                         &ws->coverage, true, &model.skin_blocks(), &box, fast);
-      }
+      if (pass == 1) cull = render(kInf);
       const double gmin = MinGap(grid, box, ws->gap, ws->coverage);
       if (!std::isfinite(gmin)) break;
       double approach = 0.0;
