@@ -121,3 +121,14 @@ def test_bench_pressure_runs_every_model_and_grid():
     for r in rows:
         for k in ("us_per_step", "over_bare", "over_native_tactile", "native_tactile_us_per_step"):
             assert np.isfinite(r[k]) and r[k] > 0, (r, k)
+
+
+@pytest.mark.parametrize("yaw", ["0", "20"])
+def test_bench_surface_fast_paths_match_reference(yaw, capsys):
+    # a benchmark, so no timing assertion: stages 1-2 of the default scene,
+    # replayed through the fast and the reference paths, give bit-identical
+    # pressures with the pad aligned (fast paths taken) and turned (general)
+    main = example_main("bench_surface.py")
+    assert main(["--steps", "5", "--repeats", "1", "--lead-in-s", "0.005", "--yaw-deg", yaw])
+    out = capsys.readouterr().out
+    assert "100% of steps in contact" in out and "bit-identical: True" in out
