@@ -233,8 +233,16 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
   double s, f = warm ? NewtonSums(g_low, w_low, L, guess, &s) - target : 0.0;
   if (warm && guess > gmin && f >= 0.0) {
     c = guess;  // to the right of the root: Newton from there
-  } else {      // the cold start point and the candidates below it
-    pack_all();
+  } else {
+    // Left of the root (the load grew): f is convex, so one Newton step
+    // from there lands right of the root, much nearer than the cold start
+    // (the load on one cell), which needs many more steps over more cells.
+    // Both converge to the root's contact set, which fixes the result.
+    if (warm && guess > gmin && s > 0.0) {
+      const double right = guess - f / s;
+      if (right > guess && right < c) c = right;
+    }
+    pack_all();  // the candidates below the start point
     L = 0;
     for (size_t i = 0; i < M; ++i) {
       g_low[L] = g_all[i];
