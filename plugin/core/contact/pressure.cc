@@ -162,13 +162,6 @@ double NewtonSums(const double* g, const double* w, size_t m, double c, double* 
   return (f[0] + f[1]) + (f[2] + f[3]);
 }
 
-// Whether the contact sets {g < a} and {g < b} (as c - g > 0) differ.
-bool SetsDiffer(const double* g, size_t m, double a, double b) {
-  int differ = 0;
-  for (size_t i = 0; i < m; ++i) differ |= (a - g[i] > 0.0) != (b - g[i] > 0.0);
-  return differ != 0;
-}
-
 }  // namespace
 
 bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
@@ -242,13 +235,17 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
       const double right = guess - f / s;
       if (right > guess && right < c) c = right;
     }
-    pack_all();  // the candidates below the start point
-    L = 0;
-    for (size_t i = 0; i < M; ++i) {
-      g_low[L] = g_all[i];
-      w_low[L] = w_all[i];
-      i_low[L] = i_all[i];
-      L += c - g_all[i] > 0.0;
+    L = 0;  // the candidates below the start point
+    for (int j = box.j0; j < box.j0 + box.ny; ++j) {
+      const size_t row = static_cast<size_t>(j) * grid.n;
+      for (size_t i = row + box.i0; i < row + box.i0 + box.nx; ++i) {
+        const double gi = gap[i], wi = cov[i];
+        if (!(wi > 0.0 && std::isfinite(gi))) continue;
+        g_low[L] = gi;
+        w_low[L] = wi;
+        i_low[L] = i;
+        L += c - gi > 0.0;
+      }
     }
     f = NewtonSums(g_low, w_low, L, c, &s) - target;
   }
@@ -262,25 +259,34 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
   }
   // Closed form from the converged contact set, as the reference. It stays
   // at or below c0 up to round-off; above it every candidate is read.
-  double set_of = std::numeric_limits<double>::quiet_NaN();  // c of the last sums
-  for (int pass = 0; pass < 4; ++pass) {
+  // A pass whose contact set {g < c} equals the last pass's would repeat its
+  // sums and give next == c: it is skipped. The sets are compared through
+  // the largest gap in the set and the smallest outside it (c - g > 0 holds
+  // exactly when g < c), taken in the same loop, off its critical path.
+  bool same_set = false;
+  for (int pass = 0; pass < 4 && !same_set; ++pass) {
     const bool low = c <= c0;
     if (!low) pack_all();
     const double* g = low ? g_low : g_all;
     const double* w = low ? w_low : w_all;
     const size_t m = low ? L : M;
-    if (set_of == set_of && !SetsDiffer(g, m, set_of, c)) break;  // the sums would repeat
     double sum_cov = 0.0, sum_cov_g = 0.0;
+    double in_max = -std::numeric_limits<double>::infinity();
+    double out_min = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < m; ++i) {
       if (c - g[i] > 0.0) {
         sum_cov += w[i];
         sum_cov_g += w[i] * g[i];
+        in_max = std::max(in_max, g[i]);
+      } else {
+        out_min = std::min(out_min, g[i]);
       }
     }
     if (!(sum_cov > 0.0)) break;
     const double next = (target + sum_cov_g) / sum_cov;
     if (next == c) break;
-    set_of = c;
+    // Candidates off the low list have g >= c0: outside both sets if next <= c0.
+    same_set = (!low || next <= c0) && in_max < next && next <= out_min;
     c = next;
   }
   out->box = box;
