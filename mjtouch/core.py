@@ -102,14 +102,17 @@ def hfield_box_mean(samples: np.ndarray, half_x_m: float, half_y_m: float, eleva
 
 
 def winkler_pressure(gap_m: np.ndarray, pitch_m: float, stiffness_pa_per_m: float,
-                     force_n: float, coverage: np.ndarray | None = None):
+                     force_n: float, coverage: np.ndarray | None = None,
+                     approach_guess_m: float = math.nan, reference: bool = False):
     """Winkler pressure (Pa, n x n) whose integral equals force_n, and the
-    solved approach (m)."""
+    solved approach (m). approach_guess_m warm-starts the solve as the plugin
+    does from its last step; reference=True runs the unoptimised solve (the
+    fast one must match it bit for bit)."""
     g = np.ascontiguousarray(gap_m, dtype=np.float64)
     _square(g, "gap_m")
     cov = np.ones_like(g) if coverage is None else np.ascontiguousarray(coverage, np.float64)
     p, approach = _core.winkler_pressure(g, cov, float(pitch_m), float(stiffness_pa_per_m),
-                                         float(force_n))
+                                         float(force_n), float(approach_guess_m), bool(reference))
     return p.astype(np.float64), approach
 
 
@@ -365,14 +368,16 @@ RIDGE_PROFILES = ("sine", "triangle", "square")
 
 def render_gap(skin_z_m: np.ndarray, pitch_m: float, surfaces: list[dict],
                pad_pos=(0.0, 0.0, 0.0), pad_mat=np.eye(3), hfield: np.ndarray | None = None,
-               area_average: bool = True):
+               area_average: bool = True, fast_paths: bool = True):
     """Stage 1: gap (m; inf where no surface) and coverage of each taxel cell
     of a skin (skin_z_m: n x n pad-frame heights) at the pad pose, against
     counter-surfaces given as dicts: type (one of SURFACE_TYPES), pos (3),
     mat (3 x 3, local -> world), size (3, MuJoCo geom size), half (2: face
     half sizes of a rectangle / height field), elevation (height field, m).
     Height-field surfaces read `hfield` (nrow x ncol samples in [0, 1]).
-    area_average=False samples cell centres (point sampling)."""
+    area_average=False samples cell centres (point sampling). fast_paths=False
+    renders with the general per-cell code only (the fast paths must match it
+    bit for bit)."""
     z = np.ascontiguousarray(skin_z_m, dtype=np.float64)
     _square(z, "skin_z_m")
     desc = np.zeros((len(surfaces), 20))
@@ -389,7 +394,8 @@ def render_gap(skin_z_m: np.ndarray, pitch_m: float, surfaces: list[dict],
     hf = np.ascontiguousarray(np.zeros((2, 2)) if hfield is None else hfield, dtype=np.float32)
     pos = tuple(float(v) for v in np.ravel(pad_pos))
     mat = tuple(float(v) for v in np.ravel(pad_mat))
-    return _core.render_gap(z, float(pitch_m), desc, pos, mat, hf, bool(area_average))
+    return _core.render_gap(z, float(pitch_m), desc, pos, mat, hf, bool(area_average),
+                            bool(fast_paths))
 
 
 def ridge_cell_mean(s_m, profile: str = "sine", pitch_m: float = 0.45e-3,

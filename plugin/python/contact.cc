@@ -1,6 +1,7 @@
 // mjtouch._core, stages 1-2 without a MuJoCo scene: surface rendering (gap
 // and coverage against counter-surfaces, pad and ridge surfaces) and contact
 // pressure (contacts splat, Winkler, elastic boundary-element solve, shear).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -44,7 +45,8 @@ RidgeProfile ParseProfile(const std::string& profile) {
 }
 
 std::tuple<Out<float>, double> Winkler(const F64_2& gap_m, const F64_2& coverage, double pitch_m,
-                                       double stiffness_pa_per_m, double force_n) {
+                                       double stiffness_pa_per_m, double force_n,
+                                       double approach_guess_m, bool reference) {
   const int n = SquareSide(gap_m, "gap_m");
   RequireShape(coverage, "coverage", n, n, "(gap_m's)");
   RequirePositive(pitch_m, "winkler_pressure", "pitch_m");
@@ -53,8 +55,8 @@ std::tuple<Out<float>, double> Winkler(const F64_2& gap_m, const F64_2& coverage
   const std::vector<double> g(gap_m.data(), gap_m.data() + grid.Size());
   const std::vector<double> c(coverage.data(), coverage.data() + grid.Size());
   TractionField tf;
-  const bool ok = WinklerPressure(grid, g, c, CellBox::All(grid), stiffness_pa_per_m, force_n,
-                                  std::nan(""), &tf);
+  const bool ok = (reference ? WinklerPressureReference : WinklerPressure)(
+      grid, g, c, CellBox::All(grid), stiffness_pa_per_m, force_n, approach_guess_m, &tf);
   if (!ok) Fail(kNoLoad);
   FinishTraction(grid, false, &tf);
   const size_t N = n;
@@ -157,7 +159,7 @@ std::tuple<Out<double>, nb::dict> ElasticTable(const F64_2& gap_m, const F64_2& 
 std::tuple<Out<double>, Out<double>> Render(const F64_2& skin_z_m, double pitch_m,
                                             const F64_2& surfaces, std::array<double, 3> pad_pos,
                                             std::array<double, 9> pad_mat, const F32_2& hfield,
-                                            bool area_average) {
+                                            bool area_average, bool fast_paths) {
   const int n = SquareSide(skin_z_m, "skin_z_m");
   RequirePositive(pitch_m, "render_gap", "pitch_m");
   if (surfaces.shape(1) != 20)
@@ -193,11 +195,15 @@ std::tuple<Out<double>, Out<double>> Render(const F64_2& skin_z_m, double pitch_
       s.samples = hfield.data();
       prefixes[k] = HeightFieldRowPrefix(s.nrow, s.ncol, s.samples);
       s.row_prefix = prefixes[k].data();
+      s.rows_identical = true;  // as the plugin detects 1D textures
+      for (int r = 1; r < s.nrow && s.rows_identical; ++r)
+        s.rows_identical = std::equal(s.samples, s.samples + s.ncol, s.samples + r * s.ncol);
     }
   }
   const std::vector<double> z(skin_z_m.data(), skin_z_m.data() + grid.Size());
   std::vector<double> g, c;
-  RenderGap(grid, z, pad, list, std::numeric_limits<double>::infinity(), &g, &c, area_average);
+  RenderGap(grid, z, pad, list, std::numeric_limits<double>::infinity(), &g, &c, area_average,
+            nullptr, nullptr, fast_paths);
   const size_t N = n;
   return {ToNumpy(std::move(g), {N, N}), ToNumpy(std::move(c), {N, N})};
 }
@@ -283,8 +289,12 @@ std::tuple<Out<double>, Out<double>, Out<double>> Splat(const F64_2& contacts, i
 void BindContact(nb::module_& m) {
   m.def("winkler_pressure", &Winkler, nb::arg("gap_m").noconvert(), nb::arg("coverage").noconvert(), nb::arg("pitch_m"),
         nb::arg("stiffness_pa_per_m"), nb::arg("force_n"),
+        nb::arg("approach_guess_m") = std::numeric_limits<double>::quiet_NaN(),
+        nb::arg("reference") = false,
         "Winkler pressure (n x n float32, Pa) whose integral equals force_n on the\n"
-        "gap field gap_m (n x n, m) with cell coverage, and the solved approach (m).");
+        "gap field gap_m (n x n, m) with cell coverage, and the solved approach (m).\n"
+        "approach_guess_m warm-starts the solve (NaN: none); reference=True: the\n"
+        "unoptimised solve (bit-identical).");
   m.def("surface_compliance", &HalfSpaceComplianceTable, nb::arg("n"), nb::arg("pitch_m"),
         nb::arg("young_pa"), nb::arg("poisson"),
         "Homogeneous half-space surface compliance table ((2n-1) x (2n-1) float32,\n"
@@ -304,11 +314,12 @@ void BindContact(nb::module_& m) {
         "The same on an n x n non-periodic grid for any skin given by its surface\n"
         "compliance table ((2n-1) x (2n-1) float32, m/Pa).");
   m.def("render_gap", &Render, nb::arg("skin_z_m").noconvert(), nb::arg("pitch_m"), nb::arg("surfaces").noconvert(),
-        nb::arg("pad_pos"), nb::arg("pad_mat"), nb::arg("hfield").noconvert(), nb::arg("area_average"),
+        nb::arg("pad_pos"), nb::arg("pad_mat"), nb::arg("hfield").noconvert(), nb::arg("area_average"), nb::arg("fast_paths") = true,
         "Stage 1: (gap m, inf where no surface; coverage) of each cell of an n x n\n"
         "skin (pad-frame heights skin_z_m) at the pad pose (pad_pos, pad_mat row-major)\n"
         "against surfaces (nsurface x 20: type code, pos 3, mat 9, size 3, half 2,\n"
-        "elevation, max height); height fields read hfield (nrow x ncol float32).");
+        "elevation, max height); height fields read hfield (nrow x ncol float32).\n"
+        "fast_paths=False: the general per-cell code (bit-identical reference).");
   m.def("ridge_cell_mean", &RidgeMean, nb::arg("s_m").noconvert(), nb::arg("profile"), nb::arg("pitch_m"),
         nb::arg("height_m"), nb::arg("angle_rad"), nb::arg("cell_m"),
         "Ridge relief (m, protrusion positive) at distances s_m (1D) along the ridge\n"

@@ -2,6 +2,7 @@
 // MuJoCo scene. Arrays in and out are numpy arrays of checked rank and dtype;
 // a stage's error message reaches Python as ValueError. This file: the module,
 // half-space stress, skin configuration, skin surface and receptors.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -9,6 +10,9 @@
 #include <string>
 #include <vector>
 
+#include <time.h>
+
+#include <nanobind/stl/array.h>
 #include <nanobind/stl/map.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
@@ -185,9 +189,105 @@ std::tuple<Out<double>, Out<double>, Out<double>> ReceptorRun(const std::string&
           ToNumpy(std::move(rate), {nsteps})};
 }
 
+// Stages 1-2 (ComputeTraction) over a recorded sequence of steps, from a
+// fresh state: the per-step CPU time of the whole of stages 1-2 and of its
+// rendering (Workspace::render_time_s), and each step's pressure. `reference`: the general (reference) code paths.
+// surfaces: rows as render_gap's; height-field rows read `hfield`.
+std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
+    std::array<double, 3> semi_axes_m, const Config& config, const F64_2& pad_pos,
+    const F64_2& pad_mat, const F64_2& forces_n, const F64_2& surfaces, const F32_2& hfield,
+    bool reference) {
+  SkinConfig cfg = ParseConfig(config);
+  for (int k = 0; k < 3; ++k) cfg.pad.semi_axes_m[k] = semi_axes_m[k];
+  std::string error;
+  if (!FinalizeSkinConfig(&cfg, &error)) Fail(error);
+  const auto model = SkinModel::Build(cfg, &error);
+  if (!model) Fail(error);
+  const size_t T = pad_pos.shape(0);
+  if (pad_pos.shape(1) != 3 || pad_mat.shape(0) != T || pad_mat.shape(1) != 9 ||
+      forces_n.shape(0) != T || forces_n.shape(1) != 3)
+    Fail("pad_pos (T, 3), pad_mat (T, 9) and forces_n (T, 3: normal, shear x, shear y) must "
+         "agree, got shapes " + ShapeOf(pad_pos) + ", " + ShapeOf(pad_mat) + ", " +
+         ShapeOf(forces_n));
+  if (surfaces.shape(1) != 20)
+    Fail("surfaces must have shape (nsurface, 20), got shape " + ShapeOf(surfaces));
+  StepInput in;
+  std::vector<double> prefix;
+  for (size_t k = 0; k < surfaces.shape(0); ++k) {
+    const double* d = surfaces.data() + 20 * k;
+    CounterSurface s;
+    if (!(d[0] >= 0 && d[0] <= static_cast<int>(CounterSurface::Type::kCylinder)))
+      Fail("surface " + std::to_string(k) + ": bad type code");
+    s.type = static_cast<CounterSurface::Type>(static_cast<int>(d[0]));
+    for (int c = 0; c < 3; ++c) s.pose.pos[c] = d[1 + c];
+    for (int c = 0; c < 9; ++c) s.pose.mat[c] = d[4 + c];
+    for (int c = 0; c < 3; ++c) s.size_m[c] = d[13 + c];
+    s.half_x_m = d[16];
+    s.half_y_m = d[17];
+    s.elevation_m = d[18];
+    s.max_height_m = d[19];
+    if (s.type == CounterSurface::Type::kHeightField) {
+      if (hfield.shape(0) < 2 || hfield.shape(1) < 2) Fail("hfield needs at least 2 x 2 samples");
+      s.nrow = static_cast<int>(hfield.shape(0));
+      s.ncol = static_cast<int>(hfield.shape(1));
+      s.samples = hfield.data();
+      prefix = HeightFieldRowPrefix(s.nrow, s.ncol, s.samples);
+      s.row_prefix = prefix.data();
+      s.rows_identical = true;
+      for (int r = 1; r < s.nrow && s.rows_identical; ++r)
+        s.rows_identical = std::equal(s.samples, s.samples + s.ncol, s.samples + r * s.ncol);
+    }
+    in.surfaces.push_back(s);
+  }
+  const size_t N = cfg.grid.Size();
+  std::vector<double> state(model->state_layout().size, 0.0);
+  ResetState(*model, state.data());
+  Workspace ws;
+  ws.reference_paths = reference;
+  std::vector<double> render_s(T), total_s(T), approach(T), pressure(T * N, 0.0);
+  // Thread CPU time: on a shared machine wall time also counts the time the
+  // thread waits for a core.
+  auto cpu_s = [] {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+  };
+  for (size_t t = 0; t < T; ++t) {
+    for (int c = 0; c < 3; ++c) in.pad_pose.pos[c] = pad_pos.data()[3 * t + c];
+    for (int c = 0; c < 9; ++c) in.pad_pose.mat[c] = pad_mat.data()[9 * t + c];
+    in.normal_force_n = forces_n.data()[3 * t];
+    in.shear_x_n = forces_n.data()[3 * t + 1];
+    in.shear_y_n = forces_n.data()[3 * t + 2];
+    in.in_contact = in.normal_force_n > 0;
+    double render = 0.0;
+    ws.render_time_s = &render;
+    const double t0 = cpu_s();
+    const bool touching = ComputeTraction(*model, in, state.data(), &ws);
+    total_s[t] = cpu_s() - t0;
+    render_s[t] = render;
+    approach[t] = touching ? ws.traction.approach_m : std::nan("");
+    if (touching)
+      std::copy(ws.traction.pressure_pa.begin(), ws.traction.pressure_pa.end(),
+                pressure.begin() + t * N);
+  }
+  const size_t n = cfg.grid.n;
+  return {ToNumpy(std::move(render_s), {T}), ToNumpy(std::move(total_s), {T}),
+          ToNumpy(std::move(approach), {T}), ToNumpy(std::move(pressure), {T, n, n})};
+}
+
 }  // namespace
 
 void BindStages(nb::module_& m) {
+  m.def("traction_steps", &TractionSteps, nb::arg("semi_axes_m"), nb::arg("config"),
+        nb::arg("pad_pos").noconvert(), nb::arg("pad_mat").noconvert(),
+        nb::arg("forces_n").noconvert(), nb::arg("surfaces").noconvert(),
+        nb::arg("hfield").noconvert(), nb::arg("reference") = false,
+        "Stages 1-2 (render + pressure model + shear) over T recorded steps from a\n"
+        "fresh state, as the plugin runs them: pad pose per step (pad_pos T x 3,\n"
+        "pad_mat T x 9 row-major), forces_n (T x 3: normal, shear x, shear y, N, pad\n"
+        "frame), surfaces as render_gap's. reference=True: the general code paths.\n"
+        "Returns per-step CPU seconds (render alone, whole of stages 1-2), the approach\n"
+        "(m, NaN: no contact) and the pressure (T x n x n, Pa).");
   m.def("halfspace_stress", &HalfspaceStress, nb::arg("points_m").noconvert(), nb::arg("load") = "pressure",
         nb::arg("poisson") = 0.5, nb::arg("cell_m") = 0.0,
         "Stress (npoint x 6, Pa, Voigt xx yy zz xy xz yz; z into the solid, tension\n"

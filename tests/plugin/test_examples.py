@@ -135,3 +135,14 @@ def test_bench_elastic_compares_both_solvers_against_the_reference():
     t = ex["timing"]("slide_grating", start, 2, 1)
     assert set(t) == {(s, st) for s in ("pk", "pcg", "winkler") for st in ("stages 1-2", "full")}
     assert all(np.isfinite(v).all() and min(v) > 0 for v in t.values()), t
+
+
+@pytest.mark.parametrize("yaw", ["0", "20"])
+def test_bench_surface_fast_paths_match_reference(yaw, capsys):
+    # a benchmark, so no timing assertion: stages 1-2 of the default scene,
+    # replayed through the fast and the reference paths, give bit-identical
+    # pressures with the pad aligned (fast paths taken) and turned (general)
+    main = example_main("bench_surface.py")
+    assert main(["--steps", "5", "--repeats", "1", "--lead-in-s", "0.005", "--yaw-deg", yaw])
+    out = capsys.readouterr().out
+    assert "100% of steps in contact" in out and "bit-identical: True" in out

@@ -68,30 +68,39 @@ bool NormalizeLoad(const TaxelGrid& grid, double force, TractionField* out) {
 
 void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out) {
   const CellBox& b = out->box;
-  ForBox(grid, b, [&](size_t k) {
-    out->pressure[k] = static_cast<float>(out->pressure_pa[k]);
-    out->shear_x[k] = shear ? static_cast<float>(out->shear_x_pa[k]) : 0.0f;
-    out->shear_y[k] = shear ? static_cast<float>(out->shear_y_pa[k]) : 0.0f;
-  });
   out->runs.Clear();
   out->active_cells = 0;
+  // Row by row: the float copies (vectorised), then the runs of active cells
+  // while the row is in cache.
   for (int j = b.j0; j < b.j0 + b.ny; ++j) {
-    int begin = -1;
-    for (int i = b.i0; i <= b.i0 + b.nx; ++i) {
-      bool on = false;
-      if (i < b.i0 + b.nx) {
-        const size_t idx = static_cast<size_t>(j) * grid.n + i;
-        on = out->pressure_pa[idx] != 0.0 ||
-             (shear && (out->shear_x_pa[idx] != 0.0 || out->shear_y_pa[idx] != 0.0));
-        out->active_cells += on;
-      }
-      if (on && begin < 0) begin = i;
-      if (!on && begin >= 0) {
-        out->runs.row.push_back(j);
-        out->runs.begin.push_back(begin);
-        out->runs.end.push_back(i);
-        begin = -1;
-      }
+    const size_t row = static_cast<size_t>(j) * grid.n;
+    const double* p = out->pressure_pa.data() + row;
+    const double* sx = out->shear_x_pa.data() + row;
+    const double* sy = out->shear_y_pa.data() + row;
+    float* fp = out->pressure.data() + row;
+    float* fx = out->shear_x.data() + row;
+    float* fy = out->shear_y.data() + row;
+    const int i0 = b.i0, i1 = b.i0 + b.nx;
+    for (int i = i0; i < i1; ++i) fp[i] = static_cast<float>(p[i]);
+    if (shear) {
+      for (int i = i0; i < i1; ++i) fx[i] = static_cast<float>(sx[i]);
+      for (int i = i0; i < i1; ++i) fy[i] = static_cast<float>(sy[i]);
+    } else {
+      std::fill(fx + i0, fx + i1, 0.0f);
+      std::fill(fy + i0, fy + i1, 0.0f);
+    }
+    auto on = [&](int i) {
+      return p[i] != 0.0 || (shear && (sx[i] != 0.0 || sy[i] != 0.0));
+    };
+    for (int i = i0; i < i1;) {
+      while (i < i1 && !on(i)) ++i;
+      if (i == i1) break;
+      const int begin = i;
+      while (i < i1 && on(i)) ++i;
+      out->runs.row.push_back(j);
+      out->runs.begin.push_back(begin);
+      out->runs.end.push_back(i);
+      out->active_cells += i - begin;
     }
   }
 }
@@ -130,7 +139,187 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
   return total > 0.0;
 }
 
+namespace {
+
+// f(c) + target and its slope over (g, w)[0, m): the Newton step's sums, in
+// four interleaved partial sums (not one latency-bound chain). Their round-off only
+// moves Newton's last iterate within round-off of the root; the approach is
+// then fixed by the closed form over the converged contact set, summed in
+// the reference's order.
+double NewtonSums(const double* g, const double* w, size_t m, double c, double* slope) {
+  double f[4] = {0, 0, 0, 0}, s[4] = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= m; i += 4)
+    for (int k = 0; k < 4; ++k) {  // branches: the contact set comes in runs
+      const double d = c - g[i + k];
+      if (d > 0.0) { f[k] += w[i + k] * d; s[k] += w[i + k]; }
+    }
+  for (; i < m; ++i) {
+    const double d = c - g[i];
+    if (d > 0.0) { f[0] += w[i] * d; s[0] += w[i]; }
+  }
+  *slope = (s[0] + s[1]) + (s[2] + s[3]);
+  return (f[0] + f[1]) + (f[2] + f[3]);
+}
+
+}  // namespace
+
 bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
+                     const std::vector<double>& cov, const CellBox& box, double k, double force,
+                     double guess, TractionField* out) {
+  // WinklerPressureReference's result with fewer passes: Newton's iterate
+  // only decreases, so after the first point c0 every pass reads only the
+  // candidates below c0 (the others' terms are skipped by d > 0 anyway); a
+  // closed-form pass whose contact set did not change would repeat the last
+  // one exactly, so it is skipped; the load is normalised over the touching
+  // cells alone (the others add exact zeros to the sum). The closed form and
+  // the load sum keep the reference's order, so the values are its values.
+  ClearTraction(grid, out);
+  const double A = grid.Area();
+  const double target = force / (k * A);
+  const size_t cells = box.empty() ? 0 : static_cast<size_t>(box.nx) * box.ny;
+  // scratch [0, cells): every candidate; [cells, 2 cells): those below c0.
+  for (auto* v : {&out->scratch_gap, &out->scratch_cov})
+    if (v->size() < 2 * cells) v->resize(2 * cells);
+  if (out->scratch_index.size() < 2 * cells) out->scratch_index.resize(2 * cells);
+  double* const g_all = out->scratch_gap.data();
+  double* const w_all = out->scratch_cov.data();
+  size_t* const i_all = out->scratch_index.data();
+  double* const g_low = g_all + cells;
+  double* const w_low = w_all + cells;
+  size_t* const i_low = i_all + cells;
+  // Pack the candidates below the warm start (all of them only if needed:
+  // every pass over memory costs here).
+  const bool warm = std::isfinite(guess);
+  size_t M = 0, L = 0;
+  double gmin = std::numeric_limits<double>::infinity(), covmax = 0.0;
+  for (int j = box.j0; j < box.j0 + box.ny; ++j) {
+    const size_t row = static_cast<size_t>(j) * grid.n;
+    for (size_t i = row + box.i0; i < row + box.i0 + box.nx; ++i) {
+      const double gi = gap[i], wi = cov[i];
+      if (!(wi > 0.0 && std::isfinite(gi))) continue;
+      gmin = std::min(gmin, gi);
+      covmax = std::max(covmax, wi);
+      g_low[L] = gi;  // kept (L advances) only below the guess
+      w_low[L] = wi;
+      i_low[L] = i;
+      L += warm && guess - gi > 0.0;
+    }
+  }
+  if (!std::isfinite(gmin) || !(force > 0.0)) return false;
+  bool packed = false;
+  auto pack_all = [&]() {
+    if (packed) return;
+    packed = true;
+    for (int j = box.j0; j < box.j0 + box.ny; ++j) {
+      const size_t row = static_cast<size_t>(j) * grid.n;
+      for (size_t i = row + box.i0; i < row + box.i0 + box.nx; ++i) {
+        if (!(cov[i] > 0.0 && std::isfinite(gap[i]))) continue;
+        g_all[M] = gap[i];
+        w_all[M] = cov[i];
+        i_all[M] = i;
+        ++M;
+      }
+    }
+  };
+  double c = gmin + target / std::max(covmax, 1e-12);
+  double s, f = warm ? NewtonSums(g_low, w_low, L, guess, &s) - target : 0.0;
+  if (warm && guess > gmin && f >= 0.0) {
+    c = guess;  // to the right of the root: Newton from there
+  } else {
+    // Left of the root (the load grew): f is convex, so one Newton step
+    // from there lands right of the root, much nearer than the cold start
+    // (the load on one cell), which needs many more steps over more cells.
+    // Both converge to the root's contact set, which fixes the result.
+    if (warm && guess > gmin && s > 0.0) {
+      const double right = guess - f / s;
+      if (right > guess && right < c) c = right;
+    }
+    L = 0;  // the candidates below the start point
+    for (int j = box.j0; j < box.j0 + box.ny; ++j) {
+      const size_t row = static_cast<size_t>(j) * grid.n;
+      for (size_t i = row + box.i0; i < row + box.i0 + box.nx; ++i) {
+        const double gi = gap[i], wi = cov[i];
+        if (!(wi > 0.0 && std::isfinite(gi))) continue;
+        g_low[L] = gi;
+        w_low[L] = wi;
+        i_low[L] = i;
+        L += c - gi > 0.0;
+      }
+    }
+    f = NewtonSums(g_low, w_low, L, c, &s) - target;
+  }
+  const double c0 = c;
+  for (int it = 0; it < 200; ++it) {
+    if (f <= 0.0 || s <= 0.0) break;
+    const double next = c - f / s;
+    if (!(next < c)) break;
+    c = next;
+    if (it + 1 < 200) f = NewtonSums(g_low, w_low, L, c, &s) - target;
+  }
+  // Closed form from the converged contact set, as the reference. It stays
+  // at or below c0 up to round-off; above it every candidate is read.
+  // A pass whose contact set {g < c} equals the last pass's would repeat its
+  // sums and give next == c: it is skipped. The sets are compared through
+  // the largest gap in the set and the smallest outside it (c - g > 0 holds
+  // exactly when g < c), taken in the same loop, off its critical path.
+  bool same_set = false;
+  for (int pass = 0; pass < 4 && !same_set; ++pass) {
+    const bool low = c <= c0;
+    if (!low) pack_all();
+    const double* g = low ? g_low : g_all;
+    const double* w = low ? w_low : w_all;
+    const size_t m = low ? L : M;
+    double sum_cov = 0.0, sum_cov_g = 0.0;
+    double in_max = -std::numeric_limits<double>::infinity();
+    double out_min = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < m; ++i) {
+      if (c - g[i] > 0.0) {
+        sum_cov += w[i];
+        sum_cov_g += w[i] * g[i];
+        in_max = std::max(in_max, g[i]);
+      } else {
+        out_min = std::min(out_min, g[i]);
+      }
+    }
+    if (!(sum_cov > 0.0)) break;
+    const double next = (target + sum_cov_g) / sum_cov;
+    if (next == c) break;
+    // Candidates off the low list have g >= c0: outside both sets if next <= c0.
+    same_set = (!low || next <= c0) && in_max < next && next <= out_min;
+    c = next;
+  }
+  out->box = box;
+  out->approach_m = c;
+  // Pressure, and NormalizeLoad's sum in box order over the touching cells.
+  const bool low = c <= c0;
+  if (!low) pack_all();
+  const double* g = low ? g_low : g_all;
+  const double* w = low ? w_low : w_all;
+  const size_t* idx = low ? i_low : i_all;
+  const size_t m = low ? L : M;
+  double* p = out->pressure_pa.data();
+  double total = 0.0;
+  size_t touching = 0;
+  for (size_t i = 0; i < m; ++i) {
+    const double d = c - g[i];
+    if (d > 0.0) {
+      const double pi = w[i] * d;
+      p[idx[i]] = pi;
+      total += pi;
+      i_low[touching++] = idx[i];  // the touching cells (i_low is read at >= i)
+    }
+  }
+  if (!(total > 0.0)) {
+    for (size_t i = 0; i < touching; ++i) p[i_low[i]] = 0.0;
+    return false;
+  }
+  const double scale = force / (A * total);
+  for (size_t i = 0; i < touching; ++i) p[i_low[i]] *= scale;
+  return true;
+}
+
+bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& gap,
                      const std::vector<double>& cov, const CellBox& box, double k, double force,
                      double guess, TractionField* out) {
   ClearTraction(grid, out);

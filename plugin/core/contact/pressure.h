@@ -73,6 +73,14 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap_m,
                      double stiffness_pa_per_m, double normal_force_n, double approach_guess_m,
                      TractionField* out);
 
+// The same solve without the fast path's shortcuts (every pass over every
+// candidate, then NormalizeLoad): the reference WinklerPressure is tested
+// and benchmarked against; the results are bit-identical.
+bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& gap_m,
+                              const std::vector<double>& coverage, const CellBox& box,
+                              double stiffness_pa_per_m, double normal_force_n,
+                              double approach_guess_m, TractionField* out);
+
 // Full-slip Coulomb shear: q = p * (F_t / F_n) along the direction of
 // MuJoCo's friction force (for a rigid pad in gross slip the local slip
 // direction is the same everywhere), so that sum(q * A) equals the

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 
+#include <time.h>
+
 #include "pipeline/skin.h"
 
 namespace mjtouch {
@@ -15,16 +17,29 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kElasticMaxIterations = 500;
 
+// CPU time of the calling thread (benchmarks: Workspace::render_time_s).
+double ThreadCpuSeconds() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
 // Smallest gap over the covered cells of the box (+inf if none).
 double MinGap(const TaxelGrid& grid, const CellBox& box, const std::vector<double>& gap,
               const std::vector<double>& cov) {
-  double gmin = kInf;
-  for (int j = box.j0; j < box.j0 + box.ny; ++j)
-    for (int i = box.i0; i < box.i0 + box.nx; ++i) {
-      const size_t k = static_cast<size_t>(j) * grid.n + i;
-      if (cov[k] > 0.0) gmin = std::min(gmin, gap[k]);
-    }
-  return gmin;
+  // Four running minima (the minimum does not depend on the order).
+  double m[4] = {kInf, kInf, kInf, kInf};
+  for (int j = box.j0; j < box.j0 + box.ny; ++j) {
+    const double* g = gap.data() + static_cast<size_t>(j) * grid.n;
+    const double* c = cov.data() + static_cast<size_t>(j) * grid.n;
+    int i = box.i0;
+    for (; i + 4 <= box.i0 + box.nx; i += 4)
+      for (int k = 0; k < 4; ++k)
+        if (c[i + k] > 0.0) m[k] = std::min(m[k], g[i + k]);
+    for (; i < box.i0 + box.nx; ++i)
+      if (c[i] > 0.0) m[0] = std::min(m[0], g[i]);
+  }
+  return std::min(std::min(m[0], m[1]), std::min(m[2], m[3]));
 }
 
 }  // namespace
@@ -52,21 +67,27 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     // so if the solved approach reaches the cull level, render everything and
     // solve again: the result is exact either way.
     const double cull_rel = warm ? 1.5 * depth_prev + 20e-6 : kInf;
+    const bool fast = !ws->reference_paths;
     CellBox box;
-    double cull = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_rel, &ws->gap,
-                            &ws->coverage, true, &model.skin_blocks(), &box);
+    auto render = [&](double cull_above_m) {
+      const double t0 = ws->render_time_s ? ThreadCpuSeconds() : 0.0;
+      const double level = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_above_m,
+                                     &ws->gap, &ws->coverage, true, &model.skin_blocks(), &box,
+                                     fast);
+      if (ws->render_time_s) *ws->render_time_s += ThreadCpuSeconds() - t0;
+      return level;
+    };
+    double cull = render(cull_rel);
     for (int pass = 0; pass < 2 && !touching; ++pass) {
-      if (pass == 1) {
-        cull = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, kInf, &ws->gap,
-                         &ws->coverage, true, &model.skin_blocks(), &box);
-      }
+      if (pass == 1) cull = render(kInf);
       const double gmin = MinGap(grid, box, ws->gap, ws->coverage);
       if (!std::isfinite(gmin)) break;
       double approach = 0.0;
       if (cfg.pressure_model == PressureModel::kWinkler) {
         const double guess = warm ? gmin + depth_prev : std::nan("");
-        touching = WinklerPressure(grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m,
-                                   in.normal_force_n, guess, &tf);
+        touching = (fast ? WinklerPressure : WinklerPressureReference)(
+            grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m, in.normal_force_n, guess,
+            &tf);
         approach = tf.approach_m;
       } else {
         const ElasticContact& ec = *model.elastic();

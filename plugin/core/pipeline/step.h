@@ -34,6 +34,12 @@ struct Workspace {
   StressScratch stress_scratch;
   StressMethod last_stress_method = StressMethod::kDirect;
   StepInput substep;            // `oversample`: the interpolated input
+  // Stages 1-2 through their general (reference) code instead of the fast
+  // paths, which give bit-identical results: for tests and benchmarks.
+  bool reference_paths = false;
+  // Benchmarks: if set, ComputeTraction adds the CPU time of its surface
+  // rendering (seconds) to it.
+  double* render_time_s = nullptr;
   std::vector<double> spike_sum;  // `oversample`: spikes over the substeps
 };
 

@@ -117,11 +117,15 @@ struct CounterSurface {
 // `blocks`: MakeSkinBlocks(grid, skin_z), precomputed (else built per call).
 struct SkinBlocks;
 // `rendered`: if given, the bounding box of the cells with coverage > 0.
+// `fast_paths` = false renders every surface with the general per-cell code
+// (the reference the fast paths are tested and benchmarked against; the
+// results are bit-identical).
 double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  const Pose& pad_pose, const std::vector<CounterSurface>& surfaces,
                  double cull_above_m, std::vector<double>* gap_m,
                  std::vector<double>* coverage, bool area_average = true,
-                 const SkinBlocks* blocks = nullptr, CellBox* rendered = nullptr);
+                 const SkinBlocks* blocks = nullptr, CellBox* rendered = nullptr,
+                 bool fast_paths = true);
 
 // Bounds of the skin's height over blocks of kSide x kSide cells, so that
 // RenderGap skips whole blocks out of reach. +inf / -inf: no skin cell.

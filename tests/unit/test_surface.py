@@ -1,0 +1,161 @@
+"""Stage 1's fast path (surface.cc RenderAlignedFace: planes, rectangles and
+height fields whose axes are the pad's; gratings rendered per column) against
+the general per-cell code (render_gap fast_paths=False), which it must match
+bit for bit, in every case the dispatch meets: aligned and rotated pads, 1D
+and 2D textures, texture edges inside the grid, and mixed with the analytic
+bodies that always take the general path."""
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from mjtouch import _core, core, textures
+
+N, PITCH = 48, 1e-4
+SEMI = (8e-3, 7e-3, 7e-3)
+HALF = (2.0e-3, 1.5e-3)          # texture half sizes: edges fall inside a 4.8 mm grid
+RES = 2.5e-5                     # texture sample spacing
+
+
+def _rot(yaw_deg=0.0, tilt_deg=0.0):
+    a, b = math.radians(yaw_deg), math.radians(tilt_deg)
+    rz = np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]])
+    ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1, 0], [-math.sin(b), 0, math.cos(b)]])
+    return rz @ ry
+
+
+def _samples(kind):
+    x, y = textures.grid(2 * HALF[0], 2 * HALF[1], RES)
+    if kind == "grating":
+        row = textures.grating(x, 1e-3, 0.5e-3, 1.0, edge_m=0.1e-3)
+        return np.tile(row, (len(y), 1)).astype(np.float32)
+    if kind == "dots":
+        h = textures.dots(x, y, 0.6e-3, 0.25e-3, 0.1e-3)
+    else:
+        h = textures.random_rough(len(y), len(x), RES, 1e-5, corr_length_m=1e-4, seed=3)
+    return ((h - h.min()) / (h.max() - h.min())).astype(np.float32)
+
+
+def _render(surfaces, samples, pad_pos, pad_mat, ridges=True):
+    z = core.pad_surface("ellipsoid", SEMI, N, PITCH, ridge_height_m=5e-5 if ridges else 0.0)
+    kw = dict(pad_pos=pad_pos, pad_mat=pad_mat, hfield=samples)
+    fast = core.render_gap(z, PITCH, surfaces, **kw)
+    ref = core.render_gap(z, PITCH, surfaces, fast_paths=False, **kw)
+    return fast, ref
+
+
+def _assert_bit_identical(fast, ref, what):
+    for a, b, name in zip(fast, ref, ("gap", "coverage")):
+        assert a.tobytes() == b.tobytes(), (
+            f"{what}: {name} differs from the general path in {np.sum(a != b)} cells, "
+            f"max {np.nanmax(np.abs(np.where(a == b, 0, a - b)))}")
+
+
+def _texture(elevation=1e-4):
+    return dict(type="hfield", half=HALF, elevation=elevation)
+
+
+PLATE = dict(type="rectangle", half=(4e-3, 3e-3))  # the plate's top face under the texture
+
+POSES = {
+    "aligned": (0.0, 0.0),
+    "aligned, yaw 180 deg": (180.0, 0.0),  # R = diag(-1, -1, 1): still the fast path
+    "yaw 30 deg": (30.0, 0.0),
+    "tilt 4 deg": (0.0, 4.0),
+}
+
+
+@pytest.mark.parametrize("pose", POSES)
+@pytest.mark.parametrize("kind", ["grating", "dots", "random"])
+@pytest.mark.parametrize("x_m", [0.0, 1.1e-3, -1.9e-3])  # texture edge off / inside the grid
+def test_face_fast_path_matches_general(kind, pose, x_m):
+    samples = _samples(kind)
+    mat = _rot(*POSES[pose])
+    if pose == "aligned, yaw 180 deg":
+        mat = np.diag([-1.0, -1.0, 1.0])  # exact, as MuJoCo gives for a half turn
+    pos = (x_m, 0.3e-3, SEMI[2] + 2e-5)  # pole 20 um below the texture's top
+    fast, ref = _render([PLATE, _texture()], samples, pos, mat)
+    _assert_bit_identical(fast, ref, f"{kind}, {pose}, x = {x_m}")
+    gap, cov = fast
+    touched = (cov > 0) & np.isfinite(gap)
+    assert touched.sum() > 100, "the pad must face the surfaces for the comparison to bite"
+    # The texture is seen: its relief makes the gap of covered cells vary by
+    # more than the smooth pad shape alone would near the pole.
+    assert np.ptp(gap[touched]) > 1e-5
+
+
+def test_aligned_plane_and_rectangle_edges():
+    # A plane and a rectangle whose edge cuts through the grid (partial coverage).
+    for surfaces in ([dict(type="plane")], [dict(type="rectangle", half=(1.0e-3, 0.6e-3))]):
+        fast, ref = _render(surfaces, None, (0.35e-3, 0.0, SEMI[2] + 1e-5), np.eye(3))
+        _assert_bit_identical(fast, ref, surfaces[0]["type"])
+        cov = fast[1]
+        if surfaces[0]["type"] == "rectangle":
+            assert np.any((cov > 0) & (cov < 1)), "the rectangle's edge must cut some cells"
+
+
+@pytest.mark.parametrize("body", [
+    dict(type="sphere", pos=(0.4e-3, 0, -3e-3 + 5e-5), size=(3e-3, 0, 0)),
+    dict(type="capsule", pos=(0, 0, -1e-3 + 4e-5), size=(1e-3, 2e-3, 0), mat=_rot(0, 90)),
+    dict(type="rectangle", pos=(0, 0, 3e-5), half=(0.5e-3, 0.5e-3)),  # a box's top face
+])
+def test_bodies_mixed_with_a_grating(body):
+    # Analytic bodies take the general path, the grating the fast one; the
+    # nearest surface per cell (first one on ties) must be the same.
+    fast, ref = _render([PLATE, _texture(), body], _samples("grating"),
+                        (0.0, 0.0, SEMI[2] + 2e-5), np.eye(3))
+    _assert_bit_identical(fast, ref, body["type"])
+
+
+def test_grating_column_means_are_the_exact_cell_integrals():
+    # A flat skin at height z0 over a grating: every covered cell's gap is
+    # z0 minus the exact mean of the bilinear texture over the cell
+    # (hfield_box_mean, computed independently per cell).
+    samples = _samples("grating")
+    z0 = 2e-5
+    z = np.full((N, N), z0)
+    gap, cov = core.render_gap(z, PITCH, [_texture()], hfield=samples)
+    c = (np.arange(N) - 0.5 * (N - 1)) * PITCH
+    X, Y = np.meshgrid(c, c)
+    x0 = np.maximum(X - PITCH / 2, -HALF[0])
+    x1 = np.minimum(X + PITCH / 2, HALF[0])
+    y0 = np.maximum(Y - PITCH / 2, -HALF[1])
+    y1 = np.minimum(Y + PITCH / 2, HALF[1])
+    inside = cov > 0
+    boxes = np.stack([x0[inside], x1[inside], y0[inside], y1[inside]], axis=1)
+    mean = _core.hfield_box_mean(samples, HALF[0], HALF[1], 1e-4, boxes)
+    np.testing.assert_allclose(gap[inside], z0 - mean, rtol=0, atol=1e-15)
+    assert np.ptp(mean) > 5e-5  # crests and grooves both under the grid
+
+
+@pytest.mark.parametrize("yaw_deg", [0.0, 20.0])
+def test_stages_1_2_fast_paths_match_reference_over_a_slide(yaw_deg):
+    # The plugin's stages 1-2 (ComputeTraction: culled render, warm-started
+    # Winkler solve, re-render when the cull was too tight, shear) over a
+    # pad sliding 0.6 mm across a grating on a plate, with a varying force.
+    # Fast and reference paths must give the same pressure and approach at
+    # every step, and the pressure must carry the force (sum p A = F).
+    T = 40
+    samples = _samples("grating")
+    surfaces = np.zeros((2, 20))
+    surfaces[0, 0], surfaces[0, 4:13], surfaces[0, 16:18] = 1, np.eye(3).ravel(), (4e-3, 3e-3)
+    surfaces[1, 0], surfaces[1, 4:13], surfaces[1, 16:18] = 2, np.eye(3).ravel(), HALF
+    surfaces[1, 18] = surfaces[1, 19] = 1e-4
+    pos = np.zeros((T, 3))
+    pos[:, 0] = np.linspace(0.0, 0.6e-3, T)
+    pos[:, 2] = SEMI[2] + 5e-5
+    mat = np.tile(_rot(yaw_deg).ravel(), (T, 1))
+    forces = np.zeros((T, 3))
+    forces[:, 0] = 0.3 + 0.2 * np.sin(np.linspace(0, 3, T))
+    forces[:, 1] = 0.1
+    config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05"}
+    ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
+                               reference=True)
+    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples)
+    approach_ref, approach_fast = ref[2], fast[2]
+    assert np.all(np.isfinite(approach_ref)), "the pad must touch at every step"
+    assert approach_fast.tobytes() == approach_ref.tobytes()
+    assert fast[3].tobytes() == ref[3].tobytes()
+    assert_allclose(ref[3].sum(axis=(1, 2)) * PITCH**2, forces[:, 0], rtol=1e-9)
