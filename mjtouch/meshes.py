@@ -357,7 +357,8 @@ def heightmap_mesh(x_m: np.ndarray, y_m: np.ndarray, h_m: np.ndarray, base_m: fl
     X, Y = np.meshgrid(x, y)
     top = np.stack([X.ravel(), Y.ravel(), h.ravel()], 1)
     idx = np.arange(nx * ny).reshape(ny, nx)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
+    a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
     faces = [np.stack([a, b, c], 1), np.stack([a, c, d], 1)]
     bottom = top.copy()
     bottom[:, 2] = -base_m

@@ -90,7 +90,8 @@ tex = mujoco.mj_name2id(s.model, mujoco.mjtObj.mjOBJ_GEOM, "texture")
 plate = mujoco.mj_name2id(s.model, mujoco.mjtObj.mjOBJ_GEOM, "plate")
 is_geom = seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)
 print(json.dumps({"texture": int(((seg[..., 0] == tex) & is_geom).sum()),
-                  "plate": int(((seg[..., 0] == plate) & is_geom).sum()), "total": seg[..., 0].size}))
+                  "plate": int(((seg[..., 0] == plate) & is_geom).sum()),
+                  "total": seg[..., 0].size}))
 """
 
 
