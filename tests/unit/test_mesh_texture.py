@@ -126,3 +126,15 @@ def test_bad_meshes_get_clear_errors(tmp_path, grating_stl):
         meshes.from_mesh(junk)
     with pytest.raises(ValueError, match="length_m x width_m"):
         meshes.from_mesh(grating_stl, length_m=1.0)
+
+
+@pytest.mark.parametrize("ext", ["obj", "ply", "glb"])
+def test_every_format_trimesh_reads_gives_the_same_heights(grating_stl, tmp_path, ext):
+    stl = meshes.from_mesh(grating_stl, resolution_m=4e-5)
+    path = tmp_path / f"grating.{ext}"
+    trimesh.load(grating_stl).export(path)
+    other = meshes.from_mesh(path, resolution_m=4e-5)
+    assert other.heights.shape == stl.heights.shape
+    # the vertices as the STL's float32 values (OBJ writes them as decimal
+    # text): the same heights to a float32 step of the 6 mm coordinates
+    assert np.abs(other.heights - stl.heights).max() < H * 1e-4
