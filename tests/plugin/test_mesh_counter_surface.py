@@ -96,3 +96,42 @@ def test_a_mesh_edge_sliding_under_a_cell_moves_the_load_smoothly():
             cx.append((p.sum(0) * xs).sum() / p.sum())
         fit = np.polyval(np.polyfit(shifts, cx, 1), shifts)
         assert np.abs(np.array(cx) - fit).max() < 0.1 * pitch
+
+
+def test_mesh_rendering_is_deterministic_across_rollout_threads_copy_and_reset():
+    import mujoco.rollout
+    name, geom, mesh, top, x = targets()[2]  # the box, its edge under the patch
+    spec = mujoco.MjSpec()
+    spec.option.gravity = [0, 0, 0]
+    spec.option.timestep = 1e-4  # one tactile evaluation per step (no oversampling)
+    spec.add_mesh(name="target", uservert=np.asarray(mesh.vertices).ravel().tolist(),
+                  userface=np.asarray(mesh.faces).ravel().tolist())
+    spec.worldbody.add_geom(name="target", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="target")
+    finger = spec.worldbody.add_body(name="finger", pos=[x, 0.0015, top + R_PAD - DEPTH])
+    finger.add_joint(name="x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
+    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[R_PAD, 0, 0], mass=0.01)
+    model_cfg = scenes.skin_config(fast_tip())
+    model_cfg.update(outputs="spikes stress force pressure")
+    scenes.add_skin_sensor(spec, "pad", model_cfg)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    data.qvel[0] = 0.5  # the edge sweeps across cells: 5 um a step
+    n = 40
+    st = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    s0 = np.empty(mujoco.mj_stateSize(model, st))
+    mujoco.mj_getState(model, data, s0, st)
+    datas = [mujoco.MjData(model) for _ in range(2)]
+    _, sd = mujoco.rollout.rollout(model, datas, np.stack([s0] * 2), np.zeros((2, n, 0)))
+    assert np.array_equal(sd[0], sd[1])
+    rows = []
+    for k in range(n):
+        mujoco.mj_step(model, data)
+        rows.append(data.sensordata.copy())
+        if k == n // 2:
+            twin = mujoco.MjData(model)
+            mujoco.mj_copyData(twin, model, data)
+    assert np.array_equal(np.array(rows), sd[0])
+    for _ in range(n - n // 2 - 1):
+        mujoco.mj_step(model, twin)
+    assert np.array_equal(twin.sensordata, rows[-1])
+    assert np.abs(rows[-1]).sum() > 0
