@@ -8,6 +8,8 @@ uses it loads with ``mujoco.MjModel.from_xml_path``. Submodules:
 - :mod:`mjtouch.rollout`  running scenes and collecting spikes and stress
 - :mod:`mjtouch.analysis` rates and spectra
 - :mod:`mjtouch.core`     the C++ stages called directly (no MuJoCo scene)
+- :mod:`mjtouch.robot`    :func:`attach` a skin to any robot's fingertip geom
+- :mod:`mjtouch.meshes`   textures from mesh files (``textures.from_mesh``)
 """
 
 import importlib.metadata as _metadata
@@ -38,4 +40,7 @@ MUJOCO_VERSION = "4.0.0"  # the plugin is compiled against exactly this release
 
 _load()
 
-__all__ = ["PluginNotBuiltError", "library_path", "MUJOCO_VERSION", "__version__"]
+from mjtouch.robot import attach, layouts  # noqa: E402  (after the plugin loads)
+
+__all__ = ["PluginNotBuiltError", "attach", "layouts", "library_path", "MUJOCO_VERSION",
+           "__version__"]

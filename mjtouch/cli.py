@@ -27,8 +27,9 @@ def _slide_parser(sub):
     p = sub.add_parser("slide", help="ridged fingertip pressed on a plate and slid; prints "
                                      "spike rates and stress spectral peaks vs V/D and V/lambda")
     p.add_argument("--texture", choices=["grating", "random", "dots", "flat"], default="grating")
-    p.add_argument("--period", type=_positive_float("--period"), default=1.0e-3,
-                   help="texture spatial period D (m), default 1e-3")
+    p.add_argument("--period", type=_positive_float("--period"), default=None,
+                   help="texture spatial period D (m), default 1e-3; with --texture-mesh: the "
+                        "mesh's period, to report peaks against V/D")
     p.add_argument("--plateau", type=_positive_float("--plateau"), default=None,
                    help="grating plateau width (m), default period/2")
     p.add_argument("--height", type=_positive_float("--height"), default=0.1e-3,
@@ -61,6 +62,17 @@ def _slide_parser(sub):
     p.add_argument("--pressure", choices=["winkler", "elastic", "contacts"], default="winkler",
                    help="pressure model (default winkler; elastic lets the ridges carry the "
                         "load in partial contact, which fingerprint filtering needs; slower)")
+    p.add_argument("--texture-mesh", metavar="FILE",
+                   help="texture from a mesh file's top surface (STL, OBJ, PLY, GLB; trimesh), "
+                        "sliding along the mesh's x after placement; overrides --texture")
+    p.add_argument("--mesh-scale", type=_positive_float("--mesh-scale"), default=1.0,
+                   help="mesh units to m (1e-3 for a file in mm), default 1")
+    p.add_argument("--mesh-up", default="+z", choices=["+z", "-z", "+x", "-x", "+y", "-y"],
+                   help="mesh axis out of the textured face, default +z")
+    p.add_argument("--mesh-rotate", type=float, default=0.0,
+                   help="turn the mesh about the up axis (deg), default 0")
+    p.add_argument("--mesh-resolution", type=_positive_float("--mesh-resolution"),
+                   default=2e-5, help="height-field cell of the mesh texture (m), default 2e-5")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="write a PNG of the spectrum and raster")
     from mjtouch import progress
@@ -74,10 +86,13 @@ def slide(args) -> dict:
 
 def slide_with_result(args):
     """slide(args) and the run's rollout.SlideResult (spikes, stress, force)."""
-    from mjtouch import analysis, progress, rollout, scenes
+    from mjtouch import scenes
 
     tip = scenes.Fingertip(ridges=args.ridges, ridge_pitch_m=args.ridge_pitch, nx=args.nx,
                            pitch_m=args.pitch, skin={"pressure": args.pressure})
+    if getattr(args, "texture_mesh", None):
+        return _slide_run(args, tip, _mesh_texture(args), args.period, "mesh")
+    args.period = args.period or 1.0e-3
     texture = scenes.Texture(kind=args.texture, period_m=args.period, plateau_m=args.plateau,
                              height_m=args.height, rms_m=args.rms,
                              corr_length_m=args.corr_length, dot_spacing_m=args.dot_spacing,
@@ -89,6 +104,26 @@ def slide_with_result(args):
         texture.length_m, texture.width_m = need, 0.016
     else:
         texture.length_m = max(texture.length_m, need)
+    periodic = {"grating": args.period, "dots": args.dot_spacing}.get(args.texture)
+    return _slide_run(args, tip, texture, periodic, args.texture)
+
+
+def _mesh_texture(args):
+    from mjtouch import textures
+    need = 2 * (args.speed * args.duration) + 0.02
+    mt = textures.from_mesh(args.texture_mesh, scale=args.mesh_scale, up=args.mesh_up,
+                            rotate_deg=args.mesh_rotate, resolution_m=args.mesh_resolution)
+    if mt.length_m < need:
+        raise ValueError(f"--texture-mesh {args.texture_mesh}: its top surface is "
+                         f"{mt.length_m * 1e3:.3g} mm long after --mesh-scale "
+                         f"{args.mesh_scale:g}; sliding {args.duration:g} s at {args.speed:g} m/s "
+                         f"needs {need * 1e3:.3g} mm (the slide and the pad, both ways): "
+                         "shorten --duration or slow --speed")
+    return mt.texture()
+
+
+def _slide_run(args, tip, texture, periodic, kind):
+    from mjtouch import analysis, progress, rollout, scenes
     protocol = scenes.Protocol(force_n=args.force, speed_m_s=args.speed, timestep_s=args.dt)
     t0 = time.perf_counter()
     # the step count scenes.controls will make (not the array: a bad --duration is
@@ -104,7 +139,6 @@ def slide_with_result(args):
     rates = analysis.rates_hz(res.spikes[w], dt, res.layout.classes)
     f, p = analysis.stress_spectrum(res.stress[w], dt)
     peaks = analysis.spectral_peaks(f, p, n=6, fmin_hz=5.0, fmax_hz=min(1000.0, 0.5 / dt))
-    periodic = {"grating": args.period, "dots": args.dot_spacing}.get(args.texture)
     expected = {"texture": args.speed / periodic if periodic else None,
                 "ridges": args.speed / args.ridge_pitch if args.ridges else None}
     power_expected = {k: (analysis.power_at(f, p, v) if v else None) for k, v in expected.items()}
@@ -121,7 +155,7 @@ def slide_with_result(args):
         "period_m": periodic,
         "ridge_pitch_m": args.ridge_pitch,
         "ridges": args.ridges,
-        "texture": args.texture,
+        "texture": kind,
         "pressure": args.pressure,
         "force_n": args.force,
         "duration_s": args.duration,
@@ -166,7 +200,8 @@ def _plot(path, res, f, p, expected, w):
 
 
 def _print_human(o: dict) -> None:
-    print(f"mjtouch slide: {o['texture']} texture, D = {o['period_m'] * 1e3:.3g} mm, "
+    period = f"{o['period_m'] * 1e3:.3g} mm" if o["period_m"] else "-"
+    print(f"mjtouch slide: {o['texture']} texture, D = {period}, "
           f"V = {o['speed_m_s'] * 1e3:.3g} mm/s, F = {o['force_n']:.3g} N, "
           f"ridges {'on' if o['ridges'] else 'off'} (lambda = {o['ridge_pitch_m'] * 1e3:.3g} mm), "
           f"{o['duration_s']:.3g} s sliding (wall {o['wall_s']:.1f} s)")
@@ -425,7 +460,7 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--nx {args.nx} is out of range; valid range [4, 512]")
         try:
             out = slide(args)
-        except ValueError as e:
+        except (ValueError, FileNotFoundError) as e:
             print(f"mjtouch: error: {e}", file=sys.stderr)
             return 2
         if args.json:

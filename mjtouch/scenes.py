@@ -31,7 +31,7 @@ import numpy as np
 
 from mjtouch import textures
 
-TextureKind = Literal["grating", "random", "dots", "flat"]
+TextureKind = Literal["grating", "random", "dots", "flat", "mesh"]
 
 
 @dataclasses.dataclass
@@ -72,7 +72,9 @@ class Texture:
       Gaussian correlation length ``corr_length_m`` (seeded by ``seed``);
     - ``dots``: hexagonal array of spherical-cap dots (``dot_spacing_m``,
       ``dot_radius_m``, ``height_m``);
-    - ``flat``: no texture.
+    - ``flat``: no texture;
+    - ``mesh``: the top surface of a mesh file, ``mesh`` (a
+      :class:`mjtouch.meshes.MeshTexture`, from :func:`mjtouch.textures.from_mesh`).
     Gratings are 1D (a 2-row height field); random and dot textures are 2D
     height fields."""
 
@@ -89,11 +91,14 @@ class Texture:
     dot_spacing_m: float = 2.5e-3
     dot_radius_m: float = 0.6e-3
     seed: int = 0
+    mesh: "object | None" = None  # kind "mesh": a meshes.MeshTexture
 
     def validate(self) -> None:
-        if self.kind not in ("grating", "flat", "random", "dots"):
+        if self.kind not in ("grating", "flat", "random", "dots", "mesh"):
             raise ValueError(f"texture kind {self.kind!r} is not one of "
-                             "'grating', 'random', 'dots', 'flat'")
+                             "'grating', 'random', 'dots', 'flat', 'mesh'")
+        if self.kind == "mesh" and self.mesh is None:
+            raise ValueError("texture kind 'mesh' needs `mesh` (mjtouch.textures.from_mesh)")
         _positive("height_m", self.height_m)
         _positive("length_m", self.length_m)
         _positive("width_m", self.width_m)
@@ -126,10 +131,14 @@ class Texture:
 
     @property
     def ncol(self) -> int:
+        if self.kind == "mesh":
+            return self.mesh.heights.shape[1]
         return int(round(self.length_m / self.resolution_m)) + 1
 
     @property
     def nrow(self) -> int:
+        if self.kind == "mesh":
+            return self.mesh.heights.shape[0]
         if self.kind in ("grating", "flat"):
             return 2
         return int(round(self.width_m / self.resolution_m)) + 1
@@ -144,6 +153,8 @@ class Texture:
 
     def heights(self) -> np.ndarray:
         """Height map (m), nrow x ncol, MuJoCo height-field order."""
+        if self.kind == "mesh":
+            return self.mesh.heights
         x = np.linspace(-self.length_m / 2, self.length_m / 2, self.ncol)
         if self.kind in ("grating", "flat"):
             return np.tile(self.profile(x), (2, 1))
@@ -371,7 +382,12 @@ def add_plate(spec: mujoco.MjSpec, texture: Texture,
         world.add_geom(name="texture", type=mujoco.mjtGeom.mjGEOM_BOX,
                        size=_qv(L / 2, W / 2, 0.01), pos=[0, 0, -0.01], rgba=[0, 0, 0, 0], **hidden)
         return
-    if texture.nrow == 2:
+    if texture.kind == "mesh":  # exact cell means of the mesh (meshes.from_mesh)
+        h = texture.heights()
+        spec.add_hfield(name="texture", nrow=texture.nrow, ncol=texture.ncol,
+                        size=_qv(L / 2, W / 2, _relief(texture), 0.001),
+                        userdata=(h.ravel() / (h.max() - h.min())).tolist())
+    elif texture.nrow == 2:
         add_grating_hfield(spec, "texture", texture, W / 2)
     else:  # a million samples: exact values, no 4-digit rounding
         h = texture.heights()

@@ -13,6 +13,8 @@ deterministic for a given seed.
   wavelengths), made by filtering white noise in Fourier space.
 - :func:`dots`: a square or hexagonal array of raised round dots (spherical
   caps).
+- :func:`from_mesh`: the top surface of a mesh file (STL, OBJ, PLY, GLB, ...
+  through trimesh) as exact cell means (:mod:`mjtouch.meshes`).
 """
 
 from __future__ import annotations
@@ -130,3 +132,12 @@ def dots(x_m: np.ndarray, y_m: np.ndarray, spacing_m: float, radius_m: float, he
         r2 = np.minimum(r2a, r2b)
     h = np.sqrt(np.maximum(R * R - r2, 0.0)) - (R - height_m)
     return np.maximum(h, 0.0)
+
+
+def from_mesh(mesh, **placement):
+    """The top surface of a mesh (file or ``trimesh.Trimesh``) as a height
+    map of exact cell means: :func:`mjtouch.meshes.from_mesh` (``scale``,
+    ``up``, ``rotate_deg``, ``resolution_m``, ``length_m``, ``width_m``).
+    ``.texture()`` of the result is a ``scenes.Texture`` for the slide scene."""
+    from mjtouch import meshes
+    return meshes.from_mesh(mesh, **placement)

@@ -24,12 +24,12 @@ void CopyPose(const mjtNum* pos, const mjtNum* mat, Pose* p) {
 
 // A counter-surface for geom g facing the point `toward` (world). Planes,
 // boxes, height fields, spheres, capsules, cylinders and ellipsoids are
-// rendered from their exact geometry; meshes through MuJoCo's ray query
-// (mj_rayMesh, the mesh's triangles); anything else (sdf) by its tangent
+// rendered from their exact geometry; meshes through ray queries of their
+// triangles (`caster`, mesh_surface.h); anything else (sdf) by its tangent
 // plane at the contact (pos, normal from the pad into the geom).
 CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mjtNum toward[3],
                               const mjtNum* contact_pos, const mjtNum* normal_into_geom,
-                              const HeightFieldCache* cache) {
+                              const HeightFieldCache* cache, const MeshRayCaster* caster) {
   CounterSurface s;
   s.id = g;
   const mjtNum* gpos = d->geom_xpos + 3 * g;
@@ -105,9 +105,19 @@ CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mj
       s.type = CounterSurface::Type::kRay;
       CopyPose(gpos, gmat, &s.pose);
       s.bound_radius_m = m->geom_rbound[g];
-      s.ray = [m, d, g](const double origin[3], const double dir[3]) {
-        mjtNum pnt[3] = {origin[0], origin[1], origin[2]}, vec[3] = {dir[0], dir[1], dir[2]};
-        return static_cast<double>(mj_rayMesh(m, d, g, pnt, vec, nullptr));
+      if (!caster) return s;  // no triangles: no ray hits
+      // The ray in the mesh's frame (the geom's: MuJoCo stores mesh
+      // vertices in it); distances are the same in both frames.
+      s.ray = [caster, pose = s.pose](const double origin[3], const double dir[3]) {
+        double o[3], v[3];
+        for (int c = 0; c < 3; ++c) {
+          o[c] = v[c] = 0.0;
+          for (int r = 0; r < 3; ++r) {
+            o[c] += pose.mat[3 * r + c] * (origin[r] - pose.pos[r]);
+            v[c] += pose.mat[3 * r + c] * dir[r];
+          }
+        }
+        return caster->Cast(o, v);
       };
       return s;
     default: {
@@ -403,18 +413,34 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     bool seen = false;
     for (const auto& s : in.surfaces) seen = seen || s.id == other;
     if (!seen) {
-      in.surfaces.push_back(SurfaceForGeom(m, d, other, ppos, c.pos, n_into, HeightField(m, other)));
+      in.surfaces.push_back(SurfaceForGeom(m, d, other, ppos, c.pos, n_into, HeightField(m, other),
+                                           MeshCaster(m, other)));
     }
   }
   if (in.in_contact) {
     for (int g : texture_geoms_) {
-      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos, HeightField(m, g)));
+      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos, HeightField(m, g),
+                                           MeshCaster(m, g)));
     }
   }
   // Force on the pad in the pad frame (columns of the row-major xmat).
   in.shear_x_n = total[0] * pmat[0] + total[1] * pmat[3] + total[2] * pmat[6];
   in.shear_y_n = total[0] * pmat[1] + total[1] * pmat[4] + total[2] * pmat[7];
   in.normal_force_n = total[0] * pmat[2] + total[1] * pmat[5] + total[2] * pmat[8];
+}
+
+const MeshRayCaster* SkinPlugin::MeshCaster(const mjModel* m, int geom) {
+  if (m->geom_type[geom] != mjGEOM_MESH) return nullptr;
+  const int id = m->geom_dataid[geom];
+  if (id < 0) return nullptr;
+  auto it = meshes_.find(id);
+  if (it == meshes_.end()) {
+    it = meshes_.emplace(id, std::make_unique<MeshRayCaster>(
+                                 m->mesh_vert + 3 * m->mesh_vertadr[id], m->mesh_vertnum[id],
+                                 m->mesh_face + 3 * m->mesh_faceadr[id], m->mesh_facenum[id]))
+             .first;
+  }
+  return it->second.get();
 }
 
 const HeightFieldCache* SkinPlugin::HeightField(const mjModel* m, int geom) {

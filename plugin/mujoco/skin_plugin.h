@@ -12,6 +12,7 @@
 #include <mujoco/mujoco.h>
 
 #include "pipeline/skin.h"
+#include "surface/mesh_surface.h"
 
 namespace mjtouch {
 
@@ -62,6 +63,7 @@ class SkinPlugin {
   SkinPlugin() = default;
   void GatherInput(const mjModel* m, const mjData* d);
   const HeightFieldCache* HeightField(const mjModel* m, int geom);
+  const MeshRayCaster* MeshCaster(const mjModel* m, int geom);
 
   std::shared_ptr<const SkinModel> model_;
   int sensor_id_ = -1;
@@ -71,6 +73,7 @@ class SkinPlugin {
   StepInput input_;
   Workspace workspace_;
   std::map<int, HeightFieldCache> hfields_;  // by hfield id, built on first use
+  std::map<int, std::unique_ptr<MeshRayCaster>> meshes_;  // by mesh id, built on first use
   // Drawing only (never read by the physics): the `visual` attribute, the
   // contact state of the last evaluation and each receptor's last spike time.
   VisualMode visual_ = VisualMode::kBoth;

@@ -35,6 +35,8 @@ constexpr float kClassRgba[kNumClasses][4] = {
     {0.15f, 0.45f, 1.0f, 1.0f}, {0.1f, 0.9f, 0.25f, 1.0f}, {0.95f, 0.2f, 0.95f, 1.0f}};
 constexpr float kIdleRgba[4] = {0.35f, 0.35f, 0.38f, 1.0f};
 constexpr float kBackingRgba[4] = {0.08f, 0.08f, 0.1f, 0.55f};
+constexpr float kRidgeRgba[4] = {0.85f, 0.85f, 0.9f, 0.6f};  // ridge crests, `above` copy
+constexpr double kRidgeLineWidthPx = 1.5;                     // ridge crest lines, pixels
 
 bool AddGeom(mjvScene* scn, int type, const mjtNum size[3], const mjtNum pos[3],
              const mjtNum mat[9], const float rgba[4], int sensor_id) {
@@ -77,12 +79,66 @@ void SkinPlugin::Visualize(const mjModel* m, mjData* d, const mjvOption* opt, mj
   };
   mjtNum pos[3], size[3];
 
+  // The textures the skin feels, drawn when their group is hidden (their
+  // group, 3 in mjtouch's scenes, is hidden by default): what the skin
+  // touches is what the viewer shows, in any viewer. Once per geom, however
+  // many skins feel it.
+  for (int g : texture_geoms_) {
+    if (opt->geomgroup[std::clamp(m->geom_group[g], 0, mjNGROUP - 1)]) continue;
+    bool drawn = false;
+    for (int k = 0; k < scn->ngeom && !drawn; ++k)
+      drawn = scn->geoms[k].objtype == mjOBJ_GEOM && scn->geoms[k].objid == g;
+    if (drawn) continue;
+    if (!AddGeom(scn, m->geom_type[g], m->geom_size + 3 * g, d->geom_xpos + 3 * g,
+                 d->geom_xmat + 9 * g, m->geom_rgba + 4 * g, sensor_id_))
+      return;
+    mjvGeom* copy = scn->geoms + scn->ngeom - 1;
+    copy->objtype = mjOBJ_GEOM;  // the geom itself (segmentation, selection)
+    copy->objid = g;
+    copy->category = mjCAT_STATIC;
+    copy->dataid = m->geom_type[g] == mjGEOM_MESH ? 2 * m->geom_dataid[g] : m->geom_dataid[g];
+  }
+
   // Backing square of the `above` copy: the grid's extent, always shown.
   if (above) {
     size[0] = size[1] = grid.HalfExtent();
     size[2] = kTileHalfThickM;
     to_world(0, 0, top_z - 2 * kTileHalfThickM, pos);
     if (!AddGeom(scn, mjGEOM_BOX, size, pos, pmat, kBackingRgba, sensor_id_)) return;
+    // The skin's ridge crests (where the relief peaks, s = k pitch across
+    // the ridges) as thin lines over the square, so the heatmap's stripes
+    // can be read against them.
+    const Ridges& ridges = cfg.ridges;
+    if (ridges.enabled && ridges.pitch_m > 0) {
+      const double ca = std::cos(ridges.angle_rad), sa = std::sin(ridges.angle_rad);
+      const double E = grid.HalfExtent();
+      const double reach = E * (std::abs(ca) + std::abs(sa));
+      for (int k = static_cast<int>(std::ceil(-reach / ridges.pitch_m));
+           k * ridges.pitch_m <= reach; ++k) {
+        const double s0 = k * ridges.pitch_m;
+        // the crest {p : p . (ca, sa) = s0}, along (-sa, ca), clipped to [-E, E]^2
+        double t_lo = -1e9, t_hi = 1e9;
+        const double base[2] = {s0 * ca, s0 * sa}, dir[2] = {-sa, ca};
+        bool empty = false;
+        for (int a = 0; a < 2; ++a) {
+          if (std::abs(dir[a]) < 1e-12) {
+            empty = empty || std::abs(base[a]) > E;
+            continue;
+          }
+          double t0 = (-E - base[a]) / dir[a], t1 = (E - base[a]) / dir[a];
+          if (t0 > t1) std::swap(t0, t1);
+          t_lo = std::max(t_lo, t0);
+          t_hi = std::min(t_hi, t1);
+        }
+        if (empty || !(t_hi > t_lo)) continue;
+        mjtNum from[3], to[3];
+        const double z_line = top_z + 1.5 * kTileHalfThickM;  // just over the tiles
+        to_world(base[0] + t_lo * dir[0], base[1] + t_lo * dir[1], z_line, from);
+        to_world(base[0] + t_hi * dir[0], base[1] + t_hi * dir[1], z_line, to);
+        if (!AddGeom(scn, mjGEOM_LINE, size, from, pmat, kRidgeRgba, sensor_id_)) return;
+        mjv_connector(scn->geoms + scn->ngeom - 1, mjGEOM_LINE, kRidgeLineWidthPx, from, to);
+      }
+    }
   }
 
   // Heatmap: cell pressures averaged over b x b tiles.

@@ -146,3 +146,28 @@ def test_bench_surface_fast_paths_match_reference(yaw, capsys):
     assert main(["--steps", "5", "--repeats", "1", "--lead-in-s", "0.005", "--yaw-deg", yaw])
     out = capsys.readouterr().out
     assert "100% of steps in contact" in out and "bit-identical: True" in out
+
+
+def test_mesh_textures_braille_and_knurl_from_mesh_files(tmp_path, capsys):
+    # coarse meshes and a small skin: the example's pipeline in seconds
+    out = run_json("mesh_textures.py", ["--out", str(tmp_path), "--mesh-grid", "1e-4",
+                                        "--resolution", "5e-5", "--duration", "0.25",
+                                        "--nx", "48", "--pitch", "2e-4"], capsys)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["braille.stl", "knurl.ply"]
+    # the meshes' reliefs (their highest vertices) survive export in mm and
+    # from_mesh: cell means sit below the highest vertex by at most the
+    # steepest facet slope there times half a mesh step (0.05 mm): dots,
+    # slope <= (0.07 + 0.1) / 0.89 (curvature radius 0.89 mm) -> 8.5 um; the
+    # knurl's 0.2 mm crests, faceted on a 0.1 mm grid, by the flank slope
+    # 0.25 mm / 0.4 mm -> 31 um. Measured: 1.4 um and 2.7 um.
+    ex = runpy.run_path(str(EXAMPLES / "mesh_textures.py"), run_name="example")
+    x = np.arange(-0.02, 0.02 + 5e-5, 1e-4)
+    y = np.arange(-0.008, 0.008 + 5e-5, 1e-4)
+    for name, drop in (("braille", 8.5e-6), ("knurl", 31e-6)):
+        top = ex["SURFACES"][name][0](x, y).max()
+        assert top - drop <= out[name]["relief_m"] <= top + 1e-9
+    k = out["knurl"]
+    assert abs(k["peaks_hz"][0] - k["expected_hz"]) <= k["fft_bin_hz"]
+    assert out["braille"]["expected_hz"] is None
+    for r in out.values():
+        assert sum(r["rates_hz"].values()) > 0

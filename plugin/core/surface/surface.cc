@@ -1,5 +1,7 @@
 #include "surface/surface.h"
 
+#include "surface/mesh_surface.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -687,23 +689,17 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
     }
     const double area = 4.0 * F.hx * F.hy;
     const bool line = IsLineType(s.type);
-    // The pad's z axis in the surface frame, and in the world (kRay).
+    // The pad's z axis in the surface frame.
     const double d_loc[3] = {R[2], R[5], R[8]};
-    const double d_world[3] = {-pad.mat[2], -pad.mat[5], -pad.mat[8]};
     for (int b = 0; b < nb * nb; ++b) {
       if (!(block_lb[k * nb * nb + b] <= cull)) continue;
       for_cells(b, [&](int i, int j, size_t idx, double u, double v, double z) {
         if (lower_bound(k, u, v, z) > cull) return;
         double cov = 1.0, gap;
         if (line) {
-          if (s.type == CounterSurface::Type::kRay) {
-            // One ray down the pad's -z axis from the pad's centre plane.
-            double o[3];
-            for (int r = 0; r < 3; ++r)
-              o[r] = pad.pos[r] + pad.mat[3 * r + 0] * u + pad.mat[3 * r + 1] * v;
-            const double dist = s.ray ? s.ray(o, d_world) : -1.0;
-            if (!(dist >= 0.0)) return;
-            gap = z + dist;
+          if (s.type == CounterSurface::Type::kRay) {  // mesh_surface.cc
+            if (!RayCellGap(s, pad, u, v, z, h, area_average ? kRayCellSide : 1, &gap, &cov))
+              return;
           } else {
             double top_sum = 0.0;
             int hits = 0;

@@ -73,7 +73,7 @@ struct Pose {
 //    the gap is measured along the pad's z axis, from the skin down to the
 //    body's top where the cell's line (pad frame x, y fixed) meets it;
 //    analytic bodies are averaged over the cell at 2x2 Gauss points
-//    (coverage: the fraction that hit), kRay samples the cell centre.
+//    (coverage: the fraction that hit), kRay over 4x4 rays (mesh_surface.h).
 struct CounterSurface {
   enum class Type { kPlane, kRectangle, kHeightField, kSphere, kEllipsoid, kCapsule, kCylinder,
                     kRay };
