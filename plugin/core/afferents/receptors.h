@@ -90,7 +90,7 @@ struct RAParams {
 // locked): tau dU/dt = -U + gain max(0, y) - w_adapt, threshold 1.
 struct PCParams {
   // Calibrated (README, "Calibration"): absolute threshold 0.5 Pa at 250 Hz.
-  double gain_s2_per_pa = 5.28e-6;
+  double gain_s2_per_pa = 4.89e-6;
   double highpass_hz = 150.0;
   double lowpass_hz = 250.0;
   double tau_s = 1.5e-3;
@@ -132,7 +132,7 @@ struct ReceptorParams {
   // Spike-triggered adaptation per class (membrane.h; README, "Dynamic range").
   Adaptation adapt[kNumClasses] = {{0.1, 0.05}, {1.0, 0.03}, {1.0, 0.02}};
   // RA and PC drive saturation (threshold units; 0: none; SA1 unused).
-  double saturation[kNumClasses] = {0.0, 5.0, 20.0};
+  double saturation[kNumClasses] = {0.0, 5.0, 0.0};
   bool varied = true;        // `population`: variants (true) or the median set only
   double rate_tau_s = 0.05;  // smoothed rate: exponential kernel, s
 };
