@@ -58,7 +58,7 @@ CASES = [
     ({"sa1_lowpass": "0"}, "`sa1_lowpass`", "(0, 10000] Hz"),
     ({"adapt": "1 -1 0"}, "`adapt` entry 2", "[0, 100]"),
     ({"adapt_tau": "0.05 0 0.02"}, "`adapt_tau` entry 2", "(0, 10]"),
-    ({"saturation": "0 5"}, "`saturation`", "3 numbers (SA1 RA PC), each in [0, 1e+06]"),
+    ({"ra_saturation": "-1"}, "`ra_saturation`", "[0, 1e+06]"),
     ({"population": "random"}, "`population`", "valid: uniform varied"),
     # explicit receptor sites
     ({"sites": "SA1 0 0"}, "`sites` has 3 words", "'CLASS x y depth' (CLASS in SA1 RA PC"),

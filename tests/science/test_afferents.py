@@ -97,7 +97,7 @@ def test_rates_at_two_timesteps_agree(cls, kind):
 # --- ramp-and-hold presses in the full plugin -------------------------------------------
 
 RA_GAIN_S_PER_PA = 1.30e-4  # receptors.h RAParams default
-RA_SATURATION = 5.0  # receptors.h ReceptorParams::saturation, RA
+RA_SATURATION = 5.0  # receptors.h RAParams::saturation
 RA_MIN_VARIANT_GAIN = 0.75  # receptors.cc kVariants: the least sensitive RA set
 RAMP_DT = 2e-4
 T_ON, RAMP, HOLD, REST = 0.1, 0.1, 0.3, 0.15  # s
@@ -406,9 +406,11 @@ def test_entrainment_needs_over_1_5x_absolute_threshold(sweep):
 def test_pc_phase_locks_one_to_one_at_best_frequency(sweep):
     # Full plugin rollouts at the PC's best frequency, at 0.9x and 1.25x the
     # most sensitive unit's threshold from the bisection.
-    pc_thr = sweep.thresholds["PC"]
-    fi, ui = np.unravel_index(np.argmin(pc_thr), pc_thr.shape)
-    f, unit, thr = VIB_FREQS_HZ[fi], sweep.units["PC"][ui], pc_thr[fi, ui]
+    # best frequency: the minimum of the absolute thresholds (the tuning
+    # curve); there, the unit with the lowest entrainment threshold
+    fi = int(np.argmin(sweep.absolute["PC"].min(axis=1)))
+    ui = int(np.argmin(sweep.thresholds["PC"][fi]))
+    f, unit, thr = VIB_FREQS_HZ[fi], sweep.units["PC"][ui], sweep.thresholds["PC"][fi, ui]
     n, win, m = vib_rows(f)
     ctrl = np.stack([vib_controls(sweep.kind, f, s * thr, n) for s in (0.9, 1.25)])
     _, sd = mujoco.rollout.rollout(sweep.model, mujoco.MjData(sweep.model),

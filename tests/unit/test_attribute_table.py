@@ -60,7 +60,7 @@ NON_DEFAULT = {
     "stress_method": "direct", "stress_theta": ("0.4", {"stress_method": "tree"}),
     "skin": "halfspace", "layers": "7e-4 8e4 0.48; 3e-3 3e4 0.45", "base": "3e4 0.45",
     "interface_side": "lower", "sa1_model": "wang2016", "sa1_lowpass": "40",
-    "adapt": "0.2 1 1", "adapt_tau": "0.05 0.03 0.03", "saturation": "0 4 0",
+    "adapt": "0.2 1 1", "adapt_tau": "0.05 0.03 0.03", "ra_saturation": "4",
     "population": "uniform",
 }
 NOT_PHYSICS = {"texture", "visual"}  # adapter and drawing only

@@ -240,14 +240,15 @@ std::string ReceptorParamsKey(const ReceptorParams& p) {
     << p.noise.sd[2] << ' ' << p.noise.tau_s << ' ' << p.noise.seed << " | " << p.rate_tau_s
     << " | " << static_cast<int>(p.sa1.model) << ' ' << p.sa1.lowpass_hz << ' ' << p.varied;
   for (const Adaptation& a : p.adapt) s << ' ' << a.jump << ' ' << a.tau_s;
-  for (double x : p.saturation) s << ' ' << x;
+  s << ' ' << p.ra.saturation;
   return s.str();
 }
 
 ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), dt_(dt_s) {
   // Exact propagation of x' = A x + B v for v constant over dt: the
   // exponential of the augmented matrix [[A, B], [0, 0]] dt.
-  auto build = [dt_s](int n, const double* A, const double* B, const double* c, Filter* f) {
+  auto build_h = [](double dt_s, int n, const double* A, const double* B, const double* c,
+                    Filter* f) {
     const int m = n + 1;
     double M[25] = {0}, E[25];
     for (int i = 0; i < n; ++i) {
@@ -262,6 +263,9 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
       f->c[i] = c[i];
     }
   };
+  auto build = [&](int n, const double* A, const double* B, const double* c, Filter* f) {
+    build_h(dt_s, n, A, B, c, f);
+  };
   {  // SA1 (kFiltered): y = w^2 / (s + w)^2 v
     const double w = kTwoPi * p.sa1.lowpass_hz;
     const double A[4] = {-w, 0, w, -w}, B[2] = {w, 0}, c[2] = {0, 1};
@@ -271,6 +275,8 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
     const double w = kTwoPi * p.ra.lowpass_hz;
     const double A[4] = {-w, 0, w, -w}, B[2] = {w, 0}, c[2] = {0, 1};
     build(2, A, B, c, &ra_);
+    for (int level = 1; level <= kMaxSubLevels; ++level)
+      build_h(std::ldexp(dt_s, -level), 2, A, B, c, &ra_sub_[level - 1]);
   }
   {  // PC: a = v / (s + wh); b_k = wl b_{k-1} / (s + wl); y = s^2 b3
     const double wh = kTwoPi * p.pc.highpass_hz, wl = kTwoPi * p.pc.lowpass_hz;
@@ -320,8 +326,10 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
   double l0[kMaxNodes] = {0}, l1[kMaxNodes] = {0};
   bool full_wave = false;
   double tau = 1.0, refractory = 1e-3;
+  double x_start[4] = {0, 0, 0, 0};  // filter state at the step start
   auto filter = [&](const Filter& f, double gain) {
     double x[4], y0 = 0.0, y1 = 0.0;
+    for (int i = 0; i < f.n; ++i) x_start[i] = st[kF0 + i];
     for (int i = 0; i < f.n; ++i) y0 += f.c[i] * st[kF0 + i];
     for (int i = 0; i < f.n; ++i) {
       double acc = f.gamma[i] * v;
@@ -376,47 +384,88 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
       break;
   }
 
-  // Input saturation (TouchSim's I s / (s + |I|), Saal et al. 2017) of the
-  // RA and PC drive, applied at the step ends (the drive stays linear in a
-  // step; an odd monotone map keeps the zero crossings).
-  const double sat = p_.saturation[ci];
-  if (sat > 0.0 && cls != ReceptorClass::kSA1) {
-    l0[0] = l0[0] * sat / (sat + std::abs(l0[0]));
-    l1[0] = l1[0] * sat / (sat + std::abs(l1[0]));
+  // Saturation of the RA drive, d s / (s + |d|) (TouchSim's input
+  // saturation, Saal et al. 2017; an odd monotone map keeps the zero
+  // crossings). The saturated drive is not linear within a step: it is
+  // evaluated at 2^k sub-step ends (the filter propagated exactly to each)
+  // and taken linear between, k the smallest (at most kMaxSubLevels) that
+  // bounds the interpolation error |l1 - l0|^2 / (4 s 4^k) (the map's
+  // curvature is at most 2 / s) by 1e-4 threshold units.
+  const double sat = cls == ReceptorClass::kRA ? p_.ra.saturation : 0.0;
+  auto saturate = [sat](double x) { return x * sat / (sat + std::abs(x)); };
+  int nsub = 1;
+  double knots[(1 << kMaxSubLevels) + 1];  // node 0's drive at the sub-step ends
+  if (sat > 0.0) {
+    const double d = l1[0] - l0[0];
+    int level = 0;
+    while (level < kMaxSubLevels && d * d / (4.0 * sat * std::ldexp(1.0, 2 * level)) > 1e-4)
+      ++level;
+    nsub = 1 << level;
+    knots[0] = saturate(l0[0]);
+    knots[nsub] = saturate(l1[0]);
+    if (nsub > 1) {
+      const Filter& f = ra_sub_[level - 1];
+      const double gain = p_.ra.gain_s_per_pa * var.gain;
+      double x[4], nx[4];
+      std::copy(x_start, x_start + 4, x);
+      for (int j = 1; j < nsub; ++j) {
+        double y = 0.0;
+        for (int i = 0; i < f.n; ++i) {
+          double acc = f.gamma[i] * v;
+          for (int m = 0; m < f.n; ++m) acc += f.phi[i * f.n + m] * x[m];
+          nx[i] = acc;
+        }
+        for (int i = 0; i < f.n; ++i) {
+          x[i] = nx[i];
+          y += f.c[i] * x[i];
+        }
+        knots[j] = saturate(gain * y);
+      }
+    }
   }
 
-  // Segments between the rectification kinks: the drive is linear in each.
-  double cuts[kMaxNodes + 2];
-  int ncut = 0;
-  cuts[ncut++] = 0.0;
-  for (int k = 0; k < nodes; ++k) {
-    if ((l0[k] < 0.0 && l1[k] > 0.0) || (l0[k] > 0.0 && l1[k] < 0.0)) {
-      const double t = dt * l0[k] / (l0[k] - l1[k]);
-      if (t > 0.0 && t < dt) cuts[ncut++] = t;
-    }
-  }
-  for (int i = 2; i < ncut; ++i)  // insertion sort of the kinks
-    for (int j = i; j > 1 && cuts[j] < cuts[j - 1]; --j) std::swap(cuts[j], cuts[j - 1]);
-  cuts[ncut++] = dt;
-  auto drive = [&](int k, double t) {
-    const double f = t / dt;
-    const double l = l0[k] + (l1[k] - l0[k]) * f;
-    const double rect = full_wave ? std::abs(l) : std::max(0.0, l);
-    return rect + n0 + (n1 - n0) * f;
-  };
   SpikeSink sink{0.0, dt, p_.rate_tau_s, 0.0};
   int spikes = 0;
-  for (int i = 0; i + 1 < ncut; ++i) {
-    const double ta = cuts[i], tb = cuts[i + 1], span = tb - ta;
-    if (!(span > 0.0)) continue;
-    double a[kMaxNodes], b[kMaxNodes];
+  const double h = dt / nsub;
+  for (int j = 0; j < nsub; ++j) {
+    // Sub-step [t0, t1] of the step, drive linear from la to lb per node.
+    const double t0 = j * h, t1 = j + 1 == nsub ? dt : (j + 1) * h;
+    double la[kMaxNodes], lb[kMaxNodes];
     for (int k = 0; k < nodes; ++k) {
-      a[k] = drive(k, ta);
-      b[k] = (drive(k, tb) - a[k]) / span;
+      la[k] = sat > 0.0 ? knots[j] : l0[k];
+      lb[k] = sat > 0.0 ? knots[j + 1] : l1[k];
     }
-    sink.offset = ta;
-    spikes += LinearDriveLIF(nodes, st + kU0, a, b, span, tau, refractory, st + kRefractory,
-                             adapt, st + kAdapt, OnSpike, &sink);
+    // Segments between the rectification kinks: the drive is linear in each.
+    const double len = t1 - t0;
+    double cuts[kMaxNodes + 2];
+    int ncut = 0;
+    cuts[ncut++] = t0;
+    for (int k = 0; k < nodes; ++k) {
+      if ((la[k] < 0.0 && lb[k] > 0.0) || (la[k] > 0.0 && lb[k] < 0.0)) {
+        const double t = t0 + len * la[k] / (la[k] - lb[k]);
+        if (t > t0 && t < t1) cuts[ncut++] = t;
+      }
+    }
+    for (int i = 2; i < ncut; ++i)  // insertion sort of the kinks
+      for (int m = i; m > 1 && cuts[m] < cuts[m - 1]; --m) std::swap(cuts[m], cuts[m - 1]);
+    cuts[ncut++] = t1;
+    auto drive = [&](int k, double t) {
+      const double l = la[k] + (lb[k] - la[k]) * ((t - t0) / len);
+      const double rect = full_wave ? std::abs(l) : std::max(0.0, l);
+      return rect + n0 + (n1 - n0) * (t / dt);
+    };
+    for (int i = 0; i + 1 < ncut; ++i) {
+      const double ta = cuts[i], tb = cuts[i + 1], span = tb - ta;
+      if (!(span > 0.0)) continue;
+      double a[kMaxNodes], b[kMaxNodes];
+      for (int k = 0; k < nodes; ++k) {
+        a[k] = drive(k, ta);
+        b[k] = (drive(k, tb) - a[k]) / span;
+      }
+      sink.offset = ta;
+      spikes += LinearDriveLIF(nodes, st + kU0, a, b, span, tau, refractory, st + kRefractory,
+                               adapt, st + kAdapt, OnSpike, &sink);
+    }
   }
   st[kRate] = st[kRate] * rate_decay_ + sink.rate_sum / p_.rate_tau_s;
   double vmax = st[kU0];

@@ -71,7 +71,7 @@ constexpr double kSA1RateTimeS = 0.05;
 // RA (Meissner, FA1): the rate of change of q, low-passed by two equal real
 // poles at `lowpass_hz`, y = w^2 / (s + w)^2 dq/dt (Pa/s), full-wave
 // rectified (fires on loading and unloading, silent in a steady hold):
-// tau dU/dt = -U + gain |y| - w_adapt, threshold 1. The low-pass sets the
+// tau dU/dt = -U + |sat(gain y)| - w_adapt, threshold 1, sat(d) = d s / (s + |d|). The low-pass sets the
 // best frequency (tens of Hz; Johansson et al. 1982), the membrane time
 // constant is in TouchSim's 3-9 ms range (Saal et al. 2017).
 struct RAParams {
@@ -80,6 +80,9 @@ struct RAParams {
   double lowpass_hz = 40.0;
   double tau_s = 5e-3;
   double refractory_s = 1e-3;
+  // Drive saturation s (threshold units; 0: none): TouchSim saturates its
+  // input current (Saal et al. 2017); ramp rates stay physiological.
+  double saturation = 5.0;
 };
 
 // PC (Pacinian, FA2): stress acceleration through a band-pass,
@@ -131,8 +134,6 @@ struct ReceptorParams {
   NoiseParams noise;
   // Spike-triggered adaptation per class (membrane.h; README, "Dynamic range").
   Adaptation adapt[kNumClasses] = {{0.1, 0.05}, {1.0, 0.03}, {1.0, 0.02}};
-  // RA and PC drive saturation (threshold units; 0: none; SA1 unused).
-  double saturation[kNumClasses] = {0.0, 5.0, 0.0};
   bool varied = true;        // `population`: variants (true) or the median set only
   double rate_tau_s = 0.05;  // smoothed rate: exponential kernel, s
 };
@@ -174,7 +175,9 @@ class ReceptorStepper {
   };
   const ReceptorParams& p_;
   double dt_;
+  static constexpr int kMaxSubLevels = 3;  // RA saturation: up to 8 sub-steps
   Filter sa1_, ra_, pc_;
+  Filter ra_sub_[kMaxSubLevels];  // RA filter over dt / 2^k, k = 1..
   double noise_rho_, rate_decay_;
 };
 
