@@ -130,7 +130,7 @@ const std::vector<AttributeRow>& Rows() {
       // -- afferents (stage 4; README "Afferent models") ---------------------
       {"sa1_model", K::kChoice, 0, 0, false, false, "", "filtered",
        "SA1 model: `filtered` (rate term low-passed and signed, adaptation, variants) or "
-       "`wang2016` (|dq/dt| as published, Wang et al. 2016); resets the SA1 gains' defaults",
+       "`wang2016` (abs(dq/dt) as published, Wang et al. 2016); resets the SA1 gains' defaults",
        "filtered wang2016",
        [](const SkinConfig& c, int) { return static_cast<double>(c.receptor.sa1.model); },
        [](SkinConfig* c, int, double index) {
@@ -164,7 +164,7 @@ const std::vector<AttributeRow>& Rows() {
       {"ra_lowpass", K::kNumber, 0, 1e4, true, false, "Hz", "40", "RA low-pass corner",
        nullptr, FIELD(receptor.ra.lowpass_hz), NO_PARSE, S::kModel},
       {"ra_saturation", K::kNumber, 0, 1e6, false, false, "(threshold units)", "5",
-       "RA drive saturation s: d s / (s + |d|), d the drive (0: none)",
+       "RA drive saturation s: d s / (s + abs(d)), d the drive (0: none)",
        nullptr, FIELD(receptor.ra.saturation), NO_PARSE, S::kModel},
       {"ra_tau", K::kNumber, 0, 10, true, false, "s", "5e-3", "RA membrane time constant",
        nullptr, FIELD(receptor.ra.tau_s), NO_PARSE, S::kModel},
