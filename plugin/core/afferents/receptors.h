@@ -63,7 +63,7 @@ struct SA1Params {
 void WangTable1Gains(Quantity q, SA1Params* p);
 // The defaults of p->model for quantity q: kWang2016 the Table 1 row;
 // kFiltered the same row with k0 x kSA1StaticScale and k1 = k0 x
-// kSA1RateTimeS (README, "Calibration").
+// kSA1RateTimeS (plugin/README.md, "Dynamic range and thresholds").
 void DefaultSA1Gains(Quantity q, SA1Params* p);
 constexpr double kSA1StaticScale = 1.0;
 constexpr double kSA1RateTimeS = 0.05;
@@ -75,7 +75,7 @@ constexpr double kSA1RateTimeS = 0.05;
 // best frequency (tens of Hz; Johansson et al. 1982), the membrane time
 // constant is in TouchSim's 3-9 ms range (Saal et al. 2017).
 struct RAParams {
-  // Calibrated (README, "Calibration"): absolute threshold 100 Pa at 40 Hz.
+  // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 100 Pa at 40 Hz.
   double gain_s_per_pa = 1.30e-4;
   double lowpass_hz = 40.0;
   double tau_s = 5e-3;
@@ -92,7 +92,7 @@ struct RAParams {
 // 1-2 ms) bound the high one. Half-wave rectified (one spike per cycle, phase
 // locked): tau dU/dt = -U + gain max(0, y) - w_adapt, threshold 1.
 struct PCParams {
-  // Calibrated (README, "Calibration"): absolute threshold 0.5 Pa at 250 Hz.
+  // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 0.5 Pa at 250 Hz.
   double gain_s2_per_pa = 4.89e-6;
   double highpass_hz = 150.0;
   double lowpass_hz = 250.0;
