@@ -205,8 +205,10 @@ class SpecimenContact:
 
 
 def sa1_config(gain_scale: float) -> dict:
-    """The SA1's Table 1 gains with k0 and k1 scaled (the same as scaling q)."""
-    return {"sa1_k0": 1.40e-16 * gain_scale, "sa1_k1": 1.68e-16 * gain_scale}
+    """Wang 2016's SA1 (`sa1_model` wang2016: |dq/dt|, no adaptation) with
+    its Table 1 gains k0 and k1 scaled (the same as scaling q)."""
+    return {"sa1_model": "wang2016", "sa1_k0": 1.40e-16 * gain_scale,
+            "sa1_k1": 1.68e-16 * gain_scale}
 
 
 def q_trace(q_static_pa: float) -> np.ndarray:

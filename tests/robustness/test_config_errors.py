@@ -55,6 +55,12 @@ CASES = [
     ({"pc_gain": "2"}, "`pc_gain`", "[0, 1] s^2/Pa"),
     ({"pc_tau": "11"}, "`pc_tau`", "(0, 10] s"),
     ({"pc_highpass": "0"}, "`pc_highpass`", "(0, 100000] Hz"),
+    ({"sa1_model": "lesniak"}, "`sa1_model`", "valid: filtered wang2016"),
+    ({"sa1_lowpass": "0"}, "`sa1_lowpass`", "(0, 10000] Hz"),
+    ({"adapt": "1 -1 0"}, "`adapt` entry 2", "[0, 100]"),
+    ({"adapt_tau": "0.05 0 0.02"}, "`adapt_tau` entry 2", "(0, 10]"),
+    ({"ra_saturation": "-1"}, "`ra_saturation`", "[0, 1e+06]"),
+    ({"population": "random"}, "`population`", "valid: uniform varied"),
     # explicit receptor sites
     ({"sites": "SA1 0 0"}, "`sites` has 3 words", "'CLASS x y depth' (CLASS in SA1 RA PC"),
     ({"sites": "XX 0 0 1e-3"}, "`sites` entry 1", "CLASS in SA1 RA PC"),

@@ -25,6 +25,7 @@ LOG_RANGES = {
     "ra_tau": (1e-5, 10), "pc_gain": (1e-8, 1), "pc_tau": (1e-5, 10), "pc_highpass": (1, 1e5),
     "refractory": (1e-5, 1), "ra_lowpass": (1, 1e4), "pc_lowpass": (1, 1e5),
     "noise_tau": (1e-5, 10), "rate_tau": (1e-4, 100), "stress_theta": (0.05, 2),
+    "sa1_lowpass": (1, 1e4), "ra_saturation": (1e-3, 1e6),
 }
 LINEAR_RANGES = {"ridge_angle": (-180, 180), "poisson": (-0.99, 0.5), "sa1_i0": (-1e-6, 1e-6)}
 INTEGER_RANGES = {"nx": (4, 40), "texture_group": (0, 5)}
@@ -36,6 +37,7 @@ CHOICES = {
     "interface_side": ["upper", "lower"], "stress_method": ["auto", "direct", "fft", "tree"],
     "oversample": ["auto", "1", "2", "3"],
     "texture": ["", "texture", "plate", "texture plate"],
+    "sa1_model": ["filtered", "wang2016"], "population": ["uniform", "varied"],
 }
 CLASSES = ["SA1", "RA", "PC"]
 QUANTITIES = ["szz", "maxcomp", "vonmises", "maxshear", "sed", "strain"]
@@ -81,6 +83,7 @@ def sites(draw):
 LIST_VALUES = {
     "classes": words(CLASSES), "quantity": words(QUANTITIES, 3), "outputs": words(OUTPUTS),
     "density": numbers(1, 1e4, 3), "depth": numbers(1e-5, 2e-2, 3), "noise": numbers(1e-3, 100, 3),
+    "adapt": numbers(1e-3, 100, 3), "adapt_tau": numbers(1e-5, 10, 3),
     "sa1_merkel": numbers(1, 1000, 1, 4), "seed": st.integers(0, 2**64 - 1).map(str),
     "layers": st.lists(layer, min_size=1, max_size=4).map("; ".join),
     "base": st.one_of(st.just("rigid"), st.tuples(log_uniform(1e2, 1e7),

@@ -60,7 +60,9 @@ NON_DEFAULT = {
     "seed": "7", "rate_tau": "0.1", "sites": "SA1 0 0 7.5e-4",
     "stress_method": "direct", "stress_theta": ("0.4", {"stress_method": "tree"}),
     "skin": "halfspace", "layers": "7e-4 8e4 0.48; 3e-3 3e4 0.45", "base": "3e4 0.45",
-    "interface_side": "lower",
+    "interface_side": "lower", "sa1_model": "wang2016", "sa1_lowpass": "40",
+    "adapt": "0.2 1 1", "adapt_tau": "0.05 0.03 0.03", "ra_saturation": "4",
+    "population": "uniform",
     # not physics (the same bits for any count), but read from the shared
     # SkinModel's config, so models with different counts must not share one
     "threads": "2",

@@ -6,6 +6,9 @@ import pytest
 from mjtouch import core
 
 SA1 = dict(C=10e-12, R=1.5e9, Vth=30e-3, k0=1.40e-16, k1=1.68e-16, I0=4.94e-12, M=8)
+# The analytic LIF rate holds for Wang 2016's SA1 (no adaptation, one
+# parameter set); the default `filtered` SA1 adds adaptation and variants.
+WANG = {"sa1_model": "wang2016"}
 
 
 def lif_rate(I, R, C, Vth, refractory):
@@ -21,7 +24,7 @@ def test_sa1_constant_stress_rate_matches_analytic(q_pa, dt):
     # Constant stress: heminode 1 (8 Merkel cells) carries the largest current
     # and fires first every cycle; the others reset with it.
     q = np.full(int(round(2.0 / dt)), q_pa)
-    spikes, _ = core.receptor_run("SA1", q, dt)
+    spikes, _ = core.receptor_run("SA1", q, dt, WANG)
     T = (q.size - 1) * dt  # the first value primes the receptor at rest
     I = SA1["M"] * SA1["k0"] * q_pa + SA1["I0"]
     expect = lif_rate(I, SA1["R"], SA1["C"], SA1["Vth"], 1e-3)
@@ -35,7 +38,7 @@ def test_sa1_silent_at_and_below_rheobase():
     # rheobase: I R = Vth, i.e. q = (Vth / R - I0) / (M k0)
     q_rheo = (SA1["Vth"] / SA1["R"] - SA1["I0"]) / (SA1["M"] * SA1["k0"])
     for q in [0.0, 0.5 * q_rheo, q_rheo]:
-        spikes, v = core.receptor_run("SA1", np.full(50000, q), 1e-4)
+        spikes, v = core.receptor_run("SA1", np.full(50000, q), 1e-4, WANG)
         assert spikes.sum() == 0
         assert v.max() <= 1.0
 

@@ -100,66 +100,13 @@ enum {
   kRate,                   // exponentially smoothed rate, Hz
   kNoise,                  // Ornstein-Uhlenbeck noise, units of threshold
   kCount,                  // steps drawn from the noise generator
-  kF0, kF1, kF2, kF3       // filter states (RA: 2, PC: 4)
+  kF0, kF1, kF2, kF3,      // filter states (SA1, RA: 2, PC: 4)
+  kAdapt,                  // adaptation current, threshold units
+  kVariant                 // population variant index
 };
-static_assert(kF3 + 1 == kReceptorStateSize, "receptor state layout");
+static_assert(kVariant + 1 == kReceptorStateSize, "receptor state layout");
 constexpr int kMaxNodes = 4;
 constexpr double kTwoPi = 6.283185307179586;
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// 1 - exp(-x) and x - 1 + exp(-x), accurate for small x.
-double Phi1(double x) { return -std::expm1(-x); }
-double Phi2(double x) {
-  if (x >= 0.1) return x - Phi1(x);
-  double term = x * x / 2.0, sum = 0.0;
-  for (int k = 3; k < 16; ++k) {  // x^2/2! - x^3/3! + ..., 0.1^16/16! ~ 5e-30
-    sum += term;
-    term *= -x / k;
-  }
-  return sum;
-}
-
-// Membrane at time s from u0 under the drive a + b t: exact solution of
-// tau du/dt = -u + a + b t.
-double Membrane(double u0, double a, double b, double tau, double s) {
-  const double x = s / tau;
-  return u0 * std::exp(-x) + a * Phi1(x) + b * tau * Phi2(x);
-}
-
-// First time in (0, span] at which the membrane reaches 1, or +inf. With
-// c = u0 - a + b tau the membrane is a + b (t - tau) + c exp(-t / tau):
-// convex for c >= 0 (one crossing at most, from below), concave for c < 0
-// (rising to a maximum at tau ln(c / (b tau)) when b < 0).
-double FirstCrossing(double u0, double a, double b, double tau, double span) {
-  if (u0 >= 1.0) return 0.0;
-  double hi = span;
-  const double c = u0 - a + b * tau;
-  if (c < 0.0 && b < 0.0) {
-    const double ratio = c / (b * tau);
-    if (ratio <= 1.0) return kInf;  // falling from the start
-    hi = std::min(span, tau * std::log(ratio));
-  }
-  if (Membrane(u0, a, b, tau, hi) < 1.0) return kInf;
-  // Bracketed: f(lo) < 0 <= f(hi), f increasing through its one root.
-  // Safeguarded Newton; returns the bracket's upper end (membrane >= 1).
-  const double tol = 1e-15 * span;
-  double lo = 0.0, s = hi;
-  for (int it = 0; it < 200; ++it) {
-    const double u = Membrane(u0, a, b, tau, s);
-    if (u >= 1.0) hi = s; else lo = s;
-    if (hi - lo <= tol) break;
-    const double du = (a + b * s - u) / tau;
-    double next = du > 0.0 ? s - (u - 1.0) / du : 0.5 * (lo + hi);
-    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-    if (std::abs(next - s) <= tol) {  // converged: close the bracket above
-      const double up = std::min(hi, std::max(next, s) + tol);
-      if (Membrane(u0, a, b, tau, up) >= 1.0) hi = up;
-      break;
-    }
-    s = next;
-  }
-  return hi;
-}
 
 uint64_t SplitMix64(uint64_t x) {
   x += 0x9e3779b97f4a7c15ULL;
@@ -248,6 +195,38 @@ void WangTable1Gains(Quantity q, SA1Params* p) {
   }
 }
 
+void DefaultSA1Gains(Quantity q, SA1Params* p) {
+  WangTable1Gains(q, p);
+  if (p->model == SA1Model::kFiltered) {
+    p->k0_a_per_pa *= kSA1StaticScale;
+    p->k1_a_s_per_pa = p->k0_a_per_pa * kSA1RateTimeS;
+  }
+}
+
+namespace {
+// Per class: multipliers of (drive gain, membrane tau, adaptation jump).
+// Variant 0 is the calibrated median unit. The spread is of the order of
+// TouchSim's fitted afferents (membrane time constants within 0.6-2x of
+// their class median, Saal et al. 2017), chosen so that every variant keeps
+// its class's tuning (tests/unit/test_afferent_tuning.py).
+const VariantScale kVariants[kNumClasses][kNumVariants] = {
+    {{1.0, 1.0, 1.0}, {0.75, 1.3, 0.7}, {1.3, 0.8, 1.4}, {0.9, 1.15, 1.2}},
+    {{1.0, 1.0, 1.0}, {0.75, 1.3, 0.7}, {1.3, 0.8, 1.4}, {0.9, 1.15, 1.2}},
+    {{1.0, 1.0, 1.0}, {0.75, 1.2, 0.7}, {1.3, 0.85, 1.4}, {0.9, 1.1, 1.2}}};
+}  // namespace
+
+const VariantScale& ReceptorVariant(ReceptorClass cls, int variant) {
+  return kVariants[static_cast<int>(cls)][variant];
+}
+
+int VariantOf(const ReceptorParams& p, ReceptorClass cls, unsigned long long stream) {
+  if (!p.varied || (cls == ReceptorClass::kSA1 && p.sa1.model == SA1Model::kWang2016)) return 0;
+  // a stream of its own, apart from the noise's (counts 0, 1, ...)
+  const uint64_t h = SplitMix64(SplitMix64(SplitMix64(p.noise.seed ^ 0x5a17ULL) ^ stream) ^
+                                static_cast<uint64_t>(cls));
+  return static_cast<int>(h % kNumVariants);
+}
+
 std::string ReceptorParamsKey(const ReceptorParams& p) {
   std::ostringstream s;
   s.precision(17);
@@ -258,44 +237,18 @@ std::string ReceptorParamsKey(const ReceptorParams& p) {
     << p.ra.tau_s << ' ' << p.ra.refractory_s << " | " << p.pc.gain_s2_per_pa << ' '
     << p.pc.highpass_hz << ' ' << p.pc.lowpass_hz << ' ' << p.pc.tau_s << ' '
     << p.pc.refractory_s << " | " << p.noise.sd[0] << ' ' << p.noise.sd[1] << ' '
-    << p.noise.sd[2] << ' ' << p.noise.tau_s << ' ' << p.noise.seed << " | " << p.rate_tau_s;
+    << p.noise.sd[2] << ' ' << p.noise.tau_s << ' ' << p.noise.seed << " | " << p.rate_tau_s
+    << " | " << static_cast<int>(p.sa1.model) << ' ' << p.sa1.lowpass_hz << ' ' << p.varied;
+  for (const Adaptation& a : p.adapt) s << ' ' << a.jump << ' ' << a.tau_s;
+  s << ' ' << p.ra.saturation;
   return s.str();
-}
-
-int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, double span,
-                   double tau, double refractory, double* refractory_left,
-                   void (*on_spike)(double t, void* ctx), void* ctx) {
-  int spikes = 0;
-  double t = 0.0;
-  while (t < span) {
-    if (*refractory_left > 0.0) {  // membranes held at reset
-      const double used = std::min(*refractory_left, span - t);
-      *refractory_left -= used;
-      t += used;
-      for (int k = 0; k < nodes; ++k) u[k] = 0.0;
-      if (t >= span) break;
-    }
-    const double left = span - t;
-    double hit = kInf;
-    for (int k = 0; k < nodes; ++k)
-      hit = std::min(hit, FirstCrossing(u[k], a[k] + b[k] * t, b[k], tau, left));
-    if (!(hit <= left)) {
-      for (int k = 0; k < nodes; ++k) u[k] = Membrane(u[k], a[k] + b[k] * t, b[k], tau, left);
-      break;
-    }
-    t += hit;
-    ++spikes;
-    if (on_spike) on_spike(t, ctx);
-    for (int k = 0; k < nodes; ++k) u[k] = 0.0;
-    *refractory_left = refractory;
-  }
-  return spikes;
 }
 
 ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), dt_(dt_s) {
   // Exact propagation of x' = A x + B v for v constant over dt: the
   // exponential of the augmented matrix [[A, B], [0, 0]] dt.
-  auto build = [dt_s](int n, const double* A, const double* B, const double* c, Filter* f) {
+  auto build_h = [](double dt_s, int n, const double* A, const double* B, const double* c,
+                    Filter* f) {
     const int m = n + 1;
     double M[25] = {0}, E[25];
     for (int i = 0; i < n; ++i) {
@@ -310,10 +263,20 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
       f->c[i] = c[i];
     }
   };
+  auto build = [&](int n, const double* A, const double* B, const double* c, Filter* f) {
+    build_h(dt_s, n, A, B, c, f);
+  };
+  {  // SA1 (kFiltered): y = w^2 / (s + w)^2 v
+    const double w = kTwoPi * p.sa1.lowpass_hz;
+    const double A[4] = {-w, 0, w, -w}, B[2] = {w, 0}, c[2] = {0, 1};
+    build(2, A, B, c, &sa1_);
+  }
   {  // RA: y = w^2 / (s + w)^2 v
     const double w = kTwoPi * p.ra.lowpass_hz;
     const double A[4] = {-w, 0, w, -w}, B[2] = {w, 0}, c[2] = {0, 1};
     build(2, A, B, c, &ra_);
+    for (int level = 1; level <= kMaxSubLevels; ++level)
+      build_h(std::ldexp(dt_s, -level), 2, A, B, c, &ra_sub_[level - 1]);
   }
   {  // PC: a = v / (s + wh); b_k = wl b_{k-1} / (s + wl); y = s^2 b3
     const double wh = kTwoPi * p.pc.highpass_hz, wl = kTwoPi * p.pc.lowpass_hz;
@@ -331,6 +294,7 @@ void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
   std::fill(st, st + kReceptorStateSize, 0.0);
   st[kPrevQ] = q;
   st[kHasPrev] = 1.0;
+  st[kVariant] = VariantOf(p, cls, stream);
   const double sd = p.noise.sd[static_cast<int>(cls)];
   if (sd > 0.0) st[kNoise] = sd * Normal(p.noise.seed, stream, 0);
 }
@@ -362,8 +326,10 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
   double l0[kMaxNodes] = {0}, l1[kMaxNodes] = {0};
   bool full_wave = false;
   double tau = 1.0, refractory = 1e-3;
+  double x_start[4] = {0, 0, 0, 0};  // filter state at the step start
   auto filter = [&](const Filter& f, double gain) {
     double x[4], y0 = 0.0, y1 = 0.0;
+    for (int i = 0; i < f.n; ++i) x_start[i] = st[kF0 + i];
     for (int i = 0; i < f.n; ++i) y0 += f.c[i] * st[kF0 + i];
     for (int i = 0; i < f.n; ++i) {
       double acc = f.gamma[i] * v;
@@ -377,66 +343,129 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
     l0[0] = gain * y0;
     l1[0] = gain * y1;
   };
+  const VariantScale& var =
+      ReceptorVariant(cls, static_cast<int>(st[kVariant]));
+  Adaptation adapt = p_.adapt[ci];
+  adapt.jump *= var.adapt;
   switch (cls) {
     case ReceptorClass::kSA1: {
       const SA1Params& s = p_.sa1;
       nodes = static_cast<int>(std::min<size_t>(s.merkel_cells.size(), kMaxNodes));
       const double scale = s.resistance_ohm / s.threshold_v;  // A -> threshold units
-      const double dyn = s.k1_a_s_per_pa * std::abs(v);
-      for (int k = 0; k < nodes; ++k) {
-        const double m = s.merkel_cells[k];
-        l0[k] = scale * (m * (s.k0_a_per_pa * q0 + dyn) + s.i0_a);
-        l1[k] = scale * (m * (s.k0_a_per_pa * q1 + dyn) + s.i0_a);
+      double r0, r1;  // the rate term at the step ends
+      if (s.model == SA1Model::kWang2016) {
+        r0 = r1 = std::abs(v);
+        adapt.jump = 0.0;
+      } else {
+        filter(sa1_, 1.0);
+        r0 = l0[0];
+        r1 = l1[0];
       }
-      tau = s.resistance_ohm * s.capacitance_f;
+      const double g = var.gain;
+      for (int k = 0; k < nodes; ++k) {
+        const double m = s.merkel_cells[k] * g;
+        l0[k] = scale * (m * (s.k0_a_per_pa * q0 + s.k1_a_s_per_pa * r0) + s.i0_a);
+        l1[k] = scale * (m * (s.k0_a_per_pa * q1 + s.k1_a_s_per_pa * r1) + s.i0_a);
+      }
+      tau = s.resistance_ohm * s.capacitance_f * var.tau;
       refractory = s.refractory_s;
       break;
     }
     case ReceptorClass::kRA:
-      filter(ra_, p_.ra.gain_s_per_pa);
+      filter(ra_, p_.ra.gain_s_per_pa * var.gain);
       full_wave = true;
-      tau = p_.ra.tau_s;
+      tau = p_.ra.tau_s * var.tau;
       refractory = p_.ra.refractory_s;
       break;
     case ReceptorClass::kPC:
-      filter(pc_, p_.pc.gain_s2_per_pa);
-      tau = p_.pc.tau_s;
+      filter(pc_, p_.pc.gain_s2_per_pa * var.gain);
+      tau = p_.pc.tau_s * var.tau;
       refractory = p_.pc.refractory_s;
       break;
   }
 
-  // Segments between the rectification kinks: the drive is linear in each.
-  double cuts[kMaxNodes + 2];
-  int ncut = 0;
-  cuts[ncut++] = 0.0;
-  for (int k = 0; k < nodes; ++k) {
-    if ((l0[k] < 0.0 && l1[k] > 0.0) || (l0[k] > 0.0 && l1[k] < 0.0)) {
-      const double t = dt * l0[k] / (l0[k] - l1[k]);
-      if (t > 0.0 && t < dt) cuts[ncut++] = t;
+  // Saturation of the RA drive, d s / (s + |d|) (TouchSim's input
+  // saturation, Saal et al. 2017; an odd monotone map keeps the zero
+  // crossings). The saturated drive is not linear within a step: it is
+  // evaluated at 2^k sub-step ends (the filter propagated exactly to each)
+  // and taken linear between, k the smallest (at most kMaxSubLevels) that
+  // bounds the interpolation error |l1 - l0|^2 / (4 s 4^k) (the map's
+  // curvature is at most 2 / s) by 1e-4 threshold units.
+  const double sat = cls == ReceptorClass::kRA ? p_.ra.saturation : 0.0;
+  auto saturate = [sat](double x) { return x * sat / (sat + std::abs(x)); };
+  int nsub = 1;
+  double knots[(1 << kMaxSubLevels) + 1];  // node 0's drive at the sub-step ends
+  if (sat > 0.0) {
+    const double d = l1[0] - l0[0];
+    int level = 0;
+    while (level < kMaxSubLevels && d * d / (4.0 * sat * std::ldexp(1.0, 2 * level)) > 1e-4)
+      ++level;
+    nsub = 1 << level;
+    knots[0] = saturate(l0[0]);
+    knots[nsub] = saturate(l1[0]);
+    if (nsub > 1) {
+      const Filter& f = ra_sub_[level - 1];
+      const double gain = p_.ra.gain_s_per_pa * var.gain;
+      double x[4], nx[4];
+      std::copy(x_start, x_start + 4, x);
+      for (int j = 1; j < nsub; ++j) {
+        double y = 0.0;
+        for (int i = 0; i < f.n; ++i) {
+          double acc = f.gamma[i] * v;
+          for (int m = 0; m < f.n; ++m) acc += f.phi[i * f.n + m] * x[m];
+          nx[i] = acc;
+        }
+        for (int i = 0; i < f.n; ++i) {
+          x[i] = nx[i];
+          y += f.c[i] * x[i];
+        }
+        knots[j] = saturate(gain * y);
+      }
     }
   }
-  for (int i = 2; i < ncut; ++i)  // insertion sort of the kinks
-    for (int j = i; j > 1 && cuts[j] < cuts[j - 1]; --j) std::swap(cuts[j], cuts[j - 1]);
-  cuts[ncut++] = dt;
-  auto drive = [&](int k, double t) {
-    const double f = t / dt;
-    const double l = l0[k] + (l1[k] - l0[k]) * f;
-    const double rect = full_wave ? std::abs(l) : std::max(0.0, l);
-    return rect + n0 + (n1 - n0) * f;
-  };
+
   SpikeSink sink{0.0, dt, p_.rate_tau_s, 0.0};
   int spikes = 0;
-  for (int i = 0; i + 1 < ncut; ++i) {
-    const double ta = cuts[i], tb = cuts[i + 1], span = tb - ta;
-    if (!(span > 0.0)) continue;
-    double a[kMaxNodes], b[kMaxNodes];
+  const double h = dt / nsub;
+  for (int j = 0; j < nsub; ++j) {
+    // Sub-step [t0, t1] of the step, drive linear from la to lb per node.
+    const double t0 = j * h, t1 = j + 1 == nsub ? dt : (j + 1) * h;
+    double la[kMaxNodes], lb[kMaxNodes];
     for (int k = 0; k < nodes; ++k) {
-      a[k] = drive(k, ta);
-      b[k] = (drive(k, tb) - a[k]) / span;
+      la[k] = sat > 0.0 ? knots[j] : l0[k];
+      lb[k] = sat > 0.0 ? knots[j + 1] : l1[k];
     }
-    sink.offset = ta;
-    spikes += LinearDriveLIF(nodes, st + kU0, a, b, span, tau, refractory, st + kRefractory,
-                             OnSpike, &sink);
+    // Segments between the rectification kinks: the drive is linear in each.
+    const double len = t1 - t0;
+    double cuts[kMaxNodes + 2];
+    int ncut = 0;
+    cuts[ncut++] = t0;
+    for (int k = 0; k < nodes; ++k) {
+      if ((la[k] < 0.0 && lb[k] > 0.0) || (la[k] > 0.0 && lb[k] < 0.0)) {
+        const double t = t0 + len * la[k] / (la[k] - lb[k]);
+        if (t > t0 && t < t1) cuts[ncut++] = t;
+      }
+    }
+    for (int i = 2; i < ncut; ++i)  // insertion sort of the kinks
+      for (int m = i; m > 1 && cuts[m] < cuts[m - 1]; --m) std::swap(cuts[m], cuts[m - 1]);
+    cuts[ncut++] = t1;
+    auto drive = [&](int k, double t) {
+      const double l = la[k] + (lb[k] - la[k]) * ((t - t0) / len);
+      const double rect = full_wave ? std::abs(l) : std::max(0.0, l);
+      return rect + n0 + (n1 - n0) * (t / dt);
+    };
+    for (int i = 0; i + 1 < ncut; ++i) {
+      const double ta = cuts[i], tb = cuts[i + 1], span = tb - ta;
+      if (!(span > 0.0)) continue;
+      double a[kMaxNodes], b[kMaxNodes];
+      for (int k = 0; k < nodes; ++k) {
+        a[k] = drive(k, ta);
+        b[k] = (drive(k, tb) - a[k]) / span;
+      }
+      sink.offset = ta;
+      spikes += LinearDriveLIF(nodes, st + kU0, a, b, span, tau, refractory, st + kRefractory,
+                               adapt, st + kAdapt, OnSpike, &sink);
+    }
   }
   st[kRate] = st[kRate] * rate_decay_ + sink.rate_sum / p_.rate_tau_s;
   double vmax = st[kU0];
@@ -449,27 +478,39 @@ bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
   const int ci = static_cast<int>(cls);
   if (p_.noise.sd[ci] > 0.0 || st[kRefractory] > 0.0 || st[kPrevQ] != 0.0 || st[kHasPrev] <= 0.0)
     return false;
+  // Filters of chained real poles: no state entry ever exceeds the sum of
+  // the current ones (each propagator entry is (w t)^k / k! exp(-w t) <= 1),
+  // so |y| <= sum |c| * n * max |x|.
+  auto filter_bound = [&](const Filter& f) {
+    double csum = 0.0, xmax = 0.0;
+    for (int i = 0; i < f.n; ++i) {
+      csum += std::abs(f.c[i]);
+      xmax = std::max(xmax, std::abs(st[kF0 + i]));
+    }
+    return csum * f.n * xmax;
+  };
+  const double gain_scale = ReceptorVariant(cls, static_cast<int>(st[kVariant])).gain;
   if (cls == ReceptorClass::kSA1) {
+    // A membrane below 1 under a drive bounded below 1 stays below 1; the
+    // adaptation current only lowers the drive.
     const SA1Params& s = p_.sa1;
-    const double bias = s.resistance_ohm / s.threshold_v * s.i0_a;  // drive at q = 0
-    if (!(bias < 1.0)) return false;
+    const double scale = s.resistance_ohm / s.threshold_v;
     const int nodes = static_cast<int>(std::min<size_t>(s.merkel_cells.size(), kMaxNodes));
+    double mmax = 0.0;
+    for (int k = 0; k < nodes; ++k) mmax = std::max(mmax, s.merkel_cells[k] * gain_scale);
+    const double dyn = s.model == SA1Model::kFiltered
+                           ? scale * mmax * s.k1_a_s_per_pa * filter_bound(sa1_) : 0.0;
+    const double bias = scale * s.i0_a;  // drive at q = 0
+    if (!(bias + dyn < 1.0)) return false;
     for (int k = 0; k < nodes; ++k)
       if (!(st[kU0 + k] < 1.0)) return false;
     return true;
   }
-  // Filters of chained real poles: no state entry ever exceeds the sum of
-  // the current ones (each propagator entry is (w t)^k / k! exp(-w t) <= 1),
-  // so |y| <= sum |c| * n * max |x|. A drive bound of 1e-6 (threshold units)
-  // keeps a membrane below 1 unless it already is within 1e-6 of it.
+  // A drive bound of 1e-6 (threshold units) keeps a membrane below 1 unless
+  // it already is within 1e-6 of it.
   const Filter& f = cls == ReceptorClass::kRA ? ra_ : pc_;
   const double gain = cls == ReceptorClass::kRA ? p_.ra.gain_s_per_pa : p_.pc.gain_s2_per_pa;
-  double csum = 0.0, xmax = 0.0;
-  for (int i = 0; i < f.n; ++i) {
-    csum += std::abs(f.c[i]);
-    xmax = std::max(xmax, std::abs(st[kF0 + i]));
-  }
-  const double bound = gain * csum * f.n * xmax;
+  const double bound = gain * gain_scale * filter_bound(f);
   return bound < 1e-6 && st[kU0] < 1.0 - 1e-6;
 }
 

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "afferents/membrane.h"
+
 namespace mjtouch {
 
 enum class ReceptorClass { kSA1 = 0, kRA = 1, kPC = 2 };
@@ -26,21 +28,32 @@ bool ParseQuantity(const std::string& s, Quantity* q);
 // Compressive-positive receptor quantity from a stress tensor (Voigt, Pa).
 double ReceptorQuantity(Quantity q, const double stress[6]);
 
-// SA1: Wang et al. 2016 (after Lesniak et al. 2014). Heminode k of the
-// branching afferent collects current I_k = M_k (k0 q + k1 |dq/dt|) + I0
-// (negative clipped to 0) and integrates C dU/dt + U/R = I_k; when any
-// heminode reaches U_th all reset to 0 (spike-initiation zone shared).
-// Wang 2016 gives no reset value (rest is 0 after their shift) and no
-// refractory period; we reset to 0 and add the common 1 ms.
+// SA1 (Merkel), after Wang et al. 2016 and Lesniak et al. 2014. Heminode k
+// of the branching afferent collects I_k = M_k (k0 q + k1 r) + I0 (negative
+// clipped to 0) and integrates C dU/dt + U/R = I_k; when any heminode
+// reaches U_th all reset to 0 (spike-initiation zone shared), 1 ms
+// refractory, minus a shared adaptation current.
+//  - kFiltered (default): r = w^2 / (s + w)^2 dq/dt, the stress rate
+//    low-passed (two real poles at lowpass_hz) and signed: loading excites,
+//    unloading inhibits (SA1s pause on release; TouchSim's SA1 fits have a
+//    negative gain on falling velocity, Saal et al. 2017), and the rate term
+//    fades above the corner, so thresholds rise at high frequencies
+//    (Johansson et al. 1982; Freeman & Johnson 1982).
+//  - kWang2016: r = |dq/dt| unfiltered, no adaptation, no population
+//    variants: Wang 2016's model as published (their specimen study).
+enum class SA1Model { kFiltered = 0, kWang2016 = 1 };
+
 struct SA1Params {
+  SA1Model model = SA1Model::kFiltered;
   std::vector<double> merkel_cells = {8, 5, 3, 1};  // M_k per heminode
-  double k0_a_per_pa = 1.40e-16;     // static gain (Wang 2016, Table 1)
-  double k1_a_s_per_pa = 1.68e-16;   // dynamic gain (Wang 2016, Table 1)
+  double k0_a_per_pa = 1.40e-16;     // static gain (set by DefaultSA1Gains)
+  double k1_a_s_per_pa = 1.68e-16;   // dynamic gain (set by DefaultSA1Gains)
   double i0_a = 4.94e-12;            // bias current (Wang 2016, Table 1)
   double capacitance_f = 10e-12;     // C
   double resistance_ohm = 1.5e9;     // R
   double threshold_v = 30e-3;        // U_th
   double refractory_s = 1e-3;        // absolute refractory period
+  double lowpass_hz = 30.0;          // kFiltered: corner of the rate term
 };
 
 // Wang et al. 2016, Table 1: the fitted (k0, k1, I0) of the model whose
@@ -48,19 +61,28 @@ struct SA1Params {
 // strain-based for `strain`, dimensionless; SED-based for `sed`, J/m^3).
 // Units read as SI, as printed ("All values are SI units"); see README.
 void WangTable1Gains(Quantity q, SA1Params* p);
+// The defaults of p->model for quantity q: kWang2016 the Table 1 row;
+// kFiltered the same row with k0 x kSA1StaticScale and k1 = k0 x
+// kSA1RateTimeS (plugin/README.md, "Dynamic range and thresholds").
+void DefaultSA1Gains(Quantity q, SA1Params* p);
+constexpr double kSA1StaticScale = 1.0;
+constexpr double kSA1RateTimeS = 0.05;
 
 // RA (Meissner, FA1): the rate of change of q, low-passed by two equal real
 // poles at `lowpass_hz`, y = w^2 / (s + w)^2 dq/dt (Pa/s), full-wave
 // rectified (fires on loading and unloading, silent in a steady hold):
-// tau dU/dt = -U + gain |y|, threshold 1. The low-pass sets the best
-// frequency (tens of Hz; Johansson et al. 1982), the membrane time constant
-// is in TouchSim's 3-9 ms range (Saal et al. 2017).
+// tau dU/dt = -U + |sat(gain y)| - w_adapt, threshold 1, sat(d) = d s / (s + |d|). The low-pass sets the
+// best frequency (tens of Hz; Johansson et al. 1982), the membrane time
+// constant is in TouchSim's 3-9 ms range (Saal et al. 2017).
 struct RAParams {
-  // Calibrated (README, "Afferent models"): 1:1 threshold 100 Pa at 40 Hz.
-  double gain_s_per_pa = 1.02e-4;
+  // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 100 Pa at 40 Hz.
+  double gain_s_per_pa = 1.30e-4;
   double lowpass_hz = 40.0;
   double tau_s = 5e-3;
   double refractory_s = 1e-3;
+  // Drive saturation s (threshold units; 0: none): TouchSim saturates its
+  // input current (Saal et al. 2017); ramp rates stay physiological.
+  double saturation = 5.0;
 };
 
 // PC (Pacinian, FA2): stress acceleration through a band-pass,
@@ -68,10 +90,10 @@ struct RAParams {
 // high-pass (Loewenstein & Skalak 1966) on top of the acceleration makes the
 // low-frequency flank steep; the low-pass and the short membrane (TouchSim:
 // 1-2 ms) bound the high one. Half-wave rectified (one spike per cycle, phase
-// locked): tau dU/dt = -U + gain max(0, y), threshold 1.
+// locked): tau dU/dt = -U + gain max(0, y) - w_adapt, threshold 1.
 struct PCParams {
-  // Calibrated (README, "Afferent models"): 1:1 threshold 0.5 Pa at 250 Hz.
-  double gain_s2_per_pa = 5.28e-6;
+  // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 0.5 Pa at 250 Hz.
+  double gain_s2_per_pa = 4.89e-6;
   double highpass_hz = 150.0;
   double lowpass_hz = 250.0;
   double tau_s = 1.5e-3;
@@ -89,18 +111,36 @@ struct NoiseParams {
   unsigned long long seed = 0;
 };
 
+// Population variability: each receptor takes one of kNumVariants parameter
+// sets of its class (multipliers of the drive gain, membrane time constant
+// and adaptation jump, receptors.cc kVariants), picked by a hash of (seed,
+// receptor index), as TouchSim draws each afferent from its class's fitted
+// set (Saal et al. 2017: 4 SA1, 9 RA, 4 PC fits).
+constexpr int kNumVariants = 4;
+struct VariantScale {
+  double gain, tau, adapt;
+};
+const VariantScale& ReceptorVariant(ReceptorClass cls, int variant);
+
 // Doubles of plugin state per receptor (membranes, refractory clock,
-// previous q, smoothed rate, noise, step count, filter states); the layout
-// is private to receptors.cc.
-constexpr int kReceptorStateSize = 14;
+// previous q, smoothed rate, noise, step count, filter states, adaptation,
+// variant); the layout is private to receptors.cc.
+constexpr int kReceptorStateSize = 16;
 
 struct ReceptorParams {
   SA1Params sa1;
   RAParams ra;
   PCParams pc;
   NoiseParams noise;
+  // Spike-triggered adaptation per class (membrane.h; README, "Dynamic range").
+  Adaptation adapt[kNumClasses] = {{0.1, 0.05}, {1.0, 0.03}, {1.0, 0.02}};
+  bool varied = true;        // `population`: variants (true) or the median set only
   double rate_tau_s = 0.05;  // smoothed rate: exponential kernel, s
 };
+
+// The variant (0 .. kNumVariants - 1) receptor `stream` uses: 0 without
+// variability and for the kWang2016 SA1.
+int VariantOf(const ReceptorParams& p, ReceptorClass cls, unsigned long long stream);
 
 // Every parameter, printed at full precision (for model caches).
 std::string ReceptorParamsKey(const ReceptorParams& p);
@@ -135,7 +175,9 @@ class ReceptorStepper {
   };
   const ReceptorParams& p_;
   double dt_;
-  Filter ra_, pc_;
+  static constexpr int kMaxSubLevels = 3;  // RA saturation: up to 8 sub-steps
+  Filter sa1_, ra_, pc_;
+  Filter ra_sub_[kMaxSubLevels];  // RA filter over dt / 2^k, k = 1..
   double noise_rho_, rate_decay_;
 };
 
@@ -149,17 +191,6 @@ double ReceptorRate(const double* state);
 // One step without a stepper (builds one: for tests and one-off calls).
 int AdvanceReceptor(ReceptorClass cls, const ReceptorParams& p, double q_end, double dt,
                     unsigned long long stream, double* state, double* voltage);
-
-// Leaky membranes with a drive linear in time over [0, span]:
-// tau du_k/dt = -u_k + a_k + b_k t, threshold 1, shared reset to 0 and an
-// absolute refractory period (membranes held at 0; `refractory_left`
-// carries over). The first crossing is found exactly (the membrane is
-// convex or concave in t, so it is bracketed and solved by safeguarded
-// Newton). Each spike time (from the interval start) is passed to
-// on_spike(t, ctx). Returns the spike count.
-int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, double span,
-                   double tau, double refractory, double* refractory_left,
-                   void (*on_spike)(double t, void* ctx), void* ctx);
 
 }  // namespace mjtouch
 

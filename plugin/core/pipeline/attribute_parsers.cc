@@ -77,7 +77,7 @@ bool ParseQuantityAttribute(const std::string& v, SkinConfig* cfg, AttributePars
                          ClassName(static_cast<ReceptorClass>(c))));
   }
   // SA1 gains default to the Wang 2016 Table 1 row of the SA1 quantity.
-  WangTable1Gains(cfg->classes[0].quantity, &cfg->receptor.sa1);
+  DefaultSA1Gains(cfg->classes[0].quantity, &cfg->receptor.sa1);
   return true;
 }
 void WriteQuantityKey(const SkinConfig& cfg, std::ostream& out) {

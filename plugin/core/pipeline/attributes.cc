@@ -132,13 +132,23 @@ const std::vector<AttributeRow>& Rows() {
        "words of: spikes stress voltage force pressure rate", NO_FIELD, ParseOutputsAttribute,
        WriteOutputsKey, S::kModel},
       // -- afferents (stage 4; README "Afferent models") ---------------------
+      {"sa1_model", K::kChoice, 0, 0, false, false, "", "filtered",
+       "SA1 model: `filtered` (rate term low-passed and signed, adaptation, variants) or "
+       "`wang2016` (abs(dq/dt) as published, Wang et al. 2016); resets the SA1 gains' defaults",
+       "filtered wang2016",
+       [](const SkinConfig& c, int) { return static_cast<double>(c.receptor.sa1.model); },
+       [](SkinConfig* c, int, double index) {
+         c->receptor.sa1.model = static_cast<SA1Model>(static_cast<int>(index));
+         DefaultSA1Gains(c->classes[0].quantity, &c->receptor.sa1);
+       },
+       NO_PARSE, S::kModel},
       {"sa1_merkel", K::kCustom, 0, 0, false, false, "cells per heminode", "8 5 3 1",
        "SA1 Merkel cells per heminode (Wang 2016)", "1 to 4 numbers in [0, 1000]", NO_FIELD,
        ParseMerkelAttribute, WriteMerkelKey, S::kModel},
       {"sa1_k0", K::kNumber, 0, 1e-6, false, false, "A per unit of q", "1.40e-16",
        "SA1 static gain (Wang 2016 Table 1 row of the SA1 `quantity`)", nullptr,
        FIELD(receptor.sa1.k0_a_per_pa), NO_PARSE, S::kModel},
-      {"sa1_k1", K::kNumber, 0, 1e-6, false, false, "A s per unit of q", "1.68e-16",
+      {"sa1_k1", K::kNumber, 0, 1e-6, false, false, "A s per unit of q", "7.0e-18",
        "SA1 dynamic gain (Wang 2016 Table 1 row of the SA1 `quantity`)", nullptr,
        FIELD(receptor.sa1.k1_a_s_per_pa), NO_PARSE, S::kModel},
       {"sa1_i0", K::kNumber, -1e-6, 1e-6, false, false, "A", "4.94e-12",
@@ -150,13 +160,19 @@ const std::vector<AttributeRow>& Rows() {
        nullptr, FIELD(receptor.sa1.resistance_ohm), NO_PARSE, S::kModel},
       {"sa1_vth", K::kNumber, 0, 10, true, false, "V", "0.03", "SA1 spike threshold", nullptr,
        FIELD(receptor.sa1.threshold_v), NO_PARSE, S::kModel},
-      {"ra_gain", K::kNumber, 0, 1, false, false, "s/Pa", "1.02e-4", "RA drive gain", nullptr,
+      {"sa1_lowpass", K::kNumber, 0, 1e4, true, false, "Hz", "30",
+       "SA1 (`filtered`): corner of the two-pole low-pass on the rate term", nullptr,
+       FIELD(receptor.sa1.lowpass_hz), NO_PARSE, S::kModel},
+      {"ra_gain", K::kNumber, 0, 1, false, false, "s/Pa", "1.30e-4", "RA drive gain", nullptr,
        FIELD(receptor.ra.gain_s_per_pa), NO_PARSE, S::kModel},
       {"ra_lowpass", K::kNumber, 0, 1e4, true, false, "Hz", "40", "RA low-pass corner",
        nullptr, FIELD(receptor.ra.lowpass_hz), NO_PARSE, S::kModel},
+      {"ra_saturation", K::kNumber, 0, 1e6, false, false, "(threshold units)", "5",
+       "RA drive saturation s: d s / (s + abs(d)), d the drive (0: none)",
+       nullptr, FIELD(receptor.ra.saturation), NO_PARSE, S::kModel},
       {"ra_tau", K::kNumber, 0, 10, true, false, "s", "5e-3", "RA membrane time constant",
        nullptr, FIELD(receptor.ra.tau_s), NO_PARSE, S::kModel},
-      {"pc_gain", K::kNumber, 0, 1, false, false, "s^2/Pa", "5.28e-6", "PC drive gain",
+      {"pc_gain", K::kNumber, 0, 1, false, false, "s^2/Pa", "4.89e-6", "PC drive gain",
        nullptr, FIELD(receptor.pc.gain_s2_per_pa), NO_PARSE, S::kModel},
       {"pc_highpass", K::kNumber, 0, 1e5, true, false, "Hz", "150", "PC capsule high-pass corner",
        nullptr, FIELD(receptor.pc.highpass_hz), NO_PARSE, S::kModel},
@@ -172,6 +188,16 @@ const std::vector<AttributeRow>& Rows() {
              c->receptor.pc.refractory_s = v;
        },
        NO_PARSE, S::kModel},
+      {"adapt", K::kPerClass, 0, 100, false, false, "(threshold units)", "0.1 1 1",
+       "SA1 RA PC spike-triggered adaptation: the jump of an inhibitory current at each spike",
+       nullptr, CLASS_FIELD(receptor.adapt[k].jump), NO_PARSE, S::kModel},
+      {"adapt_tau", K::kPerClass, 0, 10, true, false, "s", "0.05 0.03 0.02",
+       "SA1 RA PC adaptation decay time", nullptr, CLASS_FIELD(receptor.adapt[k].tau_s),
+       NO_PARSE, S::kModel},
+      {"population", K::kChoice, 0, 0, false, false, "", "varied",
+       "`varied`: each receptor takes one of 4 parameter sets of its class, picked from "
+       "(`seed`, receptor index); `uniform`: the median set",
+       "uniform varied", FIELD(receptor.varied), NO_PARSE, S::kModel},
       {"noise", K::kPerClass, 0, 100, false, false, "(threshold units)", "0 0 0",
        "SA1 RA PC membrane noise standard deviation", nullptr,
        CLASS_FIELD(receptor.noise.sd[k]), NO_PARSE, S::kModel},
@@ -354,7 +380,7 @@ bool ParseSkinAttributes(const AttributeLookup& lookup, SkinConfig* cfg, std::st
   // Defaults that depend on other attributes: the SA1 gains follow the SA1
   // quantity (set again when `quantity` is parsed); an unset radius (-1) is
   // fitted to the grid below.
-  WangTable1Gains(cfg->classes[0].quantity, &cfg->receptor.sa1);
+  DefaultSA1Gains(cfg->classes[0].quantity, &cfg->receptor.sa1);
   cfg->population_radius_m = -1.0;
   for (size_t i = 0; i < Rows().size() && p.ok(); ++i) {
     const AttributeRow& row = Rows()[i];
