@@ -28,7 +28,7 @@ LOG_RANGES = {
     "sa1_lowpass": (1, 1e4), "ra_saturation": (1e-3, 1e6),
 }
 LINEAR_RANGES = {"ridge_angle": (-180, 180), "poisson": (-0.99, 0.5), "sa1_i0": (-1e-6, 1e-6)}
-INTEGER_RANGES = {"nx": (4, 40), "texture_group": (0, 5)}
+INTEGER_RANGES = {"nx": (4, 40), "texture_group": (0, 5), "threads": (1, 3)}
 CHOICES = {
     "ridges": ["true", "false", "1", "0"], "shear": ["true", "false"],
     "ridge_profile": ["sine", "triangle", "square"], "pressure": ["contacts", "winkler", "elastic"],
