@@ -293,7 +293,15 @@ def skin_plugins(spec: mujoco.MjSpec) -> list[mujoco.MjsPlugin]:
 
 def set_skin(spec: mujoco.MjSpec, **attributes: str) -> mujoco.MjSpec:
     """Set (or, with value None, remove) attributes of every skin instance."""
-    for p in skin_plugins(spec):
+    targets = skin_plugins(spec)
+    if not targets:
+        # A spec read from MJCF with the instance inline in <sensor><plugin>
+        # (the shipped scenes) names the plugin on the sensor's copy only.
+        targets = [s.plugin for s in spec.sensors
+                   if s.type == mujoco.mjtSensor.mjSENS_PLUGIN and s.plugin.plugin_name == SKIN_PLUGIN]
+    if not targets:
+        raise ValueError("set_skin: the spec has no mjtouch.skin instance or sensor to edit")
+    for p in targets:
         cfg = dict(p.config)
         for k, v in attributes.items():
             if v is None:

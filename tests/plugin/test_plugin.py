@@ -138,3 +138,16 @@ def test_missing_plugin_library_gives_clear_error(monkeypatch, tmp_path):
     monkeypatch.setattr(mjtouch._loader, "_candidates", lambda: [tmp_path / "libmjtouch.so"])
     with pytest.raises(mjtouch.PluginNotBuiltError, match="was not found.*pip install"):
         mjtouch._loader.library_path()
+
+
+def test_set_skin_edits_the_shipped_scenes_inline_instance():
+    # models/*.xml define the instance inline in <sensor><plugin>; set_skin
+    # must reach it (it once did nothing there) and reject a spec without skin.
+    spec = mujoco.MjSpec.from_file(str(MODELS / "slide_flat.xml"))
+    scenes.set_skin(spec, pressure="elastic", nx="40")
+    layout = SkinLayout.from_model(spec.compile())
+    assert layout.nx == 40
+    bare = scenes.remove_skin(scenes.scene_spec(scenes.Fingertip(), scenes.Texture(),
+                                                scenes.Protocol()))
+    with pytest.raises(ValueError, match="no mjtouch.skin"):
+        scenes.set_skin(bare, nx="40")
