@@ -8,7 +8,8 @@ with contact_solver="pk" (Polonsky & Keer, warm-started from the last step:
 the solver before #13) and "pcg" (preconditioned CG, extrapolated warm
 start). Every configuration starts from one settled sliding state (the press
 and a lead-in simulated without the plugin). Prints per configuration:
-- CG iterations per step (median, max) over the sliding steps;
+- CG iterations per step (median, max) over the sliding steps, and the most
+  common FFT grid of the solve (set by the solve box, pipeline/skin_traction.cc);
 - errors against a tight reference (pk, tolerance 1e-8) over the same steps:
   pressure relative RMS (all steps pooled), and the largest indentation-depth
   difference (the force block's depth, m; its forces are MuJoCo's by
@@ -83,19 +84,23 @@ def accuracy(name: str, start, steps: int) -> dict:
         mujoco.mj_setState(run.model, run.data, run.state0, _FULL)
         run.data.qacc_warmstart[:] = run.warm
         run.data.ctrl[:] = run.ctrl[0]
-        p, depth, its = [], [], []
+        p, depth, its, grids = [], [], [], []
         for _ in range(steps):
             mujoco.mj_step(run.model, run.data)
             p.append(layout.block(run.data.sensordata, "pressure").copy())
             depth.append(layout.block(run.data.sensordata, "force")[3])
-            its.append(layout.last_evaluation(run.data)["elastic_iterations"])
+            ev = layout.last_evaluation(run.data)
+            its.append(ev["elastic_iterations"])
+            grids.append(ev["elastic_fft_size"])
         traces[label] = (np.array(p), np.array(depth), np.array(its))
+        if label in SOLVERS:
+            out[label + "_grid"] = max(set(grids), key=grids.count)
     p_ref, d_ref, _ = traces["ref"]
     for s in SOLVERS:
         p, d, its = traces[s]
         out[s] = dict(iterations_median=float(np.median(its)), iterations_max=int(its.max()),
                       pressure_rms_rel=float(np.sqrt(((p - p_ref) ** 2).sum() / (p_ref ** 2).sum())),
-                      depth_max_abs_m=float(np.abs(d - d_ref).max()))
+                      depth_max_abs_m=float(np.abs(d - d_ref).max()), fft_grid=out[s + "_grid"])
     out["ref_iterations_median"] = float(np.median(traces["ref"][2]))
     return out
 
@@ -138,7 +143,7 @@ def main() -> None:
             a = acc[s]
             print(f"  {s:4s} iterations median {a['iterations_median']:5.1f} max "
                   f"{a['iterations_max']:3d}  pressure rms rel {a['pressure_rms_rel']:.2e}  "
-                  f"depth max |diff| {a['depth_max_abs_m']:.2e} m")
+                  f"depth max |diff| {a['depth_max_abs_m']:.2e} m  FFT grid {a['fft_grid'][0]}x{a['fft_grid'][1]}")
             for stage in ("stages 1-2", "full"):
                 lo, med = t[s, stage]
                 print(f"       {stage:10s} us/step min {lo:8.1f} median {med:8.1f}")

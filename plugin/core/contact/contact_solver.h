@@ -52,6 +52,7 @@ struct ElasticWork {
   std::vector<double> g_pad;  // preconditioner input with a zero border
   std::vector<int> set;       // kPreconditioned: the cells of the working set
   std::vector<int> changed;
+  std::vector<double> check_p, check_u;  // skin_traction.cc: the box check
   ComplianceWork fft;
 };
 

@@ -16,12 +16,26 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kElasticMaxIterations = 500;
+// Cells the elastic solve box extends beyond the last step's contact (a
+// sliding contact moves well under a cell per step).
+constexpr int kBoxMarginCells = 3;
+// Solves on a grown box before the whole rendered box.
+constexpr int kBoxAttempts = 3;
 
 // CPU time of the calling thread (benchmarks: Workspace::render_time_s).
 double ThreadCpuSeconds() {
   timespec ts;
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+// Cells [i0, i1] x [j0, j1] widened by kBoxMarginCells, clipped to box.
+CellBox GrowBox(const CellBox& box, int i0, int i1, int j0, int j1) {
+  i0 = std::max(box.i0, i0 - kBoxMarginCells);
+  j0 = std::max(box.j0, j0 - kBoxMarginCells);
+  i1 = std::min(box.i0 + box.nx - 1, i1 + kBoxMarginCells);
+  j1 = std::min(box.j0 + box.ny - 1, j1 + kBoxMarginCells);
+  return CellBox{i0, j0, i1 - i0 + 1, j1 - j0 + 1};
 }
 
 // Smallest gap over the covered cells of the box (+inf if none).
@@ -40,6 +54,58 @@ double MinGap(const TaxelGrid& grid, const CellBox& box, const std::vector<doubl
       if (c[i] > 0.0) m[0] = std::min(m[0], g[i]);
   }
   return std::min(std::min(m[0], m[1]), std::min(m[2], m[3]));
+}
+
+// True if no rendered cell (box) outside `inner` can touch under the
+// pressure solved on `inner` (zero elsewhere): g0 + K p >= approach there.
+// Cells with g0 > approach + lift (lift: a bound on the skin's upward bulge)
+// pass without the operator; the rest get u from one application on their
+// bounding box. If some cell fails, *grown is the bounding box of inner and
+// the failing cells, kBoxMarginCells wider (within box).
+bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
+                     const std::vector<double>& gap, const CellBox& box, const CellBox& inner,
+                     const std::vector<double>& pressure, double approach_m, double lift_m,
+                     ElasticWork* w, CellBox* grown) {
+  auto outside = [&](int i, int j) {
+    return i < inner.i0 || i >= inner.i0 + inner.nx || j < inner.j0 || j >= inner.j0 + inner.ny;
+  };
+  int i0 = inner.i0, i1 = inner.i0 + inner.nx - 1, j0 = inner.j0, j1 = inner.j0 + inner.ny - 1;
+  bool any = false;
+  for (int j = box.j0; j < box.j0 + box.ny; ++j)
+    for (int i = box.i0; i < box.i0 + box.nx; ++i)
+      if (outside(i, j) && gap[static_cast<size_t>(j) * grid.n + i] <= approach_m + lift_m) {
+        any = true;
+        i0 = std::min(i0, i);
+        i1 = std::max(i1, i);
+        j0 = std::min(j0, j);
+        j1 = std::max(j1, j);
+      }
+  if (!any) return true;
+  const int cx = i1 - i0 + 1, cy = j1 - j0 + 1;
+  w->check_p.assign(static_cast<size_t>(cx) * cy, 0.0);
+  w->check_u.resize(w->check_p.size());
+  for (int j = inner.j0; j < inner.j0 + inner.ny; ++j)
+    for (int i = inner.i0; i < inner.i0 + inner.nx; ++i)
+      w->check_p[static_cast<size_t>(j - j0) * cx + (i - i0)] =
+          pressure[static_cast<size_t>(j) * grid.n + i];
+  const auto spec = K.SpectrumFor(cx, cy);
+  K.Apply(*spec, w->check_p.data(), cx, cy, w->check_u.data(), &w->fft);
+  int f0 = inner.i0, f1 = inner.i0 + inner.nx - 1, g0 = inner.j0, g1 = inner.j0 + inner.ny - 1;
+  bool ok = true;
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      const double g = gap[static_cast<size_t>(j) * grid.n + i];
+      if (outside(i, j) && g <= approach_m + lift_m &&
+          !(g + w->check_u[static_cast<size_t>(j - j0) * cx + (i - i0)] >= approach_m)) {
+        ok = false;
+        f0 = std::min(f0, i);
+        f1 = std::max(f1, i);
+        g0 = std::min(g0, j);
+        g1 = std::max(g1, j);
+      }
+    }
+  if (!ok) *grown = GrowBox(box, f0, f1, g0, g1);
+  return ok;
 }
 
 }  // namespace
@@ -118,38 +184,44 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
           }
         };
         warm_guess();
-        // The solve box: cells that can touch if the approach is at most 1.2
-        // x the last step's depth above gmin (+ 10 um). A cell whose gap
-        // exceeds the approach by more than the largest bulge of the skin
-        // never touches, so if the solved approach stays below that level
-        // the box held every contact; else solve again on every rendered
-        // cell.
-        const double lift = ec.max_lift_m_per_pa() * in.normal_force_n / grid.Area();
-        const double level = gmin + 1.2 * depth_prev + 10e-6;
+        // The solve box: the last step's contact, kBoxMarginCells wider.
+        // The gap alone bounds it poorly: an elastic contact is ~1/sqrt(2)
+        // as wide as the region where the surfaces interpenetrate, and a
+        // layered skin bulges beside a load. So the box is checked after the
+        // solve (BoxHoldsContact: no rendered cell outside it may touch) and
+        // grown around the cells that would; after kBoxAttempts, every
+        // rendered cell. The result solves the contact problem on the
+        // rendered cells either way.
         CellBox solve_box = box;
         if (warm) {
           int i0 = grid.n, i1 = -1, j0 = grid.n, j1 = -1;
           for (int j = box.j0; j < box.j0 + box.ny; ++j)
             for (int i = box.i0; i < box.i0 + box.nx; ++i)
-              if (ws->gap[static_cast<size_t>(j) * grid.n + i] <= level + lift) {
+              if (last[static_cast<size_t>(j) * grid.n + i] > 0.0) {
                 i0 = std::min(i0, i);
                 i1 = std::max(i1, i);
                 j0 = std::min(j0, j);
                 j1 = std::max(j1, j);
               }
-          if (i1 >= 0) solve_box = CellBox{i0, j0, i1 - i0 + 1, j1 - j0 + 1};
+          if (i1 >= 0) solve_box = GrowBox(box, i0, i1, j0, j1);
         }
+        // Upward bulge bound: max_lift times the whole load on one cell.
+        const double lift = ec.max_lift_m_per_pa() * in.normal_force_n / grid.Area();
         ElasticSolveStats st;
-        for (int attempt = 0; attempt < 2; ++attempt) {
-          if (attempt == 1) {  // the tight box was too small: every rendered cell
-            if (!warm) break;
-            solve_box = box;
-            warm_guess();
-          }
+        for (int attempt = 0;; ++attempt) {
           touching = ec.Solve(ws->gap, solve_box, in.normal_force_n, cfg.tolerance,
                               kElasticMaxIterations, &ws->pressure_guess, &ws->elastic, &st,
                               cfg.elastic_method);
-          if (!touching || !warm || st.approach_m <= level) break;
+          const bool whole = solve_box.i0 == box.i0 && solve_box.j0 == box.j0 &&
+                             solve_box.nx == box.nx && solve_box.ny == box.ny;
+          if (whole) break;
+          CellBox grown = box;
+          if (touching && BoxHoldsContact(grid, ec.compliance(), ws->gap, box, solve_box,
+                                          ws->pressure_guess, st.approach_m, lift, &ws->elastic,
+                                          &grown))
+            break;
+          // the solution on the smaller box is a good start on the grown one
+          solve_box = touching && attempt + 1 < kBoxAttempts ? grown : box;
         }
         if (touching) {
           tf.pressure_pa.swap(ws->pressure_guess);
