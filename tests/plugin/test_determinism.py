@@ -5,6 +5,7 @@ import mujoco.rollout
 import numpy as np
 
 from mjtouch import scenes
+from mjtouch.sensor import SkinLayout
 
 from conftest import fast_tip
 
@@ -173,3 +174,38 @@ def test_elastic_pcg_matches_the_reference_solver_in_the_plugin():
         assert touching.sum() > 100, block
         worst = (diff[touching] / norm[touching]).max()
         assert worst <= 1e-3, (block, worst)
+
+
+def test_elastic_solve_box_grows_when_the_contact_jumps():
+    # pcg solves on the last step's contact box (+3 cells) and then checks
+    # every rendered cell outside it; when the contact outgrows the box the
+    # box must grow. Jump the pad 2 mm deeper in one step (0.045 -> 0.36 N): the warm solve
+    # (last box far too small) must match a cold solve of the same step on
+    # every rendered cell (contact-valid flag cleared in plugin_state). Both
+    # stop at the 1e-4 tolerance, whose error is <= ~5e-4 against a tight
+    # solve (bench_elastic.py), so 2e-3 bounds their difference.
+    m = _elastic_model("pcg")
+    layout = SkinLayout.from_model(m)
+    d = mujoco.MjData(m)
+    for _ in range(300):  # a light press: a small contact
+        d.ctrl[:] = [0.0, -0.05]
+        mujoco.mj_step(m, d)
+    before = layout.block(d.sensordata, "pressure") > 0
+    press = m.joint("press_z").qposadr[0]
+    d.qpos[press] -= 2e-3
+    cold = mujoco.MjData(m)
+    mujoco.mj_copyData(cold, m, d)
+    cold.plugin_state[m.plugin_stateadr[0] + 1] = 0.0  # kStContactValid: no warm start
+    for dd in (d, cold):
+        dd.ctrl[:] = [0.0, -0.05]
+        mujoco.mj_step(m, dd)
+    warm_p = layout.block(d.sensordata, "pressure")
+    cold_p = layout.block(cold.sensordata, "pressure")
+    after = cold_p > 0
+    # the contact really outgrew the old box: cells touch > 3 cells beyond it
+    n = layout.nx
+    rows_before = np.flatnonzero(before.reshape(n, n).any(axis=1))
+    rows_after = np.flatnonzero(after.reshape(n, n).any(axis=1))
+    assert rows_after[0] < rows_before[0] - 3 and rows_after[-1] > rows_before[-1] + 3
+    rel = np.linalg.norm(warm_p - cold_p) / np.linalg.norm(cold_p)
+    assert rel <= 2e-3, rel
