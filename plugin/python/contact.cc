@@ -162,44 +162,13 @@ std::tuple<Out<double>, Out<double>> Render(const F64_2& skin_z_m, double pitch_
                                             bool area_average, bool fast_paths) {
   const int n = SquareSide(skin_z_m, "skin_z_m");
   RequirePositive(pitch_m, "render_gap", "pitch_m");
-  if (surfaces.shape(1) != 20)
-    Fail("surfaces must have shape (nsurface, 20), got shape " + ShapeOf(surfaces));
   const TaxelGrid grid{n, pitch_m};
   Pose pad;
   for (int k = 0; k < 3; ++k) pad.pos[k] = pad_pos[k];
   for (int k = 0; k < 9; ++k) pad.mat[k] = pad_mat[k];
-  const size_t ns = surfaces.shape(0);
-  std::vector<CounterSurface> list(ns);
-  std::vector<std::vector<double>> prefixes(ns);
-  constexpr int kLastType = static_cast<int>(CounterSurface::Type::kCylinder);
-  for (size_t k = 0; k < ns; ++k) {
-    const double* d = surfaces.data() + 20 * k;
-    CounterSurface& s = list[k];
-    if (!(d[0] >= 0 && d[0] <= kLastType) || d[0] != std::floor(d[0]))
-      Fail("surface " + std::to_string(k) + ": type code " + Num(d[0]) + " is not in [0, " +
-           std::to_string(kLastType) + "]");
-    s.type = static_cast<CounterSurface::Type>(static_cast<int>(d[0]));
-    for (int c = 0; c < 3; ++c) s.pose.pos[c] = d[1 + c];
-    for (int c = 0; c < 9; ++c) s.pose.mat[c] = d[4 + c];
-    for (int c = 0; c < 3; ++c) s.size_m[c] = d[13 + c];
-    s.half_x_m = d[16];
-    s.half_y_m = d[17];
-    s.elevation_m = d[18];
-    s.max_height_m = d[19];
-    if (s.type == CounterSurface::Type::kHeightField) {
-      if (hfield.shape(0) < 2 || hfield.shape(1) < 2)
-        Fail("surface " + std::to_string(k) + ": a height field needs hfield with at least 2 x 2 "
-             "samples, got shape " + ShapeOf(hfield));
-      s.nrow = static_cast<int>(hfield.shape(0));
-      s.ncol = static_cast<int>(hfield.shape(1));
-      s.samples = hfield.data();
-      prefixes[k] = HeightFieldRowPrefix(s.nrow, s.ncol, s.samples);
-      s.row_prefix = prefixes[k].data();
-      s.rows_identical = true;  // as the plugin detects 1D textures
-      for (int r = 1; r < s.nrow && s.rows_identical; ++r)
-        s.rows_identical = std::equal(s.samples, s.samples + s.ncol, s.samples + r * s.ncol);
-    }
-  }
+  std::vector<CounterSurface> list;
+  std::vector<std::vector<double>> prefixes;
+  DecodeSurfaces(surfaces, hfield, &list, &prefixes);
   const std::vector<double> z(skin_z_m.data(), skin_z_m.data() + grid.Size());
   std::vector<double> g, c;
   RenderGap(grid, z, pad, list, std::numeric_limits<double>::infinity(), &g, &c, area_average,
@@ -285,6 +254,47 @@ std::tuple<Out<double>, Out<double>, Out<double>> Splat(const F64_2& contacts, i
 }
 
 }  // namespace
+
+void DecodeSurfaces(const F64_2& surfaces, const F32_2& hfield,
+                    std::vector<CounterSurface>* out, std::vector<std::vector<double>>* out_prefixes) {
+  if (surfaces.shape(1) != 20)
+    Fail("surfaces must have shape (nsurface, 20), got shape " + ShapeOf(surfaces));
+  const size_t ns = surfaces.shape(0);
+  std::vector<CounterSurface>& list = *out;
+  list.assign(ns, CounterSurface{});
+  std::vector<std::vector<double>>& prefixes = *out_prefixes;
+  prefixes.assign(ns, {});
+  constexpr int kLastType = static_cast<int>(CounterSurface::Type::kCylinder);
+  for (size_t k = 0; k < ns; ++k) {
+    const double* d = surfaces.data() + 20 * k;
+    CounterSurface& s = list[k];
+    if (!(d[0] >= 0 && d[0] <= kLastType) || d[0] != std::floor(d[0]))
+      Fail("surface " + std::to_string(k) + ": type code " + Num(d[0]) + " is not in [0, " +
+           std::to_string(kLastType) + "]");
+    s.type = static_cast<CounterSurface::Type>(static_cast<int>(d[0]));
+    for (int c = 0; c < 3; ++c) s.pose.pos[c] = d[1 + c];
+    for (int c = 0; c < 9; ++c) s.pose.mat[c] = d[4 + c];
+    for (int c = 0; c < 3; ++c) s.size_m[c] = d[13 + c];
+    s.half_x_m = d[16];
+    s.half_y_m = d[17];
+    s.elevation_m = d[18];
+    s.max_height_m = d[19];
+    if (s.type == CounterSurface::Type::kHeightField) {
+      if (hfield.shape(0) < 2 || hfield.shape(1) < 2)
+        Fail("surface " + std::to_string(k) + ": a height field needs hfield with at least 2 x 2 "
+             "samples, got shape " + ShapeOf(hfield));
+      s.nrow = static_cast<int>(hfield.shape(0));
+      s.ncol = static_cast<int>(hfield.shape(1));
+      s.samples = hfield.data();
+      prefixes[k] = HeightFieldRowPrefix(s.nrow, s.ncol, s.samples);
+      s.row_prefix = prefixes[k].data();
+      s.rows_identical = true;  // as the plugin detects 1D textures
+      for (int r = 1; r < s.nrow && s.rows_identical; ++r)
+        s.rows_identical = std::equal(s.samples, s.samples + s.ncol, s.samples + r * s.ncol);
+    }
+  }
+}
+
 
 void BindContact(nb::module_& m) {
   m.def("winkler_pressure", &Winkler, nb::arg("gap_m").noconvert(), nb::arg("coverage").noconvert(), nb::arg("pitch_m"),

@@ -209,36 +209,9 @@ std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
     Fail("pad_pos (T, 3), pad_mat (T, 9) and forces_n (T, 3: normal, shear x, shear y) must "
          "agree, got shapes " + ShapeOf(pad_pos) + ", " + ShapeOf(pad_mat) + ", " +
          ShapeOf(forces_n));
-  if (surfaces.shape(1) != 20)
-    Fail("surfaces must have shape (nsurface, 20), got shape " + ShapeOf(surfaces));
   StepInput in;
-  std::vector<double> prefix;
-  for (size_t k = 0; k < surfaces.shape(0); ++k) {
-    const double* d = surfaces.data() + 20 * k;
-    CounterSurface s;
-    if (!(d[0] >= 0 && d[0] <= static_cast<int>(CounterSurface::Type::kCylinder)))
-      Fail("surface " + std::to_string(k) + ": bad type code");
-    s.type = static_cast<CounterSurface::Type>(static_cast<int>(d[0]));
-    for (int c = 0; c < 3; ++c) s.pose.pos[c] = d[1 + c];
-    for (int c = 0; c < 9; ++c) s.pose.mat[c] = d[4 + c];
-    for (int c = 0; c < 3; ++c) s.size_m[c] = d[13 + c];
-    s.half_x_m = d[16];
-    s.half_y_m = d[17];
-    s.elevation_m = d[18];
-    s.max_height_m = d[19];
-    if (s.type == CounterSurface::Type::kHeightField) {
-      if (hfield.shape(0) < 2 || hfield.shape(1) < 2) Fail("hfield needs at least 2 x 2 samples");
-      s.nrow = static_cast<int>(hfield.shape(0));
-      s.ncol = static_cast<int>(hfield.shape(1));
-      s.samples = hfield.data();
-      prefix = HeightFieldRowPrefix(s.nrow, s.ncol, s.samples);
-      s.row_prefix = prefix.data();
-      s.rows_identical = true;
-      for (int r = 1; r < s.nrow && s.rows_identical; ++r)
-        s.rows_identical = std::equal(s.samples, s.samples + s.ncol, s.samples + r * s.ncol);
-    }
-    in.surfaces.push_back(s);
-  }
+  std::vector<std::vector<double>> prefixes;
+  DecodeSurfaces(surfaces, hfield, &in.surfaces, &prefixes);
   const size_t N = cfg.grid.Size();
   std::vector<double> state(model->state_layout().size, 0.0);
   ResetState(*model, state.data());
