@@ -299,7 +299,7 @@ class StressEngine:
     ``"auto"`` builds FFT spectra where the FFT path can win (as the plugin
     with stress_method="auto"), ``"direct"`` never, ``"fft"`` always,
     ``"tree"`` builds the hierarchical path with opening angle ``theta``
-    (the plugin's default, stress_method="tree")."""
+    (the plugin with stress_method="tree")."""
 
     def __init__(self, skin, n: int, pitch_m: float, depths_m, receptors_ij, depth_index=None,
                  components=None, method: str = "auto", theta: float = 0.5):

@@ -104,9 +104,8 @@ class SlideSession:
     def build(self) -> None:
         s = self.settings
         if self.scene_path is None:
-            # interactive: the fast hierarchical stress path
-            tip = scenes.Fingertip(nx=s.nx, pitch_m=s.pitch_m, ridges=s.ridges,
-                                   skin={"stress_method": "tree"})
+            # interactive preset: exact (folded) stress, as cheap as the tree
+            tip = scenes.Fingertip(nx=s.nx, pitch_m=s.pitch_m, ridges=s.ridges)
             texture = dataclasses.replace(TEXTURES[s.texture][1])
             protocol = scenes.Protocol(force_n=s.force_n, speed_m_s=s.speed_m_s,
                                        timestep_s=s.timestep_s)
