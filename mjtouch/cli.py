@@ -145,11 +145,19 @@ def _slide_run(args, tip, texture, periodic, kind):
     # at V/lambda of the configured ridge pitch for smooth skin too, so ridged
     # and smooth runs compare from the CLI
     power_expected["ridges"] = analysis.power_at(f, p, args.speed / args.ridge_pitch)
+    # A periodic texture's stress repeats every D/V: its lines are V/D
+    # harmonics whatever the ridges do, so a V/lambda line is expected only
+    # on aperiodic (broadband) textures, which the ridges band-pass.
+    ridge_line_expected = bool(args.ridges and not periodic)
+    nearest = {k: (min(peaks, key=lambda x, v=v: abs(x - v)) if v and len(peaks) else None)
+               for k, v in expected.items()}
     fn = res.force[w, 0]
     out = {
         "rates_hz": rates,
         "peaks_hz": peaks,
         "expected_hz": expected,
+        "nearest_peak_hz": nearest,
+        "ridge_line_expected": ridge_line_expected,
         "power_at_expected": power_expected,
         "speed_m_s": args.speed,
         "period_m": periodic,
@@ -213,6 +221,17 @@ def _print_human(o: dict) -> None:
           + f"   (FFT bin {o['fft_bin_hz']:.2f} Hz)")
     print("stress spectral peaks (Hz, strongest first): "
           + ", ".join(f"{x:.2f}" for x in o["peaks_hz"]))
+    near = o["nearest_peak_hz"]
+    for key, name in (("texture", "V/D"), ("ridges", "V/lambda")):
+        if not e[key]:
+            continue
+        if key == "ridges" and not o["ridge_line_expected"]:
+            print(f"{name}: no line expected on a periodic texture (its stress repeats every "
+                  "D/V, so its lines are V/D harmonics); ridges band-pass broadband textures: "
+                  "--texture random")
+        elif near[key] is not None:
+            print(f"{name}: nearest peak {near[key]:.2f} Hz "
+                  f"({100 * (near[key] / e[key] - 1):+.0f}%)")
 
 
 def _view_parser(sub):

@@ -27,6 +27,10 @@ def test_slide_json_keys_and_peak():
     assert abs(o["peaks_hz"][0] - 30.0) <= o["fft_bin_hz"]
     assert all(np.isfinite(v) for v in o["rates_hz"].values())
     assert o["power_at_expected"]["ridges"] > 0
+    # a grating is periodic: its stress has V/D harmonics only, no V/lambda line
+    assert o["ridge_line_expected"] is False
+    assert abs(o["nearest_peak_hz"]["texture"] - 30.0) <= o["fft_bin_hz"]
+    assert o["nearest_peak_hz"]["ridges"] in o["peaks_hz"]
 
 
 def test_slide_json_reports_ridge_line_power_for_smooth_skin():
@@ -37,6 +41,7 @@ def test_slide_json_reports_ridge_line_power_for_smooth_skin():
     assert out.returncode == 0, out.stderr
     o = json.loads(out.stdout)
     assert o["expected_hz"]["ridges"] is None
+    assert o["ridge_line_expected"] is False and o["nearest_peak_hz"]["ridges"] is None
     assert np.isfinite(o["power_at_expected"]["ridges"]) and o["power_at_expected"]["ridges"] >= 0
 
 
