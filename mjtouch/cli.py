@@ -59,9 +59,10 @@ def _slide_parser(sub):
                    help="taxel pitch (m), default 1e-4")
     p.add_argument("--seed", type=int, default=0,
                    help="seed of the random texture (the pipeline itself is deterministic)")
-    p.add_argument("--pressure", choices=["winkler", "elastic", "contacts"], default="winkler",
-                   help="pressure model (default winkler; elastic lets the ridges carry the "
-                        "load in partial contact, which fingerprint filtering needs; slower)")
+    p.add_argument("--pressure", choices=["winkler", "elastic", "contacts"], default="elastic",
+                   help="pressure model (default elastic: the skin's own compliance, which lets "
+                        "the ridges carry the load in partial contact; winkler: a foundation, "
+                        "faster, presses the ridges flat; contacts: MuJoCo's contact points)")
     p.add_argument("--texture-mesh", metavar="FILE",
                    help="texture from a mesh file's top surface (STL, OBJ, PLY, GLB; trimesh), "
                         "sliding along the mesh's x after placement; overrides --texture")

@@ -60,21 +60,27 @@ def run_slide(tip: scenes.Fingertip | None = None, texture: scenes.Texture | Non
     return _collect(model, data, layout, ctrl, tip, texture, protocol, progress)
 
 
-def _rollout_chunks(model, data, state0, ctrl, progress, min_chunk: int = 50):
-    """mujoco.rollout in about 100 consecutive chunks, reporting each: every
-    chunk starts from the previous one's last full physics state (plugin
-    state included) and solver warm start, so the trajectory is the one-call
-    trajectory bit for bit (tests/plugin/test_rollout.py)."""
+def _rollout_chunks(model, data, state0, ctrl, progress=None, min_chunk: int = 50,
+                    max_chunk: int = 200):
+    """mujoco.rollout in consecutive chunks (about 100, at most max_chunk
+    steps each), reporting each to progress: every chunk starts from the
+    previous one's last full physics state (plugin state included) and solver
+    warm start, so the trajectory is the one-call trajectory bit for bit
+    (tests/plugin/test_rollout.py). Keeps only time and qpos of each state:
+    the full state carries the plugin's (the elastic warm start, 3 x nx^2
+    doubles), 0.4 MB a step at 128^2, which for a whole run would not fit."""
     n = len(ctrl)
-    size = max(min_chunk, -(-n // 100))
+    size = min(max(min_chunk, -(-n // 100)), max_chunk)
+    keep = 1 + model.nq
     states, sensordata, warmstart = [], [], None
     for i in range(0, n, size):
         st, sd = mujoco.rollout.rollout(model, data, state0[None], ctrl[None, i:i + size],
                                         initial_warmstart=warmstart)
-        states.append(st[0])
+        states.append(st[0, :, :keep].copy())
         sensordata.append(sd[0])
         state0, warmstart = st[0, -1].copy(), data.qacc_warmstart.copy()[None]
-        progress(st.shape[1])
+        if progress is not None:
+            progress(st.shape[1])
     return np.concatenate(states), np.concatenate(sensordata)
 
 
@@ -82,12 +88,8 @@ def _collect(model, data, layout, ctrl, tip, texture, protocol, progress=None) -
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state0 = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state0, spec)
-    if progress is None:
-        state, sensordata = mujoco.rollout.rollout(model, data, state0[None], ctrl[None])
-        state, sensordata = state[0], sensordata[0]
-    else:
-        state, sensordata = _rollout_chunks(model, data, state0, ctrl, progress)
-    # state: time, qpos (slide_x, press_z), ...
+    state, sensordata = _rollout_chunks(model, data, state0, ctrl, progress)
+    # state: time, qpos (slide_x, press_z)
     time = state[:, 0]
     def block(name):
         return layout.block(sensordata, name) if name in layout.blocks else None

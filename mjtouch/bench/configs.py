@@ -140,13 +140,13 @@ def default_effects(cfg: "BenchConfig") -> list[tuple[str, str, dict]]:
             ("alone", "class PC instead of SA1", {**m, "skin.classes": "PC"})]
     rows += [("alone", f"+ output {o}", {**m, "skin.outputs": f"spikes {o}"})
              for o in ("stress", "voltage", "force", "pressure", "rate")]
-    rows += [("together", "default (all: ridges, shear, layered, winkler, SA1 RA PC, "
+    rows += [("together", "default (all: ridges, shear, layered, elastic, SA1 RA PC, "
                           "spikes stress force)", {})]
     rows += [("without", "- ridges", {"ridges": False}),
              ("without", "- shear", {"skin.shear": "false"}),
              ("without", "half-space skin", {"skin.skin": "halfspace"}),
              ("without", "pressure contacts", {"skin.pressure": "contacts"}),
-             ("without", "pressure elastic", {"skin.pressure": "elastic"}),
+             ("without", "pressure winkler", {"skin.pressure": "winkler"}),
              ("without", "- SA1", {"skin.classes": "RA PC"}),
              ("without", "- RA", {"skin.classes": "SA1 PC"}),
              ("without", "- PC", {"skin.classes": "SA1 RA"}),

@@ -94,12 +94,14 @@ def test_quick_pitch_errors_shrink_toward_reference(quick):
     rows = [r for r in o["rows"] if r["knob"] == "pitch" and not r["reference"]]
     assert len(rows) >= 2
     rows.sort(key=lambda r: -r["pitch_m"])  # coarsest first
-    # the stress and its spectral line converge with the pitch; spike rates
-    # need not be monotone (a PC's rate depends on which grating harmonics a
-    # grid renders: README, "What accuracy costs"), only finite
-    for key in ("stress_rms_rel", "peak_amp_rel"):
-        errs = [r["errors"][key] for r in rows]
-        assert all(a > b for a, b in zip(errs, errs[1:])), (key, errs)
+    # the stress converges with the pitch; spike rates need not be monotone
+    # (a PC's rate depends on which grating harmonics a grid renders: README,
+    # "What accuracy costs"), only finite. The V/D line's amplitude is within
+    # 1% at every pitch under the elastic contact, where how a grid resolves
+    # the 0.45 mm ridges (2.25 vs 3 cells) moves it by a few 1e-3 either way.
+    errs = [r["errors"]["stress_rms_rel"] for r in rows]
+    assert all(a > b for a, b in zip(errs, errs[1:])), errs
+    assert all(r["errors"]["peak_amp_rel"] < 0.01 for r in rows), rows
     assert all(np.isfinite(r["errors"]["spike_rate_rel"]) for r in rows)
     # every pitch row has the same receptors (explicit sites)
     assert len({r["receptors"] for r in o["rows"] if r["knob"] == "pitch"}) == 1

@@ -47,7 +47,7 @@ def test_a_changed_readme_row_is_reported(tmp_path, monkeypatch):
 NON_DEFAULT = {
     "texture_group": "2", "nx": "64", "pitch": "1.2e-4", "ridges": "false",
     "ridge_pitch": "5e-4", "ridge_height": "6e-5", "ridge_angle": "30",
-    "ridge_profile": "square", "pressure": "elastic", "oversample": "3",
+    "ridge_profile": "square", "pressure": "winkler", "oversample": "3",
     "young": ("5e4", {"skin": "halfspace"}), "tolerance": "1e-3", "contact_solver": "pk",
     "stiffness": "3e7",
     "poisson": ("0.4", {"skin": "halfspace"}), "shear": "false", "radius": "2e-3",
@@ -85,3 +85,44 @@ def test_every_physics_attribute_changes_the_model_cache_key():
 
 def test_drawing_attributes_do_not_change_the_model_cache_key():
     assert _cache_key({}) == _cache_key({"visual": "none", "texture": "plate"})
+
+
+# Defaults the table describes in words rather than as a value to write.
+DESCRIBED_DEFAULTS = {"texture", "texture_group", "sites", "radius", "layers"}
+
+
+def test_every_written_default_is_the_parsed_default():
+    # The table's default column is text beside the config's initialisers:
+    # writing a documented default explicitly must give the same model as
+    # leaving the attribute out (it did not when `pressure` changed once).
+    from mjtouch import _core
+    rows = [[f.strip() for f in line.split("|")]
+            for line in _core.attribute_table_markdown().splitlines()[2:]]
+    defaults = {f[1].strip("`"): f[2] for f in rows}
+    assert DESCRIBED_DEFAULTS <= set(defaults)
+    for key, text in defaults.items():
+        if key in DESCRIBED_DEFAULTS:
+            continue
+        # attributes that apply only beside another (young: skin="halfspace")
+        context = NON_DEFAULT[key][1] if isinstance(NON_DEFAULT.get(key), tuple) else {}
+        written, left_out = _cache_key({**context, key: text}), _cache_key(context)
+        assert _same_numbers(written, left_out), (key, text, written, left_out)
+
+
+def _same_numbers(a: str, b: str, rel: float = 1e-9) -> bool:
+    """Cache keys equal token by token, numbers to rounding (a default the
+    config computes, e.g. sa1_k1 = k0 x ratio, is written to 2-3 digits that
+    are exact but for the last bit)."""
+    ta, tb = a.split(), b.split()
+    if len(ta) != len(tb):
+        return False
+    for x, y in zip(ta, tb):
+        if x == y:
+            continue
+        try:
+            fx, fy = float(x), float(y)
+        except ValueError:
+            return False
+        if not abs(fx - fy) <= rel * max(abs(fx), abs(fy)):
+            return False
+    return True

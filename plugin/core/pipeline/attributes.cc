@@ -79,7 +79,7 @@ const std::vector<AttributeRow>& Rows() {
       {"ridge_profile", K::kChoice, 0, 0, false, false, "", "sine", "ridge cross-section",
        "sine triangle square", FIELD(ridges.profile), NO_PARSE, S::kModel},
       // -- contact (stage 2) -------------------------------------------------
-      {"pressure", K::kChoice, 0, 0, false, false, "", "winkler",
+      {"pressure", K::kChoice, 0, 0, false, false, "", "elastic",
        "contact pressure model (the table above)", "contacts winkler elastic",
        FIELD(pressure_model), NO_PARSE, S::kModel},
       {"oversample", K::kCustom, 0, 0, false, false, "", "auto",

@@ -44,7 +44,7 @@ struct SkinConfig {
   PadGeometry pad;  // filled by the caller (MuJoCo: the pad geom's size)
   Ridges ridges;
   bool ridge_pitch_is_default = true;  // (error messages)
-  PressureModel pressure_model = PressureModel::kWinkler;  // `pressure`
+  PressureModel pressure_model = PressureModel::kElastic;  // `pressure`
   double stiffness_pa_per_m = 2e7;  // Winkler foundation
   double young_pa = 8e4;            // `elastic`: homogeneous skin (Shao 2010 epidermis)
   double tolerance = 1e-4;          // `elastic`: relative L1 pressure change per iteration (~ its error)
