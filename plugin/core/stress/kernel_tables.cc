@@ -41,26 +41,6 @@ std::shared_ptr<const KernelTables> BuildKernelTables(
         symmetric = symmetric && err <= 1e-6f * peak;
       }
   kt->mirror_symmetric = symmetric;
-  if (symmetric) {
-    kt->half.resize(depths_m.size() * kNumStress);
-    for (size_t d = 0; d < depths_m.size(); ++d)
-      for (int c = 0; c < kNumStress; ++c) {
-        if (!components[c]) continue;
-        const auto comp = static_cast<StressComponent>(c);
-        std::vector<float>& h = kt->half[d * kNumStress + c];
-        h.resize(static_cast<size_t>(n) * 3 * L);
-        for (int ady = 0; ady < n; ++ady)
-          for (int load = 0; load < kNumLoads; ++load) {
-            const auto l = static_cast<SurfaceLoad>(load);
-            const float* K = kt->At(static_cast<int>(d), l, comp) +
-                             static_cast<size_t>(ady + n - 1) * L + (n - 1);
-            float* row = h.data() + (static_cast<size_t>(ady) * 3 + load) * L + (n - 1);
-            const float sx = MirrorSign(0, l, comp);
-            for (int dx = 0; dx < n; ++dx) row[dx] = K[dx];
-            for (int dx = 1; dx < n; ++dx) row[-dx] = sx * K[dx];
-          }
-      }
-  }
   kt->build_seconds = std::chrono::duration<double>(
                           std::chrono::steady_clock::now() - t0).count();
   return kt;

@@ -25,21 +25,7 @@ struct KernelTables {
   // isotropic substrate's must be (MirrorSign), to 1e-6 of its largest
   // entry: the folded path then reads only offsets >= 0 (stress_fold.h).
   bool mirror_symmetric = false;
-  // When mirror_symmetric: per depth and component, rows |dy| = 0 .. n - 1,
-  // each the pressure, shear x and shear y tables' rows (L columns each, dx =
-  // -(n-1) .. n-1) built from offsets >= 0 only (dx < 0: MirrorSign times the
-  // entry at -dx), so the folded path reads one contiguous stream per
-  // component and both rows dy and -dy from it (stress_fold.cc).
-  std::vector<std::vector<float>> half;  // [depth * kNumStress + comp]
   double build_seconds = 0;
-
-  // The half-table rows of |dy| (pressure; shear x at + L, shear y at + 2L),
-  // at column dx = 0.
-  const float* HalfRow(int depth_index, StressComponent comp, int ady) const {
-    const int L = 2 * n - 1;
-    return half[depth_index * kNumStress + comp].data() + static_cast<size_t>(ady) * 3 * L +
-           (n - 1);
-  }
 
   const float* At(int depth_index, SurfaceLoad load, StressComponent comp) const {
     const int L = 2 * n - 1;

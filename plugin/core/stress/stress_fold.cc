@@ -112,47 +112,70 @@ void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int
   }
 }
 
-// A folded row from half-table rows (hp, hx, hy: KernelTables::HalfRow) at
-// the same columns: with R = rx hx, S = ry hy, e = (hp + R) + S at dy >= 0 and
-// (mp hp + mx R) + my S at dy < 0 (m*: the y reflection's signs,
-// MirrorSign(1, load, comp)). The same value as folding the full tables
-// (E = Kp + rx Kx + ry Ky at that offset) where they are exact mirror images:
-// sign flips are exact and rounding is symmetric.
+// e[x] = (kp[x] + rx kx[x]) + ry ky[x] (float), or kp[x] without shear.
 __attribute__((target_clones("avx2", "default")))
-void FoldRow(const float* __restrict hp, const float* __restrict hx, const float* __restrict hy,
-             float rx, float ry, bool shear, bool below, float mp, float mx, float my, int len,
-             float* __restrict e) {
-  if (!shear) {
-    if (below) {
-      for (int x = 0; x < len; ++x) e[x] = mp * hp[x];
-    } else {
-      std::memcpy(e, hp, sizeof(float) * len);
-    }
-  } else if (below) {
-    for (int x = 0; x < len; ++x) e[x] = (mp * hp[x] + mx * (rx * hx[x])) + my * (ry * hy[x]);
+void FoldRow(const float* kp, const float* kx, const float* ky, float rx, float ry, bool shear,
+             int len, float* e) {
+  if (shear) {
+    for (int x = 0; x < len; ++x) e[x] = (kp[x] + rx * kx[x]) + ry * ky[x];
   } else {
-    for (int x = 0; x < len; ++x) e[x] = (hp[x] + rx * hx[x]) + ry * hy[x];
+    std::memcpy(e, kp, sizeof(float) * len);
   }
 }
 
-// One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1; zero
-// beyond the tables) from the half table's row |dy|: one contiguous stream
-// per load, no reversed reads.
-void FoldHalfRow(const KernelTables& kt, int d, StressComponent comp, int dy, int x0, int w,
-                 float rx, float ry, bool shear, float* e) {
-  const int n = kt.n, L = 2 * n - 1;
-  const int ady = dy < 0 ? -dy : dy;
-  const int lo = std::max(x0, -(n - 1)), hi = std::min(x0 + w - 1, n - 1);
-  if (ady > n - 1 || lo > hi) {
-    std::fill(e, e + w, 0.0f);
-    return;
+// The same from a mirrored source, read backwards (k[-x]), times sign
+// (+-1, exact): a table row at negative offsets from its row at positive ones.
+__attribute__((target_clones("avx2", "default")))
+void FoldRowReversed(const float* kp, const float* kx, const float* ky, float rx, float ry,
+                     float sign, bool shear, int len, float* e) {
+  if (shear) {
+    for (int x = 0; x < len; ++x) e[x] = sign * ((kp[-x] + rx * kx[-x]) + ry * ky[-x]);
+  } else {
+    for (int x = 0; x < len; ++x) e[x] = sign * kp[-x];
   }
-  std::fill(e, e + (lo - x0), 0.0f);
-  std::fill(e + (hi - x0) + 1, e + w, 0.0f);
-  const float* h = kt.HalfRow(d, comp, ady) + lo;
-  FoldRow(h, h + L, h + 2 * L, rx, ry, shear, dy < 0, MirrorSign(1, kLoadPressure, comp),
-          MirrorSign(1, kLoadShearX, comp), MirrorSign(1, kLoadShearY, comp), hi - lo + 1,
-          e + (lo - x0));
+}
+
+// One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
+// the tables' rows at |dy| and columns |dx| only (KernelTables::
+// mirror_symmetric): the signs of the reflections folded into the ratios,
+// E = sp (Kp + (sp sx rx) Kx + (sp sy ry) Ky), exactly the value the full
+// tables give when they are mirror images.
+void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy, int x0, int w,
+                     float rx, float ry, bool shear, float* e) {
+  const int n = kt.n, L = 2 * n - 1;
+  std::fill(e, e + w, 0.0f);
+  const int ady = dy < 0 ? -dy : dy;
+  if (ady > n - 1) return;
+  const size_t row = static_cast<size_t>(ady + n - 1) * L + (n - 1);  // offset (0, |dy|)
+  const float* Kp = kt.At(d, kLoadPressure, comp) + row;
+  const float* Kx = kt.At(d, kLoadShearX, comp) + row;
+  const float* Ky = kt.At(d, kLoadShearY, comp) + row;
+  for (int side = 0; side < 2; ++side) {  // dx >= 0, then dx < 0
+    const int lo = side == 0 ? std::max(0, x0) : std::max(-(n - 1), x0);
+    const int hi = side == 0 ? std::min(n - 1, x0 + w - 1) : std::min(-1, x0 + w - 1);
+    if (lo > hi) continue;
+    float sp = 1, sx = 1, sy = 1;
+    if (side == 1) {
+      sp *= MirrorSign(0, kLoadPressure, comp);
+      sx *= MirrorSign(0, kLoadShearX, comp);
+      sy *= MirrorSign(0, kLoadShearY, comp);
+    }
+    if (dy < 0) {
+      sp *= MirrorSign(1, kLoadPressure, comp);
+      sx *= MirrorSign(1, kLoadShearX, comp);
+      sy *= MirrorSign(1, kLoadShearY, comp);
+    }
+    const float a = sp * sx * rx, b = sp * sy * ry;
+    if (side == 0) {
+      float* out = e + (lo - x0);
+      FoldRow(Kp + lo, Kx + lo, Ky + lo, a, b, shear, hi - lo + 1, out);
+      if (sp < 0)
+        for (int x = 0; x <= hi - lo; ++x) out[x] = -out[x];
+    } else {
+      // e at dx = lo .. hi reads the positive-offset row at -lo .. -hi.
+      FoldRowReversed(Kp - lo, Kx - lo, Ky - lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
+    }
+  }
 }
 
 int CountWanted(const std::array<bool, kNumStress>& w) {
@@ -311,9 +334,9 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       for (int c = 0; c < kNumStress; ++c)
         for (int t = T0; t < T1; ++t)
           if (comps[c])
-            FoldHalfRow(kt, d, static_cast<StressComponent>(c), t + win.y0, win.x0 + c0,
-                        c1 - c0, rx, ry, shear,
-                        ebuf[c] + static_cast<size_t>(t - T0) * win.w + c0);
+            FoldMirroredRow(kt, d, static_cast<StressComponent>(c), t + win.y0, win.x0 + c0,
+                            c1 - c0, rx, ry, shear,
+                            ebuf[c] + static_cast<size_t>(t - T0) * win.w + c0);
       SumBand(fs, first, last, ebuf, win.w, T0, T1, w->pressure.data(), pw, lo, hi, rows);
     }
     for (int q = job.begin; q < job.end; ++q)

@@ -4,10 +4,9 @@
 //   sigma_c(site) = sum_cells (K_p,c + r_x K_x,c + r_y K_y,c) p,
 // so one effective table per step and (depth, component) replaces three:
 // a third of the multiply-adds and of the table reads per site. The table is
-// folded band by band of kTableRowsPerBand rows (stress_fold.cc) from
-// KernelTables::half (one contiguous stream per component), only over the
-// offsets (active cells - sites) that some site reads, and each band is read
-// at once by every site of the depth while it is in L1/L2; the pressure is
+// folded band by band of kTableRowsPerBand rows (stress_fold.cc), only over
+// the offsets (active cells - sites) that some site reads, and each band is
+// read at once by every site of the depth while it is in L1/L2; the pressure is
 // copied into rows of whole 8-cell chunks, so the inner loop has no tails; a
 // site's wanted components share each pressure load. Same result as the
 // reference path (StressAtReceptor) to float rounding
