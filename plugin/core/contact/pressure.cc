@@ -105,6 +105,47 @@ void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out) {
   }
 }
 
+void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, double fy,
+                               TractionField* out) {
+  const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
+  out->uniform_slip = true;
+  out->slip_x = rx;
+  out->slip_y = ry;
+  const CellBox& b = out->box;
+  out->runs.Clear();
+  out->active_cells = 0;
+  // Only the loaded cells are written: the rest of every field is zero
+  // already (ClearTraction), as UniformSlipShear and FinishTraction leave it.
+  for (int j = b.j0; j < b.j0 + b.ny; ++j) {
+    const size_t row = static_cast<size_t>(j) * grid.n;
+    const double* p = out->pressure_pa.data() + row;
+    const int i0 = b.i0, i1 = b.i0 + b.nx;
+    for (int i = i0; i < i1;) {
+      while (i < i1 && p[i] == 0.0) ++i;
+      if (i == i1) break;
+      const int begin = i;
+      while (i < i1 && p[i] != 0.0) ++i;
+      out->runs.row.push_back(j);
+      out->runs.begin.push_back(begin);
+      out->runs.end.push_back(i);
+      out->active_cells += i - begin;
+      double* sx = out->shear_x_pa.data() + row;
+      double* sy = out->shear_y_pa.data() + row;
+      float* fp = out->pressure.data() + row;
+      float* fxf = out->shear_x.data() + row;
+      float* fyf = out->shear_y.data() + row;
+      for (int k = begin; k < i; ++k) {
+        const double qx = rx * p[k], qy = ry * p[k];
+        sx[k] = qx;
+        sy[k] = qy;
+        fp[k] = static_cast<float>(p[k]);
+        fxf[k] = static_cast<float>(qx);
+        fyf[k] = static_cast<float>(qy);
+      }
+    }
+  }
+}
+
 bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& contacts,
                    TractionField* out) {
   ClearTraction(grid, out);
@@ -403,9 +444,13 @@ void UniformSlipShear(const TaxelGrid& grid, double fn, double fx, double fy,
   field->uniform_slip = true;
   field->slip_x = rx;
   field->slip_y = ry;
+  // Unloaded cells keep the zero ClearTraction left (not rx * 0, which is
+  // -0 for rx < 0), so that the shear is zero wherever the pressure is.
   ForBox(grid, field->box, [&](size_t i) {
-    field->shear_x_pa[i] = rx * field->pressure_pa[i];
-    field->shear_y_pa[i] = ry * field->pressure_pa[i];
+    const double p = field->pressure_pa[i];
+    if (p == 0.0) return;
+    field->shear_x_pa[i] = rx * p;
+    field->shear_y_pa[i] = ry * p;
   });
 }
 

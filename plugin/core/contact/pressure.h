@@ -84,7 +84,8 @@ bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& 
 // Full-slip Coulomb shear: q = p * (F_t / F_n) along the direction of
 // MuJoCo's friction force (for a rigid pad in gross slip the local slip
 // direction is the same everywhere), so that sum(q * A) equals the
-// tangential force (ft_x, ft_y) (N, pad frame) to round-off.
+// tangential force (ft_x, ft_y) (N, pad frame) to round-off. Cells without
+// pressure are left as they are (zero after ClearTraction).
 void UniformSlipShear(const TaxelGrid& grid, double normal_force_n, double ft_x_n,
                       double ft_y_n, TractionField* field);
 
@@ -94,6 +95,12 @@ bool NormalizeLoad(const TaxelGrid& grid, double normal_force_n, TractionField* 
 // Fill the float copies and the active runs (cells with any traction)
 // from the double fields; `shear`: whether the shear fields are loads.
 void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out);
+// UniformSlipShear then FinishTraction(shear = true) on a field cleared by
+// ClearTraction, in one pass that writes only the loaded cells: the same
+// fields bit for bit (a cell is active exactly when its pressure is nonzero,
+// since its shear is the pressure times a ratio).
+void FinishUniformSlipTraction(const TaxelGrid& grid, double normal_force_n, double ft_x_n,
+                               double ft_y_n, TractionField* out);
 
 }  // namespace mjtouch
 

@@ -121,6 +121,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   if (!(in.in_contact && in.normal_force_n > 0.0)) return false;
 
   bool touching = false;
+  bool finished = false;  // FinishTraction done
   if (cfg.pressure_model == PressureModel::kContacts) {
     touching = SplatContacts(grid, in.contacts, &tf);
     state[kStContactDepth] = 0.0;
@@ -240,11 +241,17 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         state[kStContactDepth] = approach - gmin;
       }
     }
-    if (touching && cfg.shear)
-      UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
+    if (touching && cfg.shear) {
+      if (ws->reference_paths) {
+        UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
+      } else {  // the shear and FinishTraction in one pass
+        FinishUniformSlipTraction(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
+        finished = true;
+      }
+    }
   }
   if (touching) {
-    FinishTraction(grid, cfg.shear, &tf);
+    if (!finished) FinishTraction(grid, cfg.shear, &tf);
     state[kStContactValid] = 1.0;
     if (cfg.pressure_model == PressureModel::kElastic) {
       const StateLayout& lay = model.state_layout();
