@@ -40,14 +40,29 @@ void ForBox(const TaxelGrid& grid, const CellBox& box, F&& f) {
 
 void ClearTraction(const TaxelGrid& grid, TractionField* f) {
   const size_t N = grid.Size();
-  for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa}) {
-    if (v->size() != N) v->assign(N, 0.0);
-    else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0; });
+  const bool sized = f->pressure_pa.size() == N && f->shear_x_pa.size() == N &&
+                     f->shear_y_pa.size() == N && f->pressure.size() == N &&
+                     f->shear_x.size() == N && f->shear_y.size() == N;
+  if (sized && f->support_in_runs) {
+    for (size_t r = 0; r < f->runs.row.size(); ++r) {
+      const size_t a = static_cast<size_t>(f->runs.row[r]) * grid.n + f->runs.begin[r];
+      const size_t b = a + (f->runs.end[r] - f->runs.begin[r]);
+      for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa})
+        std::fill(v->begin() + a, v->begin() + b, 0.0);
+      for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y})
+        std::fill(v->begin() + a, v->begin() + b, 0.0f);
+    }
+  } else {
+    for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa}) {
+      if (v->size() != N) v->assign(N, 0.0);
+      else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0; });
+    }
+    for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y}) {
+      if (v->size() != N) v->assign(N, 0.0f);
+      else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0f; });
+    }
   }
-  for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y}) {
-    if (v->size() != N) v->assign(N, 0.0f);
-    else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0f; });
-  }
+  f->support_in_runs = false;
   f->box = CellBox{};
   f->runs.Clear();
   f->active_cells = 0;
@@ -114,6 +129,9 @@ void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, doub
   const CellBox& b = out->box;
   out->runs.Clear();
   out->active_cells = 0;
+  // Nonzero pressure only in the box (the pressure models write no -0), so
+  // after this every field is zero outside the runs.
+  out->support_in_runs = true;
   // Only the loaded cells are written: the rest of every field is zero
   // already (ClearTraction), as UniformSlipShear and FinishTraction leave it.
   for (int j = b.j0; j < b.j0 + b.ny; ++j) {

@@ -39,6 +39,9 @@ struct TractionField {
   // UniformSlipShear writes shear in the models that set it.
   bool uniform_slip = false;
   double slip_x = 0, slip_y = 0;  // shear / pressure along pad x, y
+  // Every array is zero outside `runs` (FinishUniformSlipTraction), so
+  // ClearTraction clears the runs alone, not the whole box.
+  bool support_in_runs = false;
   // Solver scratch (no meaning between calls): the packed candidates.
   std::vector<double> scratch_gap, scratch_cov;
   std::vector<size_t> scratch_index;

@@ -140,7 +140,8 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       const double t0 = ws->render_time_s ? ThreadCpuSeconds() : 0.0;
       const double level = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_above_m,
                                      &ws->gap, &ws->coverage, true, &model.skin_blocks(), &box,
-                                     fast);
+                                     fast, fast ? &ws->gap_written : nullptr);
+      if (!fast) ws->gap_written = CellBox::All(grid);  // the reference cleared it all
       if (ws->render_time_s) *ws->render_time_s += ThreadCpuSeconds() - t0;
       return level;
     };
