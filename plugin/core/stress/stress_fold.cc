@@ -112,14 +112,17 @@ void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int
   }
 }
 
-// e[x] = (kp[x] + rx kx[x]) + ry ky[x] (float), or kp[x] without shear.
+// e[x] = sign ((kp[x] + rx kx[x]) + ry ky[x]) (float; sign +-1, exact), or
+// sign kp[x] without shear.
 __attribute__((target_clones("avx2", "default")))
-void FoldRow(const float* kp, const float* kx, const float* ky, float rx, float ry, bool shear,
-             int len, float* e) {
+void FoldRow(const float* kp, const float* kx, const float* ky, float rx, float ry, float sign,
+             bool shear, int len, float* e) {
   if (shear) {
-    for (int x = 0; x < len; ++x) e[x] = (kp[x] + rx * kx[x]) + ry * ky[x];
-  } else {
+    for (int x = 0; x < len; ++x) e[x] = sign * ((kp[x] + rx * kx[x]) + ry * ky[x]);
+  } else if (sign > 0) {
     std::memcpy(e, kp, sizeof(float) * len);
+  } else {
+    for (int x = 0; x < len; ++x) e[x] = -kp[x];
   }
 }
 
@@ -143,9 +146,14 @@ void FoldRowReversed(const float* kp, const float* kx, const float* ky, float rx
 void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy, int x0, int w,
                      float rx, float ry, bool shear, float* e) {
   const int n = kt.n, L = 2 * n - 1;
-  std::fill(e, e + w, 0.0f);
   const int ady = dy < 0 ? -dy : dy;
-  if (ady > n - 1) return;
+  if (ady > n - 1) {
+    std::fill(e, e + w, 0.0f);
+    return;
+  }
+  // Zero beyond the tables' offsets; the two sides below write the rest.
+  std::fill(e, e + std::clamp(-(n - 1) - x0, 0, w), 0.0f);
+  std::fill(e + std::clamp(n - x0, 0, w), e + w, 0.0f);
   const size_t row = static_cast<size_t>(ady + n - 1) * L + (n - 1);  // offset (0, |dy|)
   const float* Kp = kt.At(d, kLoadPressure, comp) + row;
   const float* Kx = kt.At(d, kLoadShearX, comp) + row;
@@ -167,10 +175,7 @@ void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy
     }
     const float a = sp * sx * rx, b = sp * sy * ry;
     if (side == 0) {
-      float* out = e + (lo - x0);
-      FoldRow(Kp + lo, Kx + lo, Ky + lo, a, b, shear, hi - lo + 1, out);
-      if (sp < 0)
-        for (int x = 0; x <= hi - lo; ++x) out[x] = -out[x];
+      FoldRow(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
     } else {
       // e at dx = lo .. hi reads the positive-offset row at -lo .. -hi.
       FoldRowReversed(Kp - lo, Kx - lo, Ky - lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
@@ -184,39 +189,12 @@ int CountWanted(const std::array<bool, kNumStress>& w) {
   return c;
 }
 
-}  // namespace
-
-void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
-                          const ActiveRuns& runs, const float* pressure, bool shear,
-                          double slip_x, double slip_y, int threads, FoldScratch* w,
-                          Stress6* out) {
-  for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
-  if (runs.row.empty() || sites.empty()) return;
+// Sites grouped by depth (each by the window row it starts reading at, row
+// j descending, then column), each depth's largest / smallest site i, j and
+// components, and the sites' states in that order.
+void SortSites(const KernelTables& kt, const std::vector<StressSite>& sites, FoldScratch* w) {
   const int n = kt.n;
   const int D = static_cast<int>(kt.depths_m.size());
-  // Active box, its columns padded to whole chunks.
-  int i0 = n, i1 = -1, j0 = runs.row.front(), j1 = runs.row.back();
-  for (size_t r = 0; r < runs.row.size(); ++r) {
-    i0 = std::min(i0, runs.begin[r]);
-    i1 = std::max(i1, runs.end[r] - 1);
-    j0 = std::min(j0, runs.row[r]);
-    j1 = std::max(j1, runs.row[r]);
-  }
-  const int rows = j1 - j0 + 1;
-  const int pw = (i1 - i0 + kLanes) / kLanes * kLanes;
-  w->pressure.assign(static_cast<size_t>(rows) * pw, 0.0f);
-  w->row_lo.assign(rows, pw);
-  w->row_hi.assign(rows, 0);
-  for (size_t r = 0; r < runs.row.size(); ++r) {
-    const int y = runs.row[r] - j0;
-    const int b = runs.begin[r] - i0, e = runs.end[r] - i0;
-    std::copy(pressure + static_cast<size_t>(runs.row[r]) * n + runs.begin[r],
-              pressure + static_cast<size_t>(runs.row[r]) * n + runs.end[r],
-              w->pressure.begin() + static_cast<size_t>(y) * pw + b);
-    w->row_lo[y] = std::min(w->row_lo[y], b / kLanes * kLanes);
-    w->row_hi[y] = std::max(w->row_hi[y], (e + kLanes - 1) / kLanes * kLanes);
-  }
-  // Sites grouped by depth, and each depth's table window.
   w->window.assign(D, FoldScratch::Window{});
   w->depth_begin.assign(D + 1, 0);
   w->si0.assign(D, n);
@@ -256,10 +234,6 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
   for (int d = 0; d < D; ++d) {
     auto& win = w->window[d];
     if (win.si1 < 0) continue;
-    win.x0 = i0 - win.si1;
-    win.y0 = j0 - win.sj1;
-    win.w = pw + win.si1 - si0[d];
-    win.h = rows + win.sj1 - sj0[d];
     for (int q = w->depth_begin[d]; q < w->depth_begin[d + 1]; ++q) {
       const StressSite& site = sites[w->sites_by_depth[q]];
       FoldSite fs;
@@ -273,6 +247,61 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       fs.off = win.sj1 - site.j;  // window row of pressure row 0
       w->sites.push_back(fs);
     }
+  }
+}
+
+}  // namespace
+
+void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
+                          const ActiveRuns& runs, const float* pressure, bool shear,
+                          double slip_x, double slip_y, int threads, FoldScratch* w,
+                          Stress6* out) {
+  for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
+  if (runs.row.empty() || sites.empty()) return;
+  const int n = kt.n;
+  const int D = static_cast<int>(kt.depths_m.size());
+  // Active box, its columns padded to whole chunks.
+  int i0 = n, i1 = -1, j0 = runs.row.front(), j1 = runs.row.back();
+  for (size_t r = 0; r < runs.row.size(); ++r) {
+    i0 = std::min(i0, runs.begin[r]);
+    i1 = std::max(i1, runs.end[r] - 1);
+    j0 = std::min(j0, runs.row[r]);
+    j1 = std::max(j1, runs.row[r]);
+  }
+  const int rows = j1 - j0 + 1;
+  const int pw = (i1 - i0 + kLanes) / kLanes * kLanes;
+  w->pressure.assign(static_cast<size_t>(rows) * pw, 0.0f);
+  w->row_lo.assign(rows, pw);
+  w->row_hi.assign(rows, 0);
+  for (size_t r = 0; r < runs.row.size(); ++r) {
+    const int y = runs.row[r] - j0;
+    const int b = runs.begin[r] - i0, e = runs.end[r] - i0;
+    std::copy(pressure + static_cast<size_t>(runs.row[r]) * n + runs.begin[r],
+              pressure + static_cast<size_t>(runs.row[r]) * n + runs.end[r],
+              w->pressure.begin() + static_cast<size_t>(y) * pw + b);
+    w->row_lo[y] = std::min(w->row_lo[y], b / kLanes * kLanes);
+    w->row_hi[y] = std::max(w->row_hi[y], (e + kLanes - 1) / kLanes * kLanes);
+  }
+  // Sites grouped by depth, each depth's window of table offsets and the
+  // sites' states: fixed by the sites, so kept while they are unchanged.
+  auto same = [](const StressSite& a, const StressSite& b) {
+    return a.i == b.i && a.j == b.j && a.depth_index == b.depth_index && a.want == b.want;
+  };
+  if (w->key_tables != &kt || w->key_components != kt.components ||
+      w->window.size() != static_cast<size_t>(D) || w->key_sites.size() != sites.size() ||
+      !std::equal(sites.begin(), sites.end(), w->key_sites.begin(), same)) {
+    SortSites(kt, sites, w);
+    w->key_tables = &kt;
+    w->key_components = kt.components;
+    w->key_sites = sites;
+  }
+  for (int d = 0; d < D; ++d) {
+    auto& win = w->window[d];
+    if (win.si1 < 0) continue;
+    win.x0 = i0 - win.si1;
+    win.y0 = j0 - win.sj1;
+    win.w = pw + win.si1 - w->si0[d];
+    win.h = rows + win.sj1 - w->sj0[d];
   }
   // Jobs: one per depth on one thread (every site of a depth shares each
   // folded row), split into `threads` site ranges otherwise (each range folds

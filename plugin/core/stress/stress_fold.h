@@ -59,6 +59,10 @@ struct FoldScratch {
   std::vector<std::vector<float>> rowbuf;  // per job: one folded row per component
   std::vector<int> si0, sj0;               // per depth: smallest site i, j
   std::vector<int> fill;                   // per depth: next slot in sites_by_depth
+  // The sites (and tables) the site-derived fields above were built for.
+  const KernelTables* key_tables = nullptr;
+  std::array<bool, kNumStress> key_components{};
+  std::vector<StressSite> key_sites;
   double seconds = 0;  // the last call's fold + sums (diagnostics)
 };
 
