@@ -120,6 +120,25 @@ void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out) {
   }
 }
 
+namespace {
+
+// One run of loaded cells: shear = ratio x pressure, and the float copies
+// (the arrays do not overlap: vectorised without alias checks).
+void SlipRun(const double* __restrict p, double rx, double ry, int len, double* __restrict sx,
+             double* __restrict sy, float* __restrict fp, float* __restrict fx,
+             float* __restrict fy) {
+  for (int k = 0; k < len; ++k) {
+    const double qx = rx * p[k], qy = ry * p[k];
+    sx[k] = qx;
+    sy[k] = qy;
+    fp[k] = static_cast<float>(p[k]);
+    fx[k] = static_cast<float>(qx);
+    fy[k] = static_cast<float>(qy);
+  }
+}
+
+}  // namespace
+
 void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, double fy,
                                TractionField* out) {
   const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
@@ -147,19 +166,9 @@ void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, doub
       out->runs.begin.push_back(begin);
       out->runs.end.push_back(i);
       out->active_cells += i - begin;
-      double* sx = out->shear_x_pa.data() + row;
-      double* sy = out->shear_y_pa.data() + row;
-      float* fp = out->pressure.data() + row;
-      float* fxf = out->shear_x.data() + row;
-      float* fyf = out->shear_y.data() + row;
-      for (int k = begin; k < i; ++k) {
-        const double qx = rx * p[k], qy = ry * p[k];
-        sx[k] = qx;
-        sy[k] = qy;
-        fp[k] = static_cast<float>(p[k]);
-        fxf[k] = static_cast<float>(qx);
-        fyf[k] = static_cast<float>(qy);
-      }
+      SlipRun(p + begin, rx, ry, i - begin, out->shear_x_pa.data() + row + begin,
+              out->shear_y_pa.data() + row + begin, out->pressure.data() + row + begin,
+              out->shear_x.data() + row + begin, out->shear_y.data() + row + begin);
     }
   }
 }
