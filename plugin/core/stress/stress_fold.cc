@@ -248,6 +248,8 @@ void SortSites(const KernelTables& kt, const std::vector<StressSite>& sites, Fol
       w->sites.push_back(fs);
     }
   }
+  w->site_col.resize(w->sites.size());
+  for (size_t q = 0; q < w->sites.size(); ++q) w->site_col[q] = w->sites[q].col;
 }
 
 }  // namespace
@@ -347,6 +349,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       }
     const int* lo = w->row_lo.data();
     const int* hi = w->row_hi.data();
+    const int* col = w->site_col.data();  // fs[q].col, contiguous
     int first = job.begin, last = job.begin;
     const int t_end = fs[job.end - 1].off + rows;
     for (int T0 = fs[job.begin].off; T0 < t_end; T0 += band) {
@@ -356,8 +359,8 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       // Fold the band over the columns its sites read.
       int c0 = win.w, c1 = 0;
       for (int q = first; q < last; ++q) {
-        c0 = std::min(c0, fs[q].col + lo_min);
-        c1 = std::max(c1, fs[q].col + hi_max);
+        c0 = std::min(c0, col[q] + lo_min);
+        c1 = std::max(c1, col[q] + hi_max);
       }
       if (c0 >= c1) continue;  // no site reads this band
       for (int c = 0; c < kNumStress; ++c)

@@ -54,6 +54,7 @@ struct FoldScratch {
   };
   std::vector<Window> window;  // per depth
   std::vector<FoldSite> sites;  // by depth, then window row of their first read
+  std::vector<int> site_col;     // sites[q].col, contiguous (scanned per band)
   struct Job { int begin, end; };  // a range of `sites` (one depth)
   std::vector<Job> jobs;
   std::vector<std::vector<float>> rowbuf;  // per job: one folded row per component
