@@ -209,7 +209,8 @@ void SortSites(const KernelTables& kt, const std::vector<StressSite>& sites, Fol
     sj0[s.depth_index] = std::min(sj0[s.depth_index], s.j);
     win.si1 = std::max(win.si1, s.i);
     win.sj1 = std::max(win.sj1, s.j);
-    for (int c = 0; c < kNumStress; ++c) win.comps[c] = win.comps[c] || (s.want[c] && kt.components[c]);
+    for (int c = 0; c < kNumStress; ++c)
+      win.comps[c] = win.comps[c] || (s.want[c] && kt.components[c]);
   }
   for (int d = 0; d < D; ++d) w->depth_begin[d + 1] += w->depth_begin[d];
   w->sites_by_depth.resize(sites.size());

@@ -57,7 +57,7 @@ struct FoldScratch {
   std::vector<int> site_col;     // sites[q].col, contiguous (scanned per band)
   struct Job { int begin, end; };  // a range of `sites` (one depth)
   std::vector<Job> jobs;
-  std::vector<std::vector<float>> rowbuf;  // per job: one folded row per component
+  std::vector<std::vector<float>> rowbuf;  // per job: a band of folded rows per component
   std::vector<int> si0, sj0;               // per depth: smallest site i, j
   std::vector<int> fill;                   // per depth: next slot in sites_by_depth
   // The sites (and tables) the site-derived fields above were built for.
