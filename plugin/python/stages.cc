@@ -196,7 +196,7 @@ std::tuple<Out<double>, Out<double>, Out<double>> ReceptorRun(const std::string&
 std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
     std::array<double, 3> semi_axes_m, const Config& config, const F64_2& pad_pos,
     const F64_2& pad_mat, const F64_2& forces_n, const F64_2& surfaces, const F32_2& hfield,
-    bool reference) {
+    bool reference, bool fields) {
   SkinConfig cfg = ParseConfig(config);
   for (int k = 0; k < 3; ++k) cfg.pad.semi_axes_m[k] = semi_axes_m[k];
   std::string error;
@@ -217,7 +217,10 @@ std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
   ResetState(*model, state.data());
   Workspace ws;
   ws.reference_paths = reference;
-  std::vector<double> render_s(T), total_s(T), approach(T), pressure(T * N, 0.0);
+  // fields: per step the 7 planes pressure, shear x, shear y (Pa), their float
+  // copies, and the active cells (runs) as 1.
+  const size_t planes = fields ? 7 : 1;
+  std::vector<double> render_s(T), total_s(T), approach(T), pressure(T * planes * N, 0.0);
   // Thread CPU time: on a shared machine wall time also counts the time the
   // thread waits for a core.
   auto cpu_s = [] {
@@ -239,13 +242,27 @@ std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
     total_s[t] = cpu_s() - t0;
     render_s[t] = render;
     approach[t] = touching ? ws.traction.approach_m : std::nan("");
-    if (touching)
-      std::copy(ws.traction.pressure_pa.begin(), ws.traction.pressure_pa.end(),
-                pressure.begin() + t * N);
+    if (touching) {
+      const TractionField& tf = ws.traction;
+      double* out = pressure.data() + t * planes * N;
+      std::copy(tf.pressure_pa.begin(), tf.pressure_pa.end(), out);
+      if (fields) {
+        std::copy(tf.shear_x_pa.begin(), tf.shear_x_pa.end(), out + N);
+        std::copy(tf.shear_y_pa.begin(), tf.shear_y_pa.end(), out + 2 * N);
+        std::copy(tf.pressure.begin(), tf.pressure.end(), out + 3 * N);
+        std::copy(tf.shear_x.begin(), tf.shear_x.end(), out + 4 * N);
+        std::copy(tf.shear_y.begin(), tf.shear_y.end(), out + 5 * N);
+        for (size_t r = 0; r < tf.runs.row.size(); ++r)
+          for (int i = tf.runs.begin[r]; i < tf.runs.end[r]; ++i)
+            out[6 * N + static_cast<size_t>(tf.runs.row[r]) * cfg.grid.n + i] = 1.0;
+      }
+    }
   }
   const size_t n = cfg.grid.n;
   return {ToNumpy(std::move(render_s), {T}), ToNumpy(std::move(total_s), {T}),
-          ToNumpy(std::move(approach), {T}), ToNumpy(std::move(pressure), {T, n, n})};
+          ToNumpy(std::move(approach), {T}),
+          fields ? ToNumpy(std::move(pressure), {T, planes, n, n})
+                 : ToNumpy(std::move(pressure), {T, n, n})};
 }
 
 }  // namespace
@@ -254,13 +271,15 @@ void BindStages(nb::module_& m) {
   m.def("traction_steps", &TractionSteps, nb::arg("semi_axes_m"), nb::arg("config"),
         nb::arg("pad_pos").noconvert(), nb::arg("pad_mat").noconvert(),
         nb::arg("forces_n").noconvert(), nb::arg("surfaces").noconvert(),
-        nb::arg("hfield").noconvert(), nb::arg("reference") = false,
+        nb::arg("hfield").noconvert(), nb::arg("reference") = false, nb::arg("fields") = false,
         "Stages 1-2 (render + pressure model + shear) over T recorded steps from a\n"
         "fresh state, as the plugin runs them: pad pose per step (pad_pos T x 3,\n"
         "pad_mat T x 9 row-major), forces_n (T x 3: normal, shear x, shear y, N, pad\n"
         "frame), surfaces as render_gap's. reference=True: the general code paths.\n"
         "Returns per-step CPU seconds (render alone, whole of stages 1-2), the approach\n"
-        "(m, NaN: no contact) and the pressure (T x n x n, Pa).");
+        "(m, NaN: no contact) and the pressure (T x n x n, Pa); fields=True: T x 7 x n x n,\n"
+        "the planes pressure, shear x, shear y (Pa), their float32 copies, and the\n"
+        "active cells (1) the stress stage sums over.");
   m.def("halfspace_stress", &HalfspaceStress, nb::arg("points_m").noconvert(), nb::arg("load") = "pressure",
         nb::arg("poisson") = 0.5, nb::arg("cell_m") = 0.0,
         "Stress (npoint x 6, Pa, Voigt xx yy zz xy xz yz; z into the solid, tension\n"

@@ -152,10 +152,15 @@ def test_stages_1_2_fast_paths_match_reference_over_a_slide(yaw_deg):
     forces[:, 1] = 0.1
     config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05"}
     ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
-                               reference=True)
-    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples)
+                               reference=True, fields=True)
+    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
+                                fields=True)
     approach_ref, approach_fast = ref[2], fast[2]
     assert np.all(np.isfinite(approach_ref)), "the pad must touch at every step"
     assert approach_fast.tobytes() == approach_ref.tobytes()
+    # every field stage 3 reads: pressure, shear (double and float), active cells
     assert fast[3].tobytes() == ref[3].tobytes()
-    assert_allclose(ref[3].sum(axis=(1, 2)) * PITCH**2, forces[:, 0], rtol=1e-9)
+    p_ref = ref[3][:, 0]
+    assert_allclose(p_ref.sum(axis=(1, 2)) * PITCH**2, forces[:, 0], rtol=1e-9)
+    assert_allclose(ref[3][:, 1].sum(axis=(1, 2)) * PITCH**2, forces[:, 1], rtol=1e-9)
+    assert np.array_equal(ref[3][:, 6] > 0, p_ref != 0)  # active cells: the loaded ones

@@ -40,14 +40,29 @@ void ForBox(const TaxelGrid& grid, const CellBox& box, F&& f) {
 
 void ClearTraction(const TaxelGrid& grid, TractionField* f) {
   const size_t N = grid.Size();
-  for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa}) {
-    if (v->size() != N) v->assign(N, 0.0);
-    else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0; });
+  const bool sized = f->pressure_pa.size() == N && f->shear_x_pa.size() == N &&
+                     f->shear_y_pa.size() == N && f->pressure.size() == N &&
+                     f->shear_x.size() == N && f->shear_y.size() == N;
+  if (sized && f->support_in_runs) {
+    for (size_t r = 0; r < f->runs.row.size(); ++r) {
+      const size_t a = static_cast<size_t>(f->runs.row[r]) * grid.n + f->runs.begin[r];
+      const size_t b = a + (f->runs.end[r] - f->runs.begin[r]);
+      for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa})
+        std::fill(v->begin() + a, v->begin() + b, 0.0);
+      for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y})
+        std::fill(v->begin() + a, v->begin() + b, 0.0f);
+    }
+  } else {
+    for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa}) {
+      if (v->size() != N) v->assign(N, 0.0);
+      else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0; });
+    }
+    for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y}) {
+      if (v->size() != N) v->assign(N, 0.0f);
+      else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0f; });
+    }
   }
-  for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y}) {
-    if (v->size() != N) v->assign(N, 0.0f);
-    else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0f; });
-  }
+  f->support_in_runs = false;
   f->box = CellBox{};
   f->runs.Clear();
   f->active_cells = 0;
@@ -101,6 +116,59 @@ void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out) {
       out->runs.begin.push_back(begin);
       out->runs.end.push_back(i);
       out->active_cells += i - begin;
+    }
+  }
+}
+
+namespace {
+
+// One run of loaded cells: shear = ratio x pressure, and the float copies
+// (the arrays do not overlap: vectorised without alias checks).
+void SlipRun(const double* __restrict p, double rx, double ry, int len, double* __restrict sx,
+             double* __restrict sy, float* __restrict fp, float* __restrict fx,
+             float* __restrict fy) {
+  for (int k = 0; k < len; ++k) {
+    const double qx = rx * p[k], qy = ry * p[k];
+    sx[k] = qx;
+    sy[k] = qy;
+    fp[k] = static_cast<float>(p[k]);
+    fx[k] = static_cast<float>(qx);
+    fy[k] = static_cast<float>(qy);
+  }
+}
+
+}  // namespace
+
+void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, double fy,
+                               TractionField* out) {
+  const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
+  out->uniform_slip = true;
+  out->slip_x = rx;
+  out->slip_y = ry;
+  const CellBox& b = out->box;
+  out->runs.Clear();
+  out->active_cells = 0;
+  // Nonzero pressure only in the box (the pressure models write no -0), so
+  // after this every field is zero outside the runs.
+  out->support_in_runs = true;
+  // Only the loaded cells are written: the rest of every field is zero
+  // already (ClearTraction), as UniformSlipShear and FinishTraction leave it.
+  for (int j = b.j0; j < b.j0 + b.ny; ++j) {
+    const size_t row = static_cast<size_t>(j) * grid.n;
+    const double* p = out->pressure_pa.data() + row;
+    const int i0 = b.i0, i1 = b.i0 + b.nx;
+    for (int i = i0; i < i1;) {
+      while (i < i1 && p[i] == 0.0) ++i;
+      if (i == i1) break;
+      const int begin = i;
+      while (i < i1 && p[i] != 0.0) ++i;
+      out->runs.row.push_back(j);
+      out->runs.begin.push_back(begin);
+      out->runs.end.push_back(i);
+      out->active_cells += i - begin;
+      SlipRun(p + begin, rx, ry, i - begin, out->shear_x_pa.data() + row + begin,
+              out->shear_y_pa.data() + row + begin, out->pressure.data() + row + begin,
+              out->shear_x.data() + row + begin, out->shear_y.data() + row + begin);
     }
   }
 }
@@ -403,9 +471,13 @@ void UniformSlipShear(const TaxelGrid& grid, double fn, double fx, double fy,
   field->uniform_slip = true;
   field->slip_x = rx;
   field->slip_y = ry;
+  // Unloaded cells keep the zero ClearTraction left (not rx * 0, which is
+  // -0 for rx < 0), so that the shear is zero wherever the pressure is.
   ForBox(grid, field->box, [&](size_t i) {
-    field->shear_x_pa[i] = rx * field->pressure_pa[i];
-    field->shear_y_pa[i] = ry * field->pressure_pa[i];
+    const double p = field->pressure_pa[i];
+    if (p == 0.0) return;
+    field->shear_x_pa[i] = rx * p;
+    field->shear_y_pa[i] = ry * p;
   });
 }
 

@@ -39,6 +39,9 @@ struct TractionField {
   // UniformSlipShear writes shear in the models that set it.
   bool uniform_slip = false;
   double slip_x = 0, slip_y = 0;  // shear / pressure along pad x, y
+  // Every array is zero outside `runs` (FinishUniformSlipTraction), so
+  // ClearTraction clears the runs alone, not the whole box.
+  bool support_in_runs = false;
   // Solver scratch (no meaning between calls): the packed candidates.
   std::vector<double> scratch_gap, scratch_cov;
   std::vector<size_t> scratch_index;
@@ -84,7 +87,8 @@ bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& 
 // Full-slip Coulomb shear: q = p * (F_t / F_n) along the direction of
 // MuJoCo's friction force (for a rigid pad in gross slip the local slip
 // direction is the same everywhere), so that sum(q * A) equals the
-// tangential force (ft_x, ft_y) (N, pad frame) to round-off.
+// tangential force (ft_x, ft_y) (N, pad frame) to round-off. Cells without
+// pressure are left as they are (zero after ClearTraction).
 void UniformSlipShear(const TaxelGrid& grid, double normal_force_n, double ft_x_n,
                       double ft_y_n, TractionField* field);
 
@@ -94,6 +98,12 @@ bool NormalizeLoad(const TaxelGrid& grid, double normal_force_n, TractionField* 
 // Fill the float copies and the active runs (cells with any traction)
 // from the double fields; `shear`: whether the shear fields are loads.
 void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out);
+// UniformSlipShear then FinishTraction(shear = true) on a field cleared by
+// ClearTraction, in one pass that writes only the loaded cells: the same
+// fields bit for bit (a cell is active exactly when its pressure is nonzero,
+// since its shear is the pressure times a ratio).
+void FinishUniformSlipTraction(const TaxelGrid& grid, double normal_force_n, double ft_x_n,
+                               double ft_y_n, TractionField* out);
 
 }  // namespace mjtouch
 

@@ -121,6 +121,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   if (!(in.in_contact && in.normal_force_n > 0.0)) return false;
 
   bool touching = false;
+  bool finished = false;  // FinishTraction done
   if (cfg.pressure_model == PressureModel::kContacts) {
     touching = SplatContacts(grid, in.contacts, &tf);
     state[kStContactDepth] = 0.0;
@@ -139,7 +140,8 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       const double t0 = ws->render_time_s ? ThreadCpuSeconds() : 0.0;
       const double level = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_above_m,
                                      &ws->gap, &ws->coverage, true, &model.skin_blocks(), &box,
-                                     fast);
+                                     fast, fast ? &ws->gap_written : nullptr);
+      if (!fast) ws->gap_written = CellBox::All(grid);  // the reference cleared it all
       if (ws->render_time_s) *ws->render_time_s += ThreadCpuSeconds() - t0;
       return level;
     };
@@ -240,11 +242,17 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         state[kStContactDepth] = approach - gmin;
       }
     }
-    if (touching && cfg.shear)
-      UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
+    if (touching && cfg.shear) {
+      if (ws->reference_paths) {
+        UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
+      } else {  // the shear and FinishTraction in one pass
+        FinishUniformSlipTraction(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
+        finished = true;
+      }
+    }
   }
   if (touching) {
-    FinishTraction(grid, cfg.shear, &tf);
+    if (!finished) FinishTraction(grid, cfg.shear, &tf);
     state[kStContactValid] = 1.0;
     if (cfg.pressure_model == PressureModel::kElastic) {
       const StateLayout& lay = model.state_layout();

@@ -25,6 +25,7 @@ struct Workspace {
   // Receptor propagators for the last step size (rebuilt when it changes).
   std::shared_ptr<const ReceptorStepper> stepper;
   std::vector<double> gap, coverage;
+  CellBox gap_written;  // outside it gap / coverage are +inf / 0 (RenderGap `written`)
   TractionField traction;
   std::vector<double> quantity;  // per receptor
   ElasticWork elastic;

@@ -16,8 +16,9 @@ namespace mjtouch {
 namespace {
 
 constexpr int kLanes = 8;           // cells per chunk (one AVX2 vector)
-constexpr int kFoldRowsPerChunk = 16;
 constexpr int kSitesPerChunk = 8;
+// Folded table rows per band: folded together, then read by every site.
+constexpr int kTableRowsPerBand = 8;
 // Float lanes are widened to double every this many rows (a site's sum has
 // ~10^3-10^4 terms; float over a few rows keeps the error ~1e-7).
 constexpr int kRowsPerFlush = 8;
@@ -28,9 +29,9 @@ constexpr int kRowsPerFlush = 8;
 constexpr double kFoldedSecondsPerMac = 0.05e-9;
 constexpr double kFoldSecondsPerCell = 0.22e-9;
 
-typedef float v8f __attribute__((vector_size(32)));
+typedef FoldSite::Lanes8 v8f;
 typedef float v4f __attribute__((vector_size(16)));
-typedef double v4d __attribute__((vector_size(32)));
+typedef FoldSite::Lanes4 v4d;
 
 inline __attribute__((always_inline)) v8f Load(const float* p) {
   v8f v;
@@ -46,81 +47,82 @@ inline __attribute__((always_inline)) void Flush(v8f a, v4d* d) {
   d[1] += __builtin_convertvector(hi, v4d);
 }
 
-// Rows [r0, r1) of one site's NC components: E_c * p summed in float lanes
-// (U interleaved accumulators per component, so one-component sites are not
-// bound by the add latency), then widened into the site's double sums d.
-// The order of every operation is fixed by the inputs.
+// Pressure rows [r0, r1) of one site's NC components, read from a band of
+// folded table rows (ebuf[comp]: the band's first row; rows ew apart): E_c * p
+// summed in float lanes (U interleaved accumulators per component, acc[u * NC
+// + c], so one-component sites are not bound by the add latency), held in
+// registers across the rows and widened into the site's double sums at the
+// end of each band of kRowsPerFlush pressure rows. The order of every
+// operation is fixed by the inputs.
 template <int NC, int U>
-inline __attribute__((always_inline)) void SumRows(const float* const* E, size_t base, int ew,
-                                                   const float* P, int pw, const int* lo,
-                                                   const int* hi, int r0, int r1, v4d* d) {
-  v8f acc[U][NC];
-  for (int u = 0; u < U; ++u)
-    for (int c = 0; c < NC; ++c) acc[u][c] = v8f{0, 0, 0, 0, 0, 0, 0, 0};
+inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* const* ebuf,
+                                                    int ew, int T0, const float* P, int pw,
+                                                    const int* lo, const int* hi, int r0, int r1,
+                                                    int rows) {
+  v8f acc[U * NC];
+  for (int k = 0; k < U * NC; ++k) acc[k] = s.acc[k];
   for (int r = r0; r < r1; ++r) {
-    const int x1 = hi[r];
     const float* prow = P + static_cast<size_t>(r) * pw;
     const float* erow[NC];
-    for (int c = 0; c < NC; ++c) erow[c] = E[c] + base + static_cast<size_t>(r) * ew;
+    const size_t e0 = static_cast<size_t>(s.off + r - T0) * ew + s.col;
+    for (int c = 0; c < NC; ++c) erow[c] = ebuf[s.comp[c]] + e0;
+    const int x1 = hi[r];
     int x = lo[r];
     for (; x + U * kLanes <= x1; x += U * kLanes)
       for (int u = 0; u < U; ++u) {
         const v8f p = Load(prow + x + u * kLanes);
-        for (int c = 0; c < NC; ++c) acc[u][c] += Load(erow[c] + x + u * kLanes) * p;
+        for (int c = 0; c < NC; ++c) acc[u * NC + c] += Load(erow[c] + x + u * kLanes) * p;
       }
     for (; x < x1; x += kLanes) {
       const v8f p = Load(prow + x);
-      for (int c = 0; c < NC; ++c) acc[0][c] += Load(erow[c] + x) * p;
+      for (int c = 0; c < NC; ++c) acc[c] += Load(erow[c] + x) * p;
     }
-  }
-  for (int c = 0; c < NC; ++c) {
-    v8f a = acc[0][c];
-    for (int u = 1; u < U; ++u) a += acc[u][c];
-    Flush(a, d + 2 * c);
-  }
-}
-
-// One chunk's sites (at most kSitesPerChunk), band by band of kRowsPerFlush
-// pressure rows, so the table rows a band needs are reused from L1 by every
-// site of the chunk. Each site's sum is the same sequence of operations as
-// summing it alone.
-struct SiteSum {
-  int nc = 0;
-  const float* E[kNumStress];
-  size_t base = 0;
-  v4d d[2 * kNumStress];
-};
-
-__attribute__((target_clones("avx2", "default")))
-void SumChunk(SiteSum* sites, int count, int ew, const float* P, int pw, const int* lo,
-              const int* hi, int rows) {
-  for (int q = 0; q < count; ++q)
-    for (auto& v : sites[q].d) v = v4d{0, 0, 0, 0};
-  for (int r0 = 0; r0 < rows; r0 += kRowsPerFlush) {
-    const int r1 = std::min(rows, r0 + kRowsPerFlush);
-    for (int q = 0; q < count; ++q) {
-      SiteSum& s = sites[q];
-      switch (s.nc) {
-        case 0: break;
-        case 1: SumRows<1, 4>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
-        case 2: SumRows<2, 2>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
-        case 3: SumRows<3, 2>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
-        case 4: SumRows<4, 1>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
-        case 5: SumRows<5, 1>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
-        default: SumRows<6, 1>(s.E, s.base, ew, P, pw, lo, hi, r0, r1, s.d); break;
+    if ((r + 1) % kRowsPerFlush == 0 || r == rows - 1) {
+      for (int c = 0; c < NC; ++c) {
+        v8f sum = acc[c];
+        for (int u = 1; u < U; ++u) sum += acc[u * NC + c];
+        Flush(sum, s.d + 2 * c);
       }
+      for (int k = 0; k < U * NC; ++k) acc[k] = v8f{0, 0, 0, 0, 0, 0, 0, 0};
+    }
+  }
+  for (int k = 0; k < U * NC; ++k) s.acc[k] = acc[k];
+}
+
+// A band of folded table rows (window rows [T0, T1)) into the sums of the
+// sites [first, last) that read it (pressure row r = window row - site.off).
+// A site's sum is the same sequence of operations whichever band or job its
+// rows come in: rows in increasing order, float lanes widened to double every
+// kRowsPerFlush pressure rows (as the one-site-at-a-time sum).
+__attribute__((target_clones("avx2", "default")))
+void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
+             int T1, const float* P, int pw, const int* lo, const int* hi, int rows) {
+  for (int q = first; q < last; ++q) {
+    FoldSite& s = sites[q];
+    const int r0 = std::max(0, T0 - s.off), r1 = std::min(rows, T1 - s.off);
+    if (r0 >= r1) continue;
+    switch (s.nc) {
+      case 1: SiteRows<1, 4>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
+      case 2: SiteRows<2, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
+      case 3: SiteRows<3, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
+      case 4: SiteRows<4, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
+      case 5: SiteRows<5, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
+      default: SiteRows<6, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
     }
   }
 }
 
-// e[x] = (kp[x] + rx kx[x]) + ry ky[x] (float), or kp[x] without shear.
+// e[x] = sign ((kp[x] + rx kx[x]) + ry ky[x]) (float; sign +-1, exact), or
+// sign kp[x] without shear.
 __attribute__((target_clones("avx2", "default")))
-void FoldRow(const float* kp, const float* kx, const float* ky, float rx, float ry, bool shear,
-             int len, float* e) {
+void FoldRow(const float* kp, const float* kx, const float* ky, float rx, float ry, float sign,
+             bool shear, int len, float* e) {
   if (shear) {
-    for (int x = 0; x < len; ++x) e[x] = (kp[x] + rx * kx[x]) + ry * ky[x];
-  } else {
+    for (int x = 0; x < len; ++x) e[x] = sign * ((kp[x] + rx * kx[x]) + ry * ky[x]);
+  } else if (sign > 0) {
     std::memcpy(e, kp, sizeof(float) * len);
+  } else {
+    for (int x = 0; x < len; ++x) e[x] = -kp[x];
   }
 }
 
@@ -144,9 +146,14 @@ void FoldRowReversed(const float* kp, const float* kx, const float* ky, float rx
 void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy, int x0, int w,
                      float rx, float ry, bool shear, float* e) {
   const int n = kt.n, L = 2 * n - 1;
-  std::fill(e, e + w, 0.0f);
   const int ady = dy < 0 ? -dy : dy;
-  if (ady > n - 1) return;
+  if (ady > n - 1) {
+    std::fill(e, e + w, 0.0f);
+    return;
+  }
+  // Zero beyond the tables' offsets; the two sides below write the rest.
+  std::fill(e, e + std::clamp(-(n - 1) - x0, 0, w), 0.0f);
+  std::fill(e + std::clamp(n - x0, 0, w), e + w, 0.0f);
   const size_t row = static_cast<size_t>(ady + n - 1) * L + (n - 1);  // offset (0, |dy|)
   const float* Kp = kt.At(d, kLoadPressure, comp) + row;
   const float* Kx = kt.At(d, kLoadShearX, comp) + row;
@@ -168,10 +175,7 @@ void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy
     }
     const float a = sp * sx * rx, b = sp * sy * ry;
     if (side == 0) {
-      float* out = e + (lo - x0);
-      FoldRow(Kp + lo, Kx + lo, Ky + lo, a, b, shear, hi - lo + 1, out);
-      if (sp < 0)
-        for (int x = 0; x <= hi - lo; ++x) out[x] = -out[x];
+      FoldRow(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
     } else {
       // e at dx = lo .. hi reads the positive-offset row at -lo .. -hi.
       FoldRowReversed(Kp - lo, Kx - lo, Ky - lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
@@ -183,6 +187,70 @@ int CountWanted(const std::array<bool, kNumStress>& w) {
   int c = 0;
   for (bool b : w) c += b;
   return c;
+}
+
+// Sites grouped by depth (each by the window row it starts reading at, row
+// j descending, then column), each depth's largest / smallest site i, j and
+// components, and the sites' states in that order.
+void SortSites(const KernelTables& kt, const std::vector<StressSite>& sites, FoldScratch* w) {
+  const int n = kt.n;
+  const int D = static_cast<int>(kt.depths_m.size());
+  w->window.assign(D, FoldScratch::Window{});
+  w->depth_begin.assign(D + 1, 0);
+  w->si0.assign(D, n);
+  w->sj0.assign(D, n);
+  std::vector<int>& si0 = w->si0;
+  std::vector<int>& sj0 = w->sj0;
+  for (auto& win : w->window) win.si1 = win.sj1 = -1;
+  for (const StressSite& s : sites) {
+    auto& win = w->window[s.depth_index];
+    w->depth_begin[s.depth_index + 1]++;
+    si0[s.depth_index] = std::min(si0[s.depth_index], s.i);
+    sj0[s.depth_index] = std::min(sj0[s.depth_index], s.j);
+    win.si1 = std::max(win.si1, s.i);
+    win.sj1 = std::max(win.sj1, s.j);
+    for (int c = 0; c < kNumStress; ++c)
+      win.comps[c] = win.comps[c] || (s.want[c] && kt.components[c]);
+  }
+  for (int d = 0; d < D; ++d) w->depth_begin[d + 1] += w->depth_begin[d];
+  w->sites_by_depth.resize(sites.size());
+  {
+    std::vector<int>& fill = w->fill;
+    fill.assign(w->depth_begin.begin(), w->depth_begin.end() - 1);
+    for (size_t s = 0; s < sites.size(); ++s)
+      w->sites_by_depth[fill[sites[s].depth_index]++] = static_cast<int>(s);
+    // Each depth's sites by the window row they start at (row j, descending),
+    // then column (fixed by the sites alone, so the same order every step).
+    for (int d = 0; d < D; ++d)
+      std::sort(w->sites_by_depth.begin() + w->depth_begin[d],
+                w->sites_by_depth.begin() + w->depth_begin[d + 1], [&](int a, int b) {
+                  const StressSite &sa = sites[a], &sb = sites[b];
+                  return sa.j != sb.j ? sa.j > sb.j : (sa.i != sb.i ? sa.i < sb.i : a < b);
+                });
+  }
+  // Each depth's table window, and its sites' states in the order of the
+  // window row they start reading at (off), so the sites reading a row are
+  // a contiguous range.
+  w->sites.clear();
+  for (int d = 0; d < D; ++d) {
+    auto& win = w->window[d];
+    if (win.si1 < 0) continue;
+    for (int q = w->depth_begin[d]; q < w->depth_begin[d + 1]; ++q) {
+      const StressSite& site = sites[w->sites_by_depth[q]];
+      FoldSite fs;
+      fs.nc = 0;
+      for (int c = 0; c < kNumStress; ++c)
+        if (site.want[c] && win.comps[c]) fs.comp[fs.nc++] = c;
+      if (fs.nc == 0) continue;
+      fs.site = w->sites_by_depth[q];
+      fs.depth = d;
+      fs.col = win.si1 - site.i;  // window column of pressure column 0
+      fs.off = win.sj1 - site.j;  // window row of pressure row 0
+      w->sites.push_back(fs);
+    }
+  }
+  w->site_col.resize(w->sites.size());
+  for (size_t q = 0; q < w->sites.size(); ++q) w->site_col[q] = w->sites[q].col;
 }
 
 }  // namespace
@@ -217,110 +285,100 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     w->row_lo[y] = std::min(w->row_lo[y], b / kLanes * kLanes);
     w->row_hi[y] = std::max(w->row_hi[y], (e + kLanes - 1) / kLanes * kLanes);
   }
-  // Sites grouped by depth, and each depth's table window.
-  w->window.assign(D, FoldScratch::Window{});
-  w->depth_begin.assign(D + 1, 0);
-  std::vector<int> si0(D, n), sj0(D, n);
-  for (auto& win : w->window) win.si1 = win.sj1 = -1;
-  for (const StressSite& s : sites) {
-    auto& win = w->window[s.depth_index];
-    w->depth_begin[s.depth_index + 1]++;
-    si0[s.depth_index] = std::min(si0[s.depth_index], s.i);
-    sj0[s.depth_index] = std::min(sj0[s.depth_index], s.j);
-    win.si1 = std::max(win.si1, s.i);
-    win.sj1 = std::max(win.sj1, s.j);
-    for (int c = 0; c < kNumStress; ++c) win.comps[c] = win.comps[c] || (s.want[c] && kt.components[c]);
+  // Sites grouped by depth, each depth's window of table offsets and the
+  // sites' states: fixed by the sites, so kept while they are unchanged.
+  auto same = [](const StressSite& a, const StressSite& b) {
+    return a.i == b.i && a.j == b.j && a.depth_index == b.depth_index && a.want == b.want;
+  };
+  if (w->key_tables != &kt || w->key_components != kt.components ||
+      w->window.size() != static_cast<size_t>(D) || w->key_sites.size() != sites.size() ||
+      !std::equal(sites.begin(), sites.end(), w->key_sites.begin(), same)) {
+    SortSites(kt, sites, w);
+    w->key_tables = &kt;
+    w->key_components = kt.components;
+    w->key_sites = sites;
   }
-  for (int d = 0; d < D; ++d) w->depth_begin[d + 1] += w->depth_begin[d];
-  w->sites_by_depth.resize(sites.size());
-  {
-    std::vector<int> fill(w->depth_begin.begin(), w->depth_begin.end() - 1);
-    for (size_t s = 0; s < sites.size(); ++s)
-      w->sites_by_depth[fill[sites[s].depth_index]++] = static_cast<int>(s);
-    // Each depth's sites by row, then column: a chunk's sites read nearby
-    // table rows (fixed by the sites alone, so the same order every step).
-    for (int d = 0; d < D; ++d)
-      std::sort(w->sites_by_depth.begin() + w->depth_begin[d],
-                w->sites_by_depth.begin() + w->depth_begin[d + 1], [&](int a, int b) {
-                  const StressSite &sa = sites[a], &sb = sites[b];
-                  return sa.j != sb.j ? sa.j < sb.j : (sa.i != sb.i ? sa.i < sb.i : a < b);
-                });
-  }
-  w->eff.resize(static_cast<size_t>(D) * kNumStress);
-  // Fold jobs: blocks of |dy| (the rows dy and -dy share their source rows,
-  // read once).
-  struct FoldJob { int d, c, y0, y1; };
-  std::vector<FoldJob> folds;
   for (int d = 0; d < D; ++d) {
     auto& win = w->window[d];
     if (win.si1 < 0) continue;
     win.x0 = i0 - win.si1;
     win.y0 = j0 - win.sj1;
-    win.w = pw + win.si1 - si0[d];
-    win.h = rows + win.sj1 - sj0[d];
-    for (int c = 0; c < kNumStress; ++c) {
-      if (!win.comps[c]) continue;
-      w->eff[d * kNumStress + c].resize(static_cast<size_t>(win.w) * win.h);
-      const int end = std::max(std::abs(win.y0), std::abs(win.y0 + win.h - 1)) + 1;
-      for (int y = 0; y < end; y += kFoldRowsPerChunk)
-        folds.push_back({d, c, y, std::min(end, y + kFoldRowsPerChunk)});
-    }
+    win.w = pw + win.si1 - w->si0[d];
+    win.h = rows + win.sj1 - w->sj0[d];
   }
+  // Jobs: one per depth on one thread (every site of a depth shares each
+  // folded row), split into `threads` site ranges otherwise (each range folds
+  // the rows it reads: a cell's folded value does not depend on which rows
+  // or columns are folded with it, and a site's sum not on its neighbours,
+  // so the output is bit-identical for any split).
+  w->jobs.clear();
+  for (size_t a = 0; a < w->sites.size();) {
+    size_t b = a;
+    while (b < w->sites.size() && w->sites[b].depth == w->sites[a].depth) ++b;
+    const int count = static_cast<int>(b - a);
+    const int groups = std::max(1, std::min(threads, count / kSitesPerChunk));
+    for (int g = 0; g < groups; ++g)
+      w->jobs.push_back({static_cast<int>(a) + count * g / groups,
+                         static_cast<int>(a) + count * (g + 1) / groups});
+    a = b;
+  }
+  if (w->rowbuf.size() < w->jobs.size()) w->rowbuf.resize(w->jobs.size());
   const float rx = static_cast<float>(slip_x), ry = static_cast<float>(slip_y);
-  ThreadPool& pool = ThreadPool::Shared();
   const auto t0 = std::chrono::steady_clock::now();
-  pool.Run(static_cast<int>(folds.size()), threads, [&](int k) {
-    const FoldJob& f = folds[k];
-    const auto& win = w->window[f.d];
-    const auto comp = static_cast<StressComponent>(f.c);
-    float* E = w->eff[f.d * kNumStress + f.c].data();
-    for (int a = f.y0; a < f.y1; ++a)
-      for (int sign = 0; sign < (a == 0 ? 1 : 2); ++sign) {
-        const int dy = sign ? -a : a;
-        const int y = dy - win.y0;
-        if (y < 0 || y >= win.h) continue;
-        FoldMirroredRow(kt, f.d, comp, dy, win.x0, win.w, rx, ry, shear,
-                        E + static_cast<size_t>(y) * win.w);
+  ThreadPool::Shared().Run(static_cast<int>(w->jobs.size()), threads, [&](int k) {
+    const FoldScratch::Job job = w->jobs[k];
+    FoldSite* fs = w->sites.data();
+    const int d = fs[job.begin].depth;
+    const auto& win = w->window[d];
+    std::vector<float>& buf = w->rowbuf[k];
+    const int band = kTableRowsPerBand;
+    buf.resize(static_cast<size_t>(kNumStress) * band * win.w);
+    float* ebuf[kNumStress];
+    bool comps[kNumStress] = {};
+    for (int q = job.begin; q < job.end; ++q) {
+      for (int c = 0; c < fs[q].nc; ++c) comps[fs[q].comp[c]] = true;
+      for (auto& v : fs[q].acc) v = v8f{0, 0, 0, 0, 0, 0, 0, 0};
+      for (auto& v : fs[q].d) v = v4d{0, 0, 0, 0};
+    }
+    for (int c = 0; c < kNumStress; ++c)
+      ebuf[c] = buf.data() + static_cast<size_t>(c) * band * win.w;
+    int lo_min = pw, hi_max = 0;
+    for (int r = 0; r < rows; ++r)
+      if (w->row_lo[r] < w->row_hi[r]) {
+        lo_min = std::min(lo_min, w->row_lo[r]);
+        hi_max = std::max(hi_max, w->row_hi[r]);
       }
-  });
-  const auto t1 = std::chrono::steady_clock::now();
-  // Sums: blocks of sites of one depth.
-  struct SumJob { int d, s0, s1; };
-  std::vector<SumJob> sums;
-  for (int d = 0; d < D; ++d)
-    for (int s = w->depth_begin[d]; s < w->depth_begin[d + 1]; s += kSitesPerChunk)
-      sums.push_back({d, s, std::min(w->depth_begin[d + 1], s + kSitesPerChunk)});
-  pool.Run(static_cast<int>(sums.size()), threads, [&](int k) {
-    const SumJob& job = sums[k];
-    const auto& win = w->window[job.d];
-    SiteSum chunk[kSitesPerChunk];
-    int comp[kSitesPerChunk][kNumStress];
-    int count = 0;
-    for (int q = job.s0; q < job.s1; ++q, ++count) {
-      const StressSite& site = sites[w->sites_by_depth[q]];
-      SiteSum& ss = chunk[count];
-      ss.nc = 0;
+    const int* lo = w->row_lo.data();
+    const int* hi = w->row_hi.data();
+    const int* col = w->site_col.data();  // fs[q].col, contiguous
+    int first = job.begin, last = job.begin;
+    const int t_end = fs[job.end - 1].off + rows;
+    for (int T0 = fs[job.begin].off; T0 < t_end; T0 += band) {
+      const int T1 = std::min(t_end, T0 + band);
+      while (last < job.end && fs[last].off < T1) ++last;
+      while (first < last && fs[first].off + rows <= T0) ++first;
+      // Fold the band over the columns its sites read.
+      int c0 = win.w, c1 = 0;
+      for (int q = first; q < last; ++q) {
+        c0 = std::min(c0, col[q] + lo_min);
+        c1 = std::max(c1, col[q] + hi_max);
+      }
+      if (c0 >= c1) continue;  // no site reads this band
       for (int c = 0; c < kNumStress; ++c)
-        if (site.want[c] && win.comps[c]) {
-          ss.E[ss.nc] = w->eff[job.d * kNumStress + c].data();
-          comp[count][ss.nc++] = c;
-        }
-      // Window element of (row j0, column i0) for this site.
-      ss.base = static_cast<size_t>(win.sj1 - site.j) * win.w + (win.si1 - site.i);
+        for (int t = T0; t < T1; ++t)
+          if (comps[c])
+            FoldMirroredRow(kt, d, static_cast<StressComponent>(c), t + win.y0, win.x0 + c0,
+                            c1 - c0, rx, ry, shear,
+                            ebuf[c] + static_cast<size_t>(t - T0) * win.w + c0);
+      SumBand(fs, first, last, ebuf, win.w, T0, T1, w->pressure.data(), pw, lo, hi, rows);
     }
-    SumChunk(chunk, count, win.w, w->pressure.data(), pw, w->row_lo.data(), w->row_hi.data(),
-             rows);
-    for (int q = 0; q < count; ++q) {
-      const int si = w->sites_by_depth[job.s0 + q];
-      for (int c = 0; c < chunk[q].nc; ++c) {
-        const v4d s = chunk[q].d[2 * c] + chunk[q].d[2 * c + 1];
-        out[si][comp[q][c]] = (s[0] + s[1]) + (s[2] + s[3]);
+    for (int q = job.begin; q < job.end; ++q)
+      for (int c = 0; c < fs[q].nc; ++c) {
+        const v4d s = fs[q].d[2 * c] + fs[q].d[2 * c + 1];
+        out[fs[q].site][fs[q].comp[c]] = (s[0] + s[1]) + (s[2] + s[3]);
       }
-    }
   });
-  const auto t2 = std::chrono::steady_clock::now();
-  w->fold_seconds = std::chrono::duration<double>(t1 - t0).count();
-  w->sum_seconds = std::chrono::duration<double>(t2 - t1).count();
+  w->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void ReferenceDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,

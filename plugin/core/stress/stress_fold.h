@@ -3,16 +3,19 @@
 // UniformSlipShear: q_x = r_x p, q_y = r_y p) or absent, the stress is
 //   sigma_c(site) = sum_cells (K_p,c + r_x K_x,c + r_y K_y,c) p,
 // so one effective table per step and (depth, component) replaces three:
-// a third of the multiply-adds and of the table reads per site. Tables are
-// folded only over the window of offsets (active cells - sites) that some
-// site reads, and the pressure is copied into rows of whole 8-cell chunks,
-// so the inner loop has no tails; a site's wanted components share each
-// pressure load. Same result as the reference path (StressAtReceptor) to
-// float rounding (tests/unit/test_stress_fold.py: rel. RMS <= 1e-5).
+// a third of the multiply-adds and of the table reads per site. The table is
+// folded band by band of kTableRowsPerBand rows (stress_fold.cc), only over
+// the offsets (active cells - sites) that some site reads, and each band is
+// read at once by every site of the depth while it is in L1/L2; the pressure is
+// copied into rows of whole 8-cell chunks, so the inner loop has no tails; a
+// site's wanted components share each pressure load. Same result as the
+// reference path (StressAtReceptor) to float rounding
+// (tests/unit/test_stress_fold.py: rel. RMS <= 1e-5).
 //
-// Threads: work in chunks fixed by the inputs (table row blocks, then site
-// blocks), each site's sum on one thread in a fixed order, so the output is
-// bit-identical for any thread count. Pure C++: no MuJoCo types.
+// Threads: each depth's sites split into `threads` ranges, each range
+// folding the bands it reads; a site's sum is one fixed sequence of
+// operations whatever range it is in, so the output is bit-identical for any
+// thread count. Pure C++: no MuJoCo types.
 #ifndef MJTOUCH_STRESS_STRESS_FOLD_H_
 #define MJTOUCH_STRESS_STRESS_FOLD_H_
 
@@ -23,11 +26,25 @@
 
 namespace mjtouch {
 
+// One site's running sums on the folded path: float lanes of the current
+// band of rows (acc[u * nc + c]) and the double sums (d[2c], d[2c + 1]).
+// Aligned explicitly: a 32-byte vector type is only 16-byte aligned where
+// AVX is not enabled (this header), but AVX code assumes 32.
+struct alignas(32) FoldSite {
+  typedef float Lanes8 __attribute__((vector_size(32)));
+  typedef double Lanes4 __attribute__((vector_size(32)));
+  alignas(32) Lanes8 acc[kNumStress];
+  alignas(32) Lanes4 d[2 * kNumStress];
+  int nc = 0;                 // components summed
+  int comp[kNumStress] = {};  // which
+  int col = 0, off = 0;       // window column / row of pressure cell (0, 0)
+  int site = 0, depth = 0;
+};
+
 // Per-simulation scratch of the folded path (no meaning between calls).
 struct FoldScratch {
   std::vector<float> pressure;       // padded window, rows of `width` cells
   std::vector<int> row_lo, row_hi;   // per window row: chunk-aligned cell range
-  std::vector<std::vector<float>> eff;  // [depth * kNumStress + comp] folded window
   std::vector<int> sites_by_depth;   // site indices grouped by depth
   std::vector<int> depth_begin;      // ranges into sites_by_depth
   struct Window {
@@ -36,7 +53,18 @@ struct FoldScratch {
     std::array<bool, kNumStress> comps{};
   };
   std::vector<Window> window;  // per depth
-  double fold_seconds = 0, sum_seconds = 0;  // the last call's phases (diagnostics)
+  std::vector<FoldSite> sites;  // by depth, then window row of their first read
+  std::vector<int> site_col;     // sites[q].col, contiguous (scanned per band)
+  struct Job { int begin, end; };  // a range of `sites` (one depth)
+  std::vector<Job> jobs;
+  std::vector<std::vector<float>> rowbuf;  // per job: a band of folded rows per component
+  std::vector<int> si0, sj0;               // per depth: smallest site i, j
+  std::vector<int> fill;                   // per depth: next slot in sites_by_depth
+  // The sites (and tables) the site-derived fields above were built for.
+  const KernelTables* key_tables = nullptr;
+  std::array<bool, kNumStress> key_components{};
+  std::vector<StressSite> key_sites;
+  double seconds = 0;  // the last call's fold + sums (diagnostics)
 };
 
 // Stress (Pa) at every site into out[site] (components a site does not want

@@ -539,10 +539,19 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  const Pose& pad, const std::vector<CounterSurface>& surfaces,
                  double cull_above_m, std::vector<double>* gap_m,
                  std::vector<double>* coverage, bool area_average, const SkinBlocks* blocks,
-                 CellBox* rendered, bool fast_paths) {
+                 CellBox* rendered, bool fast_paths, CellBox* written) {
   const size_t N = grid.Size();
-  gap_m->assign(N, kInf);
-  coverage->assign(N, 0.0);
+  if (written && gap_m->size() == N && coverage->size() == N) {
+    const CellBox& w = *written;
+    for (int j = w.j0; j < w.j0 + w.ny; ++j) {
+      const size_t a = static_cast<size_t>(j) * grid.n + w.i0;
+      std::fill(gap_m->begin() + a, gap_m->begin() + a + w.nx, kInf);
+      std::fill(coverage->begin() + a, coverage->begin() + a + w.nx, 0.0);
+    }
+  } else {
+    gap_m->assign(N, kInf);
+    coverage->assign(N, 0.0);
+  }
   const double h = grid.pitch_m;
   struct Frame {
     double R[9], t[3], hx, hy;
@@ -756,9 +765,11 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
       });
     }
   }
-  if (rendered) {
-    *rendered = i_hi < 0 ? CellBox{} : CellBox{i_lo, j_lo, i_hi - i_lo + 1, j_hi - j_lo + 1};
-  }
+  // Every cell written above is in this box (a write takes a gap below the
+  // cell's, and extends the box).
+  const CellBox box = i_hi < 0 ? CellBox{} : CellBox{i_lo, j_lo, i_hi - i_lo + 1, j_hi - j_lo + 1};
+  if (rendered) *rendered = box;
+  if (written) *written = box;
   return cull;
 }
 

@@ -120,12 +120,15 @@ struct SkinBlocks;
 // `fast_paths` = false renders every surface with the general per-cell code
 // (the reference the fast paths are tested and benchmarked against; the
 // results are bit-identical).
+// `written`: if given, in: a box outside which gap_m / coverage (already
+// grid-sized) hold +inf / 0, so only it is reset (not the whole grid); out:
+// the same for this call's result (the cells it rendered).
 double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  const Pose& pad_pose, const std::vector<CounterSurface>& surfaces,
                  double cull_above_m, std::vector<double>* gap_m,
                  std::vector<double>* coverage, bool area_average = true,
                  const SkinBlocks* blocks = nullptr, CellBox* rendered = nullptr,
-                 bool fast_paths = true);
+                 bool fast_paths = true, CellBox* written = nullptr);
 
 // Bounds of the skin's height over blocks of kSide x kSide cells, so that
 // RenderGap skips whole blocks out of reach. +inf / -inf: no skin cell.
