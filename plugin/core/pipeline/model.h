@@ -43,16 +43,23 @@ enum LastPoseSlot {
 // Where each block of plugin_state lives (offsets and sizes in doubles), in
 // this order: the header (StateSlot), per-receptor membranes
 // (kReceptorStateSize each), the last step's spike counts and voltages
-// (re-output on repeated calls), for `elastic` the last pressure field (n*n,
-// Pa: the next step's warm start) and, with contact_solver = pcg, the one
-// before it (n*n, Pa) and whether it is valid (1 double): the warm start
-// extrapolates 2 p(n-1) - p(n-2); then the last pose (LastPoseSlot; always
-// there: `auto` oversampling depends on the timestep, which MuJoCo's
-// state-size callback does not see).
+// (re-output on repeated calls), for `elastic` the pressure history (below);
+// then the last pose (LastPoseSlot; always there: `auto` oversampling depends
+// on the timestep, which MuJoCo's state-size callback does not see).
+//
+// Pressure history (`elastic`): kHistoryBlocks blocks of n*n pressures (Pa)
+// + HistorySlot, and one slot naming the head block h. Block h holds the
+// evaluation at the current time, (h + 2) % 3 the last step's, (h + 1) % 3
+// the one before: the warm start extrapolates 2 p(n-1) - p(n-2). A new time
+// rotates h (no copies); a repeated evaluation at the same time (mj_forward
+// twice) overwrites block h only, so it starts from the same history and
+// gives the same bits.
+enum HistorySlot { kHsValid = 0, kHsDepth, kHistorySlots };  // touched; indentation, m
+constexpr int kHistoryBlocks = 3;
 struct StateLayout {
-  int receptors = 0, last_spikes = 0, last_voltage = 0, last_pressure = 0, last_pose = 0;
-  int last_pressure_size = 0;
-  int prev_pressure = 0, prev_pressure_size = 0;  // p(n-2), then its valid flag
+  int receptors = 0, last_spikes = 0, last_voltage = 0, history = 0, last_pose = 0;
+  int history_block = 0;  // n*n + kHistorySlots; 0 without `elastic`
+  int history_head = 0;   // slot of h
   int size = 0;
 
   StateLayout() = default;
@@ -60,16 +67,19 @@ struct StateLayout {
     receptors = kStateHeader;
     last_spikes = receptors + nreceptor * kReceptorStateSize;
     last_voltage = last_spikes + nreceptor;
-    last_pressure = last_voltage + nreceptor;
-    last_pressure_size =
-        cfg.pressure_model == PressureModel::kElastic ? static_cast<int>(cfg.grid.Size()) : 0;
-    prev_pressure = last_pressure + last_pressure_size;
-    prev_pressure_size = cfg.pressure_model == PressureModel::kElastic &&
-                                 cfg.elastic_method == ElasticMethod::kPreconditioned
-                             ? last_pressure_size + 1
-                             : 0;
-    last_pose = prev_pressure + prev_pressure_size;
+    history = last_voltage + nreceptor;
+    const bool elastic = cfg.pressure_model == PressureModel::kElastic;
+    history_block = elastic ? static_cast<int>(cfg.grid.Size()) + kHistorySlots : 0;
+    history_head = history + kHistoryBlocks * history_block;
+    last_pose = history_head + (elastic ? 1 : 0);
     size = last_pose + kLastPoseSize;
+  }
+  // Block k steps back from the head (0: this time, 1: last step, 2: the one
+  // before); pressures first, then HistorySlot.
+  double* history_at(double* state, int back) const {
+    const int h = static_cast<int>(state[history_head]);
+    return state + history + static_cast<size_t>((h + kHistoryBlocks - back) % kHistoryBlocks) *
+                                 history_block;
   }
   // Receptor r's membrane block.
   double* receptor(double* state, int r) const {

@@ -111,12 +111,26 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
 }  // namespace
 
 bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
-                     Workspace* ws) {
+                     Workspace* ws, bool new_time) {
   const SkinConfig& cfg = model.config();
   const TaxelGrid& grid = cfg.grid;
   TractionField& tf = ws->traction;
-  const bool warm = state[kStContactValid] > 0.0;
-  const double depth_prev = state[kStContactDepth];
+  // `elastic`: the last step's contact from the pressure history, so a
+  // repeated evaluation at the same time starts where the first one did.
+  const StateLayout& lay = model.state_layout();
+  const size_t ncell = grid.Size();
+  double* cur = nullptr;
+  const double *last = nullptr, *prev = nullptr;
+  if (lay.history_block > 0) {
+    if (new_time)
+      state[lay.history_head] = (static_cast<int>(state[lay.history_head]) + 1) % kHistoryBlocks;
+    cur = lay.history_at(state, 0);
+    last = lay.history_at(state, 1);
+    prev = lay.history_at(state, 2);
+    cur[ncell + kHsValid] = 0.0;
+  }
+  const bool warm = last ? last[ncell + kHsValid] > 0.0 : state[kStContactValid] > 0.0;
+  const double depth_prev = last ? last[ncell + kHsDepth] : state[kStContactDepth];
   state[kStContactValid] = 0.0;
   if (!(in.in_contact && in.normal_force_n > 0.0)) return false;
 
@@ -170,11 +184,9 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         // contact_solver = pcg, extrapolated 2 p(n-1) - p(n-2) when both
         // steps touched (prototype on slide_grating, P&K: 16.6 -> 9.7
         // iterations at the same error).
-        const StateLayout& lay = model.state_layout();
-        const double* last = state + lay.last_pressure;
-        const double* prev = state + lay.prev_pressure;
-        const bool extrapolate =
-            warm && lay.prev_pressure_size > 0 && prev[lay.last_pressure_size] > 0.0;
+        const bool extrapolate = warm &&
+                                 cfg.elastic_method == ElasticMethod::kPreconditioned &&
+                                 prev[ncell + kHsValid] > 0.0;
         auto warm_guess = [&]() {
           ws->pressure_guess.assign(grid.Size(), 0.0);
           if (!warm) return;
@@ -254,14 +266,10 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   if (touching) {
     if (!finished) FinishTraction(grid, cfg.shear, &tf);
     state[kStContactValid] = 1.0;
-    if (cfg.pressure_model == PressureModel::kElastic) {
-      const StateLayout& lay = model.state_layout();
-      if (lay.prev_pressure_size > 0) {  // p(n-2) <- p(n-1), valid if that step touched
-        std::copy(state + lay.last_pressure, state + lay.last_pressure + lay.last_pressure_size,
-                  state + lay.prev_pressure);
-        state[lay.prev_pressure + lay.last_pressure_size] = warm ? 1.0 : 0.0;
-      }
-      std::copy(tf.pressure_pa.begin(), tf.pressure_pa.end(), state + lay.last_pressure);
+    if (cur) {
+      std::copy(tf.pressure_pa.begin(), tf.pressure_pa.end(), cur);
+      cur[ncell + kHsValid] = 1.0;
+      cur[ncell + kHsDepth] = state[kStContactDepth];
     }
   }
   return touching;

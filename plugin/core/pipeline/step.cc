@@ -54,7 +54,7 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
 
   const TractionField& tf = ws->traction;
   // Stages 1-2: gap and tractions (skin_traction.cc).
-  const bool touching = ComputeTraction(model, in, state, ws);
+  const bool touching = ComputeTraction(model, in, state, ws, !(time_valid && elapsed == 0.0));
   const bool need_receptors =
       cfg.outputs[kOutSpikes] || cfg.outputs[kOutVoltage] || cfg.outputs[kOutRate];
   // Idle receptors: untouched, quiescent receptors (ReceptorStepper::Quiescent)

@@ -46,9 +46,12 @@ struct Workspace {
 
 // Stages 1-2 for one step (skin_traction.cc): render the gap and solve the
 // tractions into ws->traction with the configured pressure model. Reads and
-// updates the state header (contact depth, level, valid). Returns whether
-// the skin touches.
-bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state, Workspace* ws);
+// updates the state header (contact depth, level, valid) and the elastic
+// pressure history (StateLayout). new_time: false for a repeated evaluation
+// at the last one's time, which then reads the same history. Returns
+// whether the skin touches.
+bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state, Workspace* ws,
+                     bool new_time = true);
 
 // Reset the state array to its initial value.
 void ResetState(const SkinModel& model, double* state);
