@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 namespace mjtouch {
 namespace {
@@ -194,29 +195,39 @@ FftPlan::FftPlan(int n) : n_(n) {
         s.tw_re[j * R + r] = std::cos(a);
         s.tw_im[j * R + r] = std::sin(a);
       }
+    s.tw_re_f.assign(s.tw_re.begin(), s.tw_re.end());
+    s.tw_im_f.assign(s.tw_im.begin(), s.tw_im.end());
     stages_.push_back(std::move(s));
     span *= R;
   }
 }
 
-void FftPlan::Transform(double* re, double* im, int batch, int stride, bool inverse,
-                        double* sre, double* sim) const {
+template <typename T>
+void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sre,
+                        T* sim) const {
   // Ping-pong between the data (row stride `stride`) and the scratch
   // (compact, row stride `batch`).
-  const double* ir = re;
-  const double* ii = im;
+  const T* ir = re;
+  const T* ii = im;
   int is = stride;
   bool in_data = true;
   for (const Stage& s : stages_) {
-    double* orr = in_data ? sre : re;
-    double* oi = in_data ? sim : im;
+    T* orr = in_data ? sre : re;
+    T* oi = in_data ? sim : im;
     const int os = in_data ? batch : stride;
-    if (inverse) {
-      RunStage<true>(s.radix, n_, s.span, s.tw_re.data(), s.tw_im.data(), ir, ii, is, orr, oi, os,
-                     batch);
+    const T* twr;
+    const T* twi;
+    if constexpr (std::is_same_v<T, float>) {
+      twr = s.tw_re_f.data();
+      twi = s.tw_im_f.data();
     } else {
-      RunStage<false>(s.radix, n_, s.span, s.tw_re.data(), s.tw_im.data(), ir, ii, is, orr, oi,
-                      os, batch);
+      twr = s.tw_re.data();
+      twi = s.tw_im.data();
+    }
+    if (inverse) {
+      RunStage<true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+    } else {
+      RunStage<false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
     }
     ir = orr;
     ii = oi;
@@ -226,12 +237,14 @@ void FftPlan::Transform(double* re, double* im, int batch, int stride, bool inve
   if (!in_data) {
     for (int k = 0; k < n_; ++k) {
       std::memcpy(re + static_cast<size_t>(k) * stride, sre + static_cast<size_t>(k) * batch,
-                  batch * sizeof(double));
+                  batch * sizeof(T));
       std::memcpy(im + static_cast<size_t>(k) * stride, sim + static_cast<size_t>(k) * batch,
-                  batch * sizeof(double));
+                  batch * sizeof(T));
     }
   }
 }
+template void FftPlan::Transform(double*, double*, int, int, bool, double*, double*) const;
+template void FftPlan::Transform(float*, float*, int, int, bool, float*, float*) const;
 
 namespace {
 // Odd row strides: power-of-two strides put the radix streams of a stage in
@@ -240,8 +253,9 @@ int PaddedStride(int n) { return n | 1; }
 
 // Scratch for a 2D transform: the y-pass work arrays (W each) and the
 // stages' ping-pong arrays (max(W, spectrum) each), in one buffer.
-void SplitScratch(size_t W, size_t spectrum, std::vector<double>* scratch, double** wr,
-                  double** wi, double** sr, double** si) {
+template <typename T>
+void SplitScratch(size_t W, size_t spectrum, std::vector<T>* scratch, T** wr, T** wi, T** sr,
+                  T** si) {
   const size_t S = std::max(W, spectrum);
   scratch->resize(2 * W + 2 * S);
   *wr = scratch->data();
@@ -302,72 +316,76 @@ void Fft2D::Inverse(double* spec_re, double* spec_im, int rows, int cols, double
   }
 }
 
-void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, double* spec_re,
-                        double* spec_im, std::vector<double>* scratch) const {
+template <typename T>
+void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, T* spec_re, T* spec_im,
+                        std::vector<T>* scratch) const {
   const int h = (cols + 1) / 2;  // column c is packed with column c + h
   const int lw = PaddedStride(h);
   const size_t W = static_cast<size_t>(ny_) * lw;
-  double *wr, *wi, *sr, *si;
+  T *wr, *wi, *sr, *si;
   SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
-  std::fill(wr, wr + W, 0.0);
-  std::fill(wi, wi + W, 0.0);
+  std::fill(wr, wr + W, T(0));
+  std::fill(wi, wi + W, T(0));
   for (int y = 0; y < rows; ++y) {
     const double* row = re + static_cast<size_t>(y) * stride;
-    std::memcpy(wr + static_cast<size_t>(y) * lw, row, h * sizeof(double));
-    std::memcpy(wi + static_cast<size_t>(y) * lw, row + h, (cols - h) * sizeof(double));
+    T* a = wr + static_cast<size_t>(y) * lw;
+    T* b = wi + static_cast<size_t>(y) * lw;
+    for (int x = 0; x < h; ++x) a[x] = static_cast<T>(row[x]);
+    for (int x = 0; x < cols - h; ++x) b[x] = static_cast<T>(row[h + x]);
   }
   py_.Transform(wr, wi, h, lw, false, sr, si);
   // Split Z = A + i B (A, B spectra of real columns): A = (Z(k) + conj
   // Z(-k)) / 2, B = (Z(k) - conj Z(-k)) / (2 i); into (x, ky), half ky.
   const int ls = spec_stride_, hy = half_ny();
   for (int c = 0; c < h; ++c) {
-    double* ar = spec_re + static_cast<size_t>(c) * ls;
-    double* ai = spec_im + static_cast<size_t>(c) * ls;
-    double* br = spec_re + static_cast<size_t>(c + h) * ls;
-    double* bi = spec_im + static_cast<size_t>(c + h) * ls;
+    T* ar = spec_re + static_cast<size_t>(c) * ls;
+    T* ai = spec_im + static_cast<size_t>(c) * ls;
+    T* br = spec_re + static_cast<size_t>(c + h) * ls;
+    T* bi = spec_im + static_cast<size_t>(c + h) * ls;
     const bool has_b = c + h < cols;
     for (int ky = 0; ky < hy; ++ky) {
       const size_t k = static_cast<size_t>(ky) * lw + c;
       const size_t m = static_cast<size_t>((ny_ - ky) % ny_) * lw + c;
-      const double zr = wr[k], zi = wi[k], mr = wr[m], mi = wi[m];
-      ar[ky] = 0.5 * (zr + mr);
-      ai[ky] = 0.5 * (zi - mi);
+      const T zr = wr[k], zi = wi[k], mr = wr[m], mi = wi[m];
+      ar[ky] = T(0.5) * (zr + mr);
+      ai[ky] = T(0.5) * (zi - mi);
       if (has_b) {
-        br[ky] = 0.5 * (zi + mi);
-        bi[ky] = -0.5 * (zr - mr);
+        br[ky] = T(0.5) * (zi + mi);
+        bi[ky] = T(-0.5) * (zr - mr);
       }
     }
   }
   for (int x = cols; x < nx_; ++x) {
-    std::fill(spec_re + static_cast<size_t>(x) * ls, spec_re + static_cast<size_t>(x) * ls + hy, 0.0);
-    std::fill(spec_im + static_cast<size_t>(x) * ls, spec_im + static_cast<size_t>(x) * ls + hy, 0.0);
+    std::fill(spec_re + static_cast<size_t>(x) * ls, spec_re + static_cast<size_t>(x) * ls + hy, T(0));
+    std::fill(spec_im + static_cast<size_t>(x) * ls, spec_im + static_cast<size_t>(x) * ls + hy, T(0));
   }
   px_.Transform(spec_re, spec_im, hy, ls, false, sr, si);
 }
 
-void Fft2D::InverseReal(double* spec_re, double* spec_im, int rows, int cols, double* re,
-                        int stride, std::vector<double>* scratch) const {
+template <typename T>
+void Fft2D::InverseReal(T* spec_re, T* spec_im, int rows, int cols, double* re, int stride,
+                        std::vector<T>* scratch) const {
   const int h = (cols + 1) / 2;
   const int lw = PaddedStride(h);
   const size_t W = static_cast<size_t>(ny_) * lw;
-  double *wr, *wi, *sr, *si;
+  T *wr, *wi, *sr, *si;
   SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
   const int ls = spec_stride_, hy = half_ny();
   px_.Transform(spec_re, spec_im, hy, ls, true, sr, si);
   // Z = A + i B over the full ky range, the upper half from A(-k) =
   // conj A(k) (the columns' inverses are real).
   for (int c = 0; c < h; ++c) {
-    const double* ar = spec_re + static_cast<size_t>(c) * ls;
-    const double* ai = spec_im + static_cast<size_t>(c) * ls;
+    const T* ar = spec_re + static_cast<size_t>(c) * ls;
+    const T* ai = spec_im + static_cast<size_t>(c) * ls;
     const bool has_b = c + h < cols;
-    const double* br = spec_re + static_cast<size_t>(c + h) * ls;
-    const double* bi = spec_im + static_cast<size_t>(c + h) * ls;
+    const T* br = spec_re + static_cast<size_t>(c + h) * ls;
+    const T* bi = spec_im + static_cast<size_t>(c + h) * ls;
     for (int ky = 0; ky < ny_; ++ky) {
       const bool low = ky < hy;
       const int q = low ? ky : ny_ - ky;
-      const double sgn = low ? 1.0 : -1.0;  // conjugate in the upper half
-      const double a_r = ar[q], a_i = sgn * ai[q];
-      const double b_r = has_b ? br[q] : 0.0, b_i = has_b ? sgn * bi[q] : 0.0;
+      const T sgn = low ? T(1) : T(-1);  // conjugate in the upper half
+      const T a_r = ar[q], a_i = sgn * ai[q];
+      const T b_r = has_b ? br[q] : T(0), b_i = has_b ? sgn * bi[q] : T(0);
       wr[static_cast<size_t>(ky) * lw + c] = a_r - b_i;
       wi[static_cast<size_t>(ky) * lw + c] = a_i + b_r;
     }
@@ -375,9 +393,20 @@ void Fft2D::InverseReal(double* spec_re, double* spec_im, int rows, int cols, do
   py_.Transform(wr, wi, h, lw, true, sr, si);
   for (int y = 0; y < rows; ++y) {
     double* row = re + static_cast<size_t>(y) * stride;
-    std::memcpy(row, wr + static_cast<size_t>(y) * lw, h * sizeof(double));
-    std::memcpy(row + h, wi + static_cast<size_t>(y) * lw, (cols - h) * sizeof(double));
+    const T* a = wr + static_cast<size_t>(y) * lw;
+    const T* b = wi + static_cast<size_t>(y) * lw;
+    for (int x = 0; x < h; ++x) row[x] = static_cast<double>(a[x]);
+    for (int x = 0; x < cols - h; ++x) row[h + x] = static_cast<double>(b[x]);
   }
 }
+
+#define MJTOUCH_FFT_REAL(T)                                                                  \
+  template void Fft2D::ForwardReal(const double*, int, int, int, T*, T*, std::vector<T>*)    \
+      const;                                                                                 \
+  template void Fft2D::InverseReal(T*, T*, int, int, double*, int, std::vector<T>*) const;
+MJTOUCH_FFT_REAL(double)
+MJTOUCH_FFT_REAL(float)
+#undef MJTOUCH_FFT_REAL
+
 
 }  // namespace mjtouch

@@ -17,6 +17,7 @@ struct Problem {
   double target;    // sum of p over cells (force / cell area)
   double fft_cost;  // flops of one Apply, against direct sums
   ElasticWork* w;
+  ApplyPrecision precision;
 };
 
 // u = s (u - tau r + K delta) after a step p - tau t whose projection onto
@@ -33,7 +34,7 @@ void UpdateDisplacement(const Problem& P, double tau, double s, ElasticSolveStat
     if (!P.periodic && static_cast<double>(nchg) * static_cast<double>(P.B) < P.fft_cost) {
       for (int c : w->changed) P.K.AddCell(c, dl[c], P.bx, P.by, u);
     } else {
-      P.K.Apply(*P.spec, dl, P.bx, P.by, r, &w->fft);
+      P.K.Apply(*P.spec, dl, P.bx, P.by, r, &w->fft, P.precision);
       ++st->applies;
       for (size_t b = 0; b < P.B; ++b) u[b] += r[b];
     }
@@ -87,7 +88,7 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
     const double beta = beta_on * G / G_old;
     for (size_t b = 0; b < B; ++b) t[b] = p[b] > 0.0 ? g[b] + beta * t[b] : 0.0;
     G_old = G;
-    P.K.Apply(*P.spec, t, P.bx, P.by, r, &w->fft);
+    P.K.Apply(*P.spec, t, P.bx, P.by, r, &w->fft, P.precision);
     ++st->applies;
     double sum_r = 0.0;
     for (size_t b = 0; b < B; ++b)
@@ -242,7 +243,7 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     t = w->t.data();
     pn = w->p_new.data();
     for (int b : S) gp[pad_index(b)] = 0.0;
-    P.K.Apply(*P.spec, t, bx, by, r, &w->fft);
+    P.K.Apply(*P.spec, t, bx, by, r, &w->fft, P.precision);
     ++st->applies;
     double den = 0.0;  // t sums to zero over S: t.(K t - mean) = t.K t
     for (int b : S) den += r[b] * t[b];
@@ -283,15 +284,16 @@ ElasticContact::ElasticContact(std::shared_ptr<const SurfaceCompliance> complian
 bool ElasticContact::Solve(const std::vector<double>& gap_m, const CellBox& box,
                            double force_n, double tolerance, int max_iterations,
                            std::vector<double>* pressure_pa, ElasticWork* work,
-                           ElasticSolveStats* stats, ElasticMethod method) const {
+                           ElasticSolveStats* stats, ElasticMethod method,
+                           ApplyPrecision precision) const {
   return SolveElasticContact(*compliance_, gap_m, box, force_n, tolerance, max_iterations,
-                             pressure_pa, work, stats, method);
+                             pressure_pa, work, stats, method, precision);
 }
 
 bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& gap,
                          const CellBox& box_in, double force, double tol, int max_iter,
                          std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
-                         ElasticMethod method) {
+                         ElasticMethod method, ApplyPrecision precision) {
   *st = ElasticSolveStats();
   CellBox box = box_in;
   const bool periodic = K.periodic();
@@ -338,9 +340,9 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   st->fft_size_y = spec->fft.ny();
   const double fft_cost = 5.0 * static_cast<double>(spec->fft.nx()) * spec->fft.ny() *
                           std::log2(static_cast<double>(spec->fft.nx()) * spec->fft.ny());
-  K.Apply(*spec, p, bx, by, w->u.data(), &w->fft);
+  K.Apply(*spec, p, bx, by, w->u.data(), &w->fft, precision);
   st->applies = 1;
-  const Problem P{K, spec, bx, by, B, periodic, target, fft_cost, w};
+  const Problem P{K, spec, bx, by, B, periodic, target, fft_cost, w, precision};
   if (method == ElasticMethod::kPolonskyKeer) {
     PolonskyKeer(P, tol, max_iter, st);
   } else {
@@ -353,7 +355,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   p = w->p.data();
   double* u = w->u.data();
   if (method == ElasticMethod::kPolonskyKeer) {
-    K.Apply(*spec, p, bx, by, u, &w->fft);
+    K.Apply(*spec, p, bx, by, u, &w->fft, precision);
     ++st->applies;
   }
   size_t nc = 0;
