@@ -20,6 +20,23 @@ struct Problem {
   ApplyPrecision precision;
 };
 
+// sum of term(k), k < n, in four interleaved partial sums combined as
+// (s0 + s1) + (s2 + s3): one fixed order on every instruction set (so
+// deterministic), without one running sum's add-latency chain.
+template <typename F>
+inline double Sum4(size_t n, F term) {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  size_t k = 0;
+  for (; k + 4 <= n; k += 4) {
+    s0 += term(k);
+    s1 += term(k + 1);
+    s2 += term(k + 2);
+    s3 += term(k + 3);
+  }
+  for (; k < n; ++k) s0 += term(k);
+  return (s0 + s1) + (s2 + s3);
+}
+
 // u = s (u - tau r + K delta) after a step p - tau t whose projection onto
 // p >= 0 added delta on the cells in w->changed: few cells change near
 // convergence, so sum them directly unless an FFT is cheaper.
@@ -48,12 +65,8 @@ double Accept(const Problem& P, double sum_new, double* s_out) {
   double* p = P.w->p.data();
   const double* pn = P.w->p_new.data();
   const double s = P.target / sum_new;
-  double change = 0.0;
-  for (size_t b = 0; b < P.B; ++b) {
-    const double v = s * pn[b];
-    change += std::abs(v - p[b]);
-    p[b] = v;
-  }
+  const double change = Sum4(P.B, [&](size_t b) { return std::abs(s * pn[b] - p[b]); });
+  for (size_t b = 0; b < P.B; ++b) p[b] = s * pn[b];
   *s_out = s;
   return change / P.target;
 }
@@ -141,21 +154,25 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
 }
 
 // z[j * bx + i] = sum over (dj, di) in stencil order of M[dj L + di] *
-// g_pad[(j + dj) px + i + di]: a row at a time, so it vectorises; each
-// cell's sum runs in the same order as a per-cell loop would.
+// g_pad[(j + dj) px + i + di]. The stencil unrolled inside the loop over i,
+// which vectorises: each cell's sum runs in the same order as a per-cell
+// loop would, in a register.
+template <int L>
 __attribute__((target_clones("avx2", "default")))
-void ApplyStencil(const double* M, int L, const double* g_pad, int px, int bx, int by,
+void ApplyStencil(const double* M, const double* g_pad, int px, int bx, int by,
                   double* z_out) {
+  double m[L * L];
+  for (int k = 0; k < L * L; ++k) m[k] = M[k];
   for (int j = 0; j < by; ++j) {
     double* __restrict z = z_out + static_cast<size_t>(j) * bx;
-    std::fill(z, z + bx, 0.0);
-    for (int dj = 0; dj < L; ++dj) {
-      const double* row = g_pad + static_cast<size_t>(j + dj) * px;
-      for (int di = 0; di < L; ++di) {
-        const double m = M[dj * L + di];
-        const double* __restrict src = row + di;
-        for (int i = 0; i < bx; ++i) z[i] += m * src[i];
-      }
+    const double* __restrict row = g_pad + static_cast<size_t>(j) * px;
+    for (int i = 0; i < bx; ++i) {
+      double acc = 0.0;
+#pragma GCC unroll 32
+      for (int dj = 0; dj < L; ++dj)
+#pragma GCC unroll 8
+        for (int di = 0; di < L; ++di) acc += m[dj * L + di] * row[static_cast<size_t>(dj) * px + i + di];
+      z[i] = acc;
     }
   }
 }
@@ -164,7 +181,7 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   ElasticWork* w = P.w;
   const size_t B = P.B;
   const int bx = P.bx, by = P.by;
-  const int hw = SurfaceCompliance::kInverseHalfWidth, L = 2 * hw + 1;
+  constexpr int hw = SurfaceCompliance::kInverseHalfWidth, L = 2 * hw + 1;
   const int px = bx + 2 * hw;  // padded row length
   const double* M = P.spec->inverse.data();
   double* g0 = w->g0.data();
@@ -182,24 +199,28 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   for (int it = 1; it <= max_iter; ++it) {
     st->iterations = it;
     size_t nc = 0;
-    double sum_g = 0.0;
-    for (size_t b = 0; b < B; ++b)
-      if (p[b] > 0.0) { sum_g += g0[b] + u[b]; ++nc; }
+    for (size_t b = 0; b < B; ++b) nc += p[b] > 0.0;
+    const double sum_g = Sum4(B, [&](size_t b) { return p[b] > 0.0 ? g0[b] + u[b] : 0.0; });
     const double gbar = sum_g / static_cast<double>(nc);
     // The working set: the contact plus cells that overlap; t lives on it.
     std::vector<int>& S = w->set;
-    S.clear();
+    S.resize(B);
+    size_t ns = 0;
     // g_pad: g on S, zero elsewhere (its border stays zero, or wraps below).
     for (int j = 0; j < by; ++j) {
       double* gp_row = gp + static_cast<size_t>(j + hw) * px + hw;
       for (int i = 0; i < bx; ++i) {
         const size_t b = static_cast<size_t>(j) * bx + i;
-        g[b] = std::isfinite(g0[b]) ? g0[b] + u[b] - gbar : 0.0;
-        const bool in = p[b] > 0.0 || (std::isfinite(g0[b]) && g[b] < 0.0);
-        gp_row[i] = in ? g[b] : 0.0;
-        if (in) S.push_back(static_cast<int>(b));
+        const bool finite = std::isfinite(g0[b]);
+        const double gb = finite ? g0[b] + u[b] - gbar : 0.0;
+        g[b] = gb;
+        const bool in = p[b] > 0.0 || (finite && gb < 0.0);
+        gp_row[i] = in ? gb : 0.0;
+        S[ns] = static_cast<int>(b);  // kept only if in
+        ns += in;
       }
     }
+    S.resize(ns);
     // A periodic operator's stencil wraps: the border repeats the far side
     // (so a field uniform along an axis stays exactly uniform).
     if (P.periodic) {
@@ -218,15 +239,12 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     // Over the whole box, a row at a time (vectorises; each cell's sum runs
     // in the stencil's order, as a per-cell loop would), read on S only.
     // r: scratch until K t below.
-    ApplyStencil(M, L, gp, px, bx, by, r);
-    double sum_z = 0.0;
-    for (int b : S) sum_z += r[b];
-    const double zbar = sum_z / static_cast<double>(S.size());
-    double G = 0.0;
-    for (int b : S) {
-      r[b] -= zbar;
-      G += g[b] * r[b];
-    }
+    ApplyStencil<L>(M, gp, px, bx, by, r);
+    const int* Sp = S.data();
+    const double sum_z = Sum4(ns, [&](size_t k) { return r[Sp[k]]; });
+    const double zbar = sum_z / static_cast<double>(ns);
+    for (int b : S) r[b] -= zbar;
+    const double G = Sum4(ns, [&](size_t k) { return g[Sp[k]] * r[Sp[k]]; });
     if (!(G > 0.0)) {  // exact solution (or a set the stencil cannot move)
       st->converged = G == 0.0;
       break;
@@ -242,17 +260,11 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     double num = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
       std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
-      double sum_t = 0.0;
-      for (int b : S) {
-        pn[b] = r[b] + beta * t[b];
-        sum_t += pn[b];
-      }
-      const double tbar = sum_t / static_cast<double>(S.size());
-      num = 0.0;
-      for (int b : S) {
-        pn[b] -= tbar;
-        num += g[b] * pn[b];
-      }
+      for (int b : S) pn[b] = r[b] + beta * t[b];
+      const double sum_t = Sum4(ns, [&](size_t k) { return pn[Sp[k]]; });
+      const double tbar = sum_t / static_cast<double>(ns);
+      for (int b : S) pn[b] -= tbar;
+      num = Sum4(ns, [&](size_t k) { return g[Sp[k]] * pn[Sp[k]]; });
       if (num > 0.0 || beta == 0.0) break;
       beta = 0.0;
     }
@@ -261,15 +273,14 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     pn = w->p_new.data();
     P.K.Apply(*P.spec, t, bx, by, r, &w->fft, P.precision);
     ++st->applies;
-    double den = 0.0;  // t sums to zero over S: t.(K t - mean) = t.K t
-    for (int b : S) den += r[b] * t[b];
+    // t sums to zero over S: t.(K t - mean) = t.K t
+    const double den = Sum4(ns, [&](size_t k) { return r[Sp[k]] * t[Sp[k]]; });
     if (!(den > 0.0) || !(num > 0.0)) {
       st->converged = false;
       break;
     }
     const double tau = num / den;
     w->changed.clear();
-    double sum_new = 0.0;
     std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
     for (int b : S) {
       double v = p[b] - tau * t[b];
@@ -279,8 +290,8 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
         v = 0.0;
       }
       pn[b] = v;
-      sum_new += v;
     }
+    const double sum_new = Sum4(ns, [&](size_t k) { return pn[Sp[k]]; });
     if (!(sum_new > 0.0)) break;
     double s;
     st->change = Accept(P, sum_new, &s);
@@ -318,9 +329,8 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   const int bx = box.nx, by = box.ny;
   const size_t B = static_cast<size_t>(bx) * by;
   const double A = K.pitch_m() * K.pitch_m();
-  auto grid_index = [&](size_t b) {
-    return static_cast<size_t>(box.j0 + b / bx) * nx + box.i0 + b % bx;
-  };
+  // The box's row j starts at grid cell row_start(j).
+  auto row_start = [&](int j) { return static_cast<size_t>(box.j0 + j) * nx + box.i0; };
   w->g0.resize(B);
   w->p.resize(B);
   w->u.resize(B);
@@ -333,15 +343,16 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   double* p = w->p.data();
   size_t ncand = 0;
   double sum_p = 0.0;
-  for (size_t b = 0; b < B; ++b) {
-    const size_t k = grid_index(b);
-    g0[b] = gap[k];
-    const bool cand = std::isfinite(g0[b]);
-    ncand += cand;
-    p[b] = cand ? std::max(0.0, (*pressure)[k]) : 0.0;
-    if (!std::isfinite(p[b])) p[b] = 0.0;
-    sum_p += p[b];
-  }
+  for (int j = 0; j < by; ++j)
+    for (int i = 0; i < bx; ++i) {
+      const size_t b = static_cast<size_t>(j) * bx + i, k = row_start(j) + i;
+      g0[b] = gap[k];
+      const bool cand = std::isfinite(g0[b]);
+      ncand += cand;
+      p[b] = cand ? std::max(0.0, (*pressure)[k]) : 0.0;
+      if (!std::isfinite(p[b])) p[b] = 0.0;
+      sum_p += p[b];
+    }
   std::fill(pressure->begin(), pressure->end(), 0.0);
   const double target = force / A;  // sum of p over cells
   if (ncand == 0 || !(target > 0.0)) return false;
@@ -386,7 +397,9 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   st->contact_cells = static_cast<int>(nc);
   st->approach_m = nc ? sum_g / static_cast<double>(nc) : 0.0;
   st->max_contact_gap_m = max_g;
-  for (size_t b = 0; b < B; ++b) (*pressure)[grid_index(b)] = p[b];
+  for (int j = 0; j < by; ++j)
+    std::copy(p + static_cast<size_t>(j) * bx, p + static_cast<size_t>(j + 1) * bx,
+              pressure->begin() + row_start(j));
   return nc > 0;
 }
 
