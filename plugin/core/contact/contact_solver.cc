@@ -22,7 +22,8 @@ struct Problem {
 
 // sum of term(k), k < n, in four interleaved partial sums combined as
 // (s0 + s1) + (s2 + s3): one fixed order on every instruction set (so
-// deterministic), without one running sum's add-latency chain.
+// deterministic), without one running sum's add-latency chain. term is
+// called once per k, in increasing k (it may write per-k outputs).
 template <typename F>
 inline double Sum4(size_t n, F term) {
   double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
@@ -65,8 +66,11 @@ double Accept(const Problem& P, double sum_new, double* s_out) {
   double* p = P.w->p.data();
   const double* pn = P.w->p_new.data();
   const double s = P.target / sum_new;
-  const double change = Sum4(P.B, [&](size_t b) { return std::abs(s * pn[b] - p[b]); });
-  for (size_t b = 0; b < P.B; ++b) p[b] = s * pn[b];
+  const double change = Sum4(P.B, [&](size_t b) {
+    const double v = s * pn[b], d = std::abs(v - p[b]);
+    p[b] = v;
+    return d;
+  });
   *s_out = s;
   return change / P.target;
 }
@@ -199,8 +203,11 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   for (int it = 1; it <= max_iter; ++it) {
     st->iterations = it;
     size_t nc = 0;
-    for (size_t b = 0; b < B; ++b) nc += p[b] > 0.0;
-    const double sum_g = Sum4(B, [&](size_t b) { return p[b] > 0.0 ? g0[b] + u[b] : 0.0; });
+    const double sum_g = Sum4(B, [&](size_t b) {
+      const bool c = p[b] > 0.0;
+      nc += c;
+      return c ? g0[b] + u[b] : 0.0;
+    });
     const double gbar = sum_g / static_cast<double>(nc);
     // The working set: the contact plus cells that overlap; t lives on it.
     std::vector<int>& S = w->set;
@@ -243,8 +250,11 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     const int* Sp = S.data();
     const double sum_z = Sum4(ns, [&](size_t k) { return r[Sp[k]]; });
     const double zbar = sum_z / static_cast<double>(ns);
-    for (int b : S) r[b] -= zbar;
-    const double G = Sum4(ns, [&](size_t k) { return g[Sp[k]] * r[Sp[k]]; });
+    const double G = Sum4(ns, [&](size_t k) {
+      const int b = Sp[k];
+      r[b] -= zbar;
+      return g[b] * r[b];
+    });
     if (!(G > 0.0)) {  // exact solution (or a set the stencil cannot move)
       st->converged = G == 0.0;
       break;
@@ -260,11 +270,17 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     double num = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
       std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
-      for (int b : S) pn[b] = r[b] + beta * t[b];
-      const double sum_t = Sum4(ns, [&](size_t k) { return pn[Sp[k]]; });
+      const double sum_t = Sum4(ns, [&](size_t k) {
+        const int b = Sp[k];
+        pn[b] = r[b] + beta * t[b];
+        return pn[b];
+      });
       const double tbar = sum_t / static_cast<double>(ns);
-      for (int b : S) pn[b] -= tbar;
-      num = Sum4(ns, [&](size_t k) { return g[Sp[k]] * pn[Sp[k]]; });
+      num = Sum4(ns, [&](size_t k) {
+        const int b = Sp[k];
+        pn[b] -= tbar;
+        return g[b] * pn[b];
+      });
       if (num > 0.0 || beta == 0.0) break;
       beta = 0.0;
     }
@@ -282,7 +298,8 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     const double tau = num / den;
     w->changed.clear();
     std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
-    for (int b : S) {
+    const double sum_new = Sum4(ns, [&](size_t k) {
+      const int b = Sp[k];
       double v = p[b] - tau * t[b];
       if (v < 0.0) {
         dl[b] = -v;
@@ -290,8 +307,8 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
         v = 0.0;
       }
       pn[b] = v;
-    }
-    const double sum_new = Sum4(ns, [&](size_t k) { return pn[Sp[k]]; });
+      return v;
+    });
     if (!(sum_new > 0.0)) break;
     double s;
     st->change = Accept(P, sum_new, &s);
