@@ -324,14 +324,17 @@ void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, T* spe
   const size_t W = static_cast<size_t>(ny_) * lw;
   T *wr, *wi, *sr, *si;
   SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
-  std::fill(wr, wr + W, T(0));
-  std::fill(wi, wi + W, T(0));
+  // Rows >= rows are zero; in the others, the lanes [0, h) the transform
+  // reads are all written (wi's last one is zero when cols is odd).
+  std::fill(wr + static_cast<size_t>(rows) * lw, wr + W, T(0));
+  std::fill(wi + static_cast<size_t>(rows) * lw, wi + W, T(0));
   for (int y = 0; y < rows; ++y) {
     const double* row = re + static_cast<size_t>(y) * stride;
     T* a = wr + static_cast<size_t>(y) * lw;
     T* b = wi + static_cast<size_t>(y) * lw;
     for (int x = 0; x < h; ++x) a[x] = static_cast<T>(row[x]);
     for (int x = 0; x < cols - h; ++x) b[x] = static_cast<T>(row[h + x]);
+    for (int x = cols - h; x < h; ++x) b[x] = T(0);
   }
   py_.Transform(wr, wi, h, lw, false, sr, si);
   // Split Z = A + i B (A, B spectra of real columns): A = (Z(k) + conj
