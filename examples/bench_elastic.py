@@ -6,7 +6,8 @@ not a test).
 models/slide_grating.xml and slide_flat.xml with pressure="elastic", each
 with contact_solver="pk" (Polonsky & Keer, warm-started from the last step:
 the solver before #13) and "pcg" (preconditioned CG, extrapolated warm
-start). Every configuration starts from one settled sliding state (the press
+start), the compliance FFTs in double (elastic_precision="double", the
+reference arithmetic) and, for pcg, in float (the default). Every configuration starts from one settled sliding state (the press
 and a lead-in simulated without the plugin). Prints per configuration:
 - CG iterations per step (median, max) over the sliding steps, and the most
   common FFT grid of the solve (set by the solve box, pipeline/skin_traction.cc);
@@ -34,7 +35,12 @@ from mjtouch.sensor import SkinLayout
 
 MODELS = pathlib.Path(__file__).resolve().parents[1] / "models"
 SCENES = ("slide_grating", "slide_flat")
-SOLVERS = ("pk", "pcg")
+# label: skin attributes
+SOLVERS = {
+    "pk": dict(contact_solver="pk", elastic_precision="double"),
+    "pcg double": dict(contact_solver="pcg", elastic_precision="double"),
+    "pcg float": dict(contact_solver="pcg", elastic_precision="float"),
+}
 _PHYSICS = int(mujoco.mjtState.mjSTATE_FULLPHYSICS) & ~int(mujoco.mjtState.mjSTATE_PLUGIN)
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 
@@ -77,8 +83,9 @@ def accuracy(name: str, start, steps: int) -> dict:
     """Iterations and errors of each solver against the tight reference."""
     out = {}
     traces = {}
-    for label, skin in (("ref", dict(contact_solver="pk", tolerance="1e-8")),
-                        *((s, dict(contact_solver=s)) for s in SOLVERS)):
+    for label, skin in (("ref", dict(contact_solver="pk", tolerance="1e-8",
+                                     elastic_precision="double")),
+                        *SOLVERS.items()):
         run = make_run(name, start, steps, outputs="force pressure", **skin)
         layout = SkinLayout.from_model(run.model)
         mujoco.mj_setState(run.model, run.data, run.state0, _FULL)
@@ -110,7 +117,7 @@ def timing(name: str, start, steps: int, rounds: int) -> dict:
     # machine's load, against the issue's quiet-machine figures
     runs = {(s, stage): make_run(name, start, steps,
                                  **({"pressure": "winkler"} if s == "winkler"
-                                    else {"contact_solver": s}),
+                                    else SOLVERS[s]),
                                  **({"outputs": "force"} if stage == "stages 1-2" else {}))
             for s in (*SOLVERS, "winkler") for stage in ("stages 1-2", "full")}
     times = {k: [] for k in runs}
@@ -141,20 +148,23 @@ def main() -> None:
               f"{acc['ref_iterations_median']:.0f} median iterations)")
         for s in SOLVERS:
             a = acc[s]
-            print(f"  {s:4s} iterations median {a['iterations_median']:5.1f} max "
+            print(f"  {s:10s} iterations median {a['iterations_median']:5.1f} max "
                   f"{a['iterations_max']:3d}  pressure rms rel {a['pressure_rms_rel']:.2e}  "
                   f"depth max |diff| {a['depth_max_abs_m']:.2e} m  FFT grid {a['fft_grid'][0]}x{a['fft_grid'][1]}")
             for stage in ("stages 1-2", "full"):
                 lo, med = t[s, stage]
-                print(f"       {stage:10s} us/step min {lo:8.1f} median {med:8.1f}")
+                print(f"             {stage:10s} us/step min {lo:8.1f} median {med:8.1f}")
         for stage in ("stages 1-2", "full"):
             lo, med = t["winkler", stage]
             print(f"  winkler {stage:10s} us/step min {lo:8.1f} median {med:8.1f}")
-        for stage in ("stages 1-2", "full"):
-            r_min = t["pk", stage][0] / t["pcg", stage][0]
-            r_med = t["pk", stage][1] / t["pcg", stage][1]
-            print(f"  ratio pk / pcg {stage:10s}: min {r_min:.2f}x  median {r_med:.2f}x")
-        print(f"  iterations pk / pcg: {acc['pk']['iterations_median'] / acc['pcg']['iterations_median']:.2f}x")
+        for base in ("pk", "pcg double"):
+            for stage in ("stages 1-2", "full"):
+                r_min = t[base, stage][0] / t["pcg float", stage][0]
+                r_med = t[base, stage][1] / t["pcg float", stage][1]
+                print(f"  ratio {base} / pcg float {stage:10s}: min {r_min:.2f}x  "
+                      f"median {r_med:.2f}x")
+        print(f"  iterations pk / pcg float: "
+              f"{acc['pk']['iterations_median'] / acc['pcg float']['iterations_median']:.2f}x")
 
 
 if __name__ == "__main__":

@@ -146,7 +146,8 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
                      young_pa: float | None = None, poisson: float | None = None,
                      periodic: bool = False, tolerance: float = 1e-8,
                      max_iterations: int = 2000, initial_pa: np.ndarray | None = None,
-                     compliance_m_per_pa: np.ndarray | None = None, method: str = "pcg"):
+                     compliance_m_per_pa: np.ndarray | None = None, method: str = "pcg",
+                     precision: str = "double"):
     """Boundary-element contact of the skin against the rigid gap field
     (ny x nx, m; inf: cannot touch), total load force_n: a homogeneous
     half-space (young_pa, poisson), or any skin given by its surface
@@ -154,7 +155,9 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
     LayeredSkin.compliance_table(pitch_m, n)). Non-periodic grids must be
     square; periodic sizes products of 2, 3, 5 (half-space only).
     ``method``: ``"pcg"`` (preconditioned CG, the plugin's) or ``"pk"``
-    (Polonsky & Keer's plain CG, the reference path). Returns (pressure Pa,
+    (Polonsky & Keer's plain CG, the reference path). ``precision``: of the
+    operator's FFTs, ``"double"`` (the reference) or ``"float"`` (the
+    plugin's default, attribute ``elastic_precision``). Returns (pressure Pa,
     stats dict: iterations, converged, change, approach_m, contact_cells,
     max_contact_gap_m, fft_applies: operator applications by FFT, the cost)."""
     g = np.ascontiguousarray(gap_m, dtype=np.float64)
@@ -167,12 +170,13 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
                              "table's solver is non-periodic)")
         t = np.ascontiguousarray(compliance_m_per_pa, dtype=np.float32)
         return _core.elastic_pressure_table(g, p0, float(pitch_m), float(force_n), t,
-                                            float(tolerance), int(max_iterations), method)
+                                            float(tolerance), int(max_iterations), method,
+                                            precision)
     if young_pa is None or poisson is None:
         raise ValueError("give young_pa and poisson (a half-space), or compliance_m_per_pa")
     return _core.elastic_pressure(g, p0, float(pitch_m), float(force_n), float(young_pa),
                                   float(poisson), bool(periodic), float(tolerance),
-                                  int(max_iterations), method)
+                                  int(max_iterations), method, precision)
 
 
 # ---------------------------------------------------------------------------

@@ -76,7 +76,11 @@ Out<float> HalfSpaceComplianceTable(int n, double pitch_m, double young_pa, doub
 std::tuple<Out<double>, nb::dict> Solved(const mjtouch::SurfaceCompliance& K, const F64_2& gap_m,
                                          const F64_2& initial_pa, int nx, int ny, double force_n,
                                          double tolerance, int max_iterations,
-                                         const std::string& method) {
+                                         const std::string& method,
+                                         const std::string& precision) {
+  if (precision != "double" && precision != "float")
+    Fail("elastic_pressure: invalid arguments: precision = '" + precision +
+         "' is not one of 'double' (the reference), 'float' (the plugin's default FFTs)");
   if (method != "pcg" && method != "pk")
     Fail("elastic_pressure: invalid arguments: method = '" + method +
          "' is not one of 'pcg' (preconditioned CG), 'pk' (Polonsky & Keer)");
@@ -89,7 +93,9 @@ std::tuple<Out<double>, nb::dict> Solved(const mjtouch::SurfaceCompliance& K, co
       SolveElasticContact(K, g, CellBox{0, 0, nx, ny}, force_n, tolerance, max_iterations, &p,
                           &work, &st,
                           method == "pk" ? ElasticMethod::kPolonskyKeer
-                                         : ElasticMethod::kPreconditioned);
+                                         : ElasticMethod::kPreconditioned,
+                          precision == "float" ? ApplyPrecision::kFloat
+                                               : ApplyPrecision::kDouble);
   if (!ok) Fail(kNoLoad);
   nb::dict info;
   info["iterations"] = st.iterations;
@@ -115,7 +121,8 @@ std::tuple<Out<double>, nb::dict> ElasticHalfSpace(const F64_2& gap_m, const F64
                                                    double pitch_m, double force_n,
                                                    double young_pa, double poisson, bool periodic,
                                                    double tolerance, int max_iterations,
-                                                   const std::string& method) {
+                                                   const std::string& method,
+                                                   const std::string& precision) {
   CheckSolve(gap_m, initial_pa, pitch_m, tolerance, max_iterations);
   RequirePositive(young_pa, "elastic_pressure", "young_pa");
   if (!(poisson > -1 && poisson <= 0.5))
@@ -128,17 +135,20 @@ std::tuple<Out<double>, nb::dict> ElasticHalfSpace(const F64_2& gap_m, const F64
     const double e_star = young_pa / (1.0 - poisson * poisson);
     const mjtouch::SurfaceCompliance K(nx, ny, pitch_m,
                                        [&](double k) { return 2.0 / (e_star * k); });
-    return Solved(K, gap_m, initial_pa, nx, ny, force_n, tolerance, max_iterations, method);
+    return Solved(K, gap_m, initial_pa, nx, ny, force_n, tolerance, max_iterations, method,
+                  precision);
   }
   if (nx != ny) Fail("non-periodic grids must be square, got shape " + ShapeOf(gap_m));
   return Solved(*HalfSpaceCompliance(young_pa, poisson, pitch_m, nx), gap_m, initial_pa, nx, nx,
-                force_n, tolerance, max_iterations, method);
+                force_n, tolerance, max_iterations, method,
+                  precision);
 }
 
 std::tuple<Out<double>, nb::dict> ElasticTable(const F64_2& gap_m, const F64_2& initial_pa,
                                                double pitch_m, double force_n, const F32_2& table,
                                                double tolerance, int max_iterations,
-                                               const std::string& method) {
+                                               const std::string& method,
+                                               const std::string& precision) {
   CheckSolve(gap_m, initial_pa, pitch_m, tolerance, max_iterations);
   const int n = SquareSide(gap_m, "gap_m");
   const size_t L = 2 * static_cast<size_t>(n) - 1;
@@ -150,7 +160,8 @@ std::tuple<Out<double>, nb::dict> ElasticTable(const F64_2& gap_m, const F64_2& 
          ShapeOf(table));
   const mjtouch::SurfaceCompliance K(n, pitch_m,
                                      std::vector<float>(table.data(), table.data() + L * L));
-  return Solved(K, gap_m, initial_pa, n, n, force_n, tolerance, max_iterations, method);
+  return Solved(K, gap_m, initial_pa, n, n, force_n, tolerance, max_iterations, method,
+                  precision);
 }
 
 // surfaces: one row of 20 per counter-surface: type (CounterSurface::Type),
@@ -312,15 +323,17 @@ void BindContact(nb::module_& m) {
   m.def("elastic_pressure", &ElasticHalfSpace, nb::arg("gap_m").noconvert(), nb::arg("initial_pa").noconvert(),
         nb::arg("pitch_m"), nb::arg("force_n"), nb::arg("young_pa"), nb::arg("poisson"),
         nb::arg("periodic"), nb::arg("tolerance"), nb::arg("max_iterations"),
-        nb::arg("method") = "pcg",
+        nb::arg("method") = "pcg", nb::arg("precision") = "double",
         "Boundary-element contact of a homogeneous half-space skin (young_pa, poisson)\n"
         "against the gap field (ny x nx, m; inf: cannot touch) under force_n,\n"
         "warm-started from initial_pa. Non-periodic grids square; periodic sizes\n"
         "products of 2, 3, 5. method: 'pcg' (preconditioned CG) or 'pk' (Polonsky &\n"
-        "Keer, the reference). Returns (pressure Pa, stats dict).");
+        "Keer, the reference). precision: of the operator's FFTs, 'double' (the\n"
+        "reference) or 'float' (the plugin's default). Returns (pressure Pa, stats dict).");
   m.def("elastic_pressure_table", &ElasticTable, nb::arg("gap_m").noconvert(), nb::arg("initial_pa").noconvert(),
         nb::arg("pitch_m"), nb::arg("force_n"), nb::arg("compliance_m_per_pa").noconvert(),
         nb::arg("tolerance"), nb::arg("max_iterations"), nb::arg("method") = "pcg",
+        nb::arg("precision") = "double",
         "The same on an n x n non-periodic grid for any skin given by its surface\n"
         "compliance table ((2n-1) x (2n-1) float32, m/Pa).");
   m.def("render_gap", &Render, nb::arg("skin_z_m").noconvert(), nb::arg("pitch_m"), nb::arg("surfaces").noconvert(),

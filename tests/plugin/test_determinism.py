@@ -131,11 +131,12 @@ def test_rollout_two_threads_with_stress_threads_equals_serial():
     assert np.abs(two).max() > 0
 
 
-def _elastic_model(solver: str):
+def _elastic_model(solver: str, precision: str = "float"):
     # the elastic contact's warm start lives in plugin_state (p(n-1), and
     # p(n-2) for pcg's extrapolation): copies and resets must carry it
     proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
     tip = fast_tip(skin={"pressure": "elastic", "contact_solver": solver,
+                         "elastic_precision": precision,
                          "outputs": "force pressure stress"})
     return scenes.build_model(tip, scenes.Texture(period_m=0.6e-3), proto)
 
@@ -156,12 +157,14 @@ def test_elastic_pcg_copy_and_reset_are_bit_identical():
 
 def test_elastic_pcg_matches_the_reference_solver_in_the_plugin():
     # the same rollout with contact_solver = pk (Polonsky & Keer from the last
-    # step, the solver before #13): both stop at tolerance 1e-4 (about their
-    # error), so their pressures differ by about that much, not more
+    # step, the solver before #13) and double FFTs: the reference path against
+    # the default (pcg, float FFTs: ~1e-6 from double, test_contact_solver.py).
+    # Both stop at tolerance 1e-4 (about their error), so their pressures
+    # differ by about that much, not more
     from mjtouch.sensor import SkinLayout
     runs = {}
-    for solver in ("pcg", "pk"):
-        m = _elastic_model(solver)
+    for solver, precision in (("pcg", "float"), ("pk", "double")):
+        m = _elastic_model(solver, precision)
         out = _run(m, mujoco.MjData(m), 320)
         layout = SkinLayout.from_model(m)
         runs[solver] = {k: layout.block(out, k) for k in ("force", "pressure", "stress")}

@@ -32,6 +32,7 @@ CASES = [
     ({"young": "0"}, "`young`", "[100, 1e+10] Pa"),
     ({"tolerance": "0"}, "`tolerance`", "(0, 0.1]"),
     ({"contact_solver": "cg"}, "`contact_solver`", "valid: pcg pk"),
+    ({"elastic_precision": "half"}, "`elastic_precision`", "valid: float double"),
     ({"ridge_profile": "zigzag"}, "`ridge_profile`", "valid: sine triangle square"),
     ({"pressure": "2"}, "`pressure`", "valid: contacts winkler elastic"),
     ({"young": "soft"}, "`young`", "[100, 1e+10] Pa"),

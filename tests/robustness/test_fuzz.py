@@ -32,7 +32,7 @@ INTEGER_RANGES = {"nx": (4, 40), "texture_group": (0, 5), "threads": (1, 3)}
 CHOICES = {
     "ridges": ["true", "false", "1", "0"], "shear": ["true", "false"],
     "ridge_profile": ["sine", "triangle", "square"], "pressure": ["contacts", "winkler", "elastic"],
-    "contact_solver": ["pcg", "pk"],
+    "contact_solver": ["pcg", "pk"], "elastic_precision": ["float", "double"],
     "visual": ["none", "pad", "above", "both"], "skin": ["layered", "halfspace"],
     "interface_side": ["upper", "lower"], "stress_method": ["auto", "direct", "fft", "tree"],
     "oversample": ["auto", "1", "2", "3"],

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 namespace mjtouch {
 namespace {
@@ -14,106 +15,128 @@ constexpr double kPi = 3.14159265358979323846;
 // DFT and writes element (j / Ns) Ns R + (j mod Ns) + r Ns. Output is in
 // natural order after the last stage. Every loop over b is independent per
 // lane (no reductions), so vectorised and scalar code round alike.
-template <int R, bool kInverse>
-__attribute__((target_clones("avx2", "default")))
-void Stage(int n, int span, const double* tw_re, const double* tw_im, const double* in_re,
-           const double* in_im, int in_stride, double* out_re, double* out_im,
-           int out_stride, int batch) {
-  const int m = n / R;
-  // Rotation by -i (forward) or +i (inverse): (x, y) -> (s y, -s x).
-  constexpr double sg = kInverse ? -1.0 : 1.0;
-  const double c3 = -0.5, s3 = 0.86602540378443864676;
-  const double c51 = 0.30901699437494742410, c52 = -0.80901699437494742410;
-  const double s51 = 0.95105651629515357212, s52 = 0.58778525229247312917;
-  for (int j = 0; j < m; ++j) {
-    const int jm = j % span;
-    const int dst = (j / span) * span * R + jm;
-    double wr[R], wi[R];
-    for (int r = 0; r < R; ++r) {
-      wr[r] = tw_re[jm * R + r];
-      wi[r] = kInverse ? -tw_im[jm * R + r] : tw_im[jm * R + r];
-    }
-    const double* ir[R];
-    const double* ii[R];
-    double* orr[R];
-    double* oi[R];
-    for (int r = 0; r < R; ++r) {
-      ir[r] = in_re + static_cast<size_t>(j + r * m) * in_stride;
-      ii[r] = in_im + static_cast<size_t>(j + r * m) * in_stride;
-      orr[r] = out_re + static_cast<size_t>(dst + r * span) * out_stride;
-      oi[r] = out_im + static_cast<size_t>(dst + r * span) * out_stride;
-    }
-    const bool twiddle = jm != 0;
-    for (int b = 0; b < batch; ++b) {
-      double xr[R], xi[R];
-      xr[0] = ir[0][b];
-      xi[0] = ii[0][b];
-      for (int r = 1; r < R; ++r) {
-        const double a = ir[r][b], c = ii[r][b];
-        if (twiddle) {
-          xr[r] = a * wr[r] - c * wi[r];
-          xi[r] = a * wi[r] + c * wr[r];
-        } else {
-          xr[r] = a;
-          xi[r] = c;
-        }
-      }
-      if constexpr (R == 2) {
-        orr[0][b] = xr[0] + xr[1];
-        oi[0][b] = xi[0] + xi[1];
-        orr[1][b] = xr[0] - xr[1];
-        oi[1][b] = xi[0] - xi[1];
-      } else if constexpr (R == 3) {
-        const double tr = xr[1] + xr[2], ti = xi[1] + xi[2];
-        const double mr = xr[0] + c3 * tr, mi = xi[0] + c3 * ti;
-        const double dr = s3 * (xr[1] - xr[2]), di = s3 * (xi[1] - xi[2]);
-        orr[0][b] = xr[0] + tr;
-        oi[0][b] = xi[0] + ti;
-        orr[1][b] = mr + sg * di;
-        oi[1][b] = mi - sg * dr;
-        orr[2][b] = mr - sg * di;
-        oi[2][b] = mi + sg * dr;
-      } else if constexpr (R == 4) {
-        const double t0r = xr[0] + xr[2], t0i = xi[0] + xi[2];
-        const double t1r = xr[0] - xr[2], t1i = xi[0] - xi[2];
-        const double t2r = xr[1] + xr[3], t2i = xi[1] + xi[3];
-        const double t3r = xr[1] - xr[3], t3i = xi[1] - xi[3];
-        orr[0][b] = t0r + t2r;
-        oi[0][b] = t0i + t2i;
-        orr[2][b] = t0r - t2r;
-        oi[2][b] = t0i - t2i;
-        orr[1][b] = t1r + sg * t3i;
-        oi[1][b] = t1i - sg * t3r;
-        orr[3][b] = t1r - sg * t3i;
-        oi[3][b] = t1i + sg * t3r;
+// The butterflies of one j over lanes [0, batch). kTwiddle: multiply the
+// inputs r >= 1 by w[r] first. Pointers are restrict-qualified and the
+// lanes independent, so the loop vectorises (no gathers, no branches).
+template <int R, bool kInverse, bool kTwiddle, typename T>
+inline __attribute__((always_inline)) void Butterflies(
+    const T* __restrict in_re, const T* __restrict in_im, size_t in_step,
+    T* __restrict out_re, T* __restrict out_im, size_t out_step, const T* wr, const T* wi,
+    int batch) {
+  constexpr T sg = kInverse ? T(-1) : T(1);
+  const T c3 = T(-0.5), s3 = T(0.86602540378443864676);
+  const T c51 = T(0.30901699437494742410), c52 = T(-0.80901699437494742410);
+  const T s51 = T(0.95105651629515357212), s52 = T(0.58778525229247312917);
+  T w_r[R], w_i[R];
+  for (int r = 0; r < R; ++r) {
+    w_r[r] = wr[r];
+    w_i[r] = wi[r];
+  }
+#pragma GCC ivdep
+  for (int b = 0; b < batch; ++b) {
+    T xr[R], xi[R];
+    xr[0] = in_re[b];
+    xi[0] = in_im[b];
+    for (int r = 1; r < R; ++r) {
+      const T a = in_re[r * in_step + b], c = in_im[r * in_step + b];
+      if constexpr (kTwiddle) {
+        xr[r] = a * w_r[r] - c * w_i[r];
+        xi[r] = a * w_i[r] + c * w_r[r];
       } else {
-        static_assert(R == 5, "radix");
-        const double t1r = xr[1] + xr[4], t1i = xi[1] + xi[4];
-        const double t2r = xr[2] + xr[3], t2i = xi[2] + xi[3];
-        const double d1r = xr[1] - xr[4], d1i = xi[1] - xi[4];
-        const double d2r = xr[2] - xr[3], d2i = xi[2] - xi[3];
-        const double m1r = xr[0] + c51 * t1r + c52 * t2r, m1i = xi[0] + c51 * t1i + c52 * t2i;
-        const double m2r = xr[0] + c52 * t1r + c51 * t2r, m2i = xi[0] + c52 * t1i + c51 * t2i;
-        const double e1r = s51 * d1r + s52 * d2r, e1i = s51 * d1i + s52 * d2i;
-        const double e2r = s52 * d1r - s51 * d2r, e2i = s52 * d1i - s51 * d2i;
-        orr[0][b] = xr[0] + t1r + t2r;
-        oi[0][b] = xi[0] + t1i + t2i;
-        orr[1][b] = m1r + sg * e1i;
-        oi[1][b] = m1i - sg * e1r;
-        orr[4][b] = m1r - sg * e1i;
-        oi[4][b] = m1i + sg * e1r;
-        orr[2][b] = m2r + sg * e2i;
-        oi[2][b] = m2i - sg * e2r;
-        orr[3][b] = m2r - sg * e2i;
-        oi[3][b] = m2i + sg * e2r;
+        xr[r] = a;
+        xi[r] = c;
       }
+    }
+    T* orr = out_re + b;
+    T* oi = out_im + b;
+    if constexpr (R == 2) {
+      orr[0] = xr[0] + xr[1];
+      oi[0] = xi[0] + xi[1];
+      orr[out_step] = xr[0] - xr[1];
+      oi[out_step] = xi[0] - xi[1];
+    } else if constexpr (R == 3) {
+      const T tr = xr[1] + xr[2], ti = xi[1] + xi[2];
+      const T mr = xr[0] + c3 * tr, mi = xi[0] + c3 * ti;
+      const T dr = s3 * (xr[1] - xr[2]), di = s3 * (xi[1] - xi[2]);
+      orr[0] = xr[0] + tr;
+      oi[0] = xi[0] + ti;
+      orr[out_step] = mr + sg * di;
+      oi[out_step] = mi - sg * dr;
+      orr[2 * out_step] = mr - sg * di;
+      oi[2 * out_step] = mi + sg * dr;
+    } else if constexpr (R == 4) {
+      const T t0r = xr[0] + xr[2], t0i = xi[0] + xi[2];
+      const T t1r = xr[0] - xr[2], t1i = xi[0] - xi[2];
+      const T t2r = xr[1] + xr[3], t2i = xi[1] + xi[3];
+      const T t3r = xr[1] - xr[3], t3i = xi[1] - xi[3];
+      orr[0] = t0r + t2r;
+      oi[0] = t0i + t2i;
+      orr[2 * out_step] = t0r - t2r;
+      oi[2 * out_step] = t0i - t2i;
+      orr[out_step] = t1r + sg * t3i;
+      oi[out_step] = t1i - sg * t3r;
+      orr[3 * out_step] = t1r - sg * t3i;
+      oi[3 * out_step] = t1i + sg * t3r;
+    } else {
+      static_assert(R == 5, "radix");
+      const T t1r = xr[1] + xr[4], t1i = xi[1] + xi[4];
+      const T t2r = xr[2] + xr[3], t2i = xi[2] + xi[3];
+      const T d1r = xr[1] - xr[4], d1i = xi[1] - xi[4];
+      const T d2r = xr[2] - xr[3], d2i = xi[2] - xi[3];
+      const T m1r = xr[0] + c51 * t1r + c52 * t2r, m1i = xi[0] + c51 * t1i + c52 * t2i;
+      const T m2r = xr[0] + c52 * t1r + c51 * t2r, m2i = xi[0] + c52 * t1i + c51 * t2i;
+      const T e1r = s51 * d1r + s52 * d2r, e1i = s51 * d1i + s52 * d2i;
+      const T e2r = s52 * d1r - s51 * d2r, e2i = s52 * d1i - s51 * d2i;
+      orr[0] = xr[0] + t1r + t2r;
+      oi[0] = xi[0] + t1i + t2i;
+      orr[out_step] = m1r + sg * e1i;
+      oi[out_step] = m1i - sg * e1r;
+      orr[4 * out_step] = m1r - sg * e1i;
+      oi[4 * out_step] = m1i + sg * e1r;
+      orr[2 * out_step] = m2r + sg * e2i;
+      oi[2 * out_step] = m2i - sg * e2r;
+      orr[3 * out_step] = m2r - sg * e2i;
+      oi[3 * out_step] = m2i + sg * e2r;
     }
   }
 }
 
-template <bool kInverse>
-void RunStage(int radix, int n, int span, const double* twr, const double* twi, const double* ir,
-              const double* ii, int is, double* orr, double* oi, int os, int batch) {
+// One Stockham stage (Govindaraju et al. 2008, mixed radix): reads element
+// j + r n/R, twiddles by exp(-+2 pi i r (j mod Ns) / (Ns R)), does a radix-R
+// DFT and writes element (j / Ns) Ns R + (j mod Ns) + r Ns. Output is in
+// natural order after the last stage. Every loop over b is independent per
+// lane (no reductions) and no FMA is formed (-ffp-contract=off), so
+// vectorised and scalar code round alike.
+template <int R, bool kInverse, typename T>
+__attribute__((target_clones("avx2", "default")))
+void Stage(int n, int span, const T* tw_re, const T* tw_im, const T* in_re, const T* in_im,
+           int in_stride, T* out_re, T* out_im, int out_stride, int batch) {
+  const int m = n / R;
+  const size_t in_step = static_cast<size_t>(m) * in_stride;
+  const size_t out_step = static_cast<size_t>(span) * out_stride;
+  for (int j = 0; j < m; ++j) {
+    const int jm = j % span;
+    const int dst = (j / span) * span * R + jm;
+    T wr[R], wi[R];
+    for (int r = 0; r < R; ++r) {
+      wr[r] = tw_re[jm * R + r];
+      wi[r] = kInverse ? -tw_im[jm * R + r] : tw_im[jm * R + r];
+    }
+    const size_t io = static_cast<size_t>(j) * in_stride;
+    const size_t oo = static_cast<size_t>(dst) * out_stride;
+    if (jm != 0) {
+      Butterflies<R, kInverse, true>(in_re + io, in_im + io, in_step, out_re + oo, out_im + oo,
+                                     out_step, wr, wi, batch);
+    } else {
+      Butterflies<R, kInverse, false>(in_re + io, in_im + io, in_step, out_re + oo, out_im + oo,
+                                      out_step, wr, wi, batch);
+    }
+  }
+}
+
+template <bool kInverse, typename T>
+void RunStage(int radix, int n, int span, const T* twr, const T* twi, const T* ir,
+              const T* ii, int is, T* orr, T* oi, int os, int batch) {
   switch (radix) {
     case 2: Stage<2, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
     case 3: Stage<3, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
@@ -172,29 +195,39 @@ FftPlan::FftPlan(int n) : n_(n) {
         s.tw_re[j * R + r] = std::cos(a);
         s.tw_im[j * R + r] = std::sin(a);
       }
+    s.tw_re_f.assign(s.tw_re.begin(), s.tw_re.end());
+    s.tw_im_f.assign(s.tw_im.begin(), s.tw_im.end());
     stages_.push_back(std::move(s));
     span *= R;
   }
 }
 
-void FftPlan::Transform(double* re, double* im, int batch, int stride, bool inverse,
-                        double* sre, double* sim) const {
+template <typename T>
+void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sre,
+                        T* sim) const {
   // Ping-pong between the data (row stride `stride`) and the scratch
   // (compact, row stride `batch`).
-  const double* ir = re;
-  const double* ii = im;
+  const T* ir = re;
+  const T* ii = im;
   int is = stride;
   bool in_data = true;
   for (const Stage& s : stages_) {
-    double* orr = in_data ? sre : re;
-    double* oi = in_data ? sim : im;
+    T* orr = in_data ? sre : re;
+    T* oi = in_data ? sim : im;
     const int os = in_data ? batch : stride;
-    if (inverse) {
-      RunStage<true>(s.radix, n_, s.span, s.tw_re.data(), s.tw_im.data(), ir, ii, is, orr, oi, os,
-                     batch);
+    const T* twr;
+    const T* twi;
+    if constexpr (std::is_same_v<T, float>) {
+      twr = s.tw_re_f.data();
+      twi = s.tw_im_f.data();
     } else {
-      RunStage<false>(s.radix, n_, s.span, s.tw_re.data(), s.tw_im.data(), ir, ii, is, orr, oi,
-                      os, batch);
+      twr = s.tw_re.data();
+      twi = s.tw_im.data();
+    }
+    if (inverse) {
+      RunStage<true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+    } else {
+      RunStage<false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
     }
     ir = orr;
     ii = oi;
@@ -204,12 +237,14 @@ void FftPlan::Transform(double* re, double* im, int batch, int stride, bool inve
   if (!in_data) {
     for (int k = 0; k < n_; ++k) {
       std::memcpy(re + static_cast<size_t>(k) * stride, sre + static_cast<size_t>(k) * batch,
-                  batch * sizeof(double));
+                  batch * sizeof(T));
       std::memcpy(im + static_cast<size_t>(k) * stride, sim + static_cast<size_t>(k) * batch,
-                  batch * sizeof(double));
+                  batch * sizeof(T));
     }
   }
 }
+template void FftPlan::Transform(double*, double*, int, int, bool, double*, double*) const;
+template void FftPlan::Transform(float*, float*, int, int, bool, float*, float*) const;
 
 namespace {
 // Odd row strides: power-of-two strides put the radix streams of a stage in
@@ -218,8 +253,9 @@ int PaddedStride(int n) { return n | 1; }
 
 // Scratch for a 2D transform: the y-pass work arrays (W each) and the
 // stages' ping-pong arrays (max(W, spectrum) each), in one buffer.
-void SplitScratch(size_t W, size_t spectrum, std::vector<double>* scratch, double** wr,
-                  double** wi, double** sr, double** si) {
+template <typename T>
+void SplitScratch(size_t W, size_t spectrum, std::vector<T>* scratch, T** wr, T** wi, T** sr,
+                  T** si) {
   const size_t S = std::max(W, spectrum);
   scratch->resize(2 * W + 2 * S);
   *wr = scratch->data();
@@ -280,72 +316,79 @@ void Fft2D::Inverse(double* spec_re, double* spec_im, int rows, int cols, double
   }
 }
 
-void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, double* spec_re,
-                        double* spec_im, std::vector<double>* scratch) const {
+template <typename T>
+void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, T* spec_re, T* spec_im,
+                        std::vector<T>* scratch) const {
   const int h = (cols + 1) / 2;  // column c is packed with column c + h
   const int lw = PaddedStride(h);
   const size_t W = static_cast<size_t>(ny_) * lw;
-  double *wr, *wi, *sr, *si;
+  T *wr, *wi, *sr, *si;
   SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
-  std::fill(wr, wr + W, 0.0);
-  std::fill(wi, wi + W, 0.0);
+  // Rows >= rows are zero; in the others, the lanes [0, h) the transform
+  // reads are all written (wi's last one is zero when cols is odd).
+  std::fill(wr + static_cast<size_t>(rows) * lw, wr + W, T(0));
+  std::fill(wi + static_cast<size_t>(rows) * lw, wi + W, T(0));
   for (int y = 0; y < rows; ++y) {
     const double* row = re + static_cast<size_t>(y) * stride;
-    std::memcpy(wr + static_cast<size_t>(y) * lw, row, h * sizeof(double));
-    std::memcpy(wi + static_cast<size_t>(y) * lw, row + h, (cols - h) * sizeof(double));
+    T* a = wr + static_cast<size_t>(y) * lw;
+    T* b = wi + static_cast<size_t>(y) * lw;
+    for (int x = 0; x < h; ++x) a[x] = static_cast<T>(row[x]);
+    for (int x = 0; x < cols - h; ++x) b[x] = static_cast<T>(row[h + x]);
+    for (int x = cols - h; x < h; ++x) b[x] = T(0);
   }
   py_.Transform(wr, wi, h, lw, false, sr, si);
   // Split Z = A + i B (A, B spectra of real columns): A = (Z(k) + conj
   // Z(-k)) / 2, B = (Z(k) - conj Z(-k)) / (2 i); into (x, ky), half ky.
   const int ls = spec_stride_, hy = half_ny();
   for (int c = 0; c < h; ++c) {
-    double* ar = spec_re + static_cast<size_t>(c) * ls;
-    double* ai = spec_im + static_cast<size_t>(c) * ls;
-    double* br = spec_re + static_cast<size_t>(c + h) * ls;
-    double* bi = spec_im + static_cast<size_t>(c + h) * ls;
+    T* ar = spec_re + static_cast<size_t>(c) * ls;
+    T* ai = spec_im + static_cast<size_t>(c) * ls;
+    T* br = spec_re + static_cast<size_t>(c + h) * ls;
+    T* bi = spec_im + static_cast<size_t>(c + h) * ls;
     const bool has_b = c + h < cols;
     for (int ky = 0; ky < hy; ++ky) {
       const size_t k = static_cast<size_t>(ky) * lw + c;
       const size_t m = static_cast<size_t>((ny_ - ky) % ny_) * lw + c;
-      const double zr = wr[k], zi = wi[k], mr = wr[m], mi = wi[m];
-      ar[ky] = 0.5 * (zr + mr);
-      ai[ky] = 0.5 * (zi - mi);
+      const T zr = wr[k], zi = wi[k], mr = wr[m], mi = wi[m];
+      ar[ky] = T(0.5) * (zr + mr);
+      ai[ky] = T(0.5) * (zi - mi);
       if (has_b) {
-        br[ky] = 0.5 * (zi + mi);
-        bi[ky] = -0.5 * (zr - mr);
+        br[ky] = T(0.5) * (zi + mi);
+        bi[ky] = T(-0.5) * (zr - mr);
       }
     }
   }
   for (int x = cols; x < nx_; ++x) {
-    std::fill(spec_re + static_cast<size_t>(x) * ls, spec_re + static_cast<size_t>(x) * ls + hy, 0.0);
-    std::fill(spec_im + static_cast<size_t>(x) * ls, spec_im + static_cast<size_t>(x) * ls + hy, 0.0);
+    std::fill(spec_re + static_cast<size_t>(x) * ls, spec_re + static_cast<size_t>(x) * ls + hy, T(0));
+    std::fill(spec_im + static_cast<size_t>(x) * ls, spec_im + static_cast<size_t>(x) * ls + hy, T(0));
   }
   px_.Transform(spec_re, spec_im, hy, ls, false, sr, si);
 }
 
-void Fft2D::InverseReal(double* spec_re, double* spec_im, int rows, int cols, double* re,
-                        int stride, std::vector<double>* scratch) const {
+template <typename T>
+void Fft2D::InverseReal(T* spec_re, T* spec_im, int rows, int cols, double* re, int stride,
+                        std::vector<T>* scratch) const {
   const int h = (cols + 1) / 2;
   const int lw = PaddedStride(h);
   const size_t W = static_cast<size_t>(ny_) * lw;
-  double *wr, *wi, *sr, *si;
+  T *wr, *wi, *sr, *si;
   SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
   const int ls = spec_stride_, hy = half_ny();
   px_.Transform(spec_re, spec_im, hy, ls, true, sr, si);
   // Z = A + i B over the full ky range, the upper half from A(-k) =
   // conj A(k) (the columns' inverses are real).
   for (int c = 0; c < h; ++c) {
-    const double* ar = spec_re + static_cast<size_t>(c) * ls;
-    const double* ai = spec_im + static_cast<size_t>(c) * ls;
+    const T* ar = spec_re + static_cast<size_t>(c) * ls;
+    const T* ai = spec_im + static_cast<size_t>(c) * ls;
     const bool has_b = c + h < cols;
-    const double* br = spec_re + static_cast<size_t>(c + h) * ls;
-    const double* bi = spec_im + static_cast<size_t>(c + h) * ls;
+    const T* br = spec_re + static_cast<size_t>(c + h) * ls;
+    const T* bi = spec_im + static_cast<size_t>(c + h) * ls;
     for (int ky = 0; ky < ny_; ++ky) {
       const bool low = ky < hy;
       const int q = low ? ky : ny_ - ky;
-      const double sgn = low ? 1.0 : -1.0;  // conjugate in the upper half
-      const double a_r = ar[q], a_i = sgn * ai[q];
-      const double b_r = has_b ? br[q] : 0.0, b_i = has_b ? sgn * bi[q] : 0.0;
+      const T sgn = low ? T(1) : T(-1);  // conjugate in the upper half
+      const T a_r = ar[q], a_i = sgn * ai[q];
+      const T b_r = has_b ? br[q] : T(0), b_i = has_b ? sgn * bi[q] : T(0);
       wr[static_cast<size_t>(ky) * lw + c] = a_r - b_i;
       wi[static_cast<size_t>(ky) * lw + c] = a_i + b_r;
     }
@@ -353,9 +396,20 @@ void Fft2D::InverseReal(double* spec_re, double* spec_im, int rows, int cols, do
   py_.Transform(wr, wi, h, lw, true, sr, si);
   for (int y = 0; y < rows; ++y) {
     double* row = re + static_cast<size_t>(y) * stride;
-    std::memcpy(row, wr + static_cast<size_t>(y) * lw, h * sizeof(double));
-    std::memcpy(row + h, wi + static_cast<size_t>(y) * lw, (cols - h) * sizeof(double));
+    const T* a = wr + static_cast<size_t>(y) * lw;
+    const T* b = wi + static_cast<size_t>(y) * lw;
+    for (int x = 0; x < h; ++x) row[x] = static_cast<double>(a[x]);
+    for (int x = 0; x < cols - h; ++x) row[h + x] = static_cast<double>(b[x]);
   }
 }
+
+#define MJTOUCH_FFT_REAL(T)                                                                  \
+  template void Fft2D::ForwardReal(const double*, int, int, int, T*, T*, std::vector<T>*)    \
+      const;                                                                                 \
+  template void Fft2D::InverseReal(T*, T*, int, int, double*, int, std::vector<T>*) const;
+MJTOUCH_FFT_REAL(double)
+MJTOUCH_FFT_REAL(float)
+#undef MJTOUCH_FFT_REAL
+
 
 }  // namespace mjtouch

@@ -34,6 +34,7 @@ SurfaceCompliance::SurfaceCompliance(int nx, int ny, double pitch_m,
       s->k_hat[static_cast<size_t>(kx) * ls + ky] = c_of_k(k) * norm;
     }
   }
+  s->k_hat_f.assign(s->k_hat.begin(), s->k_hat.end());
   BuildInverse(s.get());
   periodic_spectrum_ = std::move(s);
 }
@@ -85,29 +86,43 @@ std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFo
   const double norm = 1.0 / (static_cast<double>(mx) * my);
   s->k_hat.resize(sre.size());
   for (size_t k = 0; k < sre.size(); ++k) s->k_hat[k] = sre[k] * norm;
+  s->k_hat_f.assign(s->k_hat.begin(), s->k_hat.end());
   BuildInverse(s.get());
   slot = std::move(s);
   return slot;
 }
 
-void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
-                              ComplianceWork* w) const {
+namespace {
+template <typename T>
+void ApplyIn(const Fft2D& fft, const T* k, const double* in, int bx, int by, double* out,
+             std::vector<T>* spec_re, std::vector<T>* spec_im, std::vector<T>* scratch) {
   // Real field, real even kernel: half spectra (Fft2D::ForwardReal).
-  const size_t S = s.fft.spectrum_size();
-  w->spec_re.resize(S);
-  w->spec_im.resize(S);
-  s.fft.ForwardReal(in, bx, by, bx, w->spec_re.data(), w->spec_im.data(), &w->fft_scratch);
-  const double* k = s.k_hat.data();
-  double* re = w->spec_re.data();
-  double* im = w->spec_im.data();
-  const int ls = s.fft.spectrum_stride(), hy = s.fft.half_ny();
-  for (int kx = 0; kx < s.fft.nx(); ++kx)
+  const size_t S = fft.spectrum_size();
+  spec_re->resize(S);
+  spec_im->resize(S);
+  T* re = spec_re->data();
+  T* im = spec_im->data();
+  fft.ForwardReal(in, bx, by, bx, re, im, scratch);
+  const int ls = fft.spectrum_stride(), hy = fft.half_ny();
+  for (int kx = 0; kx < fft.nx(); ++kx) {
+    const size_t o = static_cast<size_t>(kx) * ls;
     for (int ky = 0; ky < hy; ++ky) {
-      const size_t i = static_cast<size_t>(kx) * ls + ky;
-      re[i] *= k[i];
-      im[i] *= k[i];
+      re[o + ky] *= k[o + ky];
+      im[o + ky] *= k[o + ky];
     }
-  s.fft.InverseReal(re, im, by, bx, out, bx, &w->fft_scratch);
+  }
+  fft.InverseReal(re, im, by, bx, out, bx, scratch);
+}
+}  // namespace
+
+void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
+                              ComplianceWork* w, ApplyPrecision precision) const {
+  if (precision == ApplyPrecision::kFloat) {
+    ApplyIn(s.fft, s.k_hat_f.data(), in, bx, by, out, &w->spec_re_f, &w->spec_im_f,
+            &w->fft_scratch_f);
+  } else {
+    ApplyIn(s.fft, s.k_hat.data(), in, bx, by, out, &w->spec_re, &w->spec_im, &w->fft_scratch);
+  }
 }
 
 void SurfaceCompliance::AddCell(int c, double d, int bx, int by, double* u) const {

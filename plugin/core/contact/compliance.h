@@ -25,9 +25,16 @@ namespace mjtouch {
 
 class LayeredSubstrate;
 
+// Arithmetic of SurfaceCompliance::Apply's FFTs. kFloat: the spectra in
+// float (the table is float, and the contact solver stops at a relative
+// change ~1e-4; float rounding adds ~1e-7 relative to K p): 1.7-1.8x faster.
+// kDouble: the reference path.
+enum class ApplyPrecision { kFloat = 0, kDouble };
+
 // Per-caller FFT scratch (no state that outlives a call).
 struct ComplianceWork {
   std::vector<double> spec_re, spec_im, fft_scratch;
+  std::vector<float> spec_re_f, spec_im_f, fft_scratch_f;
 };
 
 class SurfaceCompliance {
@@ -54,6 +61,7 @@ class SurfaceCompliance {
   struct Spectrum {
     Fft2D fft;
     std::vector<double> k_hat;  // real (K is even), already divided by nx ny
+    std::vector<float> k_hat_f;  // the same rounded to float (ApplyPrecision::kFloat)
     // The inverse operator on this FFT grid (1 / k_hat, Pa/m) in real space,
     // truncated to offsets |di|, |dj| <= kInverseHalfWidth: the contact
     // solver's preconditioner. The inverse of a 1/r-like kernel is nearly
@@ -70,7 +78,7 @@ class SurfaceCompliance {
   // out = K * in over a bx x by box (arrays bx * by, row-major), with the
   // spectrum from SpectrumFor(bx, by).
   void Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
-             ComplianceWork* w) const;
+             ComplianceWork* w, ApplyPrecision precision = ApplyPrecision::kDouble) const;
   // u += K * (d on cell c of the box) by direct sum (non-periodic only):
   // cheaper than an FFT when few cells change.
   void AddCell(int c, double d, int bx, int by, double* u) const;

@@ -17,7 +17,26 @@ struct Problem {
   double target;    // sum of p over cells (force / cell area)
   double fft_cost;  // flops of one Apply, against direct sums
   ElasticWork* w;
+  ApplyPrecision precision;
 };
+
+// sum of term(k), k < n, in four interleaved partial sums combined as
+// (s0 + s1) + (s2 + s3): one fixed order on every instruction set (so
+// deterministic), without one running sum's add-latency chain. term is
+// called once per k, in increasing k (it may write per-k outputs).
+template <typename F>
+inline double Sum4(size_t n, F term) {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  size_t k = 0;
+  for (; k + 4 <= n; k += 4) {
+    s0 += term(k);
+    s1 += term(k + 1);
+    s2 += term(k + 2);
+    s3 += term(k + 3);
+  }
+  for (; k < n; ++k) s0 += term(k);
+  return (s0 + s1) + (s2 + s3);
+}
 
 // u = s (u - tau r + K delta) after a step p - tau t whose projection onto
 // p >= 0 added delta on the cells in w->changed: few cells change near
@@ -33,7 +52,7 @@ void UpdateDisplacement(const Problem& P, double tau, double s, ElasticSolveStat
     if (!P.periodic && static_cast<double>(nchg) * static_cast<double>(P.B) < P.fft_cost) {
       for (int c : w->changed) P.K.AddCell(c, dl[c], P.bx, P.by, u);
     } else {
-      P.K.Apply(*P.spec, dl, P.bx, P.by, r, &w->fft);
+      P.K.Apply(*P.spec, dl, P.bx, P.by, r, &w->fft, P.precision);
       ++st->applies;
       for (size_t b = 0; b < P.B; ++b) u[b] += r[b];
     }
@@ -47,12 +66,11 @@ double Accept(const Problem& P, double sum_new, double* s_out) {
   double* p = P.w->p.data();
   const double* pn = P.w->p_new.data();
   const double s = P.target / sum_new;
-  double change = 0.0;
-  for (size_t b = 0; b < P.B; ++b) {
-    const double v = s * pn[b];
-    change += std::abs(v - p[b]);
+  const double change = Sum4(P.B, [&](size_t b) {
+    const double v = s * pn[b], d = std::abs(v - p[b]);
     p[b] = v;
-  }
+    return d;
+  });
   *s_out = s;
   return change / P.target;
 }
@@ -87,7 +105,7 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
     const double beta = beta_on * G / G_old;
     for (size_t b = 0; b < B; ++b) t[b] = p[b] > 0.0 ? g[b] + beta * t[b] : 0.0;
     G_old = G;
-    P.K.Apply(*P.spec, t, P.bx, P.by, r, &w->fft);
+    P.K.Apply(*P.spec, t, P.bx, P.by, r, &w->fft, P.precision);
     ++st->applies;
     double sum_r = 0.0;
     for (size_t b = 0; b < B; ++b)
@@ -139,11 +157,35 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
   }
 }
 
+// z[j * bx + i] = sum over (dj, di) in stencil order of M[dj L + di] *
+// g_pad[(j + dj) px + i + di]. The stencil unrolled inside the loop over i,
+// which vectorises: each cell's sum runs in the same order as a per-cell
+// loop would, in a register.
+template <int L>
+__attribute__((target_clones("avx2", "default")))
+void ApplyStencil(const double* M, const double* g_pad, int px, int bx, int by,
+                  double* z_out) {
+  double m[L * L];
+  for (int k = 0; k < L * L; ++k) m[k] = M[k];
+  for (int j = 0; j < by; ++j) {
+    double* __restrict z = z_out + static_cast<size_t>(j) * bx;
+    const double* __restrict row = g_pad + static_cast<size_t>(j) * px;
+    for (int i = 0; i < bx; ++i) {
+      double acc = 0.0;
+#pragma GCC unroll 32
+      for (int dj = 0; dj < L; ++dj)
+#pragma GCC unroll 8
+        for (int di = 0; di < L; ++di) acc += m[dj * L + di] * row[static_cast<size_t>(dj) * px + i + di];
+      z[i] = acc;
+    }
+  }
+}
+
 void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStats* st) {
   ElasticWork* w = P.w;
   const size_t B = P.B;
   const int bx = P.bx, by = P.by;
-  const int hw = SurfaceCompliance::kInverseHalfWidth, L = 2 * hw + 1;
+  constexpr int hw = SurfaceCompliance::kInverseHalfWidth, L = 2 * hw + 1;
   const int px = bx + 2 * hw;  // padded row length
   const double* M = P.spec->inverse.data();
   double* g0 = w->g0.data();
@@ -156,29 +198,36 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   double* dl = w->delta.data();
   w->g_pad.assign(static_cast<size_t>(px) * (by + 2 * hw), 0.0);
   double* gp = w->g_pad.data();
-  auto pad_index = [&](size_t b) {
-    return static_cast<size_t>(b / bx + hw) * px + b % bx + hw;
-  };
   double G_old = 1.0;
   bool first = true;
   for (int it = 1; it <= max_iter; ++it) {
     st->iterations = it;
     size_t nc = 0;
-    double sum_g = 0.0;
-    for (size_t b = 0; b < B; ++b)
-      if (p[b] > 0.0) { sum_g += g0[b] + u[b]; ++nc; }
+    const double sum_g = Sum4(B, [&](size_t b) {
+      const bool c = p[b] > 0.0;
+      nc += c;
+      return c ? g0[b] + u[b] : 0.0;
+    });
     const double gbar = sum_g / static_cast<double>(nc);
     // The working set: the contact plus cells that overlap; t lives on it.
     std::vector<int>& S = w->set;
-    S.clear();
-    for (size_t b = 0; b < B; ++b) {
-      g[b] = std::isfinite(g0[b]) ? g0[b] + u[b] - gbar : 0.0;
-      const bool in = p[b] > 0.0 || (std::isfinite(g0[b]) && g[b] < 0.0);
-      if (in) {
-        S.push_back(static_cast<int>(b));
-        gp[pad_index(b)] = g[b];
+    S.resize(B);
+    size_t ns = 0;
+    // g_pad: g on S, zero elsewhere (its border stays zero, or wraps below).
+    for (int j = 0; j < by; ++j) {
+      double* gp_row = gp + static_cast<size_t>(j + hw) * px + hw;
+      for (int i = 0; i < bx; ++i) {
+        const size_t b = static_cast<size_t>(j) * bx + i;
+        const bool finite = std::isfinite(g0[b]);
+        const double gb = finite ? g0[b] + u[b] - gbar : 0.0;
+        g[b] = gb;
+        const bool in = p[b] > 0.0 || (finite && gb < 0.0);
+        gp_row[i] = in ? gb : 0.0;
+        S[ns] = static_cast<int>(b);  // kept only if in
+        ns += in;
       }
     }
+    S.resize(ns);
     // A periodic operator's stencil wraps: the border repeats the far side
     // (so a field uniform along an axis stays exactly uniform).
     if (P.periodic) {
@@ -194,21 +243,18 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     }
     // z = M g on S (M: the inverse operator's stencil, g zero off S), then
     // its mean removed: a direction that keeps the load.
-    double sum_z = 0.0;
-    for (int b : S) {
-      const double* row = gp + pad_index(b) - static_cast<size_t>(hw) * px - hw;
-      double z = 0.0;
-      for (int dj = 0; dj < L; ++dj)
-        for (int di = 0; di < L; ++di) z += M[dj * L + di] * row[static_cast<size_t>(dj) * px + di];
-      r[b] = z;  // r: scratch until K t below
-      sum_z += z;
-    }
-    const double zbar = sum_z / static_cast<double>(S.size());
-    double G = 0.0;
-    for (int b : S) {
+    // Over the whole box, a row at a time (vectorises; each cell's sum runs
+    // in the stencil's order, as a per-cell loop would), read on S only.
+    // r: scratch until K t below.
+    ApplyStencil<L>(M, gp, px, bx, by, r);
+    const int* Sp = S.data();
+    const double sum_z = Sum4(ns, [&](size_t k) { return r[Sp[k]]; });
+    const double zbar = sum_z / static_cast<double>(ns);
+    const double G = Sum4(ns, [&](size_t k) {
+      const int b = Sp[k];
       r[b] -= zbar;
-      G += g[b] * r[b];
-    }
+      return g[b] * r[b];
+    });
     if (!(G > 0.0)) {  // exact solution (or a set the stencil cannot move)
       st->converged = G == 0.0;
       break;
@@ -224,37 +270,36 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     double num = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
       std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
-      double sum_t = 0.0;
-      for (int b : S) {
+      const double sum_t = Sum4(ns, [&](size_t k) {
+        const int b = Sp[k];
         pn[b] = r[b] + beta * t[b];
-        sum_t += pn[b];
-      }
-      const double tbar = sum_t / static_cast<double>(S.size());
-      num = 0.0;
-      for (int b : S) {
+        return pn[b];
+      });
+      const double tbar = sum_t / static_cast<double>(ns);
+      num = Sum4(ns, [&](size_t k) {
+        const int b = Sp[k];
         pn[b] -= tbar;
-        num += g[b] * pn[b];
-      }
+        return g[b] * pn[b];
+      });
       if (num > 0.0 || beta == 0.0) break;
       beta = 0.0;
     }
     std::swap(w->t, w->p_new);
     t = w->t.data();
     pn = w->p_new.data();
-    for (int b : S) gp[pad_index(b)] = 0.0;
-    P.K.Apply(*P.spec, t, bx, by, r, &w->fft);
+    P.K.Apply(*P.spec, t, bx, by, r, &w->fft, P.precision);
     ++st->applies;
-    double den = 0.0;  // t sums to zero over S: t.(K t - mean) = t.K t
-    for (int b : S) den += r[b] * t[b];
+    // t sums to zero over S: t.(K t - mean) = t.K t
+    const double den = Sum4(ns, [&](size_t k) { return r[Sp[k]] * t[Sp[k]]; });
     if (!(den > 0.0) || !(num > 0.0)) {
       st->converged = false;
       break;
     }
     const double tau = num / den;
     w->changed.clear();
-    double sum_new = 0.0;
     std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
-    for (int b : S) {
+    const double sum_new = Sum4(ns, [&](size_t k) {
+      const int b = Sp[k];
       double v = p[b] - tau * t[b];
       if (v < 0.0) {
         dl[b] = -v;
@@ -262,8 +307,8 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
         v = 0.0;
       }
       pn[b] = v;
-      sum_new += v;
-    }
+      return v;
+    });
     if (!(sum_new > 0.0)) break;
     double s;
     st->change = Accept(P, sum_new, &s);
@@ -283,15 +328,16 @@ ElasticContact::ElasticContact(std::shared_ptr<const SurfaceCompliance> complian
 bool ElasticContact::Solve(const std::vector<double>& gap_m, const CellBox& box,
                            double force_n, double tolerance, int max_iterations,
                            std::vector<double>* pressure_pa, ElasticWork* work,
-                           ElasticSolveStats* stats, ElasticMethod method) const {
+                           ElasticSolveStats* stats, ElasticMethod method,
+                           ApplyPrecision precision) const {
   return SolveElasticContact(*compliance_, gap_m, box, force_n, tolerance, max_iterations,
-                             pressure_pa, work, stats, method);
+                             pressure_pa, work, stats, method, precision);
 }
 
 bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& gap,
                          const CellBox& box_in, double force, double tol, int max_iter,
                          std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
-                         ElasticMethod method) {
+                         ElasticMethod method, ApplyPrecision precision) {
   *st = ElasticSolveStats();
   CellBox box = box_in;
   const bool periodic = K.periodic();
@@ -300,9 +346,8 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   const int bx = box.nx, by = box.ny;
   const size_t B = static_cast<size_t>(bx) * by;
   const double A = K.pitch_m() * K.pitch_m();
-  auto grid_index = [&](size_t b) {
-    return static_cast<size_t>(box.j0 + b / bx) * nx + box.i0 + b % bx;
-  };
+  // The box's row j starts at grid cell row_start(j).
+  auto row_start = [&](int j) { return static_cast<size_t>(box.j0 + j) * nx + box.i0; };
   w->g0.resize(B);
   w->p.resize(B);
   w->u.resize(B);
@@ -315,15 +360,16 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   double* p = w->p.data();
   size_t ncand = 0;
   double sum_p = 0.0;
-  for (size_t b = 0; b < B; ++b) {
-    const size_t k = grid_index(b);
-    g0[b] = gap[k];
-    const bool cand = std::isfinite(g0[b]);
-    ncand += cand;
-    p[b] = cand ? std::max(0.0, (*pressure)[k]) : 0.0;
-    if (!std::isfinite(p[b])) p[b] = 0.0;
-    sum_p += p[b];
-  }
+  for (int j = 0; j < by; ++j)
+    for (int i = 0; i < bx; ++i) {
+      const size_t b = static_cast<size_t>(j) * bx + i, k = row_start(j) + i;
+      g0[b] = gap[k];
+      const bool cand = std::isfinite(g0[b]);
+      ncand += cand;
+      p[b] = cand ? std::max(0.0, (*pressure)[k]) : 0.0;
+      if (!std::isfinite(p[b])) p[b] = 0.0;
+      sum_p += p[b];
+    }
   std::fill(pressure->begin(), pressure->end(), 0.0);
   const double target = force / A;  // sum of p over cells
   if (ncand == 0 || !(target > 0.0)) return false;
@@ -338,9 +384,9 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   st->fft_size_y = spec->fft.ny();
   const double fft_cost = 5.0 * static_cast<double>(spec->fft.nx()) * spec->fft.ny() *
                           std::log2(static_cast<double>(spec->fft.nx()) * spec->fft.ny());
-  K.Apply(*spec, p, bx, by, w->u.data(), &w->fft);
+  K.Apply(*spec, p, bx, by, w->u.data(), &w->fft, precision);
   st->applies = 1;
-  const Problem P{K, spec, bx, by, B, periodic, target, fft_cost, w};
+  const Problem P{K, spec, bx, by, B, periodic, target, fft_cost, w, precision};
   if (method == ElasticMethod::kPolonskyKeer) {
     PolonskyKeer(P, tol, max_iter, st);
   } else {
@@ -353,7 +399,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   p = w->p.data();
   double* u = w->u.data();
   if (method == ElasticMethod::kPolonskyKeer) {
-    K.Apply(*spec, p, bx, by, u, &w->fft);
+    K.Apply(*spec, p, bx, by, u, &w->fft, precision);
     ++st->applies;
   }
   size_t nc = 0;
@@ -368,7 +414,9 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   st->contact_cells = static_cast<int>(nc);
   st->approach_m = nc ? sum_g / static_cast<double>(nc) : 0.0;
   st->max_contact_gap_m = max_g;
-  for (size_t b = 0; b < B; ++b) (*pressure)[grid_index(b)] = p[b];
+  for (int j = 0; j < by; ++j)
+    std::copy(p + static_cast<size_t>(j) * bx, p + static_cast<size_t>(j + 1) * bx,
+              pressure->begin() + row_start(j));
   return nc > 0;
 }
 

@@ -62,12 +62,14 @@ struct ElasticWork {
 // (any p >= 0; all zero: uniform over the candidates) and the solution on
 // exit (zero outside the box). Stops when the relative L1 change of the
 // pressure in one iteration is below `tolerance`, or after max_iterations.
-// Returns false if no cell can carry the load.
+// Returns false if no cell can carry the load. precision: of the operator's
+// FFTs (compliance.h; the iteration itself is double).
 bool SolveElasticContact(const SurfaceCompliance& compliance, const std::vector<double>& gap_m,
                          const CellBox& box, double force_n, double tolerance,
                          int max_iterations, std::vector<double>* pressure_pa,
                          ElasticWork* work, ElasticSolveStats* stats,
-                         ElasticMethod method = ElasticMethod::kPreconditioned);
+                         ElasticMethod method = ElasticMethod::kPreconditioned,
+                         ApplyPrecision precision = ApplyPrecision::kDouble);
 
 // One skin's elastic contact: its compliance operator (shared, immutable,
 // spectra cached per box size) bound to the solver.
@@ -85,7 +87,8 @@ class ElasticContact {
   bool Solve(const std::vector<double>& gap_m, const CellBox& box, double force_n,
              double tolerance, int max_iterations, std::vector<double>* pressure_pa,
              ElasticWork* work, ElasticSolveStats* stats,
-             ElasticMethod method = ElasticMethod::kPreconditioned) const;
+             ElasticMethod method = ElasticMethod::kPreconditioned,
+             ApplyPrecision precision = ApplyPrecision::kDouble) const;
 
  private:
   std::shared_ptr<const SurfaceCompliance> compliance_;

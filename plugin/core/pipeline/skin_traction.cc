@@ -65,7 +65,7 @@ double MinGap(const TaxelGrid& grid, const CellBox& box, const std::vector<doubl
 bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
                      const std::vector<double>& gap, const CellBox& box, const CellBox& inner,
                      const std::vector<double>& pressure, double approach_m, double lift_m,
-                     ElasticWork* w, CellBox* grown) {
+                     ApplyPrecision precision, ElasticWork* w, CellBox* grown) {
   auto outside = [&](int i, int j) {
     return i < inner.i0 || i >= inner.i0 + inner.nx || j < inner.j0 || j >= inner.j0 + inner.ny;
   };
@@ -89,7 +89,7 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
       w->check_p[static_cast<size_t>(j - j0) * cx + (i - i0)] =
           pressure[static_cast<size_t>(j) * grid.n + i];
   const auto spec = K.SpectrumFor(cx, cy);
-  K.Apply(*spec, w->check_p.data(), cx, cy, w->check_u.data(), &w->fft);
+  K.Apply(*spec, w->check_p.data(), cx, cy, w->check_u.data(), &w->fft, precision);
   int f0 = inner.i0, f1 = inner.i0 + inner.nx - 1, g0 = inner.j0, g1 = inner.j0 + inner.ny - 1;
   bool ok = true;
   for (int j = j0; j <= j1; ++j)
@@ -225,14 +225,14 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         for (int attempt = 0;; ++attempt) {
           touching = ec.Solve(ws->gap, solve_box, in.normal_force_n, cfg.tolerance,
                               kElasticMaxIterations, &ws->pressure_guess, &ws->elastic, &st,
-                              cfg.elastic_method);
+                              cfg.elastic_method, cfg.elastic_precision);
           const bool whole = solve_box.i0 == box.i0 && solve_box.j0 == box.j0 &&
                              solve_box.nx == box.nx && solve_box.ny == box.ny;
           if (whole) break;
           CellBox grown = box;
           if (touching && BoxHoldsContact(grid, ec.compliance(), ws->gap, box, solve_box,
-                                          ws->pressure_guess, st.approach_m, lift, &ws->elastic,
-                                          &grown))
+                                          ws->pressure_guess, st.approach_m, lift,
+                                          cfg.elastic_precision, &ws->elastic, &grown))
             break;
           // the solution on the smaller box is a good start on the grown one
           solve_box = touching && attempt + 1 < kBoxAttempts ? grown : box;
