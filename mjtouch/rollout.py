@@ -60,8 +60,8 @@ def run_slide(tip: scenes.Fingertip | None = None, texture: scenes.Texture | Non
     return _collect(model, data, layout, ctrl, tip, texture, protocol, progress)
 
 
-def _rollout_chunks(model, data, state0, ctrl, progress=None, min_chunk: int = 50,
-                    max_chunk: int = 200):
+def chunked_rollout(model, data, state0, ctrl, progress=None, min_chunk: int = 50,
+                    max_chunk: int = 200, control_spec: int | None = None):
     """mujoco.rollout in consecutive chunks (about 100, at most max_chunk
     steps each), reporting each to progress: every chunk starts from the
     previous one's last full physics state (plugin state included) and solver
@@ -72,10 +72,11 @@ def _rollout_chunks(model, data, state0, ctrl, progress=None, min_chunk: int = 5
     n = len(ctrl)
     size = min(max(min_chunk, -(-n // 100)), max_chunk)
     keep = 1 + model.nq
+    spec = {} if control_spec is None else {"control_spec": control_spec}
     states, sensordata, warmstart = [], [], None
     for i in range(0, n, size):
         st, sd = mujoco.rollout.rollout(model, data, state0[None], ctrl[None, i:i + size],
-                                        initial_warmstart=warmstart)
+                                        initial_warmstart=warmstart, **spec)
         states.append(st[0, :, :keep].copy())
         sensordata.append(sd[0])
         state0, warmstart = st[0, -1].copy(), data.qacc_warmstart.copy()[None]
@@ -88,7 +89,7 @@ def _collect(model, data, layout, ctrl, tip, texture, protocol, progress=None) -
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state0 = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state0, spec)
-    state, sensordata = _rollout_chunks(model, data, state0, ctrl, progress)
+    state, sensordata = chunked_rollout(model, data, state0, ctrl, progress)
     # state: time, qpos (slide_x, press_z)
     time = state[:, 0]
     def block(name):

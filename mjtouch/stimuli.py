@@ -22,6 +22,7 @@ achieved displacement (:class:`StimulusResult`).
 
 from __future__ import annotations
 
+import concurrent.futures
 import dataclasses
 import math
 from typing import Callable, Literal, Sequence
@@ -31,6 +32,7 @@ import mujoco.rollout
 import numpy as np
 
 from mjtouch import analysis, scenes
+from mjtouch.rollout import chunked_rollout
 from mjtouch.sensor import SkinLayout
 
 # --- waveforms -----------------------------------------------------------------------------
@@ -550,10 +552,21 @@ class _Scene:
             s = np.concatenate([s, np.full(n - s.size, s[-1])])  # hold the last value
             ctrl[i, :, :self.model.nu] = self.hold_ctrl
             ctrl[i, :, self.model.nu:] = self._mocap_rows(s)
-        datas = [mujoco.MjData(self.model) for _ in range(min(nthread, len(ws)))]
-        state, sd = mujoco.rollout.rollout(self.model, datas if len(datas) > 1 else datas[0],
-                                           np.repeat(self.state[None], len(ws), axis=0), ctrl,
-                                           control_spec=_CTRL_MOCAP)
+        # Each waveform in bounded chunks (rollout.chunked_rollout: the full
+        # state, with the elastic warm start, is too large to keep for every
+        # step), waveforms on `threads` Python threads (mujoco.rollout
+        # releases the GIL), each with its own MjData.
+        def one(i):
+            return chunked_rollout(self.model, mujoco.MjData(self.model), self.state, ctrl[i],
+                                   control_spec=_CTRL_MOCAP)
+        nworker = min(nthread, len(ws))
+        if nworker > 1:
+            with concurrent.futures.ThreadPoolExecutor(nworker) as pool:
+                runs = list(pool.map(one, range(len(ws))))
+        else:
+            runs = [one(i) for i in range(len(ws))]
+        state = np.stack([r[0] for r in runs])
+        sd = np.stack([r[1] for r in runs])
         # qpos before each step (the state row k is after step k)
         q0 = self.state[1 + np.array(self._qadr)]
         out = []
