@@ -91,7 +91,7 @@ def test_rates_at_two_timesteps_agree(cls, kind):
 
 # --- ramp-and-hold presses in the full plugin -------------------------------------------
 
-RA_GAIN_S_PER_PA = 1.30e-4  # receptors.h RAParams default
+RA_GAIN_S_PER_PA = 6.22e-5  # receptors.h RAParams default
 RA_SATURATION = 5.0  # receptors.h RAParams::saturation
 RA_MIN_VARIANT_GAIN = 0.75  # receptors.cc kVariants: the least sensitive RA set
 RAMP_DT = 2e-4
