@@ -145,11 +145,13 @@ const std::vector<AttributeRow>& Rows() {
       {"sa1_merkel", K::kCustom, 0, 0, false, false, "cells per heminode", "8 5 3 1",
        "SA1 Merkel cells per heminode (Wang 2016)", "1 to 4 numbers in [0, 1000]", NO_FIELD,
        ParseMerkelAttribute, WriteMerkelKey, S::kModel},
-      {"sa1_k0", K::kNumber, 0, 1e-6, false, false, "A per unit of q", "1.40e-16",
-       "SA1 static gain (Wang 2016 Table 1 row of the SA1 `quantity`)", nullptr,
+      {"sa1_k0", K::kNumber, 0, 1e-6, false, false, "A per unit of q", "9.8e-16",
+       "SA1 static gain (`filtered`: 7 x the Wang 2016 Table 1 row of the SA1 `quantity`; "
+       "`wang2016`: the row, 1.40e-16 for stress)", nullptr,
        FIELD(receptor.sa1.k0_a_per_pa), NO_PARSE, S::kModel},
-      {"sa1_k1", K::kNumber, 0, 1e-6, false, false, "A s per unit of q", "7.0e-18",
-       "SA1 dynamic gain (Wang 2016 Table 1 row of the SA1 `quantity`)", nullptr,
+      {"sa1_k1", K::kNumber, 0, 1e-6, false, false, "A s per unit of q", "4.9e-17",
+       "SA1 dynamic gain (`filtered`: 0.05 s x `sa1_k0`; `wang2016`: the Table 1 row, 1.68e-16 "
+       "for stress)", nullptr,
        FIELD(receptor.sa1.k1_a_s_per_pa), NO_PARSE, S::kModel},
       {"sa1_i0", K::kNumber, -1e-6, 1e-6, false, false, "A", "4.94e-12",
        "SA1 bias current (Wang 2016 Table 1 row of the SA1 `quantity`)", nullptr,
