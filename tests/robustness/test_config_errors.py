@@ -61,6 +61,7 @@ CASES = [
     ({"adapt": "1 -1 0"}, "`adapt` entry 2", "[0, 100]"),
     ({"adapt_tau": "0.05 0 0.02"}, "`adapt_tau` entry 2", "(0, 10]"),
     ({"ra_saturation": "-1"}, "`ra_saturation`", "[0, 1e+06]"),
+    ({"sa1_saturation": "-1"}, "`sa1_saturation`", "[0, 1e+12] units of q"),
     ({"population": "random"}, "`population`", "valid: uniform varied"),
     # explicit receptor sites
     ({"sites": "SA1 0 0"}, "`sites` has 3 words", "'CLASS x y depth' (CLASS in SA1 RA PC"),

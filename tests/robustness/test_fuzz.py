@@ -25,7 +25,7 @@ LOG_RANGES = {
     "ra_tau": (1e-5, 10), "pc_gain": (1e-8, 1), "pc_tau": (1e-5, 10), "pc_highpass": (1, 1e5),
     "refractory": (1e-5, 1), "ra_lowpass": (1, 1e4), "pc_lowpass": (1, 1e5),
     "noise_tau": (1e-5, 10), "rate_tau": (1e-4, 100), "stress_theta": (0.05, 2),
-    "sa1_lowpass": (1, 1e4), "ra_saturation": (1e-3, 1e6),
+    "sa1_lowpass": (1, 1e4), "ra_saturation": (1e-3, 1e6), "sa1_saturation": (1e-3, 1e12),
 }
 LINEAR_RANGES = {"ridge_angle": (-180, 180), "poisson": (-0.99, 0.5), "sa1_i0": (-1e-6, 1e-6)}
 INTEGER_RANGES = {"nx": (4, 40), "texture_group": (0, 5), "threads": (1, 3)}

@@ -59,11 +59,11 @@ def onset_sine(t, mean_pa, amp_pa, freq_hz):
 # (tests/unit/test_afferent_tuning.py): above the 1:1 threshold (locked) and
 # between the absolute and 1:1 thresholds (cycles skipped).
 DT_STIMULI = {
-    ("SA1", "ramp"): lambda t: ramp_and_hold(t, 60e3, 0.1, 0.4, 1.0),
-    ("SA1", "sine"): lambda t: onset_sine(t, 40e3, 15e3, 5.0),
-    ("RA", "ramp"): lambda t: ramp_and_hold(t, 30e3, 0.1, 0.1, 0.4),
-    ("RA", "sine"): lambda t: onset_sine(t, 0.0, 1500.0, 40.0),
-    ("RA", "sine-skipping"): lambda t: onset_sine(t, 0.0, 2000.0, 150.0),
+    ("SA1", "ramp"): lambda t: ramp_and_hold(t, 150e3, 0.1, 0.7, 1.0),
+    ("SA1", "sine"): lambda t: onset_sine(t, 100e3, 40e3, 5.0),
+    ("RA", "ramp"): lambda t: ramp_and_hold(t, 60e3, 0.1, 0.05, 0.3),
+    ("RA", "sine"): lambda t: onset_sine(t, 0.0, 3100.0, 40.0),
+    ("RA", "sine-skipping"): lambda t: onset_sine(t, 0.0, 4200.0, 150.0),
     ("PC", "ramp"): lambda t: ramp_and_hold(t, 5e3, 0.02, 0.05, 0.2),
     ("PC", "sine"): lambda t: onset_sine(t, 0.0, 10.0, 100.0),
     ("PC", "sine-skipping"): lambda t: onset_sine(t, 0.0, 1.5, 400.0),
@@ -77,7 +77,8 @@ def test_rates_at_two_timesteps_agree(cls, kind):
     trains = []
     for dt in (1e-4, 2.5e-5):
         t = np.arange(int(round(2.0 / dt)) + 1) * dt
-        spikes, _ = core.receptor_run(cls, stim(t), dt)
+        # noise off: the integrator's exactness (noise draws one value per step)
+        spikes, _ = core.receptor_run(cls, stim(t), dt, {"noise": "0 0 0"})
         trains.append(analysis.spike_times(spikes, dt))
     n1, n2 = trains[0].size, trains[1].size
     assert n1 >= 100  # enough spikes that 2% is a resolved difference
@@ -91,7 +92,7 @@ def test_rates_at_two_timesteps_agree(cls, kind):
 
 # --- ramp-and-hold presses in the full plugin -------------------------------------------
 
-RA_GAIN_S_PER_PA = 1.30e-4  # receptors.h RAParams default
+RA_GAIN_S_PER_PA = 6.22e-5  # receptors.h RAParams default
 RA_SATURATION = 5.0  # receptors.h RAParams::saturation
 RA_MIN_VARIANT_GAIN = 0.75  # receptors.cc kVariants: the least sensitive RA set
 RAMP_DT = 2e-4
@@ -128,7 +129,11 @@ class RampRuns:
 def ramp_runs():
     """Press with a force ramp (0.1 s) to each of FORCES_N, hold 0.3 s, ramp
     back to the preload; one batch, two threads."""
-    m = flat_scene({"outputs": "spikes stress"}, timestep_s=RAMP_DT)
+    # noise off: per-receptor monotonicity and the receptor_run identity are
+    # properties of the deterministic model (with noise an idle receptor's
+    # catch-up draws other noise than receptor_run's steps; the noisy
+    # identity is test_noisy_plugin_spikes_equal_receptor_run_with_its_stream)
+    m = flat_scene({"outputs": "spikes stress", "noise": "0 0 0"}, timestep_s=RAMP_DT)
     layout = SkinLayout.from_model(m)
     n = int(round((T_ON + 2 * RAMP + HOLD + REST) / RAMP_DT))
     t = np.arange(n) * RAMP_DT  # row k is evaluated at k dt, before step k
@@ -153,8 +158,16 @@ def test_sa1_fires_through_hold_rate_rising_with_force(ramp_runs):
     idx = np.nonzero(sa1)[0]
     for i in range(len(FORCES_N)):
         for r_ in idx[::3]:
-            got, _ = core.receptor_run("SA1", r.stress[i][:, r_], RAMP_DT, stream=int(r_))
-            assert np.array_equal(got, r.spikes[i][:, r_]), (i, r_)
+            got, _ = core.receptor_run("SA1", r.stress[i][:, r_], RAMP_DT, {"noise": "0 0 0"},
+                                     stream=int(r_))
+            # The plugin's step is time - last time (round-off ~1e-13 of dt
+            # at t ~ 0.5 s), receptor_run's exactly RAMP_DT: a spike within
+            # that of a step boundary may land one step later or earlier
+            # (3 of 78 units at the calibrated SA1 gain, none at Wang's 7x
+            # lower k0); the counts are equal.
+            assert got.sum() == r.spikes[i][:, r_].sum(), (i, r_)
+            lag = np.abs(np.cumsum(got) - np.cumsum(r.spikes[i][:, r_]))
+            assert lag.max() <= 1, (i, r_)
     # SA1 fires through the hold (the receptors under the contact's centre)
     assert np.all(counts.max(axis=1) / duration > 10.0)
     # Human SA I static rates at mm indentations: tens of impulses/s, rarely
@@ -219,7 +232,9 @@ PRESS_N = 0.5
 SETTLE_STEPS = 6000
 # Reference amplitudes: plate displacement (m) and fingertip force (N).
 VIB_DRIVES = {"plate": 1e-6, "finger": 2e-3}
-VIB_SKIN = {"outputs": "spikes stress", "classes": "RA PC", "tolerance": "1e-7"}
+# noise off as ramp_runs; elastic solved to 1e-7 of the load (linearity at
+# 1 um needs it: stimuli.STIMULUS_TOLERANCE)
+VIB_SKIN = {"outputs": "spikes stress", "classes": "RA PC", "noise": "0 0 0", "tolerance": "1e-7"}
 
 
 def vib_rows(f):
@@ -487,7 +502,8 @@ def test_noise_seeds_differ_and_zero_noise_is_no_noise():
         m, _ = noise_model(**extra)
         runs[name] = run_serial(m, mujoco.MjData(m), ctrl)
     # the seed also picks each receptor's population variant: compare at seed 7
-    plain_skin = {"outputs": NOISE_SKIN["outputs"], "seed": "7"}
+    plain_skin = {"outputs": NOISE_SKIN["outputs"], "seed": "7", "noise": "0 0 0",
+                  "noise_tau": "5e-3"}  # no noise at all, whatever its time constant
     m = flat_scene(plain_skin, timestep_s=2e-4)
     layout = SkinLayout.from_model(m)
     plain = run_serial(m, mujoco.MjData(m), ctrl)

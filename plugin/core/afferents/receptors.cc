@@ -107,6 +107,7 @@ enum {
 static_assert(kVariant + 1 == kReceptorStateSize, "receptor state layout");
 constexpr int kMaxNodes = 4;
 constexpr double kTwoPi = 6.283185307179586;
+constexpr double kIdleNoiseSds = 4.5;  // ReceptorStepper::Quiescent with noise
 
 uint64_t SplitMix64(uint64_t x) {
   x += 0x9e3779b97f4a7c15ULL;
@@ -163,6 +164,13 @@ void Expm(int m, const double* A, double* E) {
   }
 }
 
+// SA1 input saturation q / (1 + |q| / s) (SA1Params::saturation; s = 0:
+// none); odd and monotone, so zero crossings and order are kept.
+double SaturateSA1(const SA1Params& s, double q) {
+  if (s.model != SA1Model::kFiltered || !(s.saturation > 0.0)) return q;
+  return q / (1.0 + std::abs(q) / s.saturation);
+}
+
 struct SpikeSink {
   double offset;  // start of the current segment in the step, s
   double dt, rate_tau, rate_sum;
@@ -197,7 +205,14 @@ void WangTable1Gains(Quantity q, SA1Params* p) {
 
 void DefaultSA1Gains(Quantity q, SA1Params* p) {
   WangTable1Gains(q, p);
+  p->saturation = 0.0;
   if (p->model == SA1Model::kFiltered) {
+    // the row's rheobase quantity (heminode 1, the largest M) before rescaling
+    double mmax = 0.0;
+    for (double m : p->merkel_cells) mmax = std::max(mmax, m);
+    const double rheobase = (p->threshold_v / p->resistance_ohm - p->i0_a) /
+                            (mmax * p->k0_a_per_pa);
+    p->saturation = kSA1SaturationOverRheobase * rheobase;
     p->k0_a_per_pa *= kSA1StaticScale;
     p->k1_a_s_per_pa = p->k0_a_per_pa * kSA1RateTimeS;
   }
@@ -214,6 +229,11 @@ const VariantScale kVariants[kNumClasses][kNumVariants] = {
     {{1.0, 1.0, 1.0}, {0.75, 1.3, 0.7}, {1.3, 0.8, 1.4}, {0.9, 1.15, 1.2}},
     {{1.0, 1.0, 1.0}, {0.75, 1.2, 0.7}, {1.3, 0.85, 1.4}, {0.9, 1.1, 1.2}}};
 }  // namespace
+
+double NoiseSd(const ReceptorParams& p, ReceptorClass cls) {
+  if (cls == ReceptorClass::kSA1 && p.sa1.model == SA1Model::kWang2016) return 0.0;
+  return p.noise.sd[static_cast<int>(cls)];
+}
 
 const VariantScale& ReceptorVariant(ReceptorClass cls, int variant) {
   return kVariants[static_cast<int>(cls)][variant];
@@ -240,7 +260,7 @@ std::string ReceptorParamsKey(const ReceptorParams& p) {
     << p.noise.sd[2] << ' ' << p.noise.tau_s << ' ' << p.noise.seed << " | " << p.rate_tau_s
     << " | " << static_cast<int>(p.sa1.model) << ' ' << p.sa1.lowpass_hz << ' ' << p.varied;
   for (const Adaptation& a : p.adapt) s << ' ' << a.jump << ' ' << a.tau_s;
-  s << ' ' << p.ra.saturation;
+  s << ' ' << p.ra.saturation << ' ' << p.sa1.saturation;
   return s.str();
 }
 
@@ -295,7 +315,7 @@ void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
   st[kPrevQ] = q;
   st[kHasPrev] = 1.0;
   st[kVariant] = VariantOf(p, cls, stream);
-  const double sd = p.noise.sd[static_cast<int>(cls)];
+  const double sd = NoiseSd(p, cls);
   if (sd > 0.0) st[kNoise] = sd * Normal(p.noise.seed, stream, 0);
 }
 
@@ -312,7 +332,7 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
 
   const double n0 = st[kNoise];
   double n1 = n0;
-  const double sd = p_.noise.sd[ci];
+  const double sd = NoiseSd(p_, cls);
   if (sd > 0.0) {  // exact Ornstein-Uhlenbeck update
     const double count = st[kCount] + 1.0;
     st[kCount] = count;
@@ -327,12 +347,12 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
   bool full_wave = false;
   double tau = 1.0, refractory = 1e-3;
   double x_start[4] = {0, 0, 0, 0};  // filter state at the step start
-  auto filter = [&](const Filter& f, double gain) {
+  auto filter = [&](const Filter& f, double gain, double vel) {
     double x[4], y0 = 0.0, y1 = 0.0;
     for (int i = 0; i < f.n; ++i) x_start[i] = st[kF0 + i];
     for (int i = 0; i < f.n; ++i) y0 += f.c[i] * st[kF0 + i];
     for (int i = 0; i < f.n; ++i) {
-      double acc = f.gamma[i] * v;
+      double acc = f.gamma[i] * vel;
       for (int j = 0; j < f.n; ++j) acc += f.phi[i * f.n + j] * st[kF0 + j];
       x[i] = acc;
     }
@@ -352,33 +372,36 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
       const SA1Params& s = p_.sa1;
       nodes = static_cast<int>(std::min<size_t>(s.merkel_cells.size(), kMaxNodes));
       const double scale = s.resistance_ohm / s.threshold_v;  // A -> threshold units
+      // saturated input (kFiltered), taken linear over the step like q
+      const double qs0 = SaturateSA1(s, q0), qs1 = SaturateSA1(s, q1);
+      const double vs = (qs1 - qs0) / dt;
       double r0, r1;  // the rate term at the step ends
       if (s.model == SA1Model::kWang2016) {
         r0 = r1 = std::abs(v);
         adapt.jump = 0.0;
       } else {
-        filter(sa1_, 1.0);
+        filter(sa1_, 1.0, vs);
         r0 = l0[0];
         r1 = l1[0];
       }
       const double g = var.gain;
       for (int k = 0; k < nodes; ++k) {
         const double m = s.merkel_cells[k] * g;
-        l0[k] = scale * (m * (s.k0_a_per_pa * q0 + s.k1_a_s_per_pa * r0) + s.i0_a);
-        l1[k] = scale * (m * (s.k0_a_per_pa * q1 + s.k1_a_s_per_pa * r1) + s.i0_a);
+        l0[k] = scale * (m * (s.k0_a_per_pa * qs0 + s.k1_a_s_per_pa * r0) + s.i0_a);
+        l1[k] = scale * (m * (s.k0_a_per_pa * qs1 + s.k1_a_s_per_pa * r1) + s.i0_a);
       }
       tau = s.resistance_ohm * s.capacitance_f * var.tau;
       refractory = s.refractory_s;
       break;
     }
     case ReceptorClass::kRA:
-      filter(ra_, p_.ra.gain_s_per_pa * var.gain);
+      filter(ra_, p_.ra.gain_s_per_pa * var.gain, v);
       full_wave = true;
       tau = p_.ra.tau_s * var.tau;
       refractory = p_.ra.refractory_s;
       break;
     case ReceptorClass::kPC:
-      filter(pc_, p_.pc.gain_s2_per_pa * var.gain);
+      filter(pc_, p_.pc.gain_s2_per_pa * var.gain, v);
       tau = p_.pc.tau_s * var.tau;
       refractory = p_.pc.refractory_s;
       break;
@@ -475,9 +498,21 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
 }
 
 bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
-  const int ci = static_cast<int>(cls);
-  if (p_.noise.sd[ci] > 0.0 || st[kRefractory] > 0.0 || st[kPrevQ] != 0.0 || st[kHasPrev] <= 0.0)
-    return false;
+  if (st[kRefractory] > 0.0 || st[kPrevQ] != 0.0 || st[kHasPrev] <= 0.0) return false;
+  const VariantScale& var = ReceptorVariant(cls, static_cast<int>(st[kVariant]));
+  // Noise: kIdleNoiseSds stationary membrane sds (OU of correlation tau_n
+  // through the membrane tau_m: sd sqrt(tau_n / (tau_n + tau_m))) are added
+  // to the drive bound; a receptor resting further below threshold fires
+  // from noise alone at < 3e-3 Hz, which the idle skip drops.
+  double noise_margin = 0.0;
+  const double sd = NoiseSd(p_, cls);
+  if (sd > 0.0) {
+    const double tau_m = var.tau * (cls == ReceptorClass::kSA1
+                                        ? p_.sa1.resistance_ohm * p_.sa1.capacitance_f
+                                        : cls == ReceptorClass::kRA ? p_.ra.tau_s : p_.pc.tau_s);
+    noise_margin = kIdleNoiseSds * sd *
+                   std::sqrt(p_.noise.tau_s / (p_.noise.tau_s + tau_m));
+  }
   // Filters of chained real poles: no state entry ever exceeds the sum of
   // the current ones (each propagator entry is (w t)^k / k! exp(-w t) <= 1),
   // so |y| <= sum |c| * n * max |x|.
@@ -489,7 +524,7 @@ bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
     }
     return csum * f.n * xmax;
   };
-  const double gain_scale = ReceptorVariant(cls, static_cast<int>(st[kVariant])).gain;
+  const double gain_scale = var.gain;
   if (cls == ReceptorClass::kSA1) {
     // A membrane below 1 under a drive bounded below 1 stays below 1; the
     // adaptation current only lowers the drive.
@@ -501,7 +536,7 @@ bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
     const double dyn = s.model == SA1Model::kFiltered
                            ? scale * mmax * s.k1_a_s_per_pa * filter_bound(sa1_) : 0.0;
     const double bias = scale * s.i0_a;  // drive at q = 0
-    if (!(bias + dyn < 1.0)) return false;
+    if (!(bias + dyn + noise_margin < 1.0)) return false;
     for (int k = 0; k < nodes; ++k)
       if (!(st[kU0 + k] < 1.0)) return false;
     return true;
@@ -511,7 +546,7 @@ bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
   const Filter& f = cls == ReceptorClass::kRA ? ra_ : pc_;
   const double gain = cls == ReceptorClass::kRA ? p_.ra.gain_s_per_pa : p_.pc.gain_s2_per_pa;
   const double bound = gain * gain_scale * filter_bound(f);
-  return bound < 1e-6 && st[kU0] < 1.0 - 1e-6;
+  return bound < 1e-6 && noise_margin < 1.0 - 2e-6 && st[kU0] < 1.0 - 1e-6;
 }
 
 int AdvanceReceptor(ReceptorClass cls, const ReceptorParams& p, double q_end, double dt,

@@ -40,7 +40,7 @@ double ReceptorQuantity(Quantity q, const double stress[6]);
 //    fades above the corner, so thresholds rise at high frequencies
 //    (Johansson et al. 1982; Freeman & Johnson 1982).
 //  - kWang2016: r = |dq/dt| unfiltered, no adaptation, no population
-//    variants: Wang 2016's model as published (their specimen study).
+//    variants, no noise: Wang 2016's model as published (their specimen study).
 enum class SA1Model { kFiltered = 0, kWang2016 = 1 };
 
 struct SA1Params {
@@ -54,6 +54,12 @@ struct SA1Params {
   double threshold_v = 30e-3;        // U_th
   double refractory_s = 1e-3;        // absolute refractory period
   double lowpass_hz = 30.0;          // kFiltered: corner of the rate term
+  // kFiltered: the stress is saturated before the heminodes, q_s = q / (1 +
+  // |q| / saturation) (units of q; 0: none), TouchSim's saturation form
+  // (Saal et al. 2017) on the input: the SA1 rate grows about linearly with
+  // indentation while the stress under a probe grows faster (the skin
+  // stiffens). Set by DefaultSA1Gains.
+  double saturation = 0.0;
 };
 
 // Wang et al. 2016, Table 1: the fitted (k0, k1, I0) of the model whose
@@ -62,11 +68,15 @@ struct SA1Params {
 // Units read as SI, as printed ("All values are SI units"); see README.
 void WangTable1Gains(Quantity q, SA1Params* p);
 // The defaults of p->model for quantity q: kWang2016 the Table 1 row;
-// kFiltered the same row with k0 x kSA1StaticScale and k1 = k0 x
-// kSA1RateTimeS (plugin/README.md, "Dynamic range and thresholds").
+// kFiltered the same row with k0 x kSA1StaticScale, k1 = k0 x
+// kSA1RateTimeS and the input saturation at kSA1SaturationOverRheobase x
+// the row's own rheobase quantity (plugin/README.md, "SA1").
 void DefaultSA1Gains(Quantity q, SA1Params* p);
-constexpr double kSA1StaticScale = 1.0;
+// Calibrated under a 1 mm flat pin (plugin/README.md, "SA1"): the static
+// threshold falls from 13.4 kPa (0.4 mm) to ~2 kPa (~0.06 mm of indentation).
+constexpr double kSA1StaticScale = 7.0;
 constexpr double kSA1RateTimeS = 0.05;
+constexpr double kSA1SaturationOverRheobase = 4.5;
 
 // RA (Meissner, FA1): the rate of change of q, low-passed by two equal real
 // poles at `lowpass_hz`, y = w^2 / (s + w)^2 dq/dt (Pa/s), full-wave
@@ -76,7 +86,7 @@ constexpr double kSA1RateTimeS = 0.05;
 // constant is in TouchSim's 3-9 ms range (Saal et al. 2017).
 struct RAParams {
   // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 100 Pa at 40 Hz.
-  double gain_s_per_pa = 1.30e-4;
+  double gain_s_per_pa = 6.22e-5;
   double lowpass_hz = 40.0;
   double tau_s = 5e-3;
   double refractory_s = 1e-3;
@@ -93,7 +103,7 @@ struct RAParams {
 // locked): tau dU/dt = -U + gain max(0, y) - w_adapt, threshold 1.
 struct PCParams {
   // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 0.5 Pa at 250 Hz.
-  double gain_s2_per_pa = 4.89e-6;
+  double gain_s2_per_pa = 4.12e-6;
   double highpass_hz = 150.0;
   double lowpass_hz = 250.0;
   double tau_s = 1.5e-3;
@@ -106,7 +116,9 @@ struct PCParams {
 // counter-based generator (seed, receptor, step count), so runs are
 // reproducible bit for bit per seed whatever the thread or copy.
 struct NoiseParams {
-  double sd[kNumClasses] = {0.0, 0.0, 0.0};
+  // TouchSim's membrane noise (plugin/README.md, "Noise"): the same
+  // stationary membrane sd (SA1: the same resting margin in sds).
+  double sd[kNumClasses] = {0.35, 0.35, 0.12};
   double tau_s = 2e-3;
   unsigned long long seed = 0;
 };
@@ -133,7 +145,7 @@ struct ReceptorParams {
   PCParams pc;
   NoiseParams noise;
   // Spike-triggered adaptation per class (membrane.h; README, "Dynamic range").
-  Adaptation adapt[kNumClasses] = {{0.1, 0.05}, {1.0, 0.03}, {1.0, 0.02}};
+  Adaptation adapt[kNumClasses] = {{3.5, 0.05}, {1.3, 0.03}, {1.0, 0.02}};
   bool varied = true;        // `population`: variants (true) or the median set only
   double rate_tau_s = 0.05;  // smoothed rate: exponential kernel, s
 };
@@ -141,6 +153,9 @@ struct ReceptorParams {
 // The variant (0 .. kNumVariants - 1) receptor `stream` uses: 0 without
 // variability and for the kWang2016 SA1.
 int VariantOf(const ReceptorParams& p, ReceptorClass cls, unsigned long long stream);
+
+// The noise sd of class cls: 0 for the kWang2016 SA1 (as published).
+double NoiseSd(const ReceptorParams& p, ReceptorClass cls);
 
 // Every parameter, printed at full precision (for model caches).
 std::string ReceptorParamsKey(const ReceptorParams& p);
@@ -161,11 +176,13 @@ class ReceptorStepper {
   int Advance(ReceptorClass cls, double q_end, unsigned long long stream, double* state,
               double* voltage) const;
   double dt() const { return dt_; }
-  // Whether the receptor, driven by q = 0 from now on and without noise, can
-  // never fire again: refractory over, previous q zero, the constant drive
-  // (SA1: the bias I0) below threshold, filter outputs bounded far below it.
-  // Its membranes then only relax, so its steps may be skipped and made up
-  // later in one exact step (pipeline/step.cc: idle receptors).
+  // Whether the receptor, driven by q = 0 from now on, can never fire again
+  // (with noise: fires from noise alone at < 3e-3 Hz, its drive bound 4.5
+  // membrane noise sds below threshold): refractory over, previous q zero,
+  // the constant drive (SA1: the bias I0) below threshold, filter outputs
+  // bounded far below it. Its membranes then only relax, so its steps may be
+  // skipped and made up later in one step (pipeline/step.cc: idle
+  // receptors; exact without noise, one exact OU transition with it).
   bool Quiescent(ReceptorClass cls, const double* state) const;
 
  private:
