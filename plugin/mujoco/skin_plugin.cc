@@ -372,6 +372,7 @@ void SkinPlugin::Reset(const mjModel* m, mjtNum* plugin_state, int instance) {
 
 void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
   StepInput& in = input_;
+  in.timestep_s = m->opt.timestep;
   in.surfaces.clear();
   in.contacts.clear();
   in.in_contact = false;

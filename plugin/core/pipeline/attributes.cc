@@ -169,7 +169,7 @@ const std::vector<AttributeRow>& Rows() {
       {"sa1_lowpass", K::kNumber, 0, 1e4, true, false, "Hz", "30",
        "SA1 (`filtered`): corner of the two-pole low-pass on the rate term", nullptr,
        FIELD(receptor.sa1.lowpass_hz), NO_PARSE, S::kModel},
-      {"sa1_saturation", K::kNumber, 0, 1e12, false, false, "units of q", "6.05e4",
+      {"sa1_saturation", K::kNumber, 0, 1e12, false, false, "units of q", "60508.9285714",
        "SA1 (`filtered`): input saturation q / (1 + abs(q) / s) (0: none); default 4.5 x the "
        "Wang 2016 row's rheobase (60.5 kPa for the stress quantities)", nullptr,
        FIELD(receptor.sa1.saturation), NO_PARSE, S::kModel},

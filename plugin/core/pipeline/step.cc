@@ -37,8 +37,8 @@ double QuantityAt(Quantity q, const Stress6& stress, const Material& m) {
 // evaluation. Leaves the quantities in ws->quantity and each receptor's
 // spike count and voltage in `state`; returns whether the skin touches and
 // adds the spikes fired to *fired.
-bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double* state,
-              Workspace* ws, int* fired) {
+bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double nominal_s,
+              double* state, Workspace* ws, int* fired) {
   const SkinConfig& cfg = model.config();
   const auto& sites = model.receptors();
   const int nrec = static_cast<int>(sites.size());
@@ -95,7 +95,10 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
       }
       state[kStReceptorsIdle] = 0.0;
     }
-    const ReceptorStepper& stepper = StepperFor(cfg.receptor, elapsed, ws);
+    // one step of the timestep (or substep) up to rounding: exactly it
+    const double step_s =
+        nominal_s > 0.0 && std::abs(elapsed - nominal_s) <= 1e-9 * nominal_s ? nominal_s : elapsed;
+    const ReceptorStepper& stepper = StepperFor(cfg.receptor, step_s, ws);
     bool quiescent = !touching && !cfg.outputs[kOutVoltage] && !cfg.outputs[kOutRate];
     for (int r = 0; r < nrec; ++r) {
       double* st = layout.receptor(state, r);
@@ -217,13 +220,14 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
         sub.shear_y_n = last[kLpShearY] + s * (in.shear_y_n - last[kLpShearY]);
         use = &sub;
       }
-      touching = Evaluate(model, *use, k < K ? t0 + s * elapsed : time_s, state, ws, &fired);
+      touching = Evaluate(model, *use, k < K ? t0 + s * elapsed : time_s, in.timestep_s / K,
+                          state, ws, &fired);
       // (an idle evaluation leaves zero counts: idle follows a silent step)
       for (int r = 0; r < nrec; ++r) ws->spike_sum[r] += last_spikes[r];
     }
     std::copy(ws->spike_sum.begin(), ws->spike_sum.end(), last_spikes);
   } else {
-    touching = Evaluate(model, in, time_s, state, ws, &fired);
+    touching = Evaluate(model, in, time_s, in.timestep_s / std::max(K, 1), state, ws, &fired);
   }
   if (K > 1) {
     std::copy(in.pad_pose.pos, in.pad_pose.pos + 3, last + kLpPos);

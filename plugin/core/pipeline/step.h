@@ -18,6 +18,10 @@ struct StepInput {
   double shear_x_n = 0, shear_y_n = 0;  // along pad x, y
   bool in_contact = false;
   std::vector<ContactPoint> contacts;  // MuJoCo's contacts on the pad (pad frame)
+  // The physics timestep (s; 0: unknown). Time advanced by one step differs
+  // from it by rounding (t accumulates dt); receptors then integrate over
+  // exactly this step, as receptor_run does, and keep one propagator.
+  double timestep_s = 0;
 };
 
 // Scratch owned per simulation (no state that outlives a step).
