@@ -232,7 +232,7 @@ def _print_human(o: dict) -> None:
                   "--texture random")
         elif near[key] is not None:
             print(f"{name}: nearest peak {near[key]:.2f} Hz "
-                  f"({100 * (near[key] / e[key] - 1):+.0f}%)")
+                  f"({round(100 * (near[key] / e[key] - 1)) + 0:+d}%)")
 
 
 def _view_parser(sub):
