@@ -498,7 +498,10 @@ def test_cpp_layered_checks(tmp_path):
                             "--parallel", str(os.cpu_count() or 2)],
                            capture_output=True, text=True, timeout=300)
     assert build.returncode == 0, build.stdout[-4000:] + build.stderr[-4000:]
-    run = subprocess.run([str(build_dir / "tests" / "cpp" / "test_layered")],
-                         capture_output=True, text=True, timeout=300)
-    assert run.returncode == 0, run.stdout[-4000:]
-    assert "PASS: 0 failure(s)" in run.stdout
+    # test_layered: the layered kernel; test_membrane: the afferents' exact
+    # LIF integrator (first spike = first threshold crossing)
+    for exe in ("test_layered", "test_membrane"):
+        run = subprocess.run([str(build_dir / "tests" / "cpp" / exe)],
+                             capture_output=True, text=True, timeout=300)
+        assert run.returncode == 0, exe + ":\n" + run.stdout[-4000:]
+        assert "PASS: 0 failure(s)" in run.stdout, exe
