@@ -63,10 +63,12 @@ def env_fingertip(nx: int = 48, pitch_m: float = 2e-4, radius_m: float = 4e-3,
                   outputs: str = "spikes force") -> scenes.Fingertip:
     """The environments' skin: 48 x 48 taxels at 0.2 mm (9.6 mm, the whole
     contact up to ~0.8 N), receptors within 4 mm of the pole; exact stress
-    (the folded sum is as cheap as the hierarchical path was: README "What
-    accuracy costs", RL preset)."""
+    and Winkler contact, as the RL preset (README "What accuracy costs":
+    the elastic contact costs ~10x in stages 1-2; pass a tip with
+    skin={"pressure": "elastic"} where fingerprint filtering matters)."""
     return scenes.Fingertip(nx=nx, pitch_m=pitch_m,
-                            skin={"radius": f"{radius_m:.9g}", "outputs": outputs})
+                            skin={"radius": f"{radius_m:.9g}", "outputs": outputs,
+                                  "pressure": "winkler"})
 
 
 def texture_explore_spec(classes=DEFAULT_CLASSES, tip: scenes.Fingertip | None = None,
