@@ -113,7 +113,7 @@ def accuracy(name: str, start, steps: int) -> dict:
 
 
 def timing(name: str, start, steps: int, rounds: int) -> dict:
-    # winkler (the default model) in the same rounds: a yardstick for the
+    # winkler (the fast model) in the same rounds: a yardstick for the
     # machine's load, against the quiet-machine figures
     runs = {(s, stage): make_run(name, start, steps,
                                  **({"pressure": "winkler"} if s == "winkler"
