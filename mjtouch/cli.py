@@ -159,6 +159,9 @@ def _slide_run(args, tip, texture, periodic, kind):
         "expected_hz": expected,
         "nearest_peak_hz": nearest,
         "ridge_line_expected": ridge_line_expected,
+        # the elastic contact set moves cell by cell: a stress line at V / pitch
+        # (README "What accuracy costs"; examples/pc_grid_line.py)
+        "grid_line_hz": args.speed / args.pitch if args.pressure == "elastic" else None,
         "power_at_expected": power_expected,
         "speed_m_s": args.speed,
         "period_m": periodic,
@@ -233,6 +236,9 @@ def _print_human(o: dict) -> None:
         elif near[key] is not None:
             print(f"{name}: nearest peak {near[key]:.2f} Hz "
                   f"({round(100 * (near[key] / e[key] - 1)) + 0:+d}%)")
+    if o.get("grid_line_hz"):
+        print(f"note: the elastic contact adds a grid line at V/pitch = {o['grid_line_hz']:.0f} Hz "
+              "to the stress; PC rates include it (README, \"What accuracy costs\")")
 
 
 def _view_parser(sub):

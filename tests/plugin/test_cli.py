@@ -31,6 +31,8 @@ def test_slide_json_keys_and_peak():
     assert o["ridge_line_expected"] is False
     assert abs(o["nearest_peak_hz"]["texture"] - 30.0) <= o["fft_bin_hz"]
     assert o["nearest_peak_hz"]["ridges"] in o["peaks_hz"]
+    # the default elastic contact's grid line at V / pitch is reported
+    assert o["pressure"] == "elastic" and o["grid_line_hz"] == pytest.approx(0.03 / 1.5e-4)
 
 
 def test_slide_json_reports_ridge_line_power_for_smooth_skin():
