@@ -97,6 +97,8 @@ PUBLISHED_THRESHOLDS = {
 # module's criteria; computed from hsaal/touchsim as above): RA 1.1-1.7x at
 # 5-20 Hz (median 1.2-1.3x), 3.4-6.3x at 40 Hz, 8-15x at 80 Hz; PC 5-11x at
 # 40-80 Hz and >= 13x at 150-400 Hz (some fits never entrain below 0.4 mm).
+# Those TouchSim ratios predate min_cycles (5 cycles at 5-10 Hz, 0.2 s above
+# 25 Hz) and were not recomputed; ours under both windows are in README.
 PUBLISHED_ENTRAINMENT_RATIO = dict(RA=(1.5, 10.0), PC=(1.5, 10.0),
                                    source="Saal et al. 2017; Muniak et al. 2007")
 # Rate-intensity under a ramp-and-hold with this pin (1 mm diameter, finger

@@ -1,6 +1,7 @@
 """mjtouch.tuning and the `probe` / `tuning` commands (issue 14): structure of
-the results, what must hold whatever the afferent model, and the monotonic
-SA1 rate-intensity of the built model."""
+the results, what must hold whatever the afferent model, the monotonic SA1
+rate-intensity of the built model, and RA's and PC's entrainment over absolute
+threshold on the protocol's own stress."""
 
 import contextlib
 import io
@@ -65,7 +66,7 @@ def test_tuning_json_structure(quick):
 
 
 def test_entrainment_needs_at_least_the_absolute_amplitude(quick):
-    # Entrainment (>= 1 locked spike per cycle, over >= 5 cycles)
+    # Entrainment (>= 1 locked spike per cycle, over >= min_cycles cycles)
     # implies the absolute criterion (>= 0.1 per cycle and >= 1, locked), so
     # whatever the model its threshold is not lower, up to the bisection's
     # final bracket ratio.
