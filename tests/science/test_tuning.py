@@ -95,6 +95,8 @@ def test_tuning_human_output_and_bad_config():
         tuning.run(tuning.TuningConfig(freqs_hz=(4000.0,)))
     with pytest.raises(ValueError, match=r"amp_range_m\[1\] = 0.001 is out of range"):
         tuning.TuningConfig(amp_range_m=(1e-8, 1e-3), preindent_m=0.5e-3).validate()
+    bad = run_cli("tuning", "--quick", "--min-cycles", "3")
+    assert bad.returncode == 2 and "min_cycles = 3 is out of range" in bad.stderr
 
 
 def test_probe_cli_json_and_errors():
