@@ -57,7 +57,7 @@ from typing import Sequence
 
 import numpy as np
 
-from mjtouch import analysis, scenes, stimuli
+from mjtouch import analysis, core, scenes, stimuli
 
 ABSOLUTE_SPIKES_PER_CYCLE = 0.1
 LOCK_P = 0.01  # Rayleigh test: phases locked to the sine
@@ -275,15 +275,68 @@ def rate_intensity(cfg: TuningConfig, scene: stimuli.ProbeScene) -> dict:
                 rates=out)
 
 
+def _vibration_scene(cfg: TuningConfig) -> stimuli.ProbeScene:
+    tip = scenes.Fingertip(nx=int(cfg.nx), pitch_m=cfg.pitch_m, ridges=False)
+    return stimuli.ProbeScene(stimuli.Probe("pin", radius_m=cfg.pin_radius_m), tip,
+                              preindent_m=cfg.preindent_m, settle_s=0.1,
+                              timestep_s=cfg.timestep_s)
+
+
+def pin_sine_stress(cfg: TuningConfig, freqs_hz: Sequence[float],
+                    amplitudes_m: Sequence[float] = (0.0, 10e-6), threads: int = 2) -> dict:
+    """Per frequency, the receptor stress of :func:`run`'s pin under sines of
+    ``amplitudes_m`` (the first 0), with the counting window, its cycles, the
+    centred units and dt: input of :func:`atonal_ratio`."""
+    scene = _vibration_scene(cfg)
+    out = {}
+    for f in freqs_hz:
+        steady = max(cfg.steady_s, cfg.min_cycles / f)
+        res = scene.run([stimuli.sine(a, f, duration_s=2 * cfg.ramp_s + steady, ramp_s=cfg.ramp_s)
+                         for a in amplitudes_m], threads=threads)
+        out[float(f)] = dict(stress=[r.stress for r in res], amplitudes_m=list(amplitudes_m),
+                             window=res[0].window("steady"), cycles=steady * f,
+                             units=res[0].centred_units(), dt_s=res[0].dt_s)
+    return out
+
+
+def atonal_ratio(run: dict, cls: str, seed: int = 0, scale_range=(1e-4, 20.0),
+                 iters: int = 14) -> float:
+    """Entrainment over absolute threshold of the centred ``cls`` unit of one
+    :func:`pin_sine_stress` entry, with this module's count criteria, by
+    bisection on s in q0 + s (q1 - q0) (the stress is linear in amplitude;
+    tests/science/test_tuning.py checks it) through core.receptor_run with
+    the plugin's default attributes, ``seed`` (noise path and population
+    variant) and the unit's stream. RA and PC are silent under the static
+    pre-indentation, so the phase-lock alternatives add nothing. inf: no 1:1
+    within ``scale_range``; nan: no response at all."""
+    u = run["units"][cls]
+    q0, q1 = run["stress"][0][:, u], run["stress"][1][:, u]
+    w, cycles, cfg = run["window"], run["cycles"], {"seed": str(int(seed))}
+    rest = core.receptor_run(cls, q0, run["dt_s"], cfg, stream=u)[0][w].sum()
+
+    def extra(s):  # stimulated minus unstimulated spikes in the window
+        return core.receptor_run(cls, q0 + s * (q1 - q0), run["dt_s"], cfg,
+                                 stream=u)[0][w].sum() - rest
+
+    def threshold(need):
+        lo, hi = scale_range
+        if extra(hi) < need:
+            return math.inf
+        for _ in range(iters):
+            mid = math.sqrt(lo * hi)
+            lo, hi = (lo, mid) if extra(mid) >= need else (mid, hi)
+        return hi
+
+    a = threshold(max(2.0, ABSOLUTE_SPIKES_PER_CYCLE * cycles))
+    return math.nan if math.isinf(a) else threshold(cycles) / a
+
+
 def run(cfg: TuningConfig | None = None) -> dict:
     """Both measurements on one probe scene; a JSON-ready dict."""
     cfg = cfg or TuningConfig()
     cfg.validate()
-    tip = scenes.Fingertip(nx=int(cfg.nx), pitch_m=cfg.pitch_m, ridges=False)
-    probe = stimuli.Probe("pin", radius_m=cfg.pin_radius_m)
-    vib = stimuli.ProbeScene(probe, tip, preindent_m=cfg.preindent_m, settle_s=0.1,
-                             timestep_s=cfg.timestep_s)
-    touch = stimuli.ProbeScene(probe, tip, preindent_m=0.0, settle_s=0.0,
+    vib = _vibration_scene(cfg)
+    touch = stimuli.ProbeScene(vib.probe, vib.tip, preindent_m=0.0, settle_s=0.0,
                                timestep_s=cfg.timestep_s)
     return dict(
         config={k: (list(v) if isinstance(v, (tuple, list)) else v)

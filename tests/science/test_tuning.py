@@ -12,7 +12,7 @@ import types
 import numpy as np
 import pytest
 
-from mjtouch import cli, core, tuning
+from mjtouch import cli, tuning
 
 
 def run_cli(*args):
@@ -139,8 +139,8 @@ def test_probe_cli_trace_file_and_plate(tmp_path):
 # under the static pre-indentation, so the phase-lock alternatives add
 # nothing). The stress is linear in the amplitude (checked below), so each
 # threshold follows by bisection on the scale of one run's stress change,
-# driving core.receptor_run as the plugin's receptor stage
-# (tests/science/test_afferents.py: it reproduces the plugin's spikes bit for
+# driving core.receptor_run as the plugin's receptor stage (tuning.atonal_ratio;
+# tests/science/test_afferents.py: it reproduces the plugin's spikes bit for
 # bit with the receptor's stream). With noise a unit's ratio is a random draw:
 # 12 seeds (each a noise path and a population variant), their median against
 # tuning.PUBLISHED_ENTRAINMENT_RATIO (1.5-10x; issue 14: > 1.5x) and each
@@ -154,47 +154,14 @@ ATONAL_SEEDS = range(12)
 
 @pytest.fixture(scope="module")
 def pin_sine_stress():
-    from mjtouch import scenes, stimuli
-    cfg = tuning.TuningConfig()
-    tip = scenes.Fingertip(nx=cfg.nx, pitch_m=cfg.pitch_m, ridges=False)
-    scene = stimuli.ProbeScene(stimuli.Probe("pin", radius_m=cfg.pin_radius_m), tip,
-                               preindent_m=cfg.preindent_m, settle_s=0.1,
-                               timestep_s=cfg.timestep_s)
-    out = {}
-    for f in sorted({f for _, f in ATONAL_CASES}):
-        steady = max(cfg.steady_s, cfg.min_cycles / f)
-        amps = (0.0, ATONAL_REF_M, 2 * ATONAL_REF_M) if f == 10.0 else (0.0, ATONAL_REF_M)
-        res = scene.run([stimuli.sine(a, f, duration_s=2 * cfg.ramp_s + steady, ramp_s=cfg.ramp_s)
-                         for a in amps], threads=2)
-        out[f] = dict(stress=[r.stress for r in res], window=res[0].window("steady"),
-                      cycles=steady * f, units=res[0].centred_units(), dt=res[0].dt_s)
-    return out
+    return tuning.pin_sine_stress(tuning.TuningConfig(), sorted({f for _, f in ATONAL_CASES}),
+                                  (0.0, ATONAL_REF_M, 2 * ATONAL_REF_M))
 
 
-def atonal_ratio(run, cls, seed):
-    u = run["units"][cls]
-    q0, q1 = run["stress"][0][:, u], run["stress"][1][:, u]
-    w, cycles = run["window"], run["cycles"]
-    cfg = {"seed": str(seed)}
-
-    def extra(scale):  # stimulated minus unstimulated spikes in the window
-        sp = [core.receptor_run(cls, q0 + s * (q1 - q0), run["dt"], cfg, stream=u)[0][w].sum()
-              for s in (scale, 0.0)]
-        return sp[0] - sp[1]
-
-    def threshold(need):
-        lo, hi = 1e-4, 20.0  # x ATONAL_REF_M
-        assert extra(hi) >= need, (cls, seed, need)
-        for _ in range(14):  # (2e5)^(2^-14): 0.08%
-            mid = math.sqrt(lo * hi)
-            lo, hi = (lo, mid) if extra(mid) >= need else (mid, hi)
-        return hi
-
-    return threshold(cycles) / threshold(max(2.0, tuning.ABSOLUTE_SPIKES_PER_CYCLE * cycles))
-
-
-def test_pin_stress_is_linear_in_amplitude(pin_sine_stress):
-    run = pin_sine_stress[10.0]
+@pytest.mark.parametrize("f", sorted({f for _, f in ATONAL_CASES}))
+def test_pin_stress_is_linear_in_amplitude(pin_sine_stress, f):
+    # tuning.atonal_ratio scales the first amplitude's stress change
+    run = pin_sine_stress[f]
     q0, q1, q2 = (s[:, [run["units"]["RA"], run["units"]["PC"]]] for s in run["stress"])
     d1, d2 = q1 - q0, q2 - q0
     assert np.abs(d2 - 2 * d1).max() <= 0.01 * np.abs(d2).max(), np.abs(d2 - 2 * d1).max()
@@ -202,7 +169,8 @@ def test_pin_stress_is_linear_in_amplitude(pin_sine_stress):
 
 @pytest.mark.parametrize("cls, f", ATONAL_CASES)
 def test_entrainment_over_1_5x_absolute_on_the_pin(pin_sine_stress, cls, f):
-    ratios = np.array([atonal_ratio(pin_sine_stress[f], cls, s) for s in ATONAL_SEEDS])
+    ratios = np.array([tuning.atonal_ratio(pin_sine_stress[f], cls, s) for s in ATONAL_SEEDS])
+    assert np.all(np.isfinite(ratios)), ratios
     lo, hi = tuning.PUBLISHED_ENTRAINMENT_RATIO[cls]
     assert lo < np.median(ratios) < hi, ratios
     assert ratios.min() > 1.2, ratios
