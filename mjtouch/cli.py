@@ -408,6 +408,8 @@ def _tuning_parser(sub):
                    help="a few seconds: 2 frequencies, coarse grid, small skin (for tests)")
     p.add_argument("--freqs", type=_positive_float("--freqs"), nargs="+", default=None,
                    help="vibration frequencies (Hz); default 5-600 Hz in 9 steps")
+    p.add_argument("--min-cycles", type=int, default=None,
+                   help="cycles counted at least per sine (default 20; --quick 5)")
     p.add_argument("--threads", type=int, default=2, help="rollout threads, default 2")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--out", metavar="FILE", help="also write the JSON to FILE")
@@ -420,6 +422,8 @@ def tuning_main(args) -> dict:
     cfg = tuning.TuningConfig.quick() if args.quick else tuning.TuningConfig()
     if args.freqs:
         cfg.freqs_hz = tuple(args.freqs)
+    if args.min_cycles is not None:
+        cfg.min_cycles = args.min_cycles
     cfg.threads = args.threads
     t0 = time.perf_counter()
     out = tuning.run(cfg)

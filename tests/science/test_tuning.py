@@ -1,6 +1,7 @@
 """mjtouch.tuning and the `probe` / `tuning` commands (issue 14): structure of
-the results, what must hold whatever the afferent model, and the monotonic
-SA1 rate-intensity of the built model."""
+the results, what must hold whatever the afferent model, the monotonic SA1
+rate-intensity of the built model, and RA's and PC's entrainment over absolute
+threshold on the protocol's own stress."""
 
 import contextlib
 import io
@@ -65,7 +66,7 @@ def test_tuning_json_structure(quick):
 
 
 def test_entrainment_needs_at_least_the_absolute_amplitude(quick):
-    # Entrainment (>= 1 locked spike per cycle, over >= 5 cycles)
+    # Entrainment (>= 1 locked spike per cycle, over >= min_cycles cycles)
     # implies the absolute criterion (>= 0.1 per cycle and >= 1, locked), so
     # whatever the model its threshold is not lower, up to the bisection's
     # final bracket ratio.
@@ -94,6 +95,8 @@ def test_tuning_human_output_and_bad_config():
         tuning.run(tuning.TuningConfig(freqs_hz=(4000.0,)))
     with pytest.raises(ValueError, match=r"amp_range_m\[1\] = 0.001 is out of range"):
         tuning.TuningConfig(amp_range_m=(1e-8, 1e-3), preindent_m=0.5e-3).validate()
+    bad = run_cli("tuning", "--quick", "--min-cycles", "3")
+    assert bad.returncode == 2 and "min_cycles = 3 is out of range" in bad.stderr
 
 
 def test_probe_cli_json_and_errors():
@@ -123,3 +126,51 @@ def test_probe_cli_trace_file_and_plate(tmp_path):
                   "--pitch", "3e-4")
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["force_steady_mean_n"] == pytest.approx(0.3, rel=0.03)
+
+
+# --- atonal interval on the protocol's own stress (issue 14) -------------------------------
+
+# Entrainment (1:1) over absolute threshold for RA and PC, one low and one best
+# frequency each, on the stress the full pipeline computes at the centred unit
+# under tuning.run's pin (1 mm flat pin, 0.5 mm pre-indentation, 48 x 48
+# taxels at 0.15 mm, dt 1e-4 s), counted over TuningConfig's minimum of 20
+# cycles after the ramp with the module's count criteria (absolute: >= max(2,
+# 0.1/cycle) extra spikes; 1:1: >= 1 extra per cycle; RA and PC are silent
+# under the static pre-indentation, so the phase-lock alternatives add
+# nothing). The stress is linear in the amplitude (checked below), so each
+# threshold follows by bisection on the scale of one run's stress change,
+# driving core.receptor_run as the plugin's receptor stage (tuning.atonal_ratio;
+# tests/science/test_afferents.py: it reproduces the plugin's spikes bit for
+# bit with the receptor's stream). With noise a unit's ratio is a random draw:
+# 12 seeds (each a noise path and a population variant), their median against
+# tuning.PUBLISHED_ENTRAINMENT_RATIO (1.5-10x; issue 14: > 1.5x) and each
+# above 1.2x, as the receptor-stage test does at 5-20 Hz. At 5 Hz the median
+# over 24 seeds is 1.65x with 17% of units below 1.5x (README), so 5 Hz is
+# not asserted here.
+ATONAL_CASES = (("RA", 10.0), ("RA", 40.0), ("PC", 40.0), ("PC", 250.0))
+ATONAL_REF_M = 10e-6  # the sine amplitude whose stress change is scaled
+ATONAL_SEEDS = range(12)
+
+
+@pytest.fixture(scope="module")
+def pin_sine_stress():
+    return tuning.pin_sine_stress(tuning.TuningConfig(), sorted({f for _, f in ATONAL_CASES}),
+                                  (0.0, ATONAL_REF_M, 2 * ATONAL_REF_M))
+
+
+@pytest.mark.parametrize("f", sorted({f for _, f in ATONAL_CASES}))
+def test_pin_stress_is_linear_in_amplitude(pin_sine_stress, f):
+    # tuning.atonal_ratio scales the first amplitude's stress change
+    run = pin_sine_stress[f]
+    q0, q1, q2 = (s[:, [run["units"]["RA"], run["units"]["PC"]]] for s in run["stress"])
+    d1, d2 = q1 - q0, q2 - q0
+    assert np.abs(d2 - 2 * d1).max() <= 0.01 * np.abs(d2).max(), np.abs(d2 - 2 * d1).max()
+
+
+@pytest.mark.parametrize("cls, f", ATONAL_CASES)
+def test_entrainment_over_1_5x_absolute_on_the_pin(pin_sine_stress, cls, f):
+    ratios = np.array([tuning.atonal_ratio(pin_sine_stress[f], cls, s) for s in ATONAL_SEEDS])
+    assert np.all(np.isfinite(ratios)), ratios
+    lo, hi = tuning.PUBLISHED_ENTRAINMENT_RATIO[cls]
+    assert lo < np.median(ratios) < hi, ratios
+    assert ratios.min() > 1.2, ratios
