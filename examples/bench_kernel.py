@@ -63,9 +63,10 @@ def default_contact(force_n: float):
 
 
 def scene_stage(name: str):
-    """(engine, pressure, slip ratio, description) of models/<name>.xml's
-    stress stage: its sites (cells as the plugin's Grid::Nearest), depths and
-    components, and the winkler contact after LEAD_IN_S of sliding."""
+    """(engine, pressure, slip ratio, description, the plugin's `stress`
+    block, which sites' quantity is szz) of models/<name>.xml's stress stage: its sites (cells as the
+    plugin's Grid::Nearest), depths and components, and the winkler contact
+    after LEAD_IN_S of sliding."""
     path = pathlib.Path(__file__).resolve().parents[1] / "models" / f"{name}.xml"
     spec = mujoco.MjSpec.from_file(str(path))
     for s in spec.sensors:  # the shipped models embed the config in <sensor><plugin>
@@ -94,7 +95,8 @@ def scene_stage(name: str):
     desc = (f"{name}: {f[0]:.3f} N normal, {int((p > 0).sum())} active cells of {n}x{n} at "
             f"{pitch * 1e3:.2g} mm; {len(ij)} receptors {counts}, quantities {lay.quantity}; "
             f"{macs / 1e6:.2f} M multiply-adds per step on the folded path")
-    return e, p, ratio, desc
+    szz = np.array([c is SZZ for c in comps])
+    return e, p, ratio, desc, lay.block(data.sensordata, "stress").copy(), szz
 
 
 def sites(n: int, pitch: float, count: int, radius: float = 5e-3):
@@ -203,7 +205,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
 
     if args.scene:
-        e, p, ratio, desc = scene_stage(args.scene)
+        e, p, ratio, desc, _, _ = scene_stage(args.scene)
         print(desc)
         print(f"stress stage, slip ratio ({ratio[0]:.3f}, {ratio[1]:.2g}), {args.rounds} "
               f"interleaved rounds of {max(1, args.repeats // 20)} calls:")

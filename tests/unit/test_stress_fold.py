@@ -156,3 +156,20 @@ def test_bench_stage_table_runs(sliding_contact, engine, capsys):
     for line in out.splitlines():
         if "rel. RMS vs reference" in line:
             assert float(line.rsplit(" ", 1)[1]) <= REL_RMS_TOL
+
+
+def test_bench_scene_stage_is_the_plugins():
+    # bench_kernel --scene times the stage on a shipped scene's own sites and
+    # contact: its engine must give the plugin's receptor quantity (szz
+    # classes: -s_zz) at that step, to the folded path's tolerance.
+    import importlib.util
+    import pathlib
+    path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_kernel.py"
+    spec = importlib.util.spec_from_file_location("bench_kernel", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    e, p, ratio, desc, plugin_q, szz = bench.scene_stage("slide_grating")
+    assert (p > 0).sum() > 1000 and "181 receptors" in desc
+    out = e.stress(p, slip=ratio, method="direct")
+    assert szz.sum() > 100
+    assert _rel_rms(-out[szz, 2], plugin_q[szz]) <= REL_RMS_TOL
