@@ -155,13 +155,16 @@ def calibrate(n, pitch, ij, p, qx, qy, repeats):
 
 
 def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
-    """The stress stage by three paths, interleaved (each round times each
+    """The stress stage by four paths, interleaved (each round times each
     path over `repeats` calls, in turn): the reference direct sum (three
     tables per component), the folded direct path (one effective table per
-    step, plugin/core/stress/stress_fold.h) on one thread, and folded on
-    `threads` threads. Prints min / median per call (CPU time on one thread,
-    wall time on several) and the ratios."""
-    paths = {"reference": dict(fold=False, threads=1), "folded": dict(fold=True, threads=1),
+    step, plugin/core/stress/stress_fold.h) on one thread, the same in its
+    memory layout before #13 (fold_legacy: unaligned table loads; the same
+    bits), and folded on `threads` threads. Prints min / median per call (CPU
+    time on one thread, wall time on several) and the ratios."""
+    paths = {"reference": dict(fold=False, threads=1),
+             "folded (legacy layout)": dict(fold=True, threads=1, fold_legacy=True),
+             "folded": dict(fold=True, threads=1),
              f"folded+{threads}threads": dict(fold=True, threads=threads)}
     times = {k: [] for k in paths}
     outs = {}
@@ -176,6 +179,8 @@ def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
                 t = (time.process_time() - c0) / repeats
             times[name].append(t)
     ref = outs["reference"]
+    if not np.array_equal(outs["folded (legacy layout)"], outs["folded"]):
+        raise RuntimeError("the folded path's two layouts differ (they must give the same bits)")
     for name, ts in times.items():
         d = outs[name] - ref
         rms = math.sqrt(float((d**2).sum() / (ref**2).sum()))
@@ -183,11 +188,13 @@ def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
               f"  | rel. RMS vs reference {rms:.1e}")
     r = {k: (min(times["reference"]) / min(v), np.median(times["reference"]) / np.median(v))
          for k, v in times.items()}
-    f1, ft = "folded", f"folded+{threads}threads"
+    f1, ft, fl = "folded", f"folded+{threads}threads", "folded (legacy layout)"
     print(f"  ratios (min / median): reference / folded {r[f1][0]:.2f} / {r[f1][1]:.2f}, "
           f"reference / {ft} {r[ft][0]:.2f} / {r[ft][1]:.2f}, folded / {ft} "
           f"{min(times[f1]) / min(times[ft]):.2f} / "
-          f"{np.median(times[f1]) / np.median(times[ft]):.2f}")
+          f"{np.median(times[f1]) / np.median(times[ft]):.2f}, legacy layout / folded "
+          f"{min(times[fl]) / min(times[f1]):.2f} / "
+          f"{np.median(times[fl]) / np.median(times[f1]):.2f}")
     return times
 
 

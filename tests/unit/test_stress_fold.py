@@ -113,6 +113,32 @@ def test_stress_bit_identical_for_any_thread_count(sliding_contact, engine, fold
                                             threads=threads), one)
 
 
+def test_aligned_sums_are_the_legacy_bits(sliding_contact, engine):
+    # The sums' aligned layout (table loads shifted onto 32-byte boundaries,
+    # lanes rotated back at each flush; stress_fold.cc SiteRows) must give
+    # the same bits as the layout before it (fold_legacy), for sites at every
+    # column mod 8 (every shift), contacts at the grid's edges (the padded
+    # cells are read), with and without shear, on any thread count.
+    tip, p, ratio = sliding_contact
+    n = engine.n
+    ij = [(i, j) for j in (20, 64, 100) for i in range(56, 72)]  # 16 columns: every shift
+    assert {i % 8 for i, _ in ij} == set(range(8))
+    comps = [range(6) if k % 3 else (2,) for k in range(len(ij))]  # 1 and 6 components
+    e = core.StressEngine(core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], ij,
+                          components=comps, method="direct")
+    edge = np.zeros((n, n), np.float32)
+    yy, xx = np.mgrid[0:n, 0:n]
+    edge[(xx - 2) ** 2 + (yy - n + 4) ** 2 < 50] = 3e3  # at column 0 and the last row
+    edge[(xx - n + 3) ** 2 + (yy - 5) ** 2 < 30] = 1e3  # at the last column
+    for eng in (engine, e):
+        for field, slip in ((p, ratio), (p, None), (edge, (0.3, -0.45))):
+            legacy = eng.stress(field, slip=slip, method="direct", fold_legacy=True)
+            assert np.abs(legacy).max() > 0
+            for threads in (1, 3):
+                got = eng.stress(field, slip=slip, method="direct", threads=threads)
+                assert np.array_equal(got, legacy)
+
+
 def test_fold_false_is_the_reference_sum(sliding_contact, engine):
     # fold=False with explicit shear fields is the same arithmetic as the
     # shear fields without slip information (the `contacts` model's path).
@@ -149,10 +175,10 @@ def test_bench_stage_table_runs(sliding_contact, engine, capsys):
     spec.loader.exec_module(bench)
     _, p, ratio = sliding_contact
     times = bench.folded_stage(engine, p, ratio, rounds=1, repeats=1, threads=2)
-    assert set(times) == {"reference", "folded", "folded+2threads"}
+    assert set(times) == {"reference", "folded (legacy layout)", "folded", "folded+2threads"}
     assert all(len(t) == 1 and t[0] > 0 for t in times.values())
     out = capsys.readouterr().out
-    assert "reference / folded" in out
+    assert "reference / folded" in out and "legacy layout / folded" in out
     for line in out.splitlines():
         if "rel. RMS vs reference" in line:
             assert float(line.rsplit(" ", 1)[1]) <= REL_RMS_TOL

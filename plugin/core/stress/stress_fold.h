@@ -8,7 +8,8 @@
 // the offsets (active cells - sites) that some site reads, and each band is
 // read at once by every site of the depth while it is in L1/L2; the pressure is
 // copied into rows of whole 8-cell chunks, so the inner loop has no tails; a
-// site's wanted components share each pressure load. Same result as the
+// site's wanted components share each pressure load, and its table loads are
+// 32-byte aligned (no cache-line splits; SiteRows in stress_fold.cc). Same result as the
 // reference path (StressAtReceptor) to float rounding
 // (tests/unit/test_stress_fold.py: rel. RMS <= 1e-5).
 //
@@ -65,6 +66,9 @@ struct FoldScratch {
   std::array<bool, kNumStress> key_components{};
   std::vector<StressSite> key_sites;
   double seconds = 0;  // the last call's fold + sums (diagnostics)
+  // The sums' memory layout before #13 (unaligned rows, no chunk shift; the
+  // same bits): for the benchmark's old / new ratio.
+  bool fold_legacy = false;
 };
 
 // Stress (Pa) at every site into out[site] (components a site does not want
