@@ -113,12 +113,14 @@ def test_stress_bit_identical_for_any_thread_count(sliding_contact, engine, fold
                                             threads=threads), one)
 
 
-def test_aligned_sums_are_the_legacy_bits(sliding_contact, engine):
+def test_aligned_sums_and_rx_cache_are_the_legacy_bits(sliding_contact, engine):
     # The sums' aligned layout (table loads shifted onto 32-byte boundaries,
-    # lanes rotated back at each flush; stress_fold.cc SiteRows) must give
-    # the same bits as the layout before it (fold_legacy), for sites at every
-    # column mod 8 (every shift), contacts at the grid's edges (the padded
-    # cells are read), with and without shear, on any thread count.
+    # lanes rotated back at each flush; stress_fold.cc SiteRows) and the fold
+    # from the cached Kp + rx Kx (from the second call with the same float rx
+    # on) must give the same bits as the path before them (fold_legacy), for
+    # sites at every column mod 8 (every shift), contacts at the grid's edges
+    # (the padded cells are read), with and without shear, on any thread
+    # count, while rx repeats and after it changes.
     tip, p, ratio = sliding_contact
     n = engine.n
     ij = [(i, j) for j in (20, 64, 100) for i in range(56, 72)]  # 16 columns: every shift
@@ -130,13 +132,19 @@ def test_aligned_sums_are_the_legacy_bits(sliding_contact, engine):
     yy, xx = np.mgrid[0:n, 0:n]
     edge[(xx - 2) ** 2 + (yy - n + 4) ** 2 < 50] = 3e3  # at column 0 and the last row
     edge[(xx - n + 3) ** 2 + (yy - 5) ** 2 < 30] = 1e3  # at the last column
+    rx_next = float(np.nextafter(np.float32(0.3), np.float32(1)))  # the next float rx
     for eng in (engine, e):
-        for field, slip in ((p, ratio), (p, None), (edge, (0.3, -0.45))):
+        for field, slip in ((p, ratio), (p, None), (edge, (0.3, -0.45)), (edge, (rx_next, 0.2)),
+                            (edge, (0.3, 0.2))):
             legacy = eng.stress(field, slip=slip, method="direct", fold_legacy=True)
             assert np.abs(legacy).max() > 0
-            for threads in (1, 3):
+            for threads in (1, 3, 1):  # the second call on reads the rx cache
                 got = eng.stress(field, slip=slip, method="direct", threads=threads)
                 assert np.array_equal(got, legacy)
+    # the cache is of rx, not of the result: a new ry with the same rx
+    a = e.stress(edge, slip=(0.3, 0.1), method="direct")
+    assert np.array_equal(a, e.stress(edge, slip=(0.3, 0.1), method="direct", fold_legacy=True))
+    assert not np.array_equal(a, e.stress(edge, slip=(0.3, 0.2), method="direct"))
 
 
 def test_fold_false_is_the_reference_sum(sliding_contact, engine):

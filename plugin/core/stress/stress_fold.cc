@@ -153,13 +153,36 @@ void FoldRowReversed(const float* kp, const float* kx, const float* ky, float rx
   }
 }
 
+// e[x] = sign (h[x] + ry ky[x]) with h = kp + rx kx precomputed (the same
+// float as FoldRow's inner sum, so the same bits), or from a mirrored source
+// read backwards (h[-x], ky[-x]): two table reads per cell instead of three.
+__attribute__((target_clones("avx2", "default")))
+void FoldRowH(const float* h, const float* ky, float ry, float sign, int len, float* e) {
+  if (sign > 0) {
+    for (int x = 0; x < len; ++x) e[x] = h[x] + ry * ky[x];
+  } else {
+    for (int x = 0; x < len; ++x) e[x] = -(h[x] + ry * ky[x]);
+  }
+}
+
+__attribute__((target_clones("avx2", "default")))
+void FoldRowHReversed(const float* h, const float* ky, float ry, float sign, int len,
+                      float* e) {
+  if (sign > 0) {
+    for (int x = 0; x < len; ++x) e[x] = h[-x] + ry * ky[-x];
+  } else {
+    for (int x = 0; x < len; ++x) e[x] = -(h[-x] + ry * ky[-x]);
+  }
+}
+
 // One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
 // the tables' rows at |dy| and columns |dx| only (KernelTables::
 // mirror_symmetric): the signs of the reflections folded into the ratios,
 // E = sp (Kp + (sp sx rx) Kx + (sp sy ry) Ky), exactly the value the full
 // tables give when they are mirror images.
+// h (or null): the FoldScratch::h quadrants of (d, comp) for +rx and -rx.
 void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy, int x0, int w,
-                     float rx, float ry, bool shear, float* e) {
+                     float rx, float ry, bool shear, const float* const* h, float* e) {
   const int n = kt.n, L = 2 * n - 1;
   const int ady = dy < 0 ? -dy : dy;
   if (ady > n - 1) {
@@ -189,6 +212,14 @@ void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy
       sy *= MirrorSign(1, kLoadShearY, comp);
     }
     const float a = sp * sx * rx, b = sp * sy * ry;
+    if (shear && h) {  // kp + a kx from the quadrant of a = +rx or -rx
+      const float* hrow = h[sp * sx < 0] + static_cast<size_t>(ady) * n;
+      if (side == 0)
+        FoldRowH(hrow + lo, Ky + lo, b, sp, hi - lo + 1, e + (lo - x0));
+      else
+        FoldRowHReversed(hrow - lo, Ky - lo, b, sp, hi - lo + 1, e + (lo - x0));
+      continue;
+    }
     if (side == 0) {
       FoldRow(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
     } else {
@@ -202,6 +233,53 @@ void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy
 float* AlignUp64(float* p) {
   const uintptr_t a = reinterpret_cast<uintptr_t>(p);
   return p + ((64 - a % 64) % 64) / sizeof(float);
+}
+
+// FoldScratch::h: kp + (+-rx) kx over each wanted (depth, component)'s
+// quadrant, built on the second consecutive call with the same tables and
+// float rx (a steady slide: MuJoCo's F_t / F_n at the friction cone rounds
+// to the same float step after step), dropped when rx changes. Only speed
+// depends on it: FoldRowH gives FoldRow's bits.
+void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
+  if (w->h_tables != &kt || w->h_components != kt.components || w->h_calls == 0 ||
+      std::memcmp(&w->h_rx, &rx, sizeof(rx)) != 0) {
+    w->h_tables = &kt;
+    w->h_components = kt.components;
+    w->h_rx = rx;
+    w->h_calls = 1;
+    w->h_valid = false;
+    return;
+  }
+  if (w->h_valid || ++w->h_calls < 2) return;
+  const int n = kt.n, L = 2 * n - 1;
+  const int D = static_cast<int>(kt.depths_m.size());
+  w->h_offset.assign(static_cast<size_t>(D) * kNumStress, -1);
+  size_t size = 0;
+  for (int d = 0; d < D; ++d)
+    for (int c = 0; c < kNumStress; ++c)
+      if (w->window[d].comps[c]) {
+        w->h_offset[d * kNumStress + c] = static_cast<long>(size);
+        size += 2 * static_cast<size_t>(n) * n;
+      }
+  w->h.resize(size);
+  for (int d = 0; d < D; ++d)
+    for (int c = 0; c < kNumStress; ++c) {
+      const long off = w->h_offset[d * kNumStress + c];
+      if (off < 0) continue;
+      const auto comp = static_cast<StressComponent>(c);
+      for (int v = 0; v < 2; ++v) {
+        const float a = v ? -rx : rx;
+        float* H = w->h.data() + off + static_cast<size_t>(v) * n * n;
+        for (int y = 0; y < n; ++y) {
+          const size_t row = static_cast<size_t>(y + n - 1) * L + (n - 1);
+          const float* Kp = kt.At(d, kLoadPressure, comp) + row;
+          const float* Kx = kt.At(d, kLoadShearX, comp) + row;
+          float* Hy = H + static_cast<size_t>(y) * n;
+          for (int x = 0; x < n; ++x) Hy[x] = Kp[x] + a * Kx[x];
+        }
+      }
+    }
+  w->h_valid = true;
 }
 
 int CountWanted(const std::array<bool, kNumStress>& w) {
@@ -320,6 +398,8 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       w->window.size() != static_cast<size_t>(D) || w->key_sites.size() != sites.size() ||
       !std::equal(sites.begin(), sites.end(), w->key_sites.begin(), same)) {
     SortSites(kt, sites, w);
+    w->h_calls = 0;  // the rx cache covers the old sites' components
+    w->h_valid = false;
     w->key_tables = &kt;
     w->key_components = kt.components;
     w->key_sites = sites;
@@ -351,6 +431,8 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
   if (w->rowbuf.size() < w->jobs.size()) w->rowbuf.resize(w->jobs.size());
   const float rx = static_cast<float>(slip_x), ry = static_cast<float>(slip_y);
   const auto t0 = std::chrono::steady_clock::now();
+  if (shear && !w->fold_legacy) UpdateRxCache(kt, rx, w);
+  const bool use_h = shear && !w->fold_legacy && w->h_valid;
   ThreadPool::Shared().Run(static_cast<int>(w->jobs.size()), threads, [&](int k) {
     const FoldScratch::Job job = w->jobs[k];
     FoldSite* fs = w->sites.data();
@@ -395,12 +477,18 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
         c1 = std::max(c1, col[q] + hi_max + margin);
       }
       if (c0 >= c1) continue;  // no site reads this band
-      for (int c = 0; c < kNumStress; ++c)
+      for (int c = 0; c < kNumStress; ++c) {
+        if (!comps[c]) continue;
+        const float* h[2] = {nullptr, nullptr};
+        if (use_h) {
+          h[0] = w->h.data() + w->h_offset[d * kNumStress + c];
+          h[1] = h[0] + static_cast<size_t>(n) * n;
+        }
         for (int t = T0; t < T1; ++t)
-          if (comps[c])
-            FoldMirroredRow(kt, d, static_cast<StressComponent>(c), t + win.y0, win.x0 + c0,
-                            c1 - c0, rx, ry, shear,
-                            ebuf[c] + static_cast<size_t>(t - T0) * ew + c0);
+          FoldMirroredRow(kt, d, static_cast<StressComponent>(c), t + win.y0, win.x0 + c0,
+                          c1 - c0, rx, ry, shear, use_h ? h : nullptr,
+                          ebuf[c] + static_cast<size_t>(t - T0) * ew + c0);
+      }
       SumBand(fs, first, last, ebuf, ew, T0, T1, P0, ps, lo, hi, rows, aligned);
     }
     for (int q = job.begin; q < job.end; ++q)

@@ -65,9 +65,20 @@ struct FoldScratch {
   const KernelTables* key_tables = nullptr;
   std::array<bool, kNumStress> key_components{};
   std::vector<StressSite> key_sites;
+  // Kp + (+-rx) Kx per wanted (depth, component) quadrant (n x n each, +rx
+  // then -rx; h_offset: start, -1 if none) while the float rx repeats
+  // (UpdateRxCache in stress_fold.cc): the fold then reads two tables, not
+  // three. A cache of the inputs only: the bits do not depend on it.
+  std::vector<float> h;
+  std::vector<long> h_offset;
+  const KernelTables* h_tables = nullptr;
+  std::array<bool, kNumStress> h_components{};
+  float h_rx = 0;
+  int h_calls = 0;
+  bool h_valid = false;
   double seconds = 0;  // the last call's fold + sums (diagnostics)
-  // The sums' memory layout before #13 (unaligned rows, no chunk shift; the
-  // same bits): for the benchmark's old / new ratio.
+  // The sums' memory layout before #13 (unaligned rows, no chunk shift) and
+  // no rx cache (the same bits): for the benchmark's old / new ratio.
   bool fold_legacy = false;
 };
 
