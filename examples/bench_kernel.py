@@ -64,9 +64,9 @@ def default_contact(force_n: float):
 
 def scene_stage(name: str):
     """(engine, pressure, slip ratio, description, the plugin's `stress`
-    block, which sites' quantity is szz) of models/<name>.xml's stress stage: its sites (cells as the
-    plugin's Grid::Nearest), depths and components, and the winkler contact
-    after LEAD_IN_S of sliding."""
+    block, which sites' quantity is szz) of models/<name>.xml's stress
+    stage: its sites (cells as the plugin's Grid::Nearest), depths and
+    components, and the winkler contact after LEAD_IN_S of sliding."""
     path = pathlib.Path(__file__).resolve().parents[1] / "models" / f"{name}.xml"
     spec = mujoco.MjSpec.from_file(str(path))
     for s in spec.sensors:  # the shipped models embed the config in <sensor><plugin>

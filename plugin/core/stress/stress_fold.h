@@ -9,9 +9,12 @@
 // read at once by every site of the depth while it is in L1/L2; the pressure is
 // copied into rows of whole 8-cell chunks, so the inner loop has no tails; a
 // site's wanted components share each pressure load, and its table loads are
-// 32-byte aligned (no cache-line splits; SiteRows in stress_fold.cc). Same result as the
+// 32-byte aligned (no cache-line splits; SiteRows in stress_fold.cc). While
+// the float r_x repeats (a steady slide), K_p + r_x K_x is kept from the last
+// call, so the fold reads two tables instead of three. Same result as the
 // reference path (StressAtReceptor) to float rounding
-// (tests/unit/test_stress_fold.py: rel. RMS <= 1e-5).
+// (tests/unit/test_stress_fold.py: rel. RMS <= 1e-5); the alignment and the
+// cache do not change a bit (same file: against fold_legacy).
 //
 // Threads: each depth's sites split into `threads` ranges, each range
 // folding the bands it reads; a site's sum is one fixed sequence of
