@@ -4,6 +4,7 @@ summation vs FFT convolution (a benchmark, not a test).
     python examples/bench_kernel.py            # default: n = 128, 0.5 N, 250 receptors
     python examples/bench_kernel.py --repeats 400 --receptors 250
     python examples/bench_kernel.py --stage-only --threads 2   # reference/folded/threads
+    python examples/bench_kernel.py --scene slide_grating      # a shipped scene's own stage
 
 It presses the default fingertip (scenes.Fingertip(): 128 x 128 taxels at
 0.1 mm, ridged skin) onto the default grating with 0.5 N, slides it for
@@ -20,18 +21,24 @@ estimates, whose constants (plugin/core/stress/stress_field.cc) are fitted here.
 First a table of the stress stage by path, interleaved: the reference direct
 sum, the folded direct path (one effective table per step; what the plugin's
 winkler and elastic models take) and folded on --threads threads, with ratios.
+--scene NAME (models/NAME.xml) times that table on the scene's own stage
+instead: its receptor sites, classes' components and depths, and the pressure
+and slip ratio of its winkler contact after LEAD_IN_S of sliding (the
+default scene's contact is about twice the cells of the 0.5 N press above).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import pathlib
 import time
 
 import mujoco
 import numpy as np
 
 from mjtouch import core, scenes
+from mjtouch.bench.configs import LEAD_IN_S
 from mjtouch.sensor import SkinLayout
 
 ALL = range(6)
@@ -53,6 +60,43 @@ def default_contact(force_n: float):
     f = layout.block(data.sensordata, "force")
     ratio = (f[1] / f[0], f[2] / f[0]) if f[0] > 0 else (0.0, 0.0)
     return tip, p, ratio, f
+
+
+def scene_stage(name: str):
+    """(engine, pressure, slip ratio, description, the plugin's `stress`
+    block, which sites' quantity is szz) of models/<name>.xml's stress
+    stage: its sites (cells as the plugin's Grid::Nearest), depths and
+    components, and the winkler contact after LEAD_IN_S of sliding."""
+    path = pathlib.Path(__file__).resolve().parents[1] / "models" / f"{name}.xml"
+    spec = mujoco.MjSpec.from_file(str(path))
+    for s in spec.sensors:  # the shipped models embed the config in <sensor><plugin>
+        if s.type == mujoco.mjtSensor.mjSENS_PLUGIN:
+            s.plugin.config = {**dict(s.plugin.config), "pressure": "winkler",
+                               "outputs": "force pressure stress"}
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    for row in scenes.controls(scenes.Protocol(), LEAD_IN_S):
+        data.ctrl[:] = row
+        mujoco.mj_step(model, data)
+    lay = SkinLayout.from_model(model)
+    n, pitch = lay.nx, lay.pitch_m
+    p = lay.block(data.sensordata, "pressure").reshape(n, n).astype(np.float32)
+    f = lay.block(data.sensordata, "force")
+    ratio = (f[1] / f[0], f[2] / f[0])
+    pos = lay.positions_m
+    ij = np.clip(np.floor(pos[:, :2] / pitch + 0.5 * (n - 1) + 0.5).astype(int), 0, n - 1)
+    depths = sorted(set(pos[:, 2]))
+    depth_index = np.array([depths.index(z) for z in pos[:, 2]])
+    comps = [SZZ if lay.quantity[str(c)] == "szz" else ALL for c in lay.classes]
+    e = core.StressEngine(core.LayeredSkin(), n, pitch, depths, ij, depth_index=depth_index,
+                          components=comps, method="direct")
+    counts = {c: int((lay.classes == c).sum()) for c in ("SA1", "RA", "PC")}
+    macs = sum(len(c) for c in comps) * int((p > 0).sum())
+    desc = (f"{name}: {f[0]:.3f} N normal, {int((p > 0).sum())} active cells of {n}x{n} at "
+            f"{pitch * 1e3:.2g} mm; {len(ij)} receptors {counts}, quantities {lay.quantity}; "
+            f"{macs / 1e6:.2f} M multiply-adds per step on the folded path")
+    szz = np.array([c is SZZ for c in comps])
+    return e, p, ratio, desc, lay.block(data.sensordata, "stress").copy(), szz
 
 
 def sites(n: int, pitch: float, count: int, radius: float = 5e-3):
@@ -111,13 +155,16 @@ def calibrate(n, pitch, ij, p, qx, qy, repeats):
 
 
 def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
-    """The stress stage by three paths, interleaved (each round times each
+    """The stress stage by four paths, interleaved (each round times each
     path over `repeats` calls, in turn): the reference direct sum (three
     tables per component), the folded direct path (one effective table per
-    step, plugin/core/stress/stress_fold.h) on one thread, and folded on
-    `threads` threads. Prints min / median per call (CPU time on one thread,
-    wall time on several) and the ratios."""
-    paths = {"reference": dict(fold=False, threads=1), "folded": dict(fold=True, threads=1),
+    step, plugin/core/stress/stress_fold.h) on one thread, the same in its
+    memory layout before #13 (fold_legacy: unaligned table loads; the same
+    bits), and folded on `threads` threads. Prints min / median per call (CPU
+    time on one thread, wall time on several) and the ratios."""
+    paths = {"reference": dict(fold=False, threads=1),
+             "folded (legacy layout)": dict(fold=True, threads=1, fold_legacy=True),
+             "folded": dict(fold=True, threads=1),
              f"folded+{threads}threads": dict(fold=True, threads=threads)}
     times = {k: [] for k in paths}
     outs = {}
@@ -132,6 +179,8 @@ def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
                 t = (time.process_time() - c0) / repeats
             times[name].append(t)
     ref = outs["reference"]
+    if not np.array_equal(outs["folded (legacy layout)"], outs["folded"]):
+        raise RuntimeError("the folded path's two layouts differ (they must give the same bits)")
     for name, ts in times.items():
         d = outs[name] - ref
         rms = math.sqrt(float((d**2).sum() / (ref**2).sum()))
@@ -139,11 +188,13 @@ def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
               f"  | rel. RMS vs reference {rms:.1e}")
     r = {k: (min(times["reference"]) / min(v), np.median(times["reference"]) / np.median(v))
          for k, v in times.items()}
-    f1, ft = "folded", f"folded+{threads}threads"
+    f1, ft, fl = "folded", f"folded+{threads}threads", "folded (legacy layout)"
     print(f"  ratios (min / median): reference / folded {r[f1][0]:.2f} / {r[f1][1]:.2f}, "
           f"reference / {ft} {r[ft][0]:.2f} / {r[ft][1]:.2f}, folded / {ft} "
           f"{min(times[f1]) / min(times[ft]):.2f} / "
-          f"{np.median(times[f1]) / np.median(times[ft]):.2f}")
+          f"{np.median(times[f1]) / np.median(times[ft]):.2f}, legacy layout / folded "
+          f"{min(times[fl]) / min(times[f1]):.2f} / "
+          f"{np.median(times[fl]) / np.median(times[f1]):.2f}")
     return times
 
 
@@ -157,7 +208,16 @@ def main(argv=None):
                     help="only the stress stage by path: reference / folded / folded+threads")
     ap.add_argument("--threads", type=int, default=2, help="threads for folded+threads")
     ap.add_argument("--rounds", type=int, default=15, help="interleaved rounds (stage table)")
+    ap.add_argument("--scene", help="only the stage table, on models/SCENE.xml's own stage")
     args = ap.parse_args(argv)
+
+    if args.scene:
+        e, p, ratio, desc, _, _ = scene_stage(args.scene)
+        print(desc)
+        print(f"stress stage, slip ratio ({ratio[0]:.3f}, {ratio[1]:.2g}), {args.rounds} "
+              f"interleaved rounds of {max(1, args.repeats // 20)} calls:")
+        folded_stage(e, p, ratio, args.rounds, max(1, args.repeats // 20), args.threads)
+        return
 
     tip, p, ratio, f = default_contact(args.force)
     n, pitch = tip.nx, tip.pitch_m

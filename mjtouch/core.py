@@ -343,13 +343,15 @@ class StressEngine:
 
     def stress(self, pressure_pa, shear_x_pa=None, shear_y_pa=None, method: str = "auto",
                repeats: int = 1, timing: bool = False, slip=None, fold: bool = True,
-               threads: int = 1):
+               threads: int = 1, fold_legacy: bool = False):
         """Stress (nrec x 6, Pa). With timing=True also returns (seconds per
         call, method used, active cells). slip = (rx, ry): the shear is
         (rx, ry) x pressure (full slip, as the plugin's winkler and elastic
         models), so the direct path folds its tables (shear fields default to
         float32(r x pressure)); fold=False: the reference direct sum.
-        threads: the stage's thread count (the same bits for any count)."""
+        threads: the stage's thread count (the same bits for any count).
+        fold_legacy: the folded path's memory layout before #13 (unaligned
+        table loads; the same bits), for benchmarks."""
         p = np.ascontiguousarray(pressure_pa, dtype=np.float32)
         if p.shape != (self.n, self.n):
             raise ValueError(f"pressure_pa must have shape ({self.n}, {self.n}), got {p.shape}")
@@ -361,7 +363,8 @@ class StressEngine:
                 shear_y_pa = (ry * p.astype(np.float64)).astype(np.float32)
         sx, sy = _shear_pair(p, shear_x_pa, shear_y_pa)
         out, seconds, used, active = self._e.stress(p, sx, sy, method, int(repeats), slip,
-                                                    bool(fold), int(threads))
+                                                    bool(fold), int(threads),
+                                                    bool(fold_legacy))
         return (out, seconds, used, active) if timing else out
 
 

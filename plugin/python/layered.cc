@@ -224,7 +224,8 @@ class StressEngine {
                                                           const std::string& method,
                                                           int repeats,
                                                           std::optional<std::pair<double, double>> slip,
-                                                          bool fold, int threads) {
+                                                          bool fold, int threads,
+                                                          bool fold_legacy) {
     const StressMethod m = ParseMethod(method);
     if (threads < 1 || threads > ThreadPool::kMaxThreads)
       Fail("threads = " + std::to_string(threads) + " is out of range; valid range [1, " +
@@ -232,6 +233,7 @@ class StressEngine {
     StressOptions opt;
     opt.fold = fold;
     opt.threads = threads;
+    opt.fold_legacy = fold_legacy;
     if (slip) {
       opt.uniform_slip = true;
       opt.slip_x = slip->first;
@@ -360,10 +362,12 @@ void BindLayered(nb::module_& m) {
            nb::arg("shear_x_pa").noconvert().none() = nb::none(), nb::arg("shear_y_pa").noconvert().none() = nb::none(),
            nb::arg("method") = "auto", nb::arg("repeats") = 1,
            nb::arg("slip").none() = nb::none(), nb::arg("fold") = true, nb::arg("threads") = 1,
+           nb::arg("fold_legacy") = false,
            "(stress nrec x 6 Pa, seconds per call, path used, active cells) from float32\n"
            "traction fields (n x n, [j, i]); shear both or neither. slip = (rx, ry): the\n"
            "shear is (rx, ry) x pressure, so the direct path folds its tables; fold=False:\n"
-           "the reference direct sum. threads in [1, 64]: the same bits for any count.");
+           "the reference direct sum. threads in [1, 64]: the same bits for any count.\n"
+           "fold_legacy: the folded path's layout before #13 (same bits; benchmarks).");
 }
 
 }  // namespace mjtouch::py

@@ -113,6 +113,40 @@ def test_stress_bit_identical_for_any_thread_count(sliding_contact, engine, fold
                                             threads=threads), one)
 
 
+def test_aligned_sums_and_rx_cache_are_the_legacy_bits(sliding_contact, engine):
+    # The sums' aligned layout (table loads shifted onto 32-byte boundaries,
+    # lanes rotated back at each flush; stress_fold.cc SiteRows) and the fold
+    # from the cached Kp + rx Kx (from the second call with the same float rx
+    # on) must give the same bits as the path before them (fold_legacy), for
+    # sites at every column mod 8 (every shift), contacts at the grid's edges
+    # (the padded cells are read), with and without shear, on any thread
+    # count, while rx repeats and after it changes.
+    tip, p, ratio = sliding_contact
+    n = engine.n
+    ij = [(i, j) for j in (20, 64, 100) for i in range(56, 72)]  # 16 columns: every shift
+    assert {i % 8 for i, _ in ij} == set(range(8))
+    comps = [range(6) if k % 3 else (2,) for k in range(len(ij))]  # 1 and 6 components
+    e = core.StressEngine(core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], ij,
+                          components=comps, method="direct")
+    edge = np.zeros((n, n), np.float32)
+    yy, xx = np.mgrid[0:n, 0:n]
+    edge[(xx - 2) ** 2 + (yy - n + 4) ** 2 < 50] = 3e3  # at column 0 and the last row
+    edge[(xx - n + 3) ** 2 + (yy - 5) ** 2 < 30] = 1e3  # at the last column
+    rx_next = float(np.nextafter(np.float32(0.3), np.float32(1)))  # the next float rx
+    for eng in (engine, e):
+        for field, slip in ((p, ratio), (p, None), (edge, (0.3, -0.45)), (edge, (rx_next, 0.2)),
+                            (edge, (0.3, 0.2))):
+            legacy = eng.stress(field, slip=slip, method="direct", fold_legacy=True)
+            assert np.abs(legacy).max() > 0
+            for threads in (1, 3, 1):  # the second call on reads the rx cache
+                got = eng.stress(field, slip=slip, method="direct", threads=threads)
+                assert np.array_equal(got, legacy)
+    # the cache is of rx, not of the result: a new ry with the same rx
+    a = e.stress(edge, slip=(0.3, 0.1), method="direct")
+    assert np.array_equal(a, e.stress(edge, slip=(0.3, 0.1), method="direct", fold_legacy=True))
+    assert not np.array_equal(a, e.stress(edge, slip=(0.3, 0.2), method="direct"))
+
+
 def test_fold_false_is_the_reference_sum(sliding_contact, engine):
     # fold=False with explicit shear fields is the same arithmetic as the
     # shear fields without slip information (the `contacts` model's path).
@@ -149,10 +183,27 @@ def test_bench_stage_table_runs(sliding_contact, engine, capsys):
     spec.loader.exec_module(bench)
     _, p, ratio = sliding_contact
     times = bench.folded_stage(engine, p, ratio, rounds=1, repeats=1, threads=2)
-    assert set(times) == {"reference", "folded", "folded+2threads"}
+    assert set(times) == {"reference", "folded (legacy layout)", "folded", "folded+2threads"}
     assert all(len(t) == 1 and t[0] > 0 for t in times.values())
     out = capsys.readouterr().out
-    assert "reference / folded" in out
+    assert "reference / folded" in out and "legacy layout / folded" in out
     for line in out.splitlines():
         if "rel. RMS vs reference" in line:
             assert float(line.rsplit(" ", 1)[1]) <= REL_RMS_TOL
+
+
+def test_bench_scene_stage_is_the_plugins():
+    # bench_kernel --scene times the stage on a shipped scene's own sites and
+    # contact: its engine must give the plugin's receptor quantity (szz
+    # classes: -s_zz) at that step, to the folded path's tolerance.
+    import importlib.util
+    import pathlib
+    path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_kernel.py"
+    spec = importlib.util.spec_from_file_location("bench_kernel", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    e, p, ratio, desc, plugin_q, szz = bench.scene_stage("slide_grating")
+    assert (p > 0).sum() > 1000 and "181 receptors" in desc
+    out = e.stress(p, slip=ratio, method="direct")
+    assert szz.sum() > 100
+    assert _rel_rms(-out[szz, 2], plugin_q[szz]) <= REL_RMS_TOL

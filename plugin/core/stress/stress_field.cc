@@ -288,6 +288,7 @@ StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectr
                 shear ? shear_y : nullptr, scratch, out);
     return method;
   }
+  scratch->fold.fold_legacy = opt.fold_legacy;
   if (folded)
     FoldedDirectStresses(kt, sites, runs, pressure, shear, opt.slip_x, opt.slip_y, opt.threads,
                          &scratch->fold, out);

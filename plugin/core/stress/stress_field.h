@@ -75,12 +75,14 @@ struct StressScratch {
 // (slip_x, slip_y) x pressure (UniformSlipShear), so the folded path
 // applies; without shear it always does. fold = false: the reference direct
 // sum (StressAtReceptor). threads: ThreadPool callers for the direct paths
-// (any count gives the same bits).
+// (any count gives the same bits). fold_legacy: the folded path's memory
+// layout before #13 (FoldScratch::fold_legacy; same bits, for benchmarks).
 struct StressOptions {
   bool uniform_slip = false;
   double slip_x = 0, slip_y = 0;
   bool fold = true;
   int threads = 1;
+  bool fold_legacy = false;
 };
 // Whether the direct path is the folded one for these tables, fields and
 // options (tables that are not mirror images take the reference sum).

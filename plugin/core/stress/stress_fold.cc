@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <cstdint>
 #include <cstring>
 
 #include "common/thread_pool.h"
@@ -31,6 +32,7 @@ constexpr double kFoldSecondsPerCell = 0.22e-9;
 
 typedef FoldSite::Lanes8 v8f;
 typedef float v4f __attribute__((vector_size(16)));
+typedef int v8i __attribute__((vector_size(32)));
 typedef FoldSite::Lanes4 v4d;
 
 inline __attribute__((always_inline)) v8f Load(const float* p) {
@@ -54,11 +56,19 @@ inline __attribute__((always_inline)) void Flush(v8f a, v4d* d) {
 // registers across the rows and widened into the site's double sums at the
 // end of each band of kRowsPerFlush pressure rows. The order of every
 // operation is fixed by the inputs.
+// aligned (U == 1 only): each row's chunks start `shift` cells before the
+// pressure chunks, where the table row is 32-byte aligned, so the NC table
+// loads per chunk do not split cache lines (the one pressure load may); the
+// cells added before lo / from hi on are zeros of the padded pressure row
+// (an exact no-op: a lane that starts at +0 never holds -0), so lane l holds
+// the pressure lane (l - shift) mod 8's products in the same order, and the
+// lanes are rotated back before each flush: the same bits as shift 0.
 template <int NC, int U>
 inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* const* ebuf,
                                                     int ew, int T0, const float* P, int pw,
                                                     const int* lo, const int* hi, int r0, int r1,
-                                                    int rows) {
+                                                    int rows, bool aligned) {
+  const int shift = U == 1 && aligned ? s.col & (kLanes - 1) : 0;
   v8f acc[U * NC];
   for (int k = 0; k < U * NC; ++k) acc[k] = s.acc[k];
   for (int r = r0; r < r1; ++r) {
@@ -67,7 +77,7 @@ inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* co
     const size_t e0 = static_cast<size_t>(s.off + r - T0) * ew + s.col;
     for (int c = 0; c < NC; ++c) erow[c] = ebuf[s.comp[c]] + e0;
     const int x1 = hi[r];
-    int x = lo[r];
+    int x = lo[r] - shift;
     for (; x + U * kLanes <= x1; x += U * kLanes)
       for (int u = 0; u < U; ++u) {
         const v8f p = Load(prow + x + u * kLanes);
@@ -81,6 +91,10 @@ inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* co
       for (int c = 0; c < NC; ++c) {
         v8f sum = acc[c];
         for (int u = 1; u < U; ++u) sum += acc[u * NC + c];
+        if (U == 1) {  // lane l = pressure lane (l - shift) mod 8
+          const v8i back = (v8i{0, 1, 2, 3, 4, 5, 6, 7} + shift) & (kLanes - 1);
+          sum = __builtin_shuffle(sum, back);
+        }
         Flush(sum, s.d + 2 * c);
       }
       for (int k = 0; k < U * NC; ++k) acc[k] = v8f{0, 0, 0, 0, 0, 0, 0, 0};
@@ -96,18 +110,19 @@ inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* co
 // kRowsPerFlush pressure rows (as the one-site-at-a-time sum).
 __attribute__((target_clones("avx2", "default")))
 void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
-             int T1, const float* P, int pw, const int* lo, const int* hi, int rows) {
+             int T1, const float* P, int pw, const int* lo, const int* hi, int rows,
+             bool aligned) {
   for (int q = first; q < last; ++q) {
     FoldSite& s = sites[q];
     const int r0 = std::max(0, T0 - s.off), r1 = std::min(rows, T1 - s.off);
     if (r0 >= r1) continue;
     switch (s.nc) {
-      case 1: SiteRows<1, 4>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
-      case 2: SiteRows<2, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
-      case 3: SiteRows<3, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
-      case 4: SiteRows<4, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
-      case 5: SiteRows<5, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
-      default: SiteRows<6, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows); break;
+      case 1: SiteRows<1, 4>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 2: SiteRows<2, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 3: SiteRows<3, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 4: SiteRows<4, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 5: SiteRows<5, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      default: SiteRows<6, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
     }
   }
 }
@@ -138,13 +153,36 @@ void FoldRowReversed(const float* kp, const float* kx, const float* ky, float rx
   }
 }
 
+// e[x] = sign (h[x] + ry ky[x]) with h = kp + rx kx precomputed (the same
+// float as FoldRow's inner sum, so the same bits), or from a mirrored source
+// read backwards (h[-x], ky[-x]): two table reads per cell instead of three.
+__attribute__((target_clones("avx2", "default")))
+void FoldRowH(const float* h, const float* ky, float ry, float sign, int len, float* e) {
+  if (sign > 0) {
+    for (int x = 0; x < len; ++x) e[x] = h[x] + ry * ky[x];
+  } else {
+    for (int x = 0; x < len; ++x) e[x] = -(h[x] + ry * ky[x]);
+  }
+}
+
+__attribute__((target_clones("avx2", "default")))
+void FoldRowHReversed(const float* h, const float* ky, float ry, float sign, int len,
+                      float* e) {
+  if (sign > 0) {
+    for (int x = 0; x < len; ++x) e[x] = h[-x] + ry * ky[-x];
+  } else {
+    for (int x = 0; x < len; ++x) e[x] = -(h[-x] + ry * ky[-x]);
+  }
+}
+
 // One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
 // the tables' rows at |dy| and columns |dx| only (KernelTables::
 // mirror_symmetric): the signs of the reflections folded into the ratios,
 // E = sp (Kp + (sp sx rx) Kx + (sp sy ry) Ky), exactly the value the full
 // tables give when they are mirror images.
+// h (or null): the FoldScratch::h quadrants of (d, comp) for +rx and -rx.
 void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy, int x0, int w,
-                     float rx, float ry, bool shear, float* e) {
+                     float rx, float ry, bool shear, const float* const* h, float* e) {
   const int n = kt.n, L = 2 * n - 1;
   const int ady = dy < 0 ? -dy : dy;
   if (ady > n - 1) {
@@ -174,6 +212,14 @@ void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy
       sy *= MirrorSign(1, kLoadShearY, comp);
     }
     const float a = sp * sx * rx, b = sp * sy * ry;
+    if (shear && h) {  // kp + a kx from the quadrant of a = +rx or -rx
+      const float* hrow = h[sp * sx < 0] + static_cast<size_t>(ady) * n;
+      if (side == 0)
+        FoldRowH(hrow + lo, Ky + lo, b, sp, hi - lo + 1, e + (lo - x0));
+      else
+        FoldRowHReversed(hrow - lo, Ky - lo, b, sp, hi - lo + 1, e + (lo - x0));
+      continue;
+    }
     if (side == 0) {
       FoldRow(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
     } else {
@@ -181,6 +227,59 @@ void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy
       FoldRowReversed(Kp - lo, Kx - lo, Ky - lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
     }
   }
+}
+
+// The first 64-byte aligned float at or after p (buffers allocate 16 more).
+float* AlignUp64(float* p) {
+  const uintptr_t a = reinterpret_cast<uintptr_t>(p);
+  return p + ((64 - a % 64) % 64) / sizeof(float);
+}
+
+// FoldScratch::h: kp + (+-rx) kx over each wanted (depth, component)'s
+// quadrant, built on the second consecutive call with the same tables and
+// float rx (a steady slide: MuJoCo's F_t / F_n at the friction cone rounds
+// to the same float step after step), dropped when rx changes. Only speed
+// depends on it: FoldRowH gives FoldRow's bits.
+void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
+  if (w->h_tables != &kt || w->h_components != kt.components || w->h_calls == 0 ||
+      std::memcmp(&w->h_rx, &rx, sizeof(rx)) != 0) {
+    w->h_tables = &kt;
+    w->h_components = kt.components;
+    w->h_rx = rx;
+    w->h_calls = 1;
+    w->h_valid = false;
+    return;
+  }
+  if (w->h_valid || ++w->h_calls < 2) return;
+  const int n = kt.n, L = 2 * n - 1;
+  const int D = static_cast<int>(kt.depths_m.size());
+  w->h_offset.assign(static_cast<size_t>(D) * kNumStress, -1);
+  size_t size = 0;
+  for (int d = 0; d < D; ++d)
+    for (int c = 0; c < kNumStress; ++c)
+      if (w->window[d].comps[c]) {
+        w->h_offset[d * kNumStress + c] = static_cast<long>(size);
+        size += 2 * static_cast<size_t>(n) * n;
+      }
+  w->h.resize(size);
+  for (int d = 0; d < D; ++d)
+    for (int c = 0; c < kNumStress; ++c) {
+      const long off = w->h_offset[d * kNumStress + c];
+      if (off < 0) continue;
+      const auto comp = static_cast<StressComponent>(c);
+      for (int v = 0; v < 2; ++v) {
+        const float a = v ? -rx : rx;
+        float* H = w->h.data() + off + static_cast<size_t>(v) * n * n;
+        for (int y = 0; y < n; ++y) {
+          const size_t row = static_cast<size_t>(y + n - 1) * L + (n - 1);
+          const float* Kp = kt.At(d, kLoadPressure, comp) + row;
+          const float* Kx = kt.At(d, kLoadShearX, comp) + row;
+          float* Hy = H + static_cast<size_t>(y) * n;
+          for (int x = 0; x < n; ++x) Hy[x] = Kp[x] + a * Kx[x];
+        }
+      }
+    }
+  w->h_valid = true;
 }
 
 int CountWanted(const std::array<bool, kNumStress>& w) {
@@ -273,7 +372,12 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
   }
   const int rows = j1 - j0 + 1;
   const int pw = (i1 - i0 + kLanes) / kLanes * kLanes;
-  w->pressure.assign(static_cast<size_t>(rows) * pw, 0.0f);
+  // Rows of ps cells, 64-byte aligned, with kLanes zero cells on each side
+  // that the aligned sums read (SiteRows); the legacy layout: rows of pw.
+  const bool aligned = !w->fold_legacy;
+  const int ps = aligned ? pw + 2 * kLanes : pw;
+  w->pressure.assign(static_cast<size_t>(rows) * ps + (aligned ? 16 : 0), 0.0f);
+  float* const P0 = aligned ? AlignUp64(w->pressure.data()) + kLanes : w->pressure.data();
   w->row_lo.assign(rows, pw);
   w->row_hi.assign(rows, 0);
   for (size_t r = 0; r < runs.row.size(); ++r) {
@@ -281,7 +385,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     const int b = runs.begin[r] - i0, e = runs.end[r] - i0;
     std::copy(pressure + static_cast<size_t>(runs.row[r]) * n + runs.begin[r],
               pressure + static_cast<size_t>(runs.row[r]) * n + runs.end[r],
-              w->pressure.begin() + static_cast<size_t>(y) * pw + b);
+              P0 + static_cast<size_t>(y) * ps + b);
     w->row_lo[y] = std::min(w->row_lo[y], b / kLanes * kLanes);
     w->row_hi[y] = std::max(w->row_hi[y], (e + kLanes - 1) / kLanes * kLanes);
   }
@@ -294,6 +398,8 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       w->window.size() != static_cast<size_t>(D) || w->key_sites.size() != sites.size() ||
       !std::equal(sites.begin(), sites.end(), w->key_sites.begin(), same)) {
     SortSites(kt, sites, w);
+    w->h_calls = 0;  // the rx cache covers the old sites' components
+    w->h_valid = false;
     w->key_tables = &kt;
     w->key_components = kt.components;
     w->key_sites = sites;
@@ -325,6 +431,8 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
   if (w->rowbuf.size() < w->jobs.size()) w->rowbuf.resize(w->jobs.size());
   const float rx = static_cast<float>(slip_x), ry = static_cast<float>(slip_y);
   const auto t0 = std::chrono::steady_clock::now();
+  if (shear && !w->fold_legacy) UpdateRxCache(kt, rx, w);
+  const bool use_h = shear && !w->fold_legacy && w->h_valid;
   ThreadPool::Shared().Run(static_cast<int>(w->jobs.size()), threads, [&](int k) {
     const FoldScratch::Job job = w->jobs[k];
     FoldSite* fs = w->sites.data();
@@ -332,7 +440,12 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     const auto& win = w->window[d];
     std::vector<float>& buf = w->rowbuf[k];
     const int band = kTableRowsPerBand;
-    buf.resize(static_cast<size_t>(kNumStress) * band * win.w);
+    // Folded rows of ew cells, 64-byte aligned, column 0 kLanes in (the
+    // aligned sums read up to kLanes - 1 cells either side of a site's span).
+    const int ew = aligned ? (win.w + 2 * kLanes + 15) / 16 * 16 : win.w;
+    const int margin = aligned ? kLanes - 1 : 0;
+    buf.resize(static_cast<size_t>(kNumStress) * band * ew + (aligned ? 16 : 0));
+    float* const base = aligned ? AlignUp64(buf.data()) + kLanes : buf.data();
     float* ebuf[kNumStress];
     bool comps[kNumStress] = {};
     for (int q = job.begin; q < job.end; ++q) {
@@ -341,7 +454,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       for (auto& v : fs[q].d) v = v4d{0, 0, 0, 0};
     }
     for (int c = 0; c < kNumStress; ++c)
-      ebuf[c] = buf.data() + static_cast<size_t>(c) * band * win.w;
+      ebuf[c] = base + static_cast<size_t>(c) * band * ew;
     int lo_min = pw, hi_max = 0;
     for (int r = 0; r < rows; ++r)
       if (w->row_lo[r] < w->row_hi[r]) {
@@ -358,19 +471,25 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       while (last < job.end && fs[last].off < T1) ++last;
       while (first < last && fs[first].off + rows <= T0) ++first;
       // Fold the band over the columns its sites read.
-      int c0 = win.w, c1 = 0;
+      int c0 = win.w + kLanes, c1 = -kLanes;
       for (int q = first; q < last; ++q) {
-        c0 = std::min(c0, col[q] + lo_min);
-        c1 = std::max(c1, col[q] + hi_max);
+        c0 = std::min(c0, col[q] + lo_min - margin);
+        c1 = std::max(c1, col[q] + hi_max + margin);
       }
       if (c0 >= c1) continue;  // no site reads this band
-      for (int c = 0; c < kNumStress; ++c)
+      for (int c = 0; c < kNumStress; ++c) {
+        if (!comps[c]) continue;
+        const float* h[2] = {nullptr, nullptr};
+        if (use_h) {
+          h[0] = w->h.data() + w->h_offset[d * kNumStress + c];
+          h[1] = h[0] + static_cast<size_t>(n) * n;
+        }
         for (int t = T0; t < T1; ++t)
-          if (comps[c])
-            FoldMirroredRow(kt, d, static_cast<StressComponent>(c), t + win.y0, win.x0 + c0,
-                            c1 - c0, rx, ry, shear,
-                            ebuf[c] + static_cast<size_t>(t - T0) * win.w + c0);
-      SumBand(fs, first, last, ebuf, win.w, T0, T1, w->pressure.data(), pw, lo, hi, rows);
+          FoldMirroredRow(kt, d, static_cast<StressComponent>(c), t + win.y0, win.x0 + c0,
+                          c1 - c0, rx, ry, shear, use_h ? h : nullptr,
+                          ebuf[c] + static_cast<size_t>(t - T0) * ew + c0);
+      }
+      SumBand(fs, first, last, ebuf, ew, T0, T1, P0, ps, lo, hi, rows, aligned);
     }
     for (int q = job.begin; q < job.end; ++q)
       for (int c = 0; c < fs[q].nc; ++c) {

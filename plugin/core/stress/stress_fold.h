@@ -8,9 +8,13 @@
 // the offsets (active cells - sites) that some site reads, and each band is
 // read at once by every site of the depth while it is in L1/L2; the pressure is
 // copied into rows of whole 8-cell chunks, so the inner loop has no tails; a
-// site's wanted components share each pressure load. Same result as the
+// site's wanted components share each pressure load, and its table loads are
+// 32-byte aligned (no cache-line splits; SiteRows in stress_fold.cc). While
+// the float r_x repeats (a steady slide), K_p + r_x K_x is kept from the last
+// call, so the fold reads two tables instead of three. Same result as the
 // reference path (StressAtReceptor) to float rounding
-// (tests/unit/test_stress_fold.py: rel. RMS <= 1e-5).
+// (tests/unit/test_stress_fold.py: rel. RMS <= 1e-5); the alignment and the
+// cache do not change a bit (same file: against fold_legacy).
 //
 // Threads: each depth's sites split into `threads` ranges, each range
 // folding the bands it reads; a site's sum is one fixed sequence of
@@ -64,7 +68,21 @@ struct FoldScratch {
   const KernelTables* key_tables = nullptr;
   std::array<bool, kNumStress> key_components{};
   std::vector<StressSite> key_sites;
+  // Kp + (+-rx) Kx per wanted (depth, component) quadrant (n x n each, +rx
+  // then -rx; h_offset: start, -1 if none) while the float rx repeats
+  // (UpdateRxCache in stress_fold.cc): the fold then reads two tables, not
+  // three. A cache of the inputs only: the bits do not depend on it.
+  std::vector<float> h;
+  std::vector<long> h_offset;
+  const KernelTables* h_tables = nullptr;
+  std::array<bool, kNumStress> h_components{};
+  float h_rx = 0;
+  int h_calls = 0;
+  bool h_valid = false;
   double seconds = 0;  // the last call's fold + sums (diagnostics)
+  // The sums' memory layout before #13 (unaligned rows, no chunk shift) and
+  // no rx cache (the same bits): for the benchmark's old / new ratio.
+  bool fold_legacy = false;
 };
 
 // Stress (Pa) at every site into out[site] (components a site does not want
