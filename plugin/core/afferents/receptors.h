@@ -86,13 +86,14 @@ constexpr double kSA1SaturationOverRheobase = 4.5;
 // constant is in TouchSim's 3-9 ms range (Saal et al. 2017).
 struct RAParams {
   // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 100 Pa at 40 Hz.
-  double gain_s_per_pa = 6.22e-5;
+  double gain_s_per_pa = 5.92e-5;
   double lowpass_hz = 40.0;
   double tau_s = 5e-3;
   double refractory_s = 1e-3;
   // Drive saturation s (threshold units; 0: none): TouchSim saturates its
-  // input current (Saal et al. 2017); ramp rates stay physiological.
-  double saturation = 5.0;
+  // input current (Saal et al. 2017); ramp rates stay physiological, and
+  // 1:1 entrainment at 80 Hz stays reachable (plugin/README.md).
+  double saturation = 8.0;
 };
 
 // PC (Pacinian, FA2): stress acceleration through a band-pass,

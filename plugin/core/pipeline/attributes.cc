@@ -173,11 +173,11 @@ const std::vector<AttributeRow>& Rows() {
        "SA1 (`filtered`): input saturation q / (1 + abs(q) / s) (0: none); default 4.5 x the "
        "Wang 2016 row's rheobase (60.5 kPa for the stress quantities)", nullptr,
        FIELD(receptor.sa1.saturation), NO_PARSE, S::kModel},
-      {"ra_gain", K::kNumber, 0, 1, false, false, "s/Pa", "6.22e-5", "RA drive gain", nullptr,
+      {"ra_gain", K::kNumber, 0, 1, false, false, "s/Pa", "5.92e-5", "RA drive gain", nullptr,
        FIELD(receptor.ra.gain_s_per_pa), NO_PARSE, S::kModel},
       {"ra_lowpass", K::kNumber, 0, 1e4, true, false, "Hz", "40", "RA low-pass corner",
        nullptr, FIELD(receptor.ra.lowpass_hz), NO_PARSE, S::kModel},
-      {"ra_saturation", K::kNumber, 0, 1e6, false, false, "(threshold units)", "5",
+      {"ra_saturation", K::kNumber, 0, 1e6, false, false, "(threshold units)", "8",
        "RA drive saturation s: d s / (s + abs(d)), d the drive (0: none)",
        nullptr, FIELD(receptor.ra.saturation), NO_PARSE, S::kModel},
       {"ra_tau", K::kNumber, 0, 10, true, false, "s", "5e-3", "RA membrane time constant",
