@@ -93,6 +93,21 @@ std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFo
 }
 
 namespace {
+// The half spectrum times the real kernel spectrum (elementwise: the same
+// bits on every instruction set).
+template <typename T>
+__attribute__((target_clones("avx2", "default")))
+void MultiplySpectrum(const T* __restrict k, int nx, int ls, int hy, T* __restrict re,
+                      T* __restrict im) {
+  for (int kx = 0; kx < nx; ++kx) {
+    const size_t o = static_cast<size_t>(kx) * ls;
+    for (int ky = 0; ky < hy; ++ky) {
+      re[o + ky] *= k[o + ky];
+      im[o + ky] *= k[o + ky];
+    }
+  }
+}
+
 template <typename T>
 void ApplyIn(const Fft2D& fft, const T* k, const double* in, int bx, int by, int in_rows,
              int in_cols, double* out, std::vector<T>* spec_re, std::vector<T>* spec_im,
@@ -104,14 +119,7 @@ void ApplyIn(const Fft2D& fft, const T* k, const double* in, int bx, int by, int
   T* re = spec_re->data();
   T* im = spec_im->data();
   fft.ForwardReal(in, bx, in_rows, in_cols, re, im, scratch);
-  const int ls = fft.spectrum_stride(), hy = fft.half_ny();
-  for (int kx = 0; kx < fft.nx(); ++kx) {
-    const size_t o = static_cast<size_t>(kx) * ls;
-    for (int ky = 0; ky < hy; ++ky) {
-      re[o + ky] *= k[o + ky];
-      im[o + ky] *= k[o + ky];
-    }
-  }
+  MultiplySpectrum(k, fft.nx(), fft.spectrum_stride(), fft.half_ny(), re, im);
   fft.InverseReal(re, im, by, bx, out, bx, scratch);
 }
 }  // namespace

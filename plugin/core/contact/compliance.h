@@ -89,7 +89,9 @@ class SurfaceCompliance {
              int in_rows = -1, int in_cols = -1) const;
   // u += K * (d on cell c of the box) by direct sum (non-periodic only):
   // cheaper than an FFT when few cells change.
-  void AddCell(int c, double d, int bx, int by, double* u) const { AddCellAt(c % bx, c / bx, d, bx, by, u); }
+  void AddCell(int c, double d, int bx, int by, double* u) const {
+    AddCellAt(c % bx, c / bx, d, bx, by, u);
+  }
   // The same for the cell (ci, cj) in box coordinates, inside the box or
   // not (on the operator's grid).
   void AddCellAt(int ci, int cj, double d, int bx, int by, double* u) const;
