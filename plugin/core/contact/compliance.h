@@ -12,6 +12,7 @@
 #ifndef MJTOUCH_CONTACT_COMPLIANCE_H_
 #define MJTOUCH_CONTACT_COMPLIANCE_H_
 
+#include <cmath>
 #include <functional>
 #include <map>
 #include <memory>
@@ -113,6 +114,15 @@ class SurfaceCompliance {
   mutable std::mutex mu_;
   mutable std::map<std::pair<int, int>, std::shared_ptr<const Spectrum>> spectra_;
 };
+
+// How many cells' AddCell (box_cells multiply-adds each) cost about one
+// Apply with spectrum s: measured on an 87 x 76 box (180 x 160 grid, float,
+// AVX2) 1.5 us per cell against ~100 us per apply, ~4 multiply-adds per
+// FFT flop (5 N log2 N).
+inline double DirectCellsPerApply(const SurfaceCompliance::Spectrum& s, size_t box_cells) {
+  const double n = static_cast<double>(s.fft.nx()) * s.fft.ny();
+  return 5.0 * n * std::log2(n) / (4.0 * static_cast<double>(box_cells));
+}
 
 // The operators of the two skins on an n x n grid of pitch pitch_m.
 std::shared_ptr<const SurfaceCompliance> HalfSpaceCompliance(double young_pa, double poisson,

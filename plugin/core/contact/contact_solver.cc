@@ -157,6 +157,26 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
   }
 }
 
+// u = s (u - tau r [+ kd]) over the box; returns the sum of g0 + u over
+// the contact (p > 0; Sum4's order) and its size in *nc.
+template <bool kAdd>
+double UpdateAndSum(size_t B, double s, double tau, const double* __restrict r,
+                    const double* __restrict kd, const double* __restrict g0,
+                    const double* __restrict p, double* __restrict u, size_t* nc) {
+  size_t n = 0;
+  const double sum = Sum4(B, [&](size_t b) {
+    double v = u[b] - tau * r[b];
+    if constexpr (kAdd) v += kd[b];
+    v *= s;
+    u[b] = v;
+    const bool c = p[b] > 0.0;
+    n += c;
+    return c ? g0[b] + v : 0.0;
+  });
+  *nc = n;
+  return sum;
+}
+
 // z[j * bx + i] = sum over (dj, di) in stencil order of M[dj L + di] *
 // g_pad[(j + dj) px + i + di]. The stencil unrolled inside the loop over i,
 // which vectorises: each cell's sum runs in the same order as a per-cell
@@ -200,14 +220,16 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   double* gp = w->g_pad.data();
   double G_old = 1.0;
   bool first = true;
+  // The contact's gap sum and size for the next iteration (the first from
+  // the initial u; later ones from the displacement update's pass).
+  size_t nc = 0;
+  double sum_g = Sum4(B, [&](size_t b) {
+    const bool c = p[b] > 0.0;
+    nc += c;
+    return c ? g0[b] + u[b] : 0.0;
+  });
   for (int it = 1; it <= max_iter; ++it) {
     st->iterations = it;
-    size_t nc = 0;
-    const double sum_g = Sum4(B, [&](size_t b) {
-      const bool c = p[b] > 0.0;
-      nc += c;
-      return c ? g0[b] + u[b] : 0.0;
-    });
     const double gbar = sum_g / static_cast<double>(nc);
     // The working set: the contact plus cells that overlap; t lives on it.
     std::vector<int>& S = w->set;
@@ -296,8 +318,9 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
       break;
     }
     const double tau = num / den;
+    // Step and project onto p >= 0 on S; off S, p and p_new are zero (p > 0
+    // lies in S), so the rescaling and the stopping test run on S only.
     w->changed.clear();
-    std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
     const double sum_new = Sum4(ns, [&](size_t k) {
       const int b = Sp[k];
       double v = p[b] - tau * t[b];
@@ -310,9 +333,32 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
       return v;
     });
     if (!(sum_new > 0.0)) break;
-    double s;
-    st->change = Accept(P, sum_new, &s);
-    UpdateDisplacement(P, tau, s, st);
+    const double s = P.target / sum_new;
+    st->change = Sum4(ns, [&](size_t k) {
+                   const int b = Sp[k];
+                   const double v = s * pn[b], d = std::abs(v - p[b]);
+                   p[b] = v;
+                   return d;
+                 }) /
+                 P.target;
+    // u = s (u - tau K t + K delta), K delta by direct sums (few cells) or
+    // into g (free until the next iteration), in one pass that also sums
+    // the next iteration's contact gap.
+    const size_t nchg = w->changed.size();
+    double* kd = nullptr;
+    if (nchg > 0) {
+      if (!P.periodic && static_cast<double>(nchg) < DirectCellsPerApply(*P.spec, B)) {
+        for (int c : w->changed) P.K.AddCell(c, dl[c], bx, by, u);
+      } else {
+        P.K.Apply(*P.spec, dl, bx, by, g, &w->fft, P.precision);
+        ++st->applies;
+        kd = g;
+      }
+      for (int c : w->changed) dl[c] = 0.0;
+    }
+    nc = 0;
+    sum_g = kd ? UpdateAndSum<true>(B, s, tau, r, kd, g0, p, u, &nc)
+               : UpdateAndSum<false>(B, s, tau, r, kd, g0, p, u, &nc);
     if (st->change < tol) {
       st->converged = true;
       break;
@@ -380,12 +426,9 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   bool have_u = initial_u != nullptr && !periodic && method == ElasticMethod::kPreconditioned &&
                 sum_p > 0.0;
   if (have_u) {
-    // Each dropped cell costs B multiply-adds: more than ~1/8 of an FFT's
-    // flops in all, and the FFT is cheaper.
-    const auto spec = K.SpectrumFor(bx, by);
-    const double fft_flops = 5.0 * static_cast<double>(spec->fft.nx()) * spec->fft.ny() *
-                             std::log2(static_cast<double>(spec->fft.nx()) * spec->fft.ny());
-    have_u = 8.0 * static_cast<double>(w->changed.size()) * static_cast<double>(B) <= fft_flops;
+    // Too many dropped cells: the FFT is cheaper.
+    have_u = static_cast<double>(w->changed.size()) <=
+             DirectCellsPerApply(*K.SpectrumFor(bx, by), B);
     if (have_u) {
       std::copy(initial_u, initial_u + B, w->u.begin());
       for (int c : w->changed) {

@@ -212,11 +212,10 @@ bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
   };
   if (K.periodic() || !covers(rl) || !covers(rp)) return false;
   // The cells to correct (WarmStart), and whether they are few enough.
-  const auto spec = K.SpectrumFor(box.nx, box.ny);
-  const double fft_flops = 5.0 * static_cast<double>(spec->fft.nx()) * spec->fft.ny() *
-                           std::log2(static_cast<double>(spec->fft.nx()) * spec->fft.ny());
-  const double B = static_cast<double>(box.nx) * box.ny;
-  if (8.0 * static_cast<double>(w->u0_fix.size()) * B > fft_flops) return false;
+  const size_t B = static_cast<size_t>(box.nx) * box.ny;
+  if (static_cast<double>(w->u0_fix.size()) >
+      DirectCellsPerApply(*K.SpectrumFor(box.nx, box.ny), B))
+    return false;
   const CellBox lb = last.p_box(), pb = prev.p_box();
   w->u0.resize(static_cast<size_t>(box.nx) * box.ny);
   double* u = w->u0.data();
