@@ -181,22 +181,25 @@ double UpdateAndSum(size_t B, double s, double tau, const double* __restrict r,
 // g_pad[(j + dj) px + i + di]. The stencil unrolled inside the loop over i,
 // which vectorises: each cell's sum runs in the same order as a per-cell
 // loop would, in a register.
-template <int L>
+// T: the arithmetic (float with ApplyPrecision::kFloat: twice the lanes; the
+// preconditioner only shapes the search direction, so its rounding moves
+// the iterates, not the converged solution).
+template <int L, typename T>
 __attribute__((target_clones("avx2", "default")))
-void ApplyStencil(const double* M, const double* g_pad, int px, int bx, int by,
-                  double* z_out) {
-  double m[L * L];
-  for (int k = 0; k < L * L; ++k) m[k] = M[k];
+void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, double* z_out) {
+  T m[L * L];
+  for (int k = 0; k < L * L; ++k) m[k] = static_cast<T>(M[k]);
   for (int j = 0; j < by; ++j) {
     double* __restrict z = z_out + static_cast<size_t>(j) * bx;
-    const double* __restrict row = g_pad + static_cast<size_t>(j) * px;
+    const T* __restrict row = g_pad + static_cast<size_t>(j) * px;
     for (int i = 0; i < bx; ++i) {
-      double acc = 0.0;
+      T acc = 0;
 #pragma GCC unroll 32
       for (int dj = 0; dj < L; ++dj)
 #pragma GCC unroll 8
-        for (int di = 0; di < L; ++di) acc += m[dj * L + di] * row[static_cast<size_t>(dj) * px + i + di];
-      z[i] = acc;
+        for (int di = 0; di < L; ++di)
+          acc += m[dj * L + di] * row[static_cast<size_t>(dj) * px + i + di];
+      z[i] = static_cast<double>(acc);
     }
   }
 }
@@ -216,8 +219,15 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   double* r = w->r.data();
   double* pn = w->p_new.data();
   double* dl = w->delta.data();
-  w->g_pad.assign(static_cast<size_t>(px) * (by + 2 * hw), 0.0);
+  const bool stencil_f = P.precision == ApplyPrecision::kFloat;
+  const size_t pad_size = static_cast<size_t>(px) * (by + 2 * hw);
+  if (stencil_f) {
+    w->g_pad_f.assign(pad_size, 0.0f);
+  } else {
+    w->g_pad.assign(pad_size, 0.0);
+  }
   double* gp = w->g_pad.data();
+  float* gpf = w->g_pad_f.data();
   double G_old = 1.0;
   bool first = true;
   // The contact's gap sum and size for the next iteration (the first from
@@ -237,14 +247,18 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     size_t ns = 0;
     // g_pad: g on S, zero elsewhere (its border stays zero, or wraps below).
     for (int j = 0; j < by; ++j) {
-      double* gp_row = gp + static_cast<size_t>(j + hw) * px + hw;
+      const size_t row0 = static_cast<size_t>(j + hw) * px + hw;
       for (int i = 0; i < bx; ++i) {
         const size_t b = static_cast<size_t>(j) * bx + i;
         const bool finite = std::isfinite(g0[b]);
         const double gb = finite ? g0[b] + u[b] - gbar : 0.0;
         g[b] = gb;
         const bool in = p[b] > 0.0 || (finite && gb < 0.0);
-        gp_row[i] = in ? gb : 0.0;
+        if (stencil_f) {
+          gpf[row0 + i] = in ? static_cast<float>(gb) : 0.0f;
+        } else {
+          gp[row0 + i] = in ? gb : 0.0;
+        }
         S[ns] = static_cast<int>(b);  // kept only if in
         ns += in;
       }
@@ -259,7 +273,13 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
         for (int ii = 0; ii < px; ++ii) {
           if (!border_row && ii >= hw && ii < bx + hw) continue;
           const int i = ((ii - hw) % bx + bx) % bx;
-          gp[static_cast<size_t>(jj) * px + ii] = gp[static_cast<size_t>(j + hw) * px + i + hw];
+          const size_t to = static_cast<size_t>(jj) * px + ii;
+          const size_t from = static_cast<size_t>(j + hw) * px + i + hw;
+          if (stencil_f) {
+            gpf[to] = gpf[from];
+          } else {
+            gp[to] = gp[from];
+          }
         }
       }
     }
@@ -268,7 +288,11 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     // Over the whole box, a row at a time (vectorises; each cell's sum runs
     // in the stencil's order, as a per-cell loop would), read on S only.
     // r: scratch until K t below.
-    ApplyStencil<L>(M, gp, px, bx, by, r);
+    if (stencil_f) {
+      ApplyStencil<L>(M, gpf, px, bx, by, r);
+    } else {
+      ApplyStencil<L>(M, gp, px, bx, by, r);
+    }
     const int* Sp = S.data();
     const double sum_z = Sum4(ns, [&](size_t k) { return r[Sp[k]]; });
     const double zbar = sum_z / static_cast<double>(ns);

@@ -50,6 +50,7 @@ struct ElasticSolveStats {
 struct ElasticWork {
   std::vector<double> g0, p, u, g, t, r, p_new, delta;
   std::vector<double> g_pad;  // preconditioner input with a zero border
+  std::vector<float> g_pad_f;  // the same in float (ApplyPrecision::kFloat)
   std::vector<int> set;       // kPreconditioned: the cells of the working set
   std::vector<int> changed;
   std::vector<double> check_p, check_u;  // skin_traction.cc: the box check
