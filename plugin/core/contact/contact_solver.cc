@@ -422,11 +422,18 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   w->g0.resize(B);
   w->p.resize(B);
   w->u.resize(B);
-  w->g.assign(B, 0.0);
   w->t.assign(B, 0.0);
-  w->r.assign(B, 0.0);
-  w->p_new.assign(B, 0.0);
   w->delta.assign(B, 0.0);
+  if (method == ElasticMethod::kPreconditioned) {
+    // written before they are read (g, the stencil's r, each pass's p_new)
+    w->g.resize(B);
+    w->r.resize(B);
+    w->p_new.resize(B);
+  } else {
+    w->g.assign(B, 0.0);
+    w->r.assign(B, 0.0);
+    w->p_new.assign(B, 0.0);
+  }
   double* g0 = w->g0.data();
   double* p = w->p.data();
   size_t ncand = 0;

@@ -68,29 +68,38 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
                      const std::vector<double>& pressure, double approach_m, double lift_m,
                      ApplyPrecision precision, ElasticWork* w, CellBox* grown,
                      CellBox* u_region) {
-  auto outside = [&](int i, int j) {
-    return i < inner.i0 || i >= inner.i0 + inner.nx || j < inner.j0 || j >= inner.j0 + inner.ny;
+  // fn(i, j) for the cells of [ia, ib) x [ja, jb) outside inner (row
+  // segments: inner is most of the box).
+  auto for_outside = [&](int ia, int ib, int ja, int jb, auto&& fn) {
+    for (int j = ja; j < jb; ++j) {
+      const bool row_in = j >= inner.j0 && j < inner.j0 + inner.ny;
+      const int end = row_in ? std::min(ib, inner.i0) : ib;
+      for (int i = ia; i < end; ++i) fn(i, j);
+      if (row_in)
+        for (int i = std::max(ia, inner.i0 + inner.nx); i < ib; ++i) fn(i, j);
+    }
   };
   int i0 = inner.i0, i1 = inner.i0 + inner.nx - 1, j0 = inner.j0, j1 = inner.j0 + inner.ny - 1;
   bool any = false;
-  for (int j = box.j0; j < box.j0 + box.ny; ++j)
-    for (int i = box.i0; i < box.i0 + box.nx; ++i)
-      if (outside(i, j) && gap[static_cast<size_t>(j) * grid.n + i] <= approach_m + lift_m) {
-        any = true;
-        i0 = std::min(i0, i);
-        i1 = std::max(i1, i);
-        j0 = std::min(j0, j);
-        j1 = std::max(j1, j);
-      }
+  for_outside(box.i0, box.i0 + box.nx, box.j0, box.j0 + box.ny, [&](int i, int j) {
+    if (gap[static_cast<size_t>(j) * grid.n + i] <= approach_m + lift_m) {
+      any = true;
+      i0 = std::min(i0, i);
+      i1 = std::max(i1, i);
+      j0 = std::min(j0, j);
+      j1 = std::max(j1, j);
+    }
+  });
   *u_region = CellBox{0, 0, 0, 0};
   if (!any) return true;
   const int cx = i1 - i0 + 1, cy = j1 - j0 + 1;
   w->check_p.assign(static_cast<size_t>(cx) * cy, 0.0);
   w->check_u.resize(w->check_p.size());
-  for (int j = inner.j0; j < inner.j0 + inner.ny; ++j)
-    for (int i = inner.i0; i < inner.i0 + inner.nx; ++i)
-      w->check_p[static_cast<size_t>(j - j0) * cx + (i - i0)] =
-          pressure[static_cast<size_t>(j) * grid.n + i];
+  for (int j = inner.j0; j < inner.j0 + inner.ny; ++j) {
+    const double* row = pressure.data() + static_cast<size_t>(j) * grid.n + inner.i0;
+    std::copy(row, row + inner.nx,
+              w->check_p.begin() + static_cast<size_t>(j - j0) * cx + (inner.i0 - i0));
+  }
   // The pressure lives on inner only: offsets from it to the checked cells
   // reach less far than the box's size (a smaller FFT grid), and the
   // columns and rows past it need no transform.
@@ -102,18 +111,17 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
   *u_region = CellBox{i0, j0, cx, cy};
   int f0 = inner.i0, f1 = inner.i0 + inner.nx - 1, g0 = inner.j0, g1 = inner.j0 + inner.ny - 1;
   bool ok = true;
-  for (int j = j0; j <= j1; ++j)
-    for (int i = i0; i <= i1; ++i) {
-      const double g = gap[static_cast<size_t>(j) * grid.n + i];
-      if (outside(i, j) && g <= approach_m + lift_m &&
-          !(g + w->check_u[static_cast<size_t>(j - j0) * cx + (i - i0)] >= approach_m)) {
-        ok = false;
-        f0 = std::min(f0, i);
-        f1 = std::max(f1, i);
-        g0 = std::min(g0, j);
-        g1 = std::max(g1, j);
-      }
+  for_outside(i0, i1 + 1, j0, j1 + 1, [&](int i, int j) {
+    const double g = gap[static_cast<size_t>(j) * grid.n + i];
+    if (g <= approach_m + lift_m &&
+        !(g + w->check_u[static_cast<size_t>(j - j0) * cx + (i - i0)] >= approach_m)) {
+      ok = false;
+      f0 = std::min(f0, i);
+      f1 = std::max(f1, i);
+      g0 = std::min(g0, j);
+      g1 = std::max(g1, j);
     }
+  });
   if (!ok) *grown = GrowBox(box, f0, f1, g0, g1);
   return ok;
 }
