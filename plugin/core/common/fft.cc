@@ -251,6 +251,73 @@ namespace {
 // the same cache sets (measured 3-8x slower at 128 and 256).
 int PaddedStride(int n) { return n | 1; }
 
+// dst[c * ds + r] = src[r * ss + c], r < rows, c < cols: 8 x 8 (float) or
+// 4 x 4 (double) blocks transposed in registers (GCC vector extensions:
+// AVX2 or SSE2 pairs, no intrinsics), the edges one by one. Data movement
+// only: the same bits on every path.
+typedef float V8f __attribute__((vector_size(32)));
+typedef double V4d __attribute__((vector_size(32)));
+// Macros, not functions: 32-byte vectors passed by value warn of an ABI
+// change (-Wpsabi) in the SSE2 build.
+#define MJTOUCH_LOAD(v, p) std::memcpy(&(v), (p), sizeof(v))
+#define MJTOUCH_STORE(p, v)       \
+  do {                            \
+    const auto tmp_ = (v);        \
+    std::memcpy((p), &tmp_, sizeof(tmp_)); \
+  } while (0)
+
+inline __attribute__((always_inline)) void Block(const float* src, size_t ss, float* dst,
+                                                 size_t ds) {
+  V8f r[8];
+  for (int k = 0; k < 8; ++k) MJTOUCH_LOAD(r[k], src + k * ss);
+  V8f t[8], u[8];
+  for (int k = 0; k < 4; ++k) {
+    t[2 * k] = __builtin_shufflevector(r[2 * k], r[2 * k + 1], 0, 8, 1, 9, 4, 12, 5, 13);
+    t[2 * k + 1] = __builtin_shufflevector(r[2 * k], r[2 * k + 1], 2, 10, 3, 11, 6, 14, 7, 15);
+  }
+  for (int k = 0; k < 2; ++k) {
+    const V8f a = t[4 * k], b = t[4 * k + 1], c = t[4 * k + 2], d = t[4 * k + 3];
+    u[4 * k] = __builtin_shufflevector(a, c, 0, 1, 8, 9, 4, 5, 12, 13);
+    u[4 * k + 1] = __builtin_shufflevector(a, c, 2, 3, 10, 11, 6, 7, 14, 15);
+    u[4 * k + 2] = __builtin_shufflevector(b, d, 0, 1, 8, 9, 4, 5, 12, 13);
+    u[4 * k + 3] = __builtin_shufflevector(b, d, 2, 3, 10, 11, 6, 7, 14, 15);
+  }
+  for (int k = 0; k < 4; ++k) {
+    MJTOUCH_STORE(dst + k * ds, __builtin_shufflevector(u[k], u[k + 4], 0, 1, 2, 3, 8, 9, 10, 11));
+    MJTOUCH_STORE(dst + (k + 4) * ds,
+                  __builtin_shufflevector(u[k], u[k + 4], 4, 5, 6, 7, 12, 13, 14, 15));
+  }
+}
+
+inline __attribute__((always_inline)) void Block(const double* src, size_t ss, double* dst,
+                                                 size_t ds) {
+  V4d r[4];
+  for (int k = 0; k < 4; ++k) MJTOUCH_LOAD(r[k], src + k * ss);
+  const V4d t0 = __builtin_shufflevector(r[0], r[1], 0, 4, 2, 6);
+  const V4d t1 = __builtin_shufflevector(r[0], r[1], 1, 5, 3, 7);
+  const V4d t2 = __builtin_shufflevector(r[2], r[3], 0, 4, 2, 6);
+  const V4d t3 = __builtin_shufflevector(r[2], r[3], 1, 5, 3, 7);
+  MJTOUCH_STORE(dst, __builtin_shufflevector(t0, t2, 0, 1, 4, 5));
+  MJTOUCH_STORE(dst + ds, __builtin_shufflevector(t1, t3, 0, 1, 4, 5));
+  MJTOUCH_STORE(dst + 2 * ds, __builtin_shufflevector(t0, t2, 2, 3, 6, 7));
+  MJTOUCH_STORE(dst + 3 * ds, __builtin_shufflevector(t1, t3, 2, 3, 6, 7));
+}
+#undef MJTOUCH_LOAD
+#undef MJTOUCH_STORE
+
+template <typename T>
+__attribute__((target_clones("avx2", "default")))
+void TransposeT(const T* src, size_t ss, int rows, int cols, T* dst, size_t ds) {
+  constexpr int W = 32 / sizeof(T);
+  const int rb = rows / W * W, cb = cols / W * W;
+  for (int r = 0; r < rb; r += W)
+    for (int c = 0; c < cb; c += W) Block(src + r * ss + c, ss, dst + c * ds + r, ds);
+  for (int r = 0; r < rows; ++r) {
+    const int c0 = r < rb ? cb : 0;
+    for (int c = c0; c < cols; ++c) dst[c * ds + r] = src[r * ss + c];
+  }
+}
+
 // Scratch for a 2D transform: the y-pass work arrays (W each) and the
 // stages' ping-pong arrays (max(W, spectrum) each), in one buffer.
 template <typename T>
@@ -339,24 +406,36 @@ void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, T* spe
   py_.Transform(wr, wi, h, lw, false, sr, si);
   // Split Z = A + i B (A, B spectra of real columns): A = (Z(k) + conj
   // Z(-k)) / 2, B = (Z(k) - conj Z(-k)) / (2 i); into (x, ky), half ky.
+  // Transposed first (into the stages' scratch, free until the x pass), so
+  // the split runs along contiguous ky.
   const int ls = spec_stride_, hy = half_ny();
+  const size_t ts = static_cast<size_t>(ny_);
+  TransposeT(wr, lw, ny_, h, sr, ts);
+  TransposeT(wi, lw, ny_, h, si, ts);
   for (int c = 0; c < h; ++c) {
     T* ar = spec_re + static_cast<size_t>(c) * ls;
     T* ai = spec_im + static_cast<size_t>(c) * ls;
     T* br = spec_re + static_cast<size_t>(c + h) * ls;
     T* bi = spec_im + static_cast<size_t>(c + h) * ls;
+    const T* zr = sr + c * ts;
+    const T* zi = si + c * ts;
     const bool has_b = c + h < cols;
-    for (int ky = 0; ky < hy; ++ky) {
-      const size_t k = static_cast<size_t>(ky) * lw + c;
-      const size_t m = static_cast<size_t>((ny_ - ky) % ny_) * lw + c;
-      const T zr = wr[k], zi = wi[k], mr = wr[m], mi = wi[m];
-      ar[ky] = T(0.5) * (zr + mr);
-      ai[ky] = T(0.5) * (zi - mi);
-      if (has_b) {
-        br[ky] = T(0.5) * (zi + mi);
-        bi[ky] = T(-0.5) * (zr - mr);
-      }
+    // ky = 0 pairs with itself; ky >= 1 with ny - ky
+    ar[0] = T(0.5) * (zr[0] + zr[0]);
+    ai[0] = T(0.5) * (zi[0] - zi[0]);
+    if (has_b) {
+      br[0] = T(0.5) * (zi[0] + zi[0]);
+      bi[0] = T(-0.5) * (zr[0] - zr[0]);
     }
+    for (int ky = 1; ky < hy; ++ky) {
+      ar[ky] = T(0.5) * (zr[ky] + zr[ny_ - ky]);
+      ai[ky] = T(0.5) * (zi[ky] - zi[ny_ - ky]);
+    }
+    if (has_b)
+      for (int ky = 1; ky < hy; ++ky) {
+        br[ky] = T(0.5) * (zi[ky] + zi[ny_ - ky]);
+        bi[ky] = T(-0.5) * (zr[ky] - zr[ny_ - ky]);
+      }
   }
   for (int x = cols; x < nx_; ++x) {
     std::fill(spec_re + static_cast<size_t>(x) * ls, spec_re + static_cast<size_t>(x) * ls + hy, T(0));
@@ -376,23 +455,41 @@ void Fft2D::InverseReal(T* spec_re, T* spec_im, int rows, int cols, double* re, 
   const int ls = spec_stride_, hy = half_ny();
   px_.Transform(spec_re, spec_im, hy, ls, true, sr, si);
   // Z = A + i B over the full ky range, the upper half from A(-k) =
-  // conj A(k) (the columns' inverses are real).
+  // conj A(k) (the columns' inverses are real): along contiguous ky into
+  // the stages' scratch, then transposed into the y pass's layout.
+  const size_t ts = static_cast<size_t>(ny_);
   for (int c = 0; c < h; ++c) {
     const T* ar = spec_re + static_cast<size_t>(c) * ls;
     const T* ai = spec_im + static_cast<size_t>(c) * ls;
     const bool has_b = c + h < cols;
     const T* br = spec_re + static_cast<size_t>(c + h) * ls;
     const T* bi = spec_im + static_cast<size_t>(c + h) * ls;
-    for (int ky = 0; ky < ny_; ++ky) {
-      const bool low = ky < hy;
-      const int q = low ? ky : ny_ - ky;
-      const T sgn = low ? T(1) : T(-1);  // conjugate in the upper half
-      const T a_r = ar[q], a_i = sgn * ai[q];
-      const T b_r = has_b ? br[q] : T(0), b_i = has_b ? sgn * bi[q] : T(0);
-      wr[static_cast<size_t>(ky) * lw + c] = a_r - b_i;
-      wi[static_cast<size_t>(ky) * lw + c] = a_i + b_r;
+    T* zr = sr + c * ts;
+    T* zi = si + c * ts;
+    // x - (-y) == x + y and (-x) + y == y - x exactly: the conjugate half
+    // rounds as sgn * (...) did.
+    if (has_b) {
+      for (int ky = 0; ky < hy; ++ky) {
+        zr[ky] = ar[ky] - bi[ky];
+        zi[ky] = ai[ky] + br[ky];
+      }
+      for (int ky = hy; ky < ny_; ++ky) {
+        zr[ky] = ar[ny_ - ky] + bi[ny_ - ky];
+        zi[ky] = br[ny_ - ky] - ai[ny_ - ky];
+      }
+    } else {
+      for (int ky = 0; ky < hy; ++ky) {
+        zr[ky] = ar[ky] - T(0);
+        zi[ky] = ai[ky] + T(0);
+      }
+      for (int ky = hy; ky < ny_; ++ky) {
+        zr[ky] = ar[ny_ - ky] - T(0);
+        zi[ky] = -ai[ny_ - ky] + T(0);
+      }
     }
   }
+  TransposeT(sr, ts, h, ny_, wr, lw);
+  TransposeT(si, ts, h, ny_, wi, lw);
   py_.Transform(wr, wi, h, lw, true, sr, si);
   for (int y = 0; y < rows; ++y) {
     double* row = re + static_cast<size_t>(y) * stride;

@@ -61,10 +61,10 @@ void SurfaceCompliance::BuildInverse(Spectrum* s) {
     }
 }
 
-std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFor(
-    int bx, int by) const {
+std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumForReach(
+    int reach_x, int reach_y) const {
   if (periodic_) return periodic_spectrum_;
-  const int mx = NextFftSize(2 * bx - 1), my = NextFftSize(2 * by - 1);
+  const int mx = NextFftSize(2 * reach_x + 1), my = NextFftSize(2 * reach_y + 1);
   std::lock_guard<std::mutex> lock(mu_);
   auto& slot = spectra_[{mx, my}];
   if (slot) return slot;
@@ -93,40 +93,53 @@ std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFo
 }
 
 namespace {
+// The half spectrum times the real kernel spectrum (elementwise: the same
+// bits on every instruction set).
 template <typename T>
-void ApplyIn(const Fft2D& fft, const T* k, const double* in, int bx, int by, double* out,
-             std::vector<T>* spec_re, std::vector<T>* spec_im, std::vector<T>* scratch) {
-  // Real field, real even kernel: half spectra (Fft2D::ForwardReal).
-  const size_t S = fft.spectrum_size();
-  spec_re->resize(S);
-  spec_im->resize(S);
-  T* re = spec_re->data();
-  T* im = spec_im->data();
-  fft.ForwardReal(in, bx, by, bx, re, im, scratch);
-  const int ls = fft.spectrum_stride(), hy = fft.half_ny();
-  for (int kx = 0; kx < fft.nx(); ++kx) {
+__attribute__((target_clones("avx2", "default")))
+void MultiplySpectrum(const T* __restrict k, int nx, int ls, int hy, T* __restrict re,
+                      T* __restrict im) {
+  for (int kx = 0; kx < nx; ++kx) {
     const size_t o = static_cast<size_t>(kx) * ls;
     for (int ky = 0; ky < hy; ++ky) {
       re[o + ky] *= k[o + ky];
       im[o + ky] *= k[o + ky];
     }
   }
+}
+
+template <typename T>
+void ApplyIn(const Fft2D& fft, const T* k, const double* in, int bx, int by, int in_rows,
+             int in_cols, double* out, std::vector<T>* spec_re, std::vector<T>* spec_im,
+             std::vector<T>* scratch) {
+  // Real field, real even kernel: half spectra (Fft2D::ForwardReal).
+  const size_t S = fft.spectrum_size();
+  spec_re->resize(S);
+  spec_im->resize(S);
+  T* re = spec_re->data();
+  T* im = spec_im->data();
+  fft.ForwardReal(in, bx, in_rows, in_cols, re, im, scratch);
+  MultiplySpectrum(k, fft.nx(), fft.spectrum_stride(), fft.half_ny(), re, im);
   fft.InverseReal(re, im, by, bx, out, bx, scratch);
 }
 }  // namespace
 
 void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
-                              ComplianceWork* w, ApplyPrecision precision) const {
+                              ComplianceWork* w, ApplyPrecision precision, int in_rows,
+                              int in_cols) const {
+  if (in_rows < 0) in_rows = by;
+  if (in_cols < 0) in_cols = bx;
   if (precision == ApplyPrecision::kFloat) {
-    ApplyIn(s.fft, s.k_hat_f.data(), in, bx, by, out, &w->spec_re_f, &w->spec_im_f,
-            &w->fft_scratch_f);
+    ApplyIn(s.fft, s.k_hat_f.data(), in, bx, by, in_rows, in_cols, out, &w->spec_re_f,
+            &w->spec_im_f, &w->fft_scratch_f);
   } else {
-    ApplyIn(s.fft, s.k_hat.data(), in, bx, by, out, &w->spec_re, &w->spec_im, &w->fft_scratch);
+    ApplyIn(s.fft, s.k_hat.data(), in, bx, by, in_rows, in_cols, out, &w->spec_re, &w->spec_im,
+            &w->fft_scratch);
   }
 }
 
-void SurfaceCompliance::AddCell(int c, double d, int bx, int by, double* u) const {
-  const int ci = c % bx, cj = c / bx;
+__attribute__((target_clones("avx2", "default")))
+void SurfaceCompliance::AddCellAt(int ci, int cj, double d, int bx, int by, double* u) const {
   for (int j = 0; j < by; ++j) {
     double* urow = u + static_cast<size_t>(j) * bx;
     const float* krow =

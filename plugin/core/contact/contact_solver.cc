@@ -157,26 +157,49 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
   }
 }
 
+// u = s (u - tau r [+ kd]) over the box; returns the sum of g0 + u over
+// the contact (p > 0; Sum4's order) and its size in *nc.
+template <bool kAdd>
+double UpdateAndSum(size_t B, double s, double tau, const double* __restrict r,
+                    const double* __restrict kd, const double* __restrict g0,
+                    const double* __restrict p, double* __restrict u, size_t* nc) {
+  size_t n = 0;
+  const double sum = Sum4(B, [&](size_t b) {
+    double v = u[b] - tau * r[b];
+    if constexpr (kAdd) v += kd[b];
+    v *= s;
+    u[b] = v;
+    const bool c = p[b] > 0.0;
+    n += c;
+    return c ? g0[b] + v : 0.0;
+  });
+  *nc = n;
+  return sum;
+}
+
 // z[j * bx + i] = sum over (dj, di) in stencil order of M[dj L + di] *
 // g_pad[(j + dj) px + i + di]. The stencil unrolled inside the loop over i,
 // which vectorises: each cell's sum runs in the same order as a per-cell
 // loop would, in a register.
-template <int L>
+// T: the arithmetic (float with ApplyPrecision::kFloat: twice the lanes; the
+// preconditioner only shapes the search direction, so its rounding moves
+// the iterates, not the converged solution).
+template <int L, typename T>
 __attribute__((target_clones("avx2", "default")))
-void ApplyStencil(const double* M, const double* g_pad, int px, int bx, int by,
-                  double* z_out) {
-  double m[L * L];
-  for (int k = 0; k < L * L; ++k) m[k] = M[k];
+void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, double* z_out) {
+  T m[L * L];
+  for (int k = 0; k < L * L; ++k) m[k] = static_cast<T>(M[k]);
   for (int j = 0; j < by; ++j) {
     double* __restrict z = z_out + static_cast<size_t>(j) * bx;
-    const double* __restrict row = g_pad + static_cast<size_t>(j) * px;
+    const T* __restrict row = g_pad + static_cast<size_t>(j) * px;
     for (int i = 0; i < bx; ++i) {
-      double acc = 0.0;
+      T acc = 0;
 #pragma GCC unroll 32
       for (int dj = 0; dj < L; ++dj)
 #pragma GCC unroll 8
-        for (int di = 0; di < L; ++di) acc += m[dj * L + di] * row[static_cast<size_t>(dj) * px + i + di];
-      z[i] = acc;
+        for (int di = 0; di < L; ++di)
+          acc += m[dj * L + di] * row[static_cast<size_t>(dj) * px + i + di];
+      z[i] = static_cast<double>(acc);
     }
   }
 }
@@ -196,18 +219,27 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   double* r = w->r.data();
   double* pn = w->p_new.data();
   double* dl = w->delta.data();
-  w->g_pad.assign(static_cast<size_t>(px) * (by + 2 * hw), 0.0);
+  const bool stencil_f = P.precision == ApplyPrecision::kFloat;
+  const size_t pad_size = static_cast<size_t>(px) * (by + 2 * hw);
+  if (stencil_f) {
+    w->g_pad_f.assign(pad_size, 0.0f);
+  } else {
+    w->g_pad.assign(pad_size, 0.0);
+  }
   double* gp = w->g_pad.data();
+  float* gpf = w->g_pad_f.data();
   double G_old = 1.0;
   bool first = true;
+  // The contact's gap sum and size for the next iteration (the first from
+  // the initial u; later ones from the displacement update's pass).
+  size_t nc = 0;
+  double sum_g = Sum4(B, [&](size_t b) {
+    const bool c = p[b] > 0.0;
+    nc += c;
+    return c ? g0[b] + u[b] : 0.0;
+  });
   for (int it = 1; it <= max_iter; ++it) {
     st->iterations = it;
-    size_t nc = 0;
-    const double sum_g = Sum4(B, [&](size_t b) {
-      const bool c = p[b] > 0.0;
-      nc += c;
-      return c ? g0[b] + u[b] : 0.0;
-    });
     const double gbar = sum_g / static_cast<double>(nc);
     // The working set: the contact plus cells that overlap; t lives on it.
     std::vector<int>& S = w->set;
@@ -215,14 +247,18 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     size_t ns = 0;
     // g_pad: g on S, zero elsewhere (its border stays zero, or wraps below).
     for (int j = 0; j < by; ++j) {
-      double* gp_row = gp + static_cast<size_t>(j + hw) * px + hw;
+      const size_t row0 = static_cast<size_t>(j + hw) * px + hw;
       for (int i = 0; i < bx; ++i) {
         const size_t b = static_cast<size_t>(j) * bx + i;
         const bool finite = std::isfinite(g0[b]);
         const double gb = finite ? g0[b] + u[b] - gbar : 0.0;
         g[b] = gb;
         const bool in = p[b] > 0.0 || (finite && gb < 0.0);
-        gp_row[i] = in ? gb : 0.0;
+        if (stencil_f) {
+          gpf[row0 + i] = in ? static_cast<float>(gb) : 0.0f;
+        } else {
+          gp[row0 + i] = in ? gb : 0.0;
+        }
         S[ns] = static_cast<int>(b);  // kept only if in
         ns += in;
       }
@@ -237,7 +273,13 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
         for (int ii = 0; ii < px; ++ii) {
           if (!border_row && ii >= hw && ii < bx + hw) continue;
           const int i = ((ii - hw) % bx + bx) % bx;
-          gp[static_cast<size_t>(jj) * px + ii] = gp[static_cast<size_t>(j + hw) * px + i + hw];
+          const size_t to = static_cast<size_t>(jj) * px + ii;
+          const size_t from = static_cast<size_t>(j + hw) * px + i + hw;
+          if (stencil_f) {
+            gpf[to] = gpf[from];
+          } else {
+            gp[to] = gp[from];
+          }
         }
       }
     }
@@ -246,7 +288,11 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     // Over the whole box, a row at a time (vectorises; each cell's sum runs
     // in the stencil's order, as a per-cell loop would), read on S only.
     // r: scratch until K t below.
-    ApplyStencil<L>(M, gp, px, bx, by, r);
+    if (stencil_f) {
+      ApplyStencil<L>(M, gpf, px, bx, by, r);
+    } else {
+      ApplyStencil<L>(M, gp, px, bx, by, r);
+    }
     const int* Sp = S.data();
     const double sum_z = Sum4(ns, [&](size_t k) { return r[Sp[k]]; });
     const double zbar = sum_z / static_cast<double>(ns);
@@ -296,8 +342,9 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
       break;
     }
     const double tau = num / den;
+    // Step and project onto p >= 0 on S; off S, p and p_new are zero (p > 0
+    // lies in S), so the rescaling and the stopping test run on S only.
     w->changed.clear();
-    std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
     const double sum_new = Sum4(ns, [&](size_t k) {
       const int b = Sp[k];
       double v = p[b] - tau * t[b];
@@ -310,9 +357,32 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
       return v;
     });
     if (!(sum_new > 0.0)) break;
-    double s;
-    st->change = Accept(P, sum_new, &s);
-    UpdateDisplacement(P, tau, s, st);
+    const double s = P.target / sum_new;
+    st->change = Sum4(ns, [&](size_t k) {
+                   const int b = Sp[k];
+                   const double v = s * pn[b], d = std::abs(v - p[b]);
+                   p[b] = v;
+                   return d;
+                 }) /
+                 P.target;
+    // u = s (u - tau K t + K delta), K delta by direct sums (few cells) or
+    // into g (free until the next iteration), in one pass that also sums
+    // the next iteration's contact gap.
+    const size_t nchg = w->changed.size();
+    double* kd = nullptr;
+    if (nchg > 0) {
+      if (!P.periodic && static_cast<double>(nchg) < DirectCellsPerApply(*P.spec, B)) {
+        for (int c : w->changed) P.K.AddCell(c, dl[c], bx, by, u);
+      } else {
+        P.K.Apply(*P.spec, dl, bx, by, g, &w->fft, P.precision);
+        ++st->applies;
+        kd = g;
+      }
+      for (int c : w->changed) dl[c] = 0.0;
+    }
+    nc = 0;
+    sum_g = kd ? UpdateAndSum<true>(B, s, tau, r, kd, g0, p, u, &nc)
+               : UpdateAndSum<false>(B, s, tau, r, kd, g0, p, u, &nc);
     if (st->change < tol) {
       st->converged = true;
       break;
@@ -329,15 +399,16 @@ bool ElasticContact::Solve(const std::vector<double>& gap_m, const CellBox& box,
                            double force_n, double tolerance, int max_iterations,
                            std::vector<double>* pressure_pa, ElasticWork* work,
                            ElasticSolveStats* stats, ElasticMethod method,
-                           ApplyPrecision precision) const {
+                           ApplyPrecision precision, const double* initial_u_m) const {
   return SolveElasticContact(*compliance_, gap_m, box, force_n, tolerance, max_iterations,
-                             pressure_pa, work, stats, method, precision);
+                             pressure_pa, work, stats, method, precision, initial_u_m);
 }
 
 bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& gap,
                          const CellBox& box_in, double force, double tol, int max_iter,
                          std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
-                         ElasticMethod method, ApplyPrecision precision) {
+                         ElasticMethod method, ApplyPrecision precision,
+                         const double* initial_u) {
   *st = ElasticSolveStats();
   CellBox box = box_in;
   const bool periodic = K.periodic();
@@ -351,25 +422,54 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   w->g0.resize(B);
   w->p.resize(B);
   w->u.resize(B);
-  w->g.assign(B, 0.0);
   w->t.assign(B, 0.0);
-  w->r.assign(B, 0.0);
-  w->p_new.assign(B, 0.0);
   w->delta.assign(B, 0.0);
+  if (method == ElasticMethod::kPreconditioned) {
+    // written before they are read (g, the stencil's r, each pass's p_new)
+    w->g.resize(B);
+    w->r.resize(B);
+    w->p_new.resize(B);
+  } else {
+    w->g.assign(B, 0.0);
+    w->r.assign(B, 0.0);
+    w->p_new.assign(B, 0.0);
+  }
   double* g0 = w->g0.data();
   double* p = w->p.data();
   size_t ncand = 0;
   double sum_p = 0.0;
+  // Cells of the guess the solve drops (their share of initial_u removed).
+  w->changed.clear();
   for (int j = 0; j < by; ++j)
     for (int i = 0; i < bx; ++i) {
       const size_t b = static_cast<size_t>(j) * bx + i, k = row_start(j) + i;
       g0[b] = gap[k];
       const bool cand = std::isfinite(g0[b]);
       ncand += cand;
-      p[b] = cand ? std::max(0.0, (*pressure)[k]) : 0.0;
+      const double given = (*pressure)[k];
+      p[b] = cand ? std::max(0.0, given) : 0.0;
       if (!std::isfinite(p[b])) p[b] = 0.0;
+      if (p[b] != given) w->changed.push_back(static_cast<int>(b));
       sum_p += p[b];
     }
+  // initial_u, corrected for the dropped cells (direct sums unless they
+  // are many), or a fresh K p.
+  bool have_u = initial_u != nullptr && !periodic && method == ElasticMethod::kPreconditioned &&
+                sum_p > 0.0;
+  if (have_u) {
+    // Too many dropped cells: the FFT is cheaper.
+    have_u = static_cast<double>(w->changed.size()) <=
+             DirectCellsPerApply(*K.SpectrumFor(bx, by), B);
+    if (have_u) {
+      std::copy(initial_u, initial_u + B, w->u.begin());
+      for (int c : w->changed) {
+        const double given = (*pressure)[row_start(c / bx) + c % bx];
+        if (std::isfinite(given)) K.AddCell(c, p[c] - given, bx, by, w->u.data());
+        else have_u = false;
+      }
+    }
+  }
+  w->changed.clear();
   std::fill(pressure->begin(), pressure->end(), 0.0);
   const double target = force / A;  // sum of p over cells
   if (ncand == 0 || !(target > 0.0)) return false;
@@ -377,15 +477,20 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
     for (size_t b = 0; b < B; ++b) p[b] = std::isfinite(g0[b]) ? 1.0 : 0.0;
     sum_p = static_cast<double>(ncand);
   }
-  for (size_t b = 0; b < B; ++b) p[b] *= target / sum_p;
+  const double scale = target / sum_p;
+  for (size_t b = 0; b < B; ++b) p[b] *= scale;
 
   const auto spec = K.SpectrumFor(bx, by);
   st->fft_size_x = spec->fft.nx();
   st->fft_size_y = spec->fft.ny();
   const double fft_cost = 5.0 * static_cast<double>(spec->fft.nx()) * spec->fft.ny() *
                           std::log2(static_cast<double>(spec->fft.nx()) * spec->fft.ny());
-  K.Apply(*spec, p, bx, by, w->u.data(), &w->fft, precision);
-  st->applies = 1;
+  if (have_u) {
+    for (size_t b = 0; b < B; ++b) w->u[b] *= scale;
+  } else {
+    K.Apply(*spec, p, bx, by, w->u.data(), &w->fft, precision);
+    st->applies = 1;
+  }
   const Problem P{K, spec, bx, by, B, periodic, target, fft_cost, w, precision};
   if (method == ElasticMethod::kPolonskyKeer) {
     PolonskyKeer(P, tol, max_iter, st);

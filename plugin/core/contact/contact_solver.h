@@ -50,9 +50,14 @@ struct ElasticSolveStats {
 struct ElasticWork {
   std::vector<double> g0, p, u, g, t, r, p_new, delta;
   std::vector<double> g_pad;  // preconditioner input with a zero border
+  std::vector<float> g_pad_f;  // the same in float (ApplyPrecision::kFloat)
   std::vector<int> set;       // kPreconditioned: the cells of the working set
   std::vector<int> changed;
   std::vector<double> check_p, check_u;  // skin_traction.cc: the box check
+  std::vector<double> u0;                 // skin_traction.cc: the warm start's K p
+  std::vector<int> u0_fix;
+  std::vector<double> row_a, row_b;
+  std::vector<float> row_f;
   ComplianceWork fft;
 };
 
@@ -63,13 +68,18 @@ struct ElasticWork {
 // exit (zero outside the box). Stops when the relative L1 change of the
 // pressure in one iteration is below `tolerance`, or after max_iterations.
 // Returns false if no cell can carry the load. precision: of the operator's
-// FFTs (compliance.h; the iteration itself is double).
+// FFTs (compliance.h; the iteration itself is double). initial_u_m: if not
+// null (kPreconditioned, non-periodic), K times the initial guess on the box
+// (bx * by, the guess's cells outside the box left out), which spares the
+// solve's first operator application; the solver corrects it for the cells
+// it drops (no candidates) and scales it with the guess.
 bool SolveElasticContact(const SurfaceCompliance& compliance, const std::vector<double>& gap_m,
                          const CellBox& box, double force_n, double tolerance,
                          int max_iterations, std::vector<double>* pressure_pa,
                          ElasticWork* work, ElasticSolveStats* stats,
                          ElasticMethod method = ElasticMethod::kPreconditioned,
-                         ApplyPrecision precision = ApplyPrecision::kDouble);
+                         ApplyPrecision precision = ApplyPrecision::kDouble,
+                         const double* initial_u_m = nullptr);
 
 // One skin's elastic contact: its compliance operator (shared, immutable,
 // spectra cached per box size) bound to the solver.
@@ -88,7 +98,8 @@ class ElasticContact {
              double tolerance, int max_iterations, std::vector<double>* pressure_pa,
              ElasticWork* work, ElasticSolveStats* stats,
              ElasticMethod method = ElasticMethod::kPreconditioned,
-             ApplyPrecision precision = ApplyPrecision::kDouble) const;
+             ApplyPrecision precision = ApplyPrecision::kDouble,
+             const double* initial_u_m = nullptr) const;
 
  private:
   std::shared_ptr<const SurfaceCompliance> compliance_;

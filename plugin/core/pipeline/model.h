@@ -5,6 +5,7 @@
 #define MJTOUCH_PIPELINE_MODEL_H_
 
 #include <array>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,20 +48,71 @@ enum LastPoseSlot {
 // then the last pose (LastPoseSlot; always there: `auto` oversampling depends
 // on the timestep, which MuJoCo's state-size callback does not see).
 //
-// Pressure history (`elastic`): kHistoryBlocks blocks of n*n pressures (Pa)
-// + HistorySlot, and one slot naming the head block h. Block h holds the
-// evaluation at the current time, (h + 2) % 3 the last step's, (h + 1) % 3
-// the one before: the warm start extrapolates 2 p(n-1) - p(n-2). A new time
-// rotates h (no copies); a repeated evaluation at the same time (mj_forward
-// twice) overwrites block h only, so it starts from the same history and
-// gives the same bits.
-enum HistorySlot { kHsValid = 0, kHsDepth, kHistorySlots };  // touched; indentation, m
+// Pressure history (`elastic`): kHistoryBlocks blocks of HistorySlot, then
+// 2 n*n floats packed two to a double (n*n doubles): the pressure (Pa) on the
+// grid, valid inside the box kHsPBox* (zero outside), and the surface
+// displacement K p (m) of that pressure over the box kHsURegion* (row-major,
+// at most n*n cells; none if kHsURegionNx is 0),
+// which spares the next step's solve the operator application of its warm
+// start. Floats: the history only seeds the warm start (the solve converges
+// from it; float rounding, 1e-7, is far below its tolerance) and halves the
+// state that mj_copyData and mujoco.rollout copy each step. Packed finite
+// floats never form a NaN or infinite double.
+// One slot names the head block h. Block h holds the evaluation at the
+// current time, (h + 2) % 3 the last step's, (h + 1) % 3 the one before: the
+// warm start extrapolates 2 p(n-1) - p(n-2). A new time rotates h (no
+// copies); a repeated evaluation at the same time (mj_forward twice)
+// overwrites block h only, so it starts from the same history and gives the
+// same bits.
+enum HistorySlot {
+  kHsValid = 0,  // touched
+  kHsDepth,      // indentation, m
+  kHsPBoxI0, kHsPBoxJ0, kHsPBoxNx, kHsPBoxNy,              // box of the pressure
+  kHsURegionI0, kHsURegionJ0, kHsURegionNx, kHsURegionNy,  // box of the displacement
+  kHistorySlots
+};
 constexpr int kHistoryBlocks = 3;
+
+// A history block's packed floats: pressure at [0, ncell), displacement at
+// [ncell, 2 ncell) (memcpy: no aliasing of the doubles).
+struct HistoryBlock {
+  double* slots;
+  char* floats;
+  size_t ncell;
+  float p(size_t k) const { return Get(k); }
+  float u(size_t k) const { return Get(ncell + k); }
+  void set_p(size_t k, float v) { Set(k, v); }
+  void set_u(size_t k, float v) { Set(ncell + k, v); }
+  float Get(size_t k) const {
+    float v;
+    std::memcpy(&v, floats + 4 * k, 4);
+    return v;
+  }
+  void Set(size_t k, float v) { std::memcpy(floats + 4 * k, &v, 4); }
+  // count displacements from index k on
+  void u_row(size_t k, int count, float* out) const {
+    std::memcpy(out, floats + 4 * (ncell + k), 4 * static_cast<size_t>(count));
+  }
+  CellBox SlotBox(int first) const {
+    return CellBox{static_cast<int>(slots[first]), static_cast<int>(slots[first + 1]),
+                   static_cast<int>(slots[first + 2]), static_cast<int>(slots[first + 3])};
+  }
+  void SetSlotBox(int first, const CellBox& b) {
+    slots[first] = b.i0;
+    slots[first + 1] = b.j0;
+    slots[first + 2] = b.nx;
+    slots[first + 3] = b.ny;
+  }
+  CellBox p_box() const { return SlotBox(kHsPBoxI0); }
+  CellBox u_box() const { return SlotBox(kHsURegionI0); }
+};
+
 struct StateLayout {
   int receptors = 0, last_spikes = 0, last_voltage = 0, history = 0, last_pose = 0;
-  int history_block = 0;  // n*n + kHistorySlots; 0 without `elastic`
+  int history_block = 0;  // kHistorySlots + n*n; 0 without `elastic`
   int history_head = 0;   // slot of h
   int size = 0;
+  size_t ncell = 0;
 
   StateLayout() = default;
   StateLayout(const SkinConfig& cfg, int nreceptor) {
@@ -69,17 +121,19 @@ struct StateLayout {
     last_voltage = last_spikes + nreceptor;
     history = last_voltage + nreceptor;
     const bool elastic = cfg.pressure_model == PressureModel::kElastic;
-    history_block = elastic ? static_cast<int>(cfg.grid.Size()) + kHistorySlots : 0;
+    ncell = cfg.grid.Size();
+    history_block = elastic ? kHistorySlots + static_cast<int>(ncell) : 0;
     history_head = history + kHistoryBlocks * history_block;
     last_pose = history_head + (elastic ? 1 : 0);
     size = last_pose + kLastPoseSize;
   }
   // Block k steps back from the head (0: this time, 1: last step, 2: the one
-  // before); pressures first, then HistorySlot.
-  double* history_at(double* state, int back) const {
+  // before).
+  HistoryBlock history_at(double* state, int back) const {
     const int h = static_cast<int>(state[history_head]);
-    return state + history + static_cast<size_t>((h + kHistoryBlocks - back) % kHistoryBlocks) *
-                                 history_block;
+    double* b = state + history + static_cast<size_t>((h + kHistoryBlocks - back) % kHistoryBlocks) *
+                                      history_block;
+    return HistoryBlock{b, reinterpret_cast<char*>(b + kHistorySlots), ncell};
   }
   // Receptor r's membrane block.
   double* receptor(double* state, int r) const {
