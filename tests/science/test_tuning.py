@@ -152,13 +152,22 @@ ATONAL_REF_M = 10e-6  # the sine amplitude whose stress change is scaled
 ATONAL_SEEDS = range(12)
 
 
+# RA at 80 Hz: TouchSim's nine RA fits need 8-15x their absolute threshold
+# to follow every cycle (mjtouch/tuning.py, computed from hsaal/touchsim);
+# the 12-seed median is held to that range widened by 25% each way, the
+# spread of such a median here (24 seeds: 10-90% of single units 7-20x). With
+# `ra_saturation` 5 the median was ~100x (plugin/README.md, RA).
+RA_80HZ_RATIO = (8.0 / 1.25, 15.0 * 1.25)
+PIN_FREQS_HZ = sorted({f for _, f in ATONAL_CASES} | {80.0})
+
+
 @pytest.fixture(scope="module")
 def pin_sine_stress():
-    return tuning.pin_sine_stress(tuning.TuningConfig(), sorted({f for _, f in ATONAL_CASES}),
+    return tuning.pin_sine_stress(tuning.TuningConfig(), PIN_FREQS_HZ,
                                   (0.0, ATONAL_REF_M, 2 * ATONAL_REF_M))
 
 
-@pytest.mark.parametrize("f", sorted({f for _, f in ATONAL_CASES}))
+@pytest.mark.parametrize("f", PIN_FREQS_HZ)
 def test_pin_stress_is_linear_in_amplitude(pin_sine_stress, f):
     # tuning.atonal_ratio scales the first amplitude's stress change
     run = pin_sine_stress[f]
@@ -174,3 +183,10 @@ def test_entrainment_over_1_5x_absolute_on_the_pin(pin_sine_stress, cls, f):
     lo, hi = tuning.PUBLISHED_ENTRAINMENT_RATIO[cls]
     assert lo < np.median(ratios) < hi, ratios
     assert ratios.min() > 1.2, ratios
+
+
+def test_ra_follows_80_hz_within_touchsims_range(pin_sine_stress):
+    ratios = np.array([tuning.atonal_ratio(pin_sine_stress[80.0], "RA", s) for s in ATONAL_SEEDS])
+    assert np.all(np.isfinite(ratios)), ratios
+    lo, hi = RA_80HZ_RATIO
+    assert lo < np.median(ratios) < hi, ratios
