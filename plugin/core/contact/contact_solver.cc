@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <limits>
 
 namespace mjtouch {
@@ -173,8 +171,7 @@ double UpdateAndSum(size_t B, double s, double tau, const double* __restrict r,
     u[b] = v;
     const bool c = p[b] > 0.0;
     n += c;
-    const double x = g0[b] + v;  // computed and selected: no branch
-    return c ? x : 0.0;
+    return c ? g0[b] + v : 0.0;
   });
   *nc = n;
   return sum;
@@ -220,6 +217,7 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   double* g = w->g.data();
   double* t = w->t.data();
   double* r = w->r.data();
+  double* pn = w->p_new.data();
   double* dl = w->delta.data();
   const bool stencil_f = P.precision == ApplyPrecision::kFloat;
   const size_t pad_size = static_cast<size_t>(px) * (by + 2 * hw);
@@ -230,7 +228,6 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   }
   double* gp = w->g_pad.data();
   float* gpf = w->g_pad_f.data();
-  for (auto* v : {&w->set_g, &w->set_p, &w->set_t, &w->set_z, &w->set_n}) v->resize(B);
   double G_old = 1.0;
   bool first = true;
   // The contact's gap sum and size for the next iteration (the first from
@@ -245,66 +242,25 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     st->iterations = it;
     const double gbar = sum_g / static_cast<double>(nc);
     // The working set: the contact plus cells that overlap; t lives on it.
-    // The CG's vector work runs on compact arrays over the set (k < ns, in
-    // box order: the same sums in the same order as over the box's cells
-    // of the set), gathered here in one pass; only the operator's input t
-    // and the pressure p are scattered back to the box.
     std::vector<int>& S = w->set;
     S.resize(B);
-    int* Sw = S.data();
-    double* sg = w->set_g.data();
-    double* sp = w->set_p.data();
-    double* stv = w->set_t.data();  // the last t, then the new one
-    double* sz = w->set_z.data();
     size_t ns = 0;
     // g_pad: g on S, zero elsewhere (its border stays zero, or wraps below).
-    // Per row, first the residual and the set's membership without branches
-    // (on a fragmented contact, branches on p > 0 mispredict: this pass
-    // drew ~40% of the solver's own perf samples on slide_grating), then
-    // the set's cells gathered into the compact arrays; t is cleared on the
-    // box (its old values gathered) for the new t.
-    std::vector<unsigned char>& in_row = w->set_mask;
-    in_row.resize(bx);
-    unsigned char* mk = in_row.data();
     for (int j = 0; j < by; ++j) {
       const size_t row0 = static_cast<size_t>(j + hw) * px + hw;
-      const size_t b0 = static_cast<size_t>(j) * bx;
-      const double* __restrict g0r = g0 + b0;
-      const double* __restrict ur = u + b0;
-      const double* __restrict pr = p + b0;
-      double* __restrict gr = g + b0;
       for (int i = 0; i < bx; ++i) {
-        // computed for every cell and selected: no branch (a cell that
-        // never touches has g0 = +inf)
-        const double graw = g0r[i] + ur[i] - gbar;
-        const bool finite = std::abs(g0r[i]) <= std::numeric_limits<double>::max();
-        const double gb = finite ? graw : 0.0;
-        const bool in = (pr[i] > 0.0) | (finite & (gb < 0.0));
-        gr[i] = gb;
-        mk[i] = in;
-        // in ? g : +0 by a bit mask (GCC turns the select into a branch)
+        const size_t b = static_cast<size_t>(j) * bx + i;
+        const bool finite = std::isfinite(g0[b]);
+        const double gb = finite ? g0[b] + u[b] - gbar : 0.0;
+        g[b] = gb;
+        const bool in = p[b] > 0.0 || (finite && gb < 0.0);
         if (stencil_f) {
-          const float gf = static_cast<float>(gb);
-          uint32_t bits;
-          std::memcpy(&bits, &gf, sizeof(bits));
-          bits &= 0u - static_cast<uint32_t>(in);
-          std::memcpy(gpf + row0 + i, &bits, sizeof(bits));
+          gpf[row0 + i] = in ? static_cast<float>(gb) : 0.0f;
         } else {
-          uint64_t bits;
-          std::memcpy(&bits, &gb, sizeof(bits));
-          bits &= uint64_t{0} - static_cast<uint64_t>(in);
-          std::memcpy(gp + row0 + i, &bits, sizeof(bits));
+          gp[row0 + i] = in ? gb : 0.0;
         }
-      }
-      for (int i = 0; i < bx; ++i) {
-        // kept only if in (the next cell overwrites them otherwise)
-        const size_t b = b0 + i;
-        Sw[ns] = static_cast<int>(b);
-        sg[ns] = g[b];
-        sp[ns] = p[b];
-        stv[ns] = t[b];
-        t[b] = 0.0;
-        ns += mk[i];
+        S[ns] = static_cast<int>(b);  // kept only if in
+        ns += in;
       }
     }
     S.resize(ns);
@@ -338,14 +294,12 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
       ApplyStencil<L>(M, gp, px, bx, by, r);
     }
     const int* Sp = S.data();
-    const double sum_z = Sum4(ns, [&](size_t k) {
-      sz[k] = r[Sp[k]];
-      return sz[k];
-    });
+    const double sum_z = Sum4(ns, [&](size_t k) { return r[Sp[k]]; });
     const double zbar = sum_z / static_cast<double>(ns);
     const double G = Sum4(ns, [&](size_t k) {
-      sz[k] -= zbar;
-      return sg[k] * sz[k];
+      const int b = Sp[k];
+      r[b] -= zbar;
+      return g[b] * r[b];
     });
     if (!(G > 0.0)) {  // exact solution (or a set the stencil cannot move)
       st->converged = G == 0.0;
@@ -360,29 +314,29 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     first = false;
     G_old = G;
     double num = 0.0;
-    // sn: the new t on S (stv keeps the old one for a second pass)
-    double* sn = w->set_n.data();
     for (int pass = 0; pass < 2; ++pass) {
+      std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
       const double sum_t = Sum4(ns, [&](size_t k) {
-        sn[k] = sz[k] + beta * stv[k];
-        return sn[k];
+        const int b = Sp[k];
+        pn[b] = r[b] + beta * t[b];
+        return pn[b];
       });
       const double tbar = sum_t / static_cast<double>(ns);
       num = Sum4(ns, [&](size_t k) {
-        sn[k] -= tbar;
-        return sg[k] * sn[k];
+        const int b = Sp[k];
+        pn[b] -= tbar;
+        return g[b] * pn[b];
       });
       if (num > 0.0 || beta == 0.0) break;
       beta = 0.0;
     }
-    for (size_t k = 0; k < ns; ++k) t[Sp[k]] = sn[k];
-    std::swap(w->set_t, w->set_n);
-    stv = w->set_t.data();
-    sn = w->set_n.data();
+    std::swap(w->t, w->p_new);
+    t = w->t.data();
+    pn = w->p_new.data();
     P.K.Apply(*P.spec, t, bx, by, r, &w->fft, P.precision);
     ++st->applies;
     // t sums to zero over S: t.(K t - mean) = t.K t
-    const double den = Sum4(ns, [&](size_t k) { return r[Sp[k]] * stv[k]; });
+    const double den = Sum4(ns, [&](size_t k) { return r[Sp[k]] * t[Sp[k]]; });
     if (!(den > 0.0) || !(num > 0.0)) {
       st->converged = false;
       break;
@@ -390,24 +344,24 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     const double tau = num / den;
     // Step and project onto p >= 0 on S; off S, p and p_new are zero (p > 0
     // lies in S), so the rescaling and the stopping test run on S only.
-    // sn: p_new on S.
     w->changed.clear();
     const double sum_new = Sum4(ns, [&](size_t k) {
-      double v = sp[k] - tau * stv[k];
+      const int b = Sp[k];
+      double v = p[b] - tau * t[b];
       if (v < 0.0) {
-        const int b = Sp[k];
         dl[b] = -v;
         w->changed.push_back(b);
         v = 0.0;
       }
-      sn[k] = v;
+      pn[b] = v;
       return v;
     });
     if (!(sum_new > 0.0)) break;
     const double s = P.target / sum_new;
     st->change = Sum4(ns, [&](size_t k) {
-                   const double v = s * sn[k], d = std::abs(v - sp[k]);
-                   p[Sp[k]] = v;
+                   const int b = Sp[k];
+                   const double v = s * pn[b], d = std::abs(v - p[b]);
+                   p[b] = v;
                    return d;
                  }) /
                  P.target;
@@ -471,7 +425,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   w->t.assign(B, 0.0);
   w->delta.assign(B, 0.0);
   if (method == ElasticMethod::kPreconditioned) {
-    // written before they are read (g, the stencil's r; p_new unused)
+    // written before they are read (g, the stencil's r, each pass's p_new)
     w->g.resize(B);
     w->r.resize(B);
     w->p_new.resize(B);

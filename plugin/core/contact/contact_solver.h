@@ -52,9 +52,6 @@ struct ElasticWork {
   std::vector<double> g_pad;  // preconditioner input with a zero border
   std::vector<float> g_pad_f;  // the same in float (ApplyPrecision::kFloat)
   std::vector<int> set;       // kPreconditioned: the cells of the working set
-  // kPreconditioned: g, p, t, z and the new t (or p_new) on the set, compact
-  std::vector<double> set_g, set_p, set_t, set_z, set_n;
-  std::vector<unsigned char> set_mask;  // one box row's membership
   std::vector<int> changed;
   std::vector<double> check_p, check_u;  // skin_traction.cc: the box check
   std::vector<double> u0;                 // skin_traction.cc: the warm start's K p
