@@ -18,7 +18,7 @@ constexpr double kPi = 3.14159265358979323846;
 // The butterflies of one j over lanes [0, batch). kTwiddle: multiply the
 // inputs r >= 1 by w[r] first. Pointers are restrict-qualified and the
 // lanes independent, so the loop vectorises (no gathers, no branches).
-// kOut (radix 5 only: 3 or 5): the outputs r < kOut only.
+// kOut (radix 5: 3 or 5; radix 3: 2 or 3): the outputs r < kOut only.
 template <int R, bool kInverse, bool kTwiddle, typename T, int kOut = R>
 inline __attribute__((always_inline)) void Butterflies(
     const T* __restrict in_re, const T* __restrict in_im, size_t in_step,
@@ -63,8 +63,10 @@ inline __attribute__((always_inline)) void Butterflies(
       oi[0] = xi[0] + ti;
       orr[out_step] = mr + sg * di;
       oi[out_step] = mi - sg * dr;
-      orr[2 * out_step] = mr - sg * di;
-      oi[2 * out_step] = mi + sg * dr;
+      if constexpr (kOut == 3) {
+        orr[2 * out_step] = mr - sg * di;
+        oi[2 * out_step] = mi + sg * dr;
+      }
     } else if constexpr (R == 4) {
       const T t0r = xr[0] + xr[2], t0i = xi[0] + xi[2];
       const T t1r = xr[0] - xr[2], t1i = xi[0] - xi[2];
@@ -183,11 +185,34 @@ void FirstStage4HalfInput(int n, const T* in_re, const T* in_im, int in_stride, 
   }
 }
 
-// A last radix-5 stage writing outputs r < 3 only.
+// A last stage writing outputs r < kOut only: radix 5 the first three,
+// radix 3 the first two.
 template <bool kInverse, typename T>
-void RunStage5FirstThree(int n, int span, const T* twr, const T* twi, const T* ir,
-                         const T* ii, int is, T* orr, T* oi, int os, int batch) {
-  Stage<5, kInverse, T, 3>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+void RunLastStagePart(int radix, int n, int span, const T* twr, const T* twi, const T* ir,
+                      const T* ii, int is, T* orr, T* oi, int os, int batch) {
+  if (radix == 5) {
+    Stage<5, kInverse, T, 3>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+  } else {
+    Stage<3, kInverse, T, 2>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+  }
+}
+
+// A first (span 1) radix-2 stage whose inputs j + n/2 are zero: both
+// outputs are x_j (x + 0 and x - 0 are x).
+template <typename T>
+void FirstStage2HalfInput(int n, const T* in_re, const T* in_im, int in_stride, T* out_re,
+                          T* out_im, int out_stride, int batch) {
+  const size_t os = static_cast<size_t>(out_stride);
+  for (int j = 0; j < n / 2; ++j) {
+    const T* a_r = in_re + static_cast<size_t>(j) * in_stride;
+    const T* a_i = in_im + static_cast<size_t>(j) * in_stride;
+    T* o_r = out_re + static_cast<size_t>(2 * j) * os;
+    T* o_i = out_im + static_cast<size_t>(2 * j) * os;
+    std::memcpy(o_r, a_r, batch * sizeof(T));
+    std::memcpy(o_r + os, a_r, batch * sizeof(T));
+    std::memcpy(o_i, a_i, batch * sizeof(T));
+    std::memcpy(o_i + os, a_i, batch * sizeof(T));
+  }
 }
 
 // dst[c * dst_stride + r] = src[r * src_stride + c], r < rows, c < cols.
@@ -251,10 +276,13 @@ template <typename T>
 void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sre, T* sim,
                         int nonzero, int needed) const {
   const bool half_input = SkipsUpperHalf(nonzero);
-  // A last radix-5 stage writes element j + r n/5 from output r: with
-  // needed <= 3 n / 5, outputs 3 and 4 are never read.
-  const bool three_of_five = needed >= 0 && stages_.size() > 1 && stages_.back().radix == 5 &&
-                             5 * needed <= 3 * n_;
+  // A last radix-R stage writes element j + r n/R from output r: with
+  // needed <= 3 n / 5 (R = 5) or 2 n / 3 (R = 3), outputs 3-4 or 2 are
+  // never read.
+  const int last_radix = stages_.empty() ? 0 : stages_.back().radix;
+  const bool last_part =
+      needed >= 0 && stages_.size() > 1 &&
+      ((last_radix == 5 && 5 * needed <= 3 * n_) || (last_radix == 3 && 3 * needed <= 2 * n_));
   // Ping-pong between the data (row stride `stride`) and the scratch
   // (compact, row stride `batch`).
   const T* ir = re;
@@ -274,12 +302,14 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
       twr = s.tw_re.data();
       twi = s.tw_im.data();
     }
-    if (three_of_five && &s == &stages_.back()) {
+    if (last_part && &s == &stages_.back()) {
       if (inverse) {
-        RunStage5FirstThree<true>(n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+        RunLastStagePart<true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
       } else {
-        RunStage5FirstThree<false>(n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+        RunLastStagePart<false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
       }
+    } else if (half_input && &s == &stages_[0] && s.radix == 2) {
+      FirstStage2HalfInput(n_, ir, ii, is, orr, oi, os, batch);
     } else if (half_input && &s == &stages_[0]) {
       if (inverse) {
         FirstStage4HalfInput<true>(n_, ir, ii, is, orr, oi, os, batch);
@@ -297,7 +327,7 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
     in_data = !in_data;
   }
   if (!in_data) {
-    for (int k = 0; k < (three_of_five ? needed : n_); ++k) {
+    for (int k = 0; k < (last_part ? needed : n_); ++k) {
       std::memcpy(re + static_cast<size_t>(k) * stride, sre + static_cast<size_t>(k) * batch,
                   batch * sizeof(T));
       std::memcpy(im + static_cast<size_t>(k) * stride, sim + static_cast<size_t>(k) * batch,
