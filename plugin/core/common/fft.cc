@@ -18,7 +18,8 @@ constexpr double kPi = 3.14159265358979323846;
 // The butterflies of one j over lanes [0, batch). kTwiddle: multiply the
 // inputs r >= 1 by w[r] first. Pointers are restrict-qualified and the
 // lanes independent, so the loop vectorises (no gathers, no branches).
-template <int R, bool kInverse, bool kTwiddle, typename T>
+// kOut (radix 5: 3 or 5; radix 3: 2 or 3): the outputs r < kOut only.
+template <int R, bool kInverse, bool kTwiddle, typename T, int kOut = R>
 inline __attribute__((always_inline)) void Butterflies(
     const T* __restrict in_re, const T* __restrict in_im, size_t in_step,
     T* __restrict out_re, T* __restrict out_im, size_t out_step, const T* wr, const T* wi,
@@ -62,8 +63,10 @@ inline __attribute__((always_inline)) void Butterflies(
       oi[0] = xi[0] + ti;
       orr[out_step] = mr + sg * di;
       oi[out_step] = mi - sg * dr;
-      orr[2 * out_step] = mr - sg * di;
-      oi[2 * out_step] = mi + sg * dr;
+      if constexpr (kOut == 3) {
+        orr[2 * out_step] = mr - sg * di;
+        oi[2 * out_step] = mi + sg * dr;
+      }
     } else if constexpr (R == 4) {
       const T t0r = xr[0] + xr[2], t0i = xi[0] + xi[2];
       const T t1r = xr[0] - xr[2], t1i = xi[0] - xi[2];
@@ -79,6 +82,7 @@ inline __attribute__((always_inline)) void Butterflies(
       oi[3 * out_step] = t1i + sg * t3r;
     } else {
       static_assert(R == 5, "radix");
+      static_assert(kOut == 5 || kOut == 3, "outputs");
       const T t1r = xr[1] + xr[4], t1i = xi[1] + xi[4];
       const T t2r = xr[2] + xr[3], t2i = xi[2] + xi[3];
       const T d1r = xr[1] - xr[4], d1i = xi[1] - xi[4];
@@ -91,12 +95,14 @@ inline __attribute__((always_inline)) void Butterflies(
       oi[0] = xi[0] + t1i + t2i;
       orr[out_step] = m1r + sg * e1i;
       oi[out_step] = m1i - sg * e1r;
-      orr[4 * out_step] = m1r - sg * e1i;
-      oi[4 * out_step] = m1i + sg * e1r;
       orr[2 * out_step] = m2r + sg * e2i;
       oi[2 * out_step] = m2i - sg * e2r;
-      orr[3 * out_step] = m2r - sg * e2i;
-      oi[3 * out_step] = m2i + sg * e2r;
+      if constexpr (kOut == 5) {
+        orr[4 * out_step] = m1r - sg * e1i;
+        oi[4 * out_step] = m1i + sg * e1r;
+        orr[3 * out_step] = m2r - sg * e2i;
+        oi[3 * out_step] = m2i + sg * e2r;
+      }
     }
   }
 }
@@ -107,7 +113,8 @@ inline __attribute__((always_inline)) void Butterflies(
 // natural order after the last stage. Every loop over b is independent per
 // lane (no reductions) and no FMA is formed (-ffp-contract=off), so
 // vectorised and scalar code round alike.
-template <int R, bool kInverse, typename T>
+// kOut: Butterflies' (a last stage whose outputs r >= kOut are not needed).
+template <int R, bool kInverse, typename T, int kOut = R>
 __attribute__((target_clones("avx2", "default")))
 void Stage(int n, int span, const T* tw_re, const T* tw_im, const T* in_re, const T* in_im,
            int in_stride, T* out_re, T* out_im, int out_stride, int batch) {
@@ -125,11 +132,11 @@ void Stage(int n, int span, const T* tw_re, const T* tw_im, const T* in_re, cons
     const size_t io = static_cast<size_t>(j) * in_stride;
     const size_t oo = static_cast<size_t>(dst) * out_stride;
     if (jm != 0) {
-      Butterflies<R, kInverse, true>(in_re + io, in_im + io, in_step, out_re + oo, out_im + oo,
-                                     out_step, wr, wi, batch);
+      Butterflies<R, kInverse, true, T, kOut>(in_re + io, in_im + io, in_step, out_re + oo,
+                                             out_im + oo, out_step, wr, wi, batch);
     } else {
-      Butterflies<R, kInverse, false>(in_re + io, in_im + io, in_step, out_re + oo, out_im + oo,
-                                      out_step, wr, wi, batch);
+      Butterflies<R, kInverse, false, T, kOut>(in_re + io, in_im + io, in_step, out_re + oo,
+                                              out_im + oo, out_step, wr, wi, batch);
     }
   }
 }
@@ -142,6 +149,69 @@ void RunStage(int radix, int n, int span, const T* twr, const T* twi, const T* i
     case 3: Stage<3, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
     case 4: Stage<4, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
     default: Stage<5, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
+  }
+}
+
+// A first (span 1, untwiddled) radix-4 stage whose inputs j + 2 n/4 and
+// j + 3 n/4 are zero: the butterfly of Butterflies<4> with x2 = x3 = 0
+// dropped, which rounds alike (x + 0 and x - 0 are x), reading half the data.
+template <bool kInverse, typename T>
+__attribute__((target_clones("avx2", "default")))
+void FirstStage4HalfInput(int n, const T* in_re, const T* in_im, int in_stride, T* out_re,
+                          T* out_im, int out_stride, int batch) {
+  constexpr T sg = kInverse ? T(-1) : T(1);
+  const int m = n / 4;
+  const size_t in_step = static_cast<size_t>(m) * in_stride;
+  const size_t os = static_cast<size_t>(out_stride);
+  for (int j = 0; j < m; ++j) {
+    const T* __restrict a_r = in_re + static_cast<size_t>(j) * in_stride;
+    const T* __restrict a_i = in_im + static_cast<size_t>(j) * in_stride;
+    const T* __restrict b_r = a_r + in_step;
+    const T* __restrict b_i = a_i + in_step;
+    T* __restrict o_r = out_re + static_cast<size_t>(4 * j) * os;
+    T* __restrict o_i = out_im + static_cast<size_t>(4 * j) * os;
+#pragma GCC ivdep
+    for (int b = 0; b < batch; ++b) {
+      const T x0r = a_r[b], x0i = a_i[b], x1r = b_r[b], x1i = b_i[b];
+      o_r[b] = x0r + x1r;
+      o_i[b] = x0i + x1i;
+      o_r[2 * os + b] = x0r - x1r;
+      o_i[2 * os + b] = x0i - x1i;
+      o_r[os + b] = x0r + sg * x1i;
+      o_i[os + b] = x0i - sg * x1r;
+      o_r[3 * os + b] = x0r - sg * x1i;
+      o_i[3 * os + b] = x0i + sg * x1r;
+    }
+  }
+}
+
+// A last stage writing outputs r < kOut only: radix 5 the first three,
+// radix 3 the first two.
+template <bool kInverse, typename T>
+void RunLastStagePart(int radix, int n, int span, const T* twr, const T* twi, const T* ir,
+                      const T* ii, int is, T* orr, T* oi, int os, int batch) {
+  if (radix == 5) {
+    Stage<5, kInverse, T, 3>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+  } else {
+    Stage<3, kInverse, T, 2>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+  }
+}
+
+// A first (span 1) radix-2 stage whose inputs j + n/2 are zero: both
+// outputs are x_j (x + 0 and x - 0 are x).
+template <typename T>
+void FirstStage2HalfInput(int n, const T* in_re, const T* in_im, int in_stride, T* out_re,
+                          T* out_im, int out_stride, int batch) {
+  const size_t os = static_cast<size_t>(out_stride);
+  for (int j = 0; j < n / 2; ++j) {
+    const T* a_r = in_re + static_cast<size_t>(j) * in_stride;
+    const T* a_i = in_im + static_cast<size_t>(j) * in_stride;
+    T* o_r = out_re + static_cast<size_t>(2 * j) * os;
+    T* o_i = out_im + static_cast<size_t>(2 * j) * os;
+    std::memcpy(o_r, a_r, batch * sizeof(T));
+    std::memcpy(o_r + os, a_r, batch * sizeof(T));
+    std::memcpy(o_i, a_i, batch * sizeof(T));
+    std::memcpy(o_i + os, a_i, batch * sizeof(T));
   }
 }
 
@@ -203,8 +273,16 @@ FftPlan::FftPlan(int n) : n_(n) {
 }
 
 template <typename T>
-void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sre,
-                        T* sim) const {
+void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sre, T* sim,
+                        int nonzero, int needed) const {
+  const bool half_input = SkipsUpperHalf(nonzero);
+  // A last radix-R stage writes element j + r n/R from output r: with
+  // needed <= 3 n / 5 (R = 5) or 2 n / 3 (R = 3), outputs 3-4 or 2 are
+  // never read.
+  const int last_radix = stages_.empty() ? 0 : stages_.back().radix;
+  const bool last_part =
+      needed >= 0 && stages_.size() > 1 &&
+      ((last_radix == 5 && 5 * needed <= 3 * n_) || (last_radix == 3 && 3 * needed <= 2 * n_));
   // Ping-pong between the data (row stride `stride`) and the scratch
   // (compact, row stride `batch`).
   const T* ir = re;
@@ -224,7 +302,21 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
       twr = s.tw_re.data();
       twi = s.tw_im.data();
     }
-    if (inverse) {
+    if (last_part && &s == &stages_.back()) {
+      if (inverse) {
+        RunLastStagePart<true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      } else {
+        RunLastStagePart<false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      }
+    } else if (half_input && &s == &stages_[0] && s.radix == 2) {
+      FirstStage2HalfInput(n_, ir, ii, is, orr, oi, os, batch);
+    } else if (half_input && &s == &stages_[0]) {
+      if (inverse) {
+        FirstStage4HalfInput<true>(n_, ir, ii, is, orr, oi, os, batch);
+      } else {
+        FirstStage4HalfInput<false>(n_, ir, ii, is, orr, oi, os, batch);
+      }
+    } else if (inverse) {
       RunStage<true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
     } else {
       RunStage<false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
@@ -235,7 +327,7 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
     in_data = !in_data;
   }
   if (!in_data) {
-    for (int k = 0; k < n_; ++k) {
+    for (int k = 0; k < (last_part ? needed : n_); ++k) {
       std::memcpy(re + static_cast<size_t>(k) * stride, sre + static_cast<size_t>(k) * batch,
                   batch * sizeof(T));
       std::memcpy(im + static_cast<size_t>(k) * stride, sim + static_cast<size_t>(k) * batch,
@@ -243,8 +335,9 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
     }
   }
 }
-template void FftPlan::Transform(double*, double*, int, int, bool, double*, double*) const;
-template void FftPlan::Transform(float*, float*, int, int, bool, float*, float*) const;
+template void FftPlan::Transform(double*, double*, int, int, bool, double*, double*, int,
+                                 int) const;
+template void FftPlan::Transform(float*, float*, int, int, bool, float*, float*, int, int) const;
 
 namespace {
 // Odd row strides: power-of-two strides put the radix streams of a stage in
@@ -392,9 +485,12 @@ void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, T* spe
   T *wr, *wi, *sr, *si;
   SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
   // Rows >= rows are zero; in the others, the lanes [0, h) the transform
-  // reads are all written (wi's last one is zero when cols is odd).
-  std::fill(wr + static_cast<size_t>(rows) * lw, wr + W, T(0));
-  std::fill(wi + static_cast<size_t>(rows) * lw, wi + W, T(0));
+  // reads are all written (wi's last one is zero when cols is odd). With
+  // rows <= ny / 2 the transform reads rows < ny / 2 only (Transform's
+  // nonzero): the others need no clearing.
+  const size_t zero_end = py_.SkipsUpperHalf(rows) ? static_cast<size_t>(ny_ / 2) * lw : W;
+  std::fill(wr + static_cast<size_t>(rows) * lw, wr + zero_end, T(0));
+  std::fill(wi + static_cast<size_t>(rows) * lw, wi + zero_end, T(0));
   for (int y = 0; y < rows; ++y) {
     const double* row = re + static_cast<size_t>(y) * stride;
     T* a = wr + static_cast<size_t>(y) * lw;
@@ -403,7 +499,7 @@ void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, T* spe
     for (int x = 0; x < cols - h; ++x) b[x] = static_cast<T>(row[h + x]);
     for (int x = cols - h; x < h; ++x) b[x] = T(0);
   }
-  py_.Transform(wr, wi, h, lw, false, sr, si);
+  py_.Transform(wr, wi, h, lw, false, sr, si, rows);
   // Split Z = A + i B (A, B spectra of real columns): A = (Z(k) + conj
   // Z(-k)) / 2, B = (Z(k) - conj Z(-k)) / (2 i); into (x, ky), half ky.
   // Transposed first (into the stages' scratch, free until the x pass), so
@@ -437,11 +533,13 @@ void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, T* spe
         bi[ky] = T(-0.5) * (zr[ky] - zr[ny_ - ky]);
       }
   }
-  for (int x = cols; x < nx_; ++x) {
+  // columns >= cols are zero (those the transform reads: as above)
+  const int zero_x = px_.SkipsUpperHalf(cols) ? nx_ / 2 : nx_;
+  for (int x = cols; x < zero_x; ++x) {
     std::fill(spec_re + static_cast<size_t>(x) * ls, spec_re + static_cast<size_t>(x) * ls + hy, T(0));
     std::fill(spec_im + static_cast<size_t>(x) * ls, spec_im + static_cast<size_t>(x) * ls + hy, T(0));
   }
-  px_.Transform(spec_re, spec_im, hy, ls, false, sr, si);
+  px_.Transform(spec_re, spec_im, hy, ls, false, sr, si, cols);
 }
 
 template <typename T>
@@ -453,7 +551,8 @@ void Fft2D::InverseReal(T* spec_re, T* spec_im, int rows, int cols, double* re, 
   T *wr, *wi, *sr, *si;
   SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
   const int ls = spec_stride_, hy = half_ny();
-  px_.Transform(spec_re, spec_im, hy, ls, true, sr, si);
+  // columns x < cols only are read below
+  px_.Transform(spec_re, spec_im, hy, ls, true, sr, si, -1, cols);
   // Z = A + i B over the full ky range, the upper half from A(-k) =
   // conj A(k) (the columns' inverses are real): along contiguous ky into
   // the stages' scratch, then transposed into the y pass's layout.
@@ -490,7 +589,7 @@ void Fft2D::InverseReal(T* spec_re, T* spec_im, int rows, int cols, double* re, 
   }
   TransposeT(sr, ts, h, ny_, wr, lw);
   TransposeT(si, ts, h, ny_, wi, lw);
-  py_.Transform(wr, wi, h, lw, true, sr, si);
+  py_.Transform(wr, wi, h, lw, true, sr, si, -1, rows);
   for (int y = 0; y < rows; ++y) {
     double* row = re + static_cast<size_t>(y) * stride;
     const T* a = wr + static_cast<size_t>(y) * lw;

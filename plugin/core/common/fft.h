@@ -34,8 +34,21 @@ class FftPlan {
  public:
   explicit FftPlan(int n);  // IsFftSize(n)
   int size() const { return n_; }
+  // nonzero (< 0: n): only elements k < nonzero of the input are nonzero;
+  // at most n / 2 with a leading radix-4 or -2 stage, that stage skips the
+  // zero half (the same bits: x + 0 and x - 0 are x). needed (< 0: n):
+  // only outputs k < needed are read afterwards (the others may be left
+  // unwritten); at most 3 n / 5 with a trailing radix-5 stage (2 n / 3,
+  // radix 3), that stage skips two of its five outputs (one of three).
   template <typename T>
-  void Transform(T* re, T* im, int batch, int stride, bool inverse, T* sre, T* sim) const;
+  void Transform(T* re, T* im, int batch, int stride, bool inverse, T* sre, T* sim,
+                 int nonzero = -1, int needed = -1) const;
+  // Whether Transform with this `nonzero` skips (never reads) the input's
+  // elements k >= n / 2.
+  bool SkipsUpperHalf(int nonzero) const {
+    return nonzero >= 0 && 2 * nonzero <= n_ && !stages_.empty() &&
+           (stages_[0].radix == 4 || stages_[0].radix == 2);
+  }
 
  private:
   struct Stage {
