@@ -92,49 +92,23 @@ std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFo
   return slot;
 }
 
-namespace {
-// The half spectrum times the real kernel spectrum (elementwise: the same
-// bits on every instruction set).
-template <typename T>
-__attribute__((target_clones("avx2", "default")))
-void MultiplySpectrum(const T* __restrict k, int nx, int ls, int hy, T* __restrict re,
-                      T* __restrict im) {
-  for (int kx = 0; kx < nx; ++kx) {
-    const size_t o = static_cast<size_t>(kx) * ls;
-    for (int ky = 0; ky < hy; ++ky) {
-      re[o + ky] *= k[o + ky];
-      im[o + ky] *= k[o + ky];
-    }
-  }
-}
-
-template <typename T>
-void ApplyIn(const Fft2D& fft, const T* k, const double* in, int bx, int by, int in_rows,
-             int in_cols, double* out, std::vector<T>* spec_re, std::vector<T>* spec_im,
-             std::vector<T>* scratch) {
-  // Real field, real even kernel: half spectra (Fft2D::ForwardReal).
-  const size_t S = fft.spectrum_size();
-  spec_re->resize(S);
-  spec_im->resize(S);
-  T* re = spec_re->data();
-  T* im = spec_im->data();
-  fft.ForwardReal(in, bx, in_rows, in_cols, re, im, scratch);
-  MultiplySpectrum(k, fft.nx(), fft.spectrum_stride(), fft.half_ny(), re, im);
-  fft.InverseReal(re, im, by, bx, out, bx, scratch);
-}
-}  // namespace
-
 void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
                               ComplianceWork* w, ApplyPrecision precision, int in_rows,
                               int in_cols) const {
   if (in_rows < 0) in_rows = by;
   if (in_cols < 0) in_cols = bx;
+  // Real field, real even kernel: half spectra (Fft2D::ConvolveReal).
+  const size_t S = s.fft.spectrum_size();
   if (precision == ApplyPrecision::kFloat) {
-    ApplyIn(s.fft, s.k_hat_f.data(), in, bx, by, in_rows, in_cols, out, &w->spec_re_f,
-            &w->spec_im_f, &w->fft_scratch_f);
+    w->spec_re_f.resize(S);
+    w->spec_im_f.resize(S);
+    s.fft.ConvolveReal(in, bx, in_rows, in_cols, s.k_hat_f.data(), by, bx, out, bx,
+                       w->spec_re_f.data(), w->spec_im_f.data(), &w->fft_scratch_f, w->threads);
   } else {
-    ApplyIn(s.fft, s.k_hat.data(), in, bx, by, in_rows, in_cols, out, &w->spec_re, &w->spec_im,
-            &w->fft_scratch);
+    w->spec_re.resize(S);
+    w->spec_im.resize(S);
+    s.fft.ConvolveReal(in, bx, in_rows, in_cols, s.k_hat.data(), by, bx, out, bx,
+                       w->spec_re.data(), w->spec_im.data(), &w->fft_scratch, w->threads);
   }
 }
 

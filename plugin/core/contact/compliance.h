@@ -32,8 +32,10 @@ class LayeredSubstrate;
 // kDouble: the reference path.
 enum class ApplyPrecision { kFloat = 0, kDouble };
 
-// Per-caller FFT scratch (no state that outlives a call).
+// Per-caller FFT scratch (no state that outlives a call), and the threads
+// Apply may use (ThreadPool callers; the same bits for any count).
 struct ComplianceWork {
+  int threads = 1;
   std::vector<double> spec_re, spec_im, fft_scratch;
   std::vector<float> spec_re_f, spec_im_f, fft_scratch_f;
 };
