@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/thread_pool.h"
 #include "substrate/layered.h"
 #include "substrate/substrate.h"
 
@@ -113,14 +114,37 @@ void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int b
 }
 
 __attribute__((target_clones("avx2", "default")))
-void SurfaceCompliance::AddCellAt(int ci, int cj, double d, int bx, int by, double* u) const {
-  for (int j = 0; j < by; ++j) {
+void SurfaceCompliance::AddCellRows(int ci, int cj, double d, int bx, int j0, int j1,
+                                    double* u) const {
+  for (int j = j0; j < j1; ++j) {
     double* urow = u + static_cast<size_t>(j) * bx;
     const float* krow =
         table_.data() + static_cast<size_t>(cj - j + n_ - 1) * (2 * n_ - 1) + (ci + n_ - 1);
     // K(ci - i, cj - j): walk the table row backwards with i.
     for (int i = 0; i < bx; ++i) urow[i] += d * krow[-i];
   }
+}
+
+void SurfaceCompliance::AddCells(const int* cells, size_t count, const double* d, int bx, int by,
+                                 double* u, int threads) const {
+  // Blocks of kRows rows, every cell per block: the block of u stays in L1
+  // while the cells' table rows stream past.
+  constexpr int kRows = 8;
+  auto rows = [&](int j0, int j1) {
+    for (int jb = j0; jb < j1; jb += kRows)
+      for (size_t k = 0; k < count; ++k) {
+        const int c = cells[k];
+        AddCellRows(c % bx, c / bx, d[c], bx, jb, std::min(j1, jb + kRows), u);
+      }
+  };
+  const int parts = std::max(1, std::min(threads, by / kRows));
+  if (parts == 1) {
+    rows(0, by);
+    return;
+  }
+  ThreadPool::Shared().Run(parts, threads, [&](int part) {
+    rows(by * part / parts, by * (part + 1) / parts);
+  });
 }
 
 std::shared_ptr<const SurfaceCompliance> HalfSpaceCompliance(double young_pa, double poisson,

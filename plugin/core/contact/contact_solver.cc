@@ -391,7 +391,7 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     double* kd = nullptr;
     if (nchg > 0) {
       if (!P.periodic && static_cast<double>(nchg) < DirectCellsPerApply(*P.spec, B)) {
-        for (int c : w->changed) P.K.AddCell(c, dl[c], bx, by, u);
+        P.K.AddCells(w->changed.data(), nchg, dl, bx, by, u, w->fft.threads);
       } else {
         P.K.Apply(*P.spec, dl, bx, by, g, &w->fft, P.precision);
         ++st->applies;
