@@ -17,13 +17,19 @@ and a lead-in simulated without the plugin). Prints per configuration:
   construction);
 - us/step (process CPU time) of stages 1-2 (outputs="force") and of the full
   pipeline (default outputs), min and median over interleaved rounds, and the pk / pcg ratios;
-  the winkler model in the same rounds as a yardstick of the machine's load.
+  the winkler model in the same rounds as a yardstick of the machine's load;
+- pcg float with `threads` 1 and --threads (default 2): process CPU and wall
+  time per step, min and median, the wall ratio, and a yardstick of the
+  cores free meanwhile (two numpy loops on two threads against one after
+  the other: 2.0 on an idle 2-core machine, ~1.0 when another process holds
+  a core; the `threads` speedup can reach at most that).
 """
 
 from __future__ import annotations
 
 import argparse
 import pathlib
+import threading
 import time
 
 import mujoco
@@ -135,10 +141,51 @@ def timing(name: str, start, steps: int, rounds: int) -> dict:
     return {k: (min(v), float(np.median(v))) for k, v in times.items()}
 
 
+def free_cores_yardstick(n: int = 2, size: int = 4_000_000) -> float:
+    """Wall time of n numpy loops (the GIL released) one after the other over
+    their time on n threads: how many cores this process gets right now."""
+    a = np.random.default_rng(0).random(size)
+
+    def work():
+        for _ in range(3):
+            np.cumsum(a)
+
+    t0 = time.perf_counter()
+    for _ in range(n):
+        work()
+    serial = time.perf_counter() - t0
+    ts = [threading.Thread(target=work) for _ in range(n)]
+    t0 = time.perf_counter()
+    for t in ts:
+        t.start()
+    for t in ts:
+        t.join()
+    return serial / (time.perf_counter() - t0)
+
+
+def thread_timing(name: str, start, steps: int, rounds: int, threads: int) -> dict:
+    """pcg float with threads 1 and `threads`: (cpu, wall) us/step lists per
+    (threads, stage), and the free-cores yardstick per round."""
+    runs = {(t, stage): make_run(name, start, steps, **SOLVERS["pcg float"], threads=str(t),
+                                 **({"outputs": "force"} if stage == "stages 1-2" else {}))
+            for t in (1, threads) for stage in ("stages 1-2", "full")}
+    out = {k: [] for k in runs}
+    yard = []
+    for _ in range(rounds):
+        yard.append(free_cores_yardstick(threads))
+        for k, run in runs.items():
+            t0, c0 = time.perf_counter(), time.process_time()
+            run.step(steps)
+            out[k].append(((time.process_time() - c0) / steps * 1e6,
+                           (time.perf_counter() - t0) / steps * 1e6))
+    return out, yard
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=200, help="sliding steps per run")
     ap.add_argument("--rounds", type=int, default=5, help="interleaved timing rounds")
+    ap.add_argument("--threads", type=int, default=2, help="the `threads` compared with 1")
     args = ap.parse_args()
     for name in SCENES:
         start = settled(name)
@@ -165,6 +212,19 @@ def main() -> None:
                       f"median {r_med:.2f}x")
         print(f"  iterations pk / pcg float: "
               f"{acc['pk']['iterations_median'] / acc['pcg float']['iterations_median']:.2f}x")
+        tt, yard = thread_timing(name, start, args.steps, args.rounds, args.threads)
+        print(f"  pcg float, threads 1 / {args.threads} (free-cores yardstick min "
+              f"{min(yard):.2f} median {np.median(yard):.2f} max {max(yard):.2f})")
+        for stage in ("stages 1-2", "full"):
+            for t in (1, args.threads):
+                c = [a for a, _ in tt[t, stage]]
+                w = [b for _, b in tt[t, stage]]
+                print(f"    threads {t} {stage:10s} us/step cpu min {min(c):7.1f} median "
+                      f"{np.median(c):7.1f}  wall min {min(w):7.1f} median {np.median(w):7.1f}")
+            w1 = [b for _, b in tt[1, stage]]
+            wn = [b for _, b in tt[args.threads, stage]]
+            print(f"    wall threads 1 / {args.threads} {stage:10s}: min {min(w1) / min(wn):.2f}x  "
+                  f"median {np.median(w1) / np.median(wn):.2f}x")
 
 
 if __name__ == "__main__":

@@ -499,8 +499,10 @@ def test_cpp_layered_checks(tmp_path):
                            capture_output=True, text=True, timeout=300)
     assert build.returncode == 0, build.stdout[-4000:] + build.stderr[-4000:]
     # test_layered: the layered kernel; test_membrane: the afferents' exact
-    # LIF integrator (first spike = first threshold crossing)
-    for exe in ("test_layered", "test_membrane"):
+    # LIF integrator (first spike = first threshold crossing); test_fft_threads:
+    # the elastic solve's convolution, the same bits for threads 1-4 and equal
+    # to a direct sum
+    for exe in ("test_layered", "test_membrane", "test_fft_threads"):
         run = subprocess.run([str(build_dir / "tests" / "cpp" / exe)],
                              capture_output=True, text=True, timeout=300)
         assert run.returncode == 0, exe + ":\n" + run.stdout[-4000:]

@@ -5,6 +5,8 @@
 #include <cstring>
 #include <type_traits>
 
+#include "common/thread_pool.h"
+
 namespace mjtouch {
 namespace {
 
@@ -476,133 +478,299 @@ void Fft2D::Inverse(double* spec_re, double* spec_im, int rows, int cols, double
   }
 }
 
+// The real transforms in parts that own disjoint memory, so that
+// ConvolveReal can run them on threads without sharing cache lines: the y
+// pass by packed columns [c0, c1) (its own work slab wr / wi, row stride
+// lw), the x pass by ky lanes (one Slab of the spectrum each). Transform's
+// arithmetic per lane depends on neither the batch nor the strides, and
+// each part's stage scratch is its own slice of sr / si (ny elements per
+// packed column, nx per ky lane), so any split gives the bits of a single
+// part (ForwardReal, InverseReal).
 template <typename T>
-void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, T* spec_re, T* spec_im,
-                        std::vector<T>* scratch) const {
+void Fft2D::ForwardColumns(const double* re, int stride, int rows, int cols, int c0, int c1,
+                           T* wr, T* wi, int lw, const Slab* slabs, int nslabs, T* spec_re,
+                           T* spec_im, T* sr, T* si) const {
+  if (c0 >= c1) return;
   const int h = (cols + 1) / 2;  // column c is packed with column c + h
-  const int lw = PaddedStride(h);
-  const size_t W = static_cast<size_t>(ny_) * lw;
-  T *wr, *wi, *sr, *si;
-  SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
-  // Rows >= rows are zero; in the others, the lanes [0, h) the transform
-  // reads are all written (wi's last one is zero when cols is odd). With
-  // rows <= ny / 2 the transform reads rows < ny / 2 only (Transform's
-  // nonzero): the others need no clearing.
-  const size_t zero_end = py_.SkipsUpperHalf(rows) ? static_cast<size_t>(ny_ / 2) * lw : W;
-  std::fill(wr + static_cast<size_t>(rows) * lw, wr + zero_end, T(0));
-  std::fill(wi + static_cast<size_t>(rows) * lw, wi + zero_end, T(0));
+  const int nb = c1 - c0;
+  // Rows >= rows are zero; in the others, the part's lanes are all written
+  // (wi's last one is zero when cols is odd). With rows <= ny / 2 the
+  // transform reads rows < ny / 2 only (Transform's nonzero): the others
+  // need no clearing.
+  const int zero_end = py_.SkipsUpperHalf(rows) ? ny_ / 2 : ny_;
+  for (int y = rows; y < zero_end; ++y) {
+    std::fill(wr + static_cast<size_t>(y) * lw, wr + static_cast<size_t>(y) * lw + nb, T(0));
+    std::fill(wi + static_cast<size_t>(y) * lw, wi + static_cast<size_t>(y) * lw + nb, T(0));
+  }
+  const int b_end = std::max(c0, std::min(c1, cols - h));
   for (int y = 0; y < rows; ++y) {
     const double* row = re + static_cast<size_t>(y) * stride;
-    T* a = wr + static_cast<size_t>(y) * lw;
-    T* b = wi + static_cast<size_t>(y) * lw;
-    for (int x = 0; x < h; ++x) a[x] = static_cast<T>(row[x]);
-    for (int x = 0; x < cols - h; ++x) b[x] = static_cast<T>(row[h + x]);
-    for (int x = cols - h; x < h; ++x) b[x] = T(0);
+    T* a = wr + static_cast<size_t>(y) * lw - c0;  // indexed by column
+    T* b = wi + static_cast<size_t>(y) * lw - c0;
+    for (int x = c0; x < c1; ++x) a[x] = static_cast<T>(row[x]);
+    for (int x = c0; x < b_end; ++x) b[x] = static_cast<T>(row[h + x]);
+    for (int x = b_end; x < c1; ++x) b[x] = T(0);
   }
-  py_.Transform(wr, wi, h, lw, false, sr, si, rows);
+  const size_t ts = static_cast<size_t>(ny_);
+  py_.Transform(wr, wi, nb, lw, false, sr + c0 * ts, si + c0 * ts, rows);
   // Split Z = A + i B (A, B spectra of real columns): A = (Z(k) + conj
   // Z(-k)) / 2, B = (Z(k) - conj Z(-k)) / (2 i); into (x, ky), half ky.
-  // Transposed first (into the stages' scratch, free until the x pass), so
+  // Transposed first (into this part's slice of the stages' scratch), so
   // the split runs along contiguous ky.
-  const int ls = spec_stride_, hy = half_ny();
-  const size_t ts = static_cast<size_t>(ny_);
-  TransposeT(wr, lw, ny_, h, sr, ts);
-  TransposeT(wi, lw, ny_, h, si, ts);
-  for (int c = 0; c < h; ++c) {
-    T* ar = spec_re + static_cast<size_t>(c) * ls;
-    T* ai = spec_im + static_cast<size_t>(c) * ls;
-    T* br = spec_re + static_cast<size_t>(c + h) * ls;
-    T* bi = spec_im + static_cast<size_t>(c + h) * ls;
+  TransposeT(wr, lw, ny_, nb, sr + c0 * ts, ts);
+  TransposeT(wi, lw, ny_, nb, si + c0 * ts, ts);
+  for (int c = c0; c < c1; ++c) {
     const T* zr = sr + c * ts;
     const T* zi = si + c * ts;
     const bool has_b = c + h < cols;
-    // ky = 0 pairs with itself; ky >= 1 with ny - ky
-    ar[0] = T(0.5) * (zr[0] + zr[0]);
-    ai[0] = T(0.5) * (zi[0] - zi[0]);
-    if (has_b) {
-      br[0] = T(0.5) * (zi[0] + zi[0]);
-      bi[0] = T(-0.5) * (zr[0] - zr[0]);
-    }
-    for (int ky = 1; ky < hy; ++ky) {
-      ar[ky] = T(0.5) * (zr[ky] + zr[ny_ - ky]);
-      ai[ky] = T(0.5) * (zi[ky] - zi[ny_ - ky]);
-    }
-    if (has_b)
-      for (int ky = 1; ky < hy; ++ky) {
-        br[ky] = T(0.5) * (zi[ky] + zi[ny_ - ky]);
-        bi[ky] = T(-0.5) * (zr[ky] - zr[ny_ - ky]);
+    for (int q = 0; q < nslabs; ++q) {
+      const Slab& sl = slabs[q];
+      // row c of the slab, indexed by ky
+      T* ar = spec_re + sl.offset + static_cast<size_t>(c) * sl.stride - sl.lo;
+      T* ai = spec_im + sl.offset + static_cast<size_t>(c) * sl.stride - sl.lo;
+      T* br = spec_re + sl.offset + static_cast<size_t>(c + h) * sl.stride - sl.lo;
+      T* bi = spec_im + sl.offset + static_cast<size_t>(c + h) * sl.stride - sl.lo;
+      // ky = 0 pairs with itself; ky >= 1 with ny - ky
+      if (sl.lo == 0) {
+        ar[0] = T(0.5) * (zr[0] + zr[0]);
+        ai[0] = T(0.5) * (zi[0] - zi[0]);
+        if (has_b) {
+          br[0] = T(0.5) * (zi[0] + zi[0]);
+          bi[0] = T(-0.5) * (zr[0] - zr[0]);
+        }
       }
+      const int k0 = std::max(sl.lo, 1);
+      for (int ky = k0; ky < sl.hi; ++ky) {
+        ar[ky] = T(0.5) * (zr[ky] + zr[ny_ - ky]);
+        ai[ky] = T(0.5) * (zi[ky] - zi[ny_ - ky]);
+      }
+      if (has_b)
+        for (int ky = k0; ky < sl.hi; ++ky) {
+          br[ky] = T(0.5) * (zi[ky] + zi[ny_ - ky]);
+          bi[ky] = T(-0.5) * (zr[ky] - zr[ny_ - ky]);
+        }
+    }
   }
+}
+
+template <typename T>
+void Fft2D::ForwardLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr, T* si) const {
+  const int nb = sl.hi - sl.lo;
+  if (nb <= 0) return;
+  T* re = spec_re + sl.offset;
+  T* im = spec_im + sl.offset;
   // columns >= cols are zero (those the transform reads: as above)
   const int zero_x = px_.SkipsUpperHalf(cols) ? nx_ / 2 : nx_;
   for (int x = cols; x < zero_x; ++x) {
-    std::fill(spec_re + static_cast<size_t>(x) * ls, spec_re + static_cast<size_t>(x) * ls + hy, T(0));
-    std::fill(spec_im + static_cast<size_t>(x) * ls, spec_im + static_cast<size_t>(x) * ls + hy, T(0));
+    std::fill(re + static_cast<size_t>(x) * sl.stride, re + static_cast<size_t>(x) * sl.stride + nb, T(0));
+    std::fill(im + static_cast<size_t>(x) * sl.stride, im + static_cast<size_t>(x) * sl.stride + nb, T(0));
   }
-  px_.Transform(spec_re, spec_im, hy, ls, false, sr, si, cols);
+  const size_t tn = static_cast<size_t>(nx_);
+  px_.Transform(re, im, nb, sl.stride, false, sr + sl.lo * tn, si + sl.lo * tn, cols);
+}
+
+template <typename T>
+void Fft2D::InverseLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr, T* si) const {
+  const int nb = sl.hi - sl.lo;
+  if (nb <= 0) return;
+  // columns x < cols only are read below
+  const size_t tn = static_cast<size_t>(nx_);
+  px_.Transform(spec_re + sl.offset, spec_im + sl.offset, nb, sl.stride, true, sr + sl.lo * tn,
+                si + sl.lo * tn, -1, cols);
+}
+
+template <typename T>
+void Fft2D::InverseColumns(T* spec_re, T* spec_im, const Slab* slabs, int nslabs, int rows,
+                           int cols, int c0, int c1, double* re, int stride, T* wr, T* wi,
+                           int lw, T* sr, T* si) const {
+  if (c0 >= c1) return;
+  const int h = (cols + 1) / 2;
+  const int nb = c1 - c0;
+  const int hy = half_ny(), top = ny_ - hy;  // ky >= hy pair with 1 <= ny - ky <= top
+  // Z = A + i B over the full ky range, the upper half from A(-k) =
+  // conj A(k) (the columns' inverses are real): along contiguous ky into
+  // this part's slice of the stages' scratch, then transposed into the y
+  // pass's layout.
+  const size_t ts = static_cast<size_t>(ny_);
+  for (int c = c0; c < c1; ++c) {
+    const bool has_b = c + h < cols;
+    T* zr = sr + c * ts;
+    T* zi = si + c * ts;
+    for (int q = 0; q < nslabs; ++q) {
+      const Slab& sl = slabs[q];
+      const T* ar = spec_re + sl.offset + static_cast<size_t>(c) * sl.stride - sl.lo;
+      const T* ai = spec_im + sl.offset + static_cast<size_t>(c) * sl.stride - sl.lo;
+      const T* br = spec_re + sl.offset + static_cast<size_t>(c + h) * sl.stride - sl.lo;
+      const T* bi = spec_im + sl.offset + static_cast<size_t>(c + h) * sl.stride - sl.lo;
+      const int m0 = std::max(sl.lo, 1), m1 = std::min(sl.hi, top + 1);
+      // x - (-y) == x + y and (-x) + y == y - x exactly: the conjugate half
+      // rounds as sgn * (...) did.
+      if (has_b) {
+        for (int ky = sl.lo; ky < sl.hi; ++ky) {
+          zr[ky] = ar[ky] - bi[ky];
+          zi[ky] = ai[ky] + br[ky];
+        }
+        for (int m = m1 - 1; m >= m0; --m) {  // ky = ny - m
+          zr[ny_ - m] = ar[m] + bi[m];
+          zi[ny_ - m] = br[m] - ai[m];
+        }
+      } else {
+        for (int ky = sl.lo; ky < sl.hi; ++ky) {
+          zr[ky] = ar[ky] - T(0);
+          zi[ky] = ai[ky] + T(0);
+        }
+        for (int m = m1 - 1; m >= m0; --m) {
+          zr[ny_ - m] = ar[m] - T(0);
+          zi[ny_ - m] = -ai[m] + T(0);
+        }
+      }
+    }
+  }
+  TransposeT(sr + c0 * ts, ts, nb, ny_, wr, lw);
+  TransposeT(si + c0 * ts, ts, nb, ny_, wi, lw);
+  py_.Transform(wr, wi, nb, lw, true, sr + c0 * ts, si + c0 * ts, -1, rows);
+  const int b_end = std::max(c0, std::min(c1, cols - h));
+  for (int y = 0; y < rows; ++y) {
+    double* row = re + static_cast<size_t>(y) * stride;
+    const T* a = wr + static_cast<size_t>(y) * lw - c0;
+    const T* b = wi + static_cast<size_t>(y) * lw - c0;
+    for (int x = c0; x < c1; ++x) row[x] = static_cast<double>(a[x]);
+    for (int x = c0; x < b_end; ++x) row[h + x] = static_cast<double>(b[x]);
+  }
+}
+
+template <typename T>
+void Fft2D::ForwardReal(const double* re, int stride, int rows, int cols, T* spec_re, T* spec_im,
+                        std::vector<T>* scratch) const {
+  const int h = (cols + 1) / 2, lw = PaddedStride(h);
+  const size_t W = static_cast<size_t>(ny_) * lw;
+  T *wr, *wi, *sr, *si;
+  SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
+  const Slab all{0, half_ny(), 0, spec_stride_};
+  ForwardColumns(re, stride, rows, cols, 0, h, wr, wi, lw, &all, 1, spec_re, spec_im, sr, si);
+  ForwardLanes(cols, all, spec_re, spec_im, sr, si);
 }
 
 template <typename T>
 void Fft2D::InverseReal(T* spec_re, T* spec_im, int rows, int cols, double* re, int stride,
                         std::vector<T>* scratch) const {
-  const int h = (cols + 1) / 2;
-  const int lw = PaddedStride(h);
+  const int h = (cols + 1) / 2, lw = PaddedStride(h);
   const size_t W = static_cast<size_t>(ny_) * lw;
   T *wr, *wi, *sr, *si;
   SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
-  const int ls = spec_stride_, hy = half_ny();
-  // columns x < cols only are read below
-  px_.Transform(spec_re, spec_im, hy, ls, true, sr, si, -1, cols);
-  // Z = A + i B over the full ky range, the upper half from A(-k) =
-  // conj A(k) (the columns' inverses are real): along contiguous ky into
-  // the stages' scratch, then transposed into the y pass's layout.
-  const size_t ts = static_cast<size_t>(ny_);
-  for (int c = 0; c < h; ++c) {
-    const T* ar = spec_re + static_cast<size_t>(c) * ls;
-    const T* ai = spec_im + static_cast<size_t>(c) * ls;
-    const bool has_b = c + h < cols;
-    const T* br = spec_re + static_cast<size_t>(c + h) * ls;
-    const T* bi = spec_im + static_cast<size_t>(c + h) * ls;
-    T* zr = sr + c * ts;
-    T* zi = si + c * ts;
-    // x - (-y) == x + y and (-x) + y == y - x exactly: the conjugate half
-    // rounds as sgn * (...) did.
-    if (has_b) {
-      for (int ky = 0; ky < hy; ++ky) {
-        zr[ky] = ar[ky] - bi[ky];
-        zi[ky] = ai[ky] + br[ky];
-      }
-      for (int ky = hy; ky < ny_; ++ky) {
-        zr[ky] = ar[ny_ - ky] + bi[ny_ - ky];
-        zi[ky] = br[ny_ - ky] - ai[ny_ - ky];
-      }
-    } else {
-      for (int ky = 0; ky < hy; ++ky) {
-        zr[ky] = ar[ky] - T(0);
-        zi[ky] = ai[ky] + T(0);
-      }
-      for (int ky = hy; ky < ny_; ++ky) {
-        zr[ky] = ar[ny_ - ky] - T(0);
-        zi[ky] = -ai[ny_ - ky] + T(0);
-      }
+  const Slab all{0, half_ny(), 0, spec_stride_};
+  InverseLanes(cols, all, spec_re, spec_im, sr, si);
+  InverseColumns(spec_re, spec_im, &all, 1, rows, cols, 0, h, re, stride, wr, wi, lw, sr, si);
+}
+
+namespace {
+// A spectrum slab's elements times the real kernel spectrum k (layout
+// kx * ls + ky; elementwise: the same bits on every instruction set).
+template <typename T>
+__attribute__((target_clones("avx2", "default")))
+void MultiplySlab(const T* __restrict k, int nx, int ls, int lo, int hi, int stride,
+                  T* __restrict re, T* __restrict im) {
+  const int nb = hi - lo;
+  for (int kx = 0; kx < nx; ++kx) {
+    const T* kr = k + static_cast<size_t>(kx) * ls + lo;
+    T* a = re + static_cast<size_t>(kx) * stride;
+    T* b = im + static_cast<size_t>(kx) * stride;
+    for (int q = 0; q < nb; ++q) {
+      a[q] *= kr[q];
+      b[q] *= kr[q];
     }
   }
-  TransposeT(sr, ts, h, ny_, wr, lw);
-  TransposeT(si, ts, h, ny_, wi, lw);
-  py_.Transform(wr, wi, h, lw, true, sr, si, -1, rows);
-  for (int y = 0; y < rows; ++y) {
-    double* row = re + static_cast<size_t>(y) * stride;
-    const T* a = wr + static_cast<size_t>(y) * lw;
-    const T* b = wi + static_cast<size_t>(y) * lw;
-    for (int x = 0; x < h; ++x) row[x] = static_cast<double>(a[x]);
-    for (int x = 0; x < cols - h; ++x) row[h + x] = static_cast<double>(b[x]);
+}
+
+// Bounds of part k of `parts` over [0, n): the even split rounded to the
+// nearest multiple of `align` (whole vectors per part), the last part
+// ending at n.
+inline int PartBound(int n, int parts, int k, int align) {
+  if (k >= parts) return n;
+  const long long even = static_cast<long long>(n) * k / parts;
+  return std::min(n, static_cast<int>((even + align / 2) / align * align));
+}
+
+constexpr int kMaxParts = 16;
+}  // namespace
+
+template <typename T>
+void Fft2D::ConvolveReal(const double* in, int in_stride, int in_rows, int in_cols, const T* k_hat,
+                         int out_rows, int out_cols, double* out, int out_stride, T* spec_re,
+                         T* spec_im, std::vector<T>* scratch, int threads) const {
+  const int h_in = (in_cols + 1) / 2, h_out = (out_cols + 1) / 2, hy = half_ny();
+  const int ls = spec_stride_;
+  constexpr int kAlign = 16 / sizeof(T);  // one SSE vector of lanes (finer balance)
+  auto parts = [&](int n) {
+    return std::max(1, std::min(std::min(threads, kMaxParts), (n + kAlign - 1) / kAlign));
+  };
+  const int pa = parts(h_in), pb = parts(hy), pc = parts(h_out);
+  // The spectrum's ky lanes in pb slabs, one after another (each part's
+  // rows contiguous: no cache line shared by two threads' x passes).
+  Slab slabs[kMaxParts];
+  size_t spec_used = 0;
+  for (int k = 0; k < pb; ++k) {
+    const int lo = PartBound(hy, pb, k, kAlign), hi = PartBound(hy, pb, k + 1, kAlign);
+    const int stride = pb == 1 ? ls : PaddedStride(hi - lo);
+    slabs[k] = Slab{lo, hi, spec_used, stride};
+    spec_used += static_cast<size_t>(nx_) * stride;
   }
+  // The y passes' work slabs likewise, per packed column part.
+  auto slab_sizes = [&](int h, int np, int* lw, size_t* off) {
+    size_t used = 0;
+    for (int k = 0; k < np; ++k) {
+      lw[k] = PaddedStride(np == 1 ? h : PartBound(h, np, k + 1, kAlign) - PartBound(h, np, k, kAlign));
+      off[k] = used;
+      used += static_cast<size_t>(ny_) * lw[k];
+    }
+    return used;
+  };
+  int lw_a[kMaxParts], lw_c[kMaxParts];
+  size_t off_a[kMaxParts], off_c[kMaxParts];
+  const size_t W = std::max(slab_sizes(h_in, pa, lw_a, off_a), slab_sizes(h_out, pc, lw_c, off_c));
+  T *wr, *wi, *sr, *si;
+  SplitScratch(W, spectrum_size(), scratch, &wr, &wi, &sr, &si);
+  const bool parallel = threads > 1 && spec_used <= spectrum_size() && (pa > 1 || pb > 1 || pc > 1);
+  if (!parallel) {
+    const Slab all{0, hy, 0, ls};
+    ForwardColumns(in, in_stride, in_rows, in_cols, 0, h_in, wr, wi, PaddedStride(h_in), &all, 1,
+                   spec_re, spec_im, sr, si);
+    ForwardLanes(in_cols, all, spec_re, spec_im, sr, si);
+    MultiplySlab(k_hat, nx_, ls, 0, hy, ls, spec_re, spec_im);
+    InverseLanes(out_cols, all, spec_re, spec_im, sr, si);
+    InverseColumns(spec_re, spec_im, &all, 1, out_rows, out_cols, 0, h_out, out, out_stride, wr,
+                   wi, PaddedStride(h_out), sr, si);
+    return;
+  }
+  // Three passes, each split into parts that write disjoint memory; the
+  // bits do not depend on the split (see ForwardColumns), so the parts
+  // follow the thread count.
+  ThreadPool& pool = ThreadPool::Shared();
+  pool.Run(pa, threads, [&](int k) {
+    ForwardColumns(in, in_stride, in_rows, in_cols, PartBound(h_in, pa, k, kAlign),
+                   PartBound(h_in, pa, k + 1, kAlign), wr + off_a[k], wi + off_a[k], lw_a[k],
+                   slabs, pb, spec_re, spec_im, sr, si);
+  });
+  pool.Run(pb, threads, [&](int k) {
+    const Slab& sl = slabs[k];
+    ForwardLanes(in_cols, sl, spec_re, spec_im, sr, si);
+    MultiplySlab(k_hat, nx_, ls, sl.lo, sl.hi, sl.stride, spec_re + sl.offset,
+                 spec_im + sl.offset);
+    InverseLanes(out_cols, sl, spec_re, spec_im, sr, si);
+  });
+  pool.Run(pc, threads, [&](int k) {
+    InverseColumns(spec_re, spec_im, slabs, pb, out_rows, out_cols,
+                   PartBound(h_out, pc, k, kAlign), PartBound(h_out, pc, k + 1, kAlign), out,
+                   out_stride, wr + off_c[k], wi + off_c[k], lw_c[k], sr, si);
+  });
 }
 
 #define MJTOUCH_FFT_REAL(T)                                                                  \
   template void Fft2D::ForwardReal(const double*, int, int, int, T*, T*, std::vector<T>*)    \
       const;                                                                                 \
-  template void Fft2D::InverseReal(T*, T*, int, int, double*, int, std::vector<T>*) const;
+  template void Fft2D::InverseReal(T*, T*, int, int, double*, int, std::vector<T>*) const;    \
+  template void Fft2D::ConvolveReal(const double*, int, int, int, const T*, int, int, double*, \
+                                    int, T*, T*, std::vector<T>*, int) const;
 MJTOUCH_FFT_REAL(double)
 MJTOUCH_FFT_REAL(float)
 #undef MJTOUCH_FFT_REAL

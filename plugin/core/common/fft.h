@@ -97,6 +97,16 @@ class Fft2D {
   void InverseReal(T* spec_re, T* spec_im, int rows, int cols, double* re, int stride,
                    std::vector<T>* scratch) const;
   int half_ny() const { return ny_ / 2 + 1; }
+  // out = the convolution of a real field with a real even kernel whose
+  // half spectrum (ForwardReal's layout, normalisation included) is k_hat:
+  // ForwardReal of the in_rows x in_cols block, the product, InverseReal
+  // into out_rows x out_cols. threads > 1: the passes split over
+  // ThreadPool::Shared() callers (by columns along y, by ky lanes along x:
+  // lanes are independent, so the same bits for any thread count).
+  template <typename T>
+  void ConvolveReal(const double* in, int in_stride, int in_rows, int in_cols, const T* k_hat,
+                    int out_rows, int out_cols, double* out, int out_stride, T* spec_re,
+                    T* spec_im, std::vector<T>* scratch, int threads) const;
   // The same with row stride nx (arrays of the full transform size).
   void Forward(const double* re, const double* im, int rows, int cols, double* spec_re,
                double* spec_im, std::vector<double>* scratch) const {
@@ -108,6 +118,28 @@ class Fft2D {
   }
 
  private:
+  // Parts of the real transforms (fft.cc): the y pass over packed columns
+  // [c0, c1) in a work slab wr / wi (row stride lw), the x pass over the
+  // spectrum's ky lanes [lo, hi) stored at offset with row stride `stride`;
+  // sr, si: the scratch of SplitScratch.
+  struct Slab {
+    int lo, hi;
+    size_t offset;
+    int stride;
+  };
+  template <typename T>
+  void ForwardColumns(const double* re, int stride, int rows, int cols, int c0, int c1, T* wr,
+                      T* wi, int lw, const Slab* slabs, int nslabs, T* spec_re, T* spec_im,
+                      T* sr, T* si) const;
+  template <typename T>
+  void ForwardLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr, T* si) const;
+  template <typename T>
+  void InverseLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr, T* si) const;
+  template <typename T>
+  void InverseColumns(T* spec_re, T* spec_im, const Slab* slabs, int nslabs, int rows, int cols,
+                      int c0, int c1, double* re, int stride, T* wr, T* wi, int lw, T* sr,
+                      T* si) const;
+
   int nx_, ny_;
   int spec_stride_;
   FftPlan px_, py_;

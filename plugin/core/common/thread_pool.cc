@@ -18,8 +18,10 @@ inline void CpuRelax() {
 #endif
 }
 
+// A waiting thread yields after a short spin: on a machine busier than
+// its cores, the thread it waits for may share its core.
 inline void Backoff(int k) {
-  if (k < 512) CpuRelax();
+  if (k < 64) CpuRelax();
   else std::this_thread::yield();
 }
 
@@ -69,9 +71,15 @@ void ThreadPool::WorkerLoop(int /*index*/) {
     if (g == seen && !stop_) {
       const auto until = std::chrono::steady_clock::now() + kSpin;
       int k = 0;
+      // Spin politely: pause, and yield every few, so that a worker sharing
+      // a core with the caller (another process holds the other) does not
+      // take the caller's time slice.
       while ((g = generation_.load()) == seen && !stop_) {
         CpuRelax();
-        if (++k % 64 == 0 && std::chrono::steady_clock::now() > until) break;
+        if (++k % 16 == 0) {
+          if (std::chrono::steady_clock::now() > until) break;
+          std::this_thread::yield();
+        }
       }
       if (g == seen && !stop_) {
         std::unique_lock<std::mutex> lk(wake_mutex_);

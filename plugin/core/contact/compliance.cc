@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/thread_pool.h"
 #include "substrate/layered.h"
 #include "substrate/substrate.h"
 
@@ -92,61 +93,58 @@ std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFo
   return slot;
 }
 
-namespace {
-// The half spectrum times the real kernel spectrum (elementwise: the same
-// bits on every instruction set).
-template <typename T>
-__attribute__((target_clones("avx2", "default")))
-void MultiplySpectrum(const T* __restrict k, int nx, int ls, int hy, T* __restrict re,
-                      T* __restrict im) {
-  for (int kx = 0; kx < nx; ++kx) {
-    const size_t o = static_cast<size_t>(kx) * ls;
-    for (int ky = 0; ky < hy; ++ky) {
-      re[o + ky] *= k[o + ky];
-      im[o + ky] *= k[o + ky];
-    }
-  }
-}
-
-template <typename T>
-void ApplyIn(const Fft2D& fft, const T* k, const double* in, int bx, int by, int in_rows,
-             int in_cols, double* out, std::vector<T>* spec_re, std::vector<T>* spec_im,
-             std::vector<T>* scratch) {
-  // Real field, real even kernel: half spectra (Fft2D::ForwardReal).
-  const size_t S = fft.spectrum_size();
-  spec_re->resize(S);
-  spec_im->resize(S);
-  T* re = spec_re->data();
-  T* im = spec_im->data();
-  fft.ForwardReal(in, bx, in_rows, in_cols, re, im, scratch);
-  MultiplySpectrum(k, fft.nx(), fft.spectrum_stride(), fft.half_ny(), re, im);
-  fft.InverseReal(re, im, by, bx, out, bx, scratch);
-}
-}  // namespace
-
 void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
                               ComplianceWork* w, ApplyPrecision precision, int in_rows,
                               int in_cols) const {
   if (in_rows < 0) in_rows = by;
   if (in_cols < 0) in_cols = bx;
+  // Real field, real even kernel: half spectra (Fft2D::ConvolveReal).
+  const size_t S = s.fft.spectrum_size();
   if (precision == ApplyPrecision::kFloat) {
-    ApplyIn(s.fft, s.k_hat_f.data(), in, bx, by, in_rows, in_cols, out, &w->spec_re_f,
-            &w->spec_im_f, &w->fft_scratch_f);
+    w->spec_re_f.resize(S);
+    w->spec_im_f.resize(S);
+    s.fft.ConvolveReal(in, bx, in_rows, in_cols, s.k_hat_f.data(), by, bx, out, bx,
+                       w->spec_re_f.data(), w->spec_im_f.data(), &w->fft_scratch_f, w->threads);
   } else {
-    ApplyIn(s.fft, s.k_hat.data(), in, bx, by, in_rows, in_cols, out, &w->spec_re, &w->spec_im,
-            &w->fft_scratch);
+    w->spec_re.resize(S);
+    w->spec_im.resize(S);
+    s.fft.ConvolveReal(in, bx, in_rows, in_cols, s.k_hat.data(), by, bx, out, bx,
+                       w->spec_re.data(), w->spec_im.data(), &w->fft_scratch, w->threads);
   }
 }
 
 __attribute__((target_clones("avx2", "default")))
-void SurfaceCompliance::AddCellAt(int ci, int cj, double d, int bx, int by, double* u) const {
-  for (int j = 0; j < by; ++j) {
+void SurfaceCompliance::AddCellRows(int ci, int cj, double d, int bx, int j0, int j1,
+                                    double* u) const {
+  for (int j = j0; j < j1; ++j) {
     double* urow = u + static_cast<size_t>(j) * bx;
     const float* krow =
         table_.data() + static_cast<size_t>(cj - j + n_ - 1) * (2 * n_ - 1) + (ci + n_ - 1);
     // K(ci - i, cj - j): walk the table row backwards with i.
     for (int i = 0; i < bx; ++i) urow[i] += d * krow[-i];
   }
+}
+
+void SurfaceCompliance::AddCells(const int* cells, size_t count, const double* d, int bx, int by,
+                                 double* u, int threads) const {
+  // Blocks of kRows rows, every cell per block: the block of u stays in L1
+  // while the cells' table rows stream past.
+  constexpr int kRows = 8;
+  auto rows = [&](int j0, int j1) {
+    for (int jb = j0; jb < j1; jb += kRows)
+      for (size_t k = 0; k < count; ++k) {
+        const int c = cells[k];
+        AddCellRows(c % bx, c / bx, d[c], bx, jb, std::min(j1, jb + kRows), u);
+      }
+  };
+  const int parts = std::max(1, std::min(threads, by / kRows));
+  if (parts == 1) {
+    rows(0, by);
+    return;
+  }
+  ThreadPool::Shared().Run(parts, threads, [&](int part) {
+    rows(by * part / parts, by * (part + 1) / parts);
+  });
 }
 
 std::shared_ptr<const SurfaceCompliance> HalfSpaceCompliance(double young_pa, double poisson,

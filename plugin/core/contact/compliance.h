@@ -32,8 +32,10 @@ class LayeredSubstrate;
 // kDouble: the reference path.
 enum class ApplyPrecision { kFloat = 0, kDouble };
 
-// Per-caller FFT scratch (no state that outlives a call).
+// Per-caller FFT scratch (no state that outlives a call), and the threads
+// Apply may use (ThreadPool callers; the same bits for any count).
 struct ComplianceWork {
+  int threads = 1;
   std::vector<double> spec_re, spec_im, fft_scratch;
   std::vector<float> spec_re_f, spec_im_f, fft_scratch_f;
 };
@@ -95,12 +97,21 @@ class SurfaceCompliance {
   }
   // The same for the cell (ci, cj) in box coordinates, inside the box or
   // not (on the operator's grid).
-  void AddCellAt(int ci, int cj, double d, int bx, int by, double* u) const;
+  void AddCellAt(int ci, int cj, double d, int bx, int by, double* u) const {
+    AddCellRows(ci, cj, d, bx, 0, by, u);
+  }
+  // AddCell for cells[0..count) in order with amounts d[cells[k]], the box's
+  // rows split over `threads` ThreadPool callers (each element sums the
+  // cells in list order: the same bits for any count).
+  void AddCells(const int* cells, size_t count, const double* d, int bx, int by, double* u,
+                int threads) const;
 
  private:
   // Fills s->inverse from s->k_hat (modes with k_hat <= 0 dropped: the
   // periodic operator's mean is part of the approach).
   static void BuildInverse(Spectrum* s);
+  // AddCellAt over the box rows [j0, j1) only.
+  void AddCellRows(int ci, int cj, double d, int bx, int j0, int j1, double* u) const;
   double TableAt(int di, int dj) const {
     return table_[static_cast<size_t>(dj + n_ - 1) * (2 * n_ - 1) + (di + n_ - 1)];
   }

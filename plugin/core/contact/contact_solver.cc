@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "common/thread_pool.h"
+
 namespace mjtouch {
 namespace {
 
@@ -204,6 +206,23 @@ void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, doubl
   }
 }
 
+// ApplyStencil with the rows split over `threads` pool callers (each row's
+// sums are its own: the same bits for any split).
+template <int L, typename T>
+void StencilRows(const double* M, const T* g_pad, int px, int bx, int by, double* z_out,
+                 int threads) {
+  const int parts = std::max(1, std::min(threads, by / 8));
+  if (parts == 1) {
+    ApplyStencil<L>(M, g_pad, px, bx, by, z_out);
+    return;
+  }
+  ThreadPool::Shared().Run(parts, threads, [&](int k) {
+    const int j0 = by * k / parts, j1 = by * (k + 1) / parts;
+    ApplyStencil<L>(M, g_pad + static_cast<size_t>(j0) * px, px, bx, j1 - j0,
+                    z_out + static_cast<size_t>(j0) * bx);
+  });
+}
+
 void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStats* st) {
   ElasticWork* w = P.w;
   const size_t B = P.B;
@@ -289,9 +308,9 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     // in the stencil's order, as a per-cell loop would), read on S only.
     // r: scratch until K t below.
     if (stencil_f) {
-      ApplyStencil<L>(M, gpf, px, bx, by, r);
+      StencilRows<L>(M, gpf, px, bx, by, r, w->fft.threads);
     } else {
-      ApplyStencil<L>(M, gp, px, bx, by, r);
+      StencilRows<L>(M, gp, px, bx, by, r, w->fft.threads);
     }
     const int* Sp = S.data();
     const double sum_z = Sum4(ns, [&](size_t k) { return r[Sp[k]]; });
@@ -372,7 +391,7 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     double* kd = nullptr;
     if (nchg > 0) {
       if (!P.periodic && static_cast<double>(nchg) < DirectCellsPerApply(*P.spec, B)) {
-        for (int c : w->changed) P.K.AddCell(c, dl[c], bx, by, u);
+        P.K.AddCells(w->changed.data(), nchg, dl, bx, by, u, w->fft.threads);
       } else {
         P.K.Apply(*P.spec, dl, bx, by, g, &w->fft, P.precision);
         ++st->applies;

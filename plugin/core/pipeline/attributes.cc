@@ -241,8 +241,9 @@ const std::vector<AttributeRow>& Rows() {
        "`tree`'s opening angle; RMS stress error 3e-4 to 1e-3 at 0.5", nullptr,
        FIELD(stress_theta), NO_PARSE, S::kModel},
       {"threads", K::kInteger, 1, 64, false, false, "", "1",
-       "stage 3's threads per step (a shared pool; the same bits for any count). 1: outer "
-       "parallelism (rollout, sweeps) keeps every core busy without oversubscription",
+       "threads per step for the `elastic` solve's FFTs and preconditioner and for stage 3 "
+       "(a shared pool; the same bits for any count). 1: outer parallelism (rollout, sweeps) "
+       "keeps every core busy without oversubscription",
        nullptr, FIELD(threads), NO_PARSE, S::kModel},
       {"skin", K::kChoice, 0, 0, false, false, "", "layered",
        "`layered` (`layers` over `base`) or `halfspace` (`poisson`)", "layered halfspace",

@@ -60,7 +60,7 @@ struct SkinConfig {
   InterfaceSide interface_side = InterfaceSide::kUpper;
   StressMethod stress_method = StressMethod::kAuto;  // `stress_method` (exact by default)
   double stress_theta = 0.5;  // `stress_theta`: tree's opening angle
-  int threads = 1;  // `threads`: stage 3's threads per step (same bits for any count)
+  int threads = 1;  // `threads`: elastic solve's and stage 3's threads per step (same bits)
   // `oversample`: tactile evaluations per physics step (the pad's pose and
   // MuJoCo's contact force interpolated over the step); 0 (`auto`) until
   // ResolveOversample sets the smallest that resolves the afferents.

@@ -314,6 +314,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         approach = tf.approach_m;
       } else {
         const ElasticContact& ec = *model.elastic();
+        ws->elastic.fft.threads = cfg.threads;  // the operator's FFTs, the stencil
         // Cells without coverage never touch.
         for (int j = box.j0; j < box.j0 + box.ny; ++j)
           for (int i = box.i0; i < box.i0 + box.nx; ++i) {
