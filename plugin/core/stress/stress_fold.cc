@@ -62,15 +62,12 @@ inline __attribute__((always_inline)) void Flush(v8f a, v4d* d) {
 // cells added before lo / from hi on are zeros of the padded pressure row
 // (an exact no-op: a lane that starts at +0 never holds -0), so lane l holds
 // the pressure lane (l - shift) mod 8's products in the same order, and the
-// lanes are rotated back before each flush: the same bits as shift 0. Its
-// chunks span the row's cells [cb, ce) only (not whole pressure chunks): the
-// chunks left out hold zero pressure (exact no-ops), ~10% of the chunks.
+// lanes are rotated back before each flush: the same bits as shift 0.
 template <int NC, int U>
 inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* const* ebuf,
                                                     int ew, int T0, const float* P, int pw,
-                                                    const int* lo, const int* hi, const int* cb,
-                                                    const int* ce, int r0, int r1, int rows,
-                                                    bool aligned) {
+                                                    const int* lo, const int* hi, int r0, int r1,
+                                                    int rows, bool aligned) {
   const int shift = U == 1 && aligned ? s.col & (kLanes - 1) : 0;
   v8f acc[U * NC];
   for (int k = 0; k < U * NC; ++k) acc[k] = s.acc[k];
@@ -79,9 +76,8 @@ inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* co
     const float* erow[NC];
     const size_t e0 = static_cast<size_t>(s.off + r - T0) * ew + s.col;
     for (int c = 0; c < NC; ++c) erow[c] = ebuf[s.comp[c]] + e0;
-    const bool trim = U == 1 && aligned;
-    const int x1 = trim ? ce[r] : hi[r];
-    int x = trim ? cb[r] - ((cb[r] + shift) & (kLanes - 1)) : lo[r];
+    const int x1 = hi[r];
+    int x = lo[r] - shift;
     for (; x + U * kLanes <= x1; x += U * kLanes)
       for (int u = 0; u < U; ++u) {
         const v8f p = Load(prow + x + u * kLanes);
@@ -152,8 +148,8 @@ inline __attribute__((always_inline)) void PairRows1(FoldSite& a, FoldSite& b,
 // kRowsPerFlush pressure rows (as the one-site-at-a-time sum).
 __attribute__((target_clones("avx2", "default")))
 void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
-             int T1, const float* P, int pw, const int* lo, const int* hi, const int* cb,
-             const int* ce, int rows, bool aligned) {
+             int T1, const float* P, int pw, const int* lo, const int* hi, int rows,
+             bool aligned) {
   for (int q = first; q < last; ++q) {
     FoldSite& s = sites[q];
     const int r0 = std::max(0, T0 - s.off), r1 = std::min(rows, T1 - s.off);
@@ -164,12 +160,12 @@ void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int
       continue;
     }
     switch (s.nc) {
-      case 1: SiteRows<1, 4>(s, ebuf, ew, T0, P, pw, lo, hi, cb, ce, r0, r1, rows, aligned); break;
-      case 2: SiteRows<2, 2>(s, ebuf, ew, T0, P, pw, lo, hi, cb, ce, r0, r1, rows, aligned); break;
-      case 3: SiteRows<3, 2>(s, ebuf, ew, T0, P, pw, lo, hi, cb, ce, r0, r1, rows, aligned); break;
-      case 4: SiteRows<4, 1>(s, ebuf, ew, T0, P, pw, lo, hi, cb, ce, r0, r1, rows, aligned); break;
-      case 5: SiteRows<5, 1>(s, ebuf, ew, T0, P, pw, lo, hi, cb, ce, r0, r1, rows, aligned); break;
-      default: SiteRows<6, 1>(s, ebuf, ew, T0, P, pw, lo, hi, cb, ce, r0, r1, rows, aligned); break;
+      case 1: SiteRows<1, 4>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 2: SiteRows<2, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 3: SiteRows<3, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 4: SiteRows<4, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 5: SiteRows<5, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      default: SiteRows<6, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
     }
   }
 }
@@ -432,8 +428,6 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
   float* const P0 = aligned ? AlignUp64(w->pressure.data()) + kLanes : w->pressure.data();
   w->row_lo.assign(rows, pw);
   w->row_hi.assign(rows, 0);
-  w->row_cb.assign(rows, pw);
-  w->row_ce.assign(rows, 0);
   for (size_t r = 0; r < runs.row.size(); ++r) {
     const int y = runs.row[r] - j0;
     const int b = runs.begin[r] - i0, e = runs.end[r] - i0;
@@ -442,8 +436,6 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
               P0 + static_cast<size_t>(y) * ps + b);
     w->row_lo[y] = std::min(w->row_lo[y], b / kLanes * kLanes);
     w->row_hi[y] = std::max(w->row_hi[y], (e + kLanes - 1) / kLanes * kLanes);
-    w->row_cb[y] = std::min(w->row_cb[y], b);
-    w->row_ce[y] = std::max(w->row_ce[y], e);
   }
   // Sites grouped by depth, each depth's window of table offsets and the
   // sites' states: fixed by the sites, so kept while they are unchanged.
@@ -519,8 +511,6 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       }
     const int* lo = w->row_lo.data();
     const int* hi = w->row_hi.data();
-    const int* cb = w->row_cb.data();
-    const int* ce = w->row_ce.data();
     const int* col = w->site_col.data();  // fs[q].col, contiguous
     int first = job.begin, last = job.begin;
     const int t_end = fs[job.end - 1].off + rows;
@@ -547,7 +537,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
                           c1 - c0, rx, ry, shear, use_h ? h : nullptr,
                           ebuf[c] + static_cast<size_t>(t - T0) * ew + c0);
       }
-      SumBand(fs, first, last, ebuf, ew, T0, T1, P0, ps, lo, hi, cb, ce, rows, aligned);
+      SumBand(fs, first, last, ebuf, ew, T0, T1, P0, ps, lo, hi, rows, aligned);
     }
     for (int q = job.begin; q < job.end; ++q)
       for (int c = 0; c < fs[q].nc; ++c) {

@@ -49,7 +49,6 @@ struct alignas(32) FoldSite {
 struct FoldScratch {
   std::vector<float> pressure;       // padded window, rows of `width` cells
   std::vector<int> row_lo, row_hi;   // per window row: chunk-aligned cell range
-  std::vector<int> row_cb, row_ce;   // per window row: cell range (not chunk-aligned)
   std::vector<int> sites_by_depth;   // site indices grouped by depth
   std::vector<int> depth_begin;      // ranges into sites_by_depth
   struct Window {
