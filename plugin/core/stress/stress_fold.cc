@@ -103,44 +103,6 @@ inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* co
   for (int k = 0; k < U * NC; ++k) s.acc[k] = acc[k];
 }
 
-// Two one-component sites on the same lattice row (same off: the same
-// pressure rows and chunks), their rows r0..r1 interleaved: each pressure
-// load serves both (the sums stream their rows from L2: 2-3% of the stage on
-// slide_grating, where 62 of the 126 szz sites pair). Each site's operations are SiteRows<1, 4>'s, in the same
-// order, so the same bits.
-inline __attribute__((always_inline)) void PairRows1(FoldSite& a, FoldSite& b,
-                                                     const float* const* ebuf, int ew, int T0,
-                                                     const float* P, int pw, const int* lo,
-                                                     const int* hi, int r0, int r1, int rows) {
-  v8f A[4], B[4];
-  for (int u = 0; u < 4; ++u) A[u] = a.acc[u], B[u] = b.acc[u];
-  for (int r = r0; r < r1; ++r) {
-    const float* prow = P + static_cast<size_t>(r) * pw;
-    const size_t e0 = static_cast<size_t>(a.off + r - T0) * ew;
-    const float* ea = ebuf[a.comp[0]] + e0 + a.col;
-    const float* eb = ebuf[b.comp[0]] + e0 + b.col;
-    const int x1 = hi[r];
-    int x = lo[r];
-    for (; x + 4 * kLanes <= x1; x += 4 * kLanes)
-      for (int u = 0; u < 4; ++u) {
-        const v8f p = Load(prow + x + u * kLanes);
-        A[u] += Load(ea + x + u * kLanes) * p;
-        B[u] += Load(eb + x + u * kLanes) * p;
-      }
-    for (; x < x1; x += kLanes) {
-      const v8f p = Load(prow + x);
-      A[0] += Load(ea + x) * p;
-      B[0] += Load(eb + x) * p;
-    }
-    if ((r + 1) % kRowsPerFlush == 0 || r == rows - 1) {
-      Flush(((A[0] + A[1]) + A[2]) + A[3], a.d);
-      Flush(((B[0] + B[1]) + B[2]) + B[3], b.d);
-      for (int u = 0; u < 4; ++u) A[u] = B[u] = v8f{0, 0, 0, 0, 0, 0, 0, 0};
-    }
-  }
-  for (int u = 0; u < 4; ++u) a.acc[u] = A[u], b.acc[u] = B[u];
-}
-
 // A band of folded table rows (window rows [T0, T1)) into the sums of the
 // sites [first, last) that read it (pressure row r = window row - site.off).
 // A site's sum is the same sequence of operations whichever band or job its
@@ -154,11 +116,6 @@ void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int
     FoldSite& s = sites[q];
     const int r0 = std::max(0, T0 - s.off), r1 = std::min(rows, T1 - s.off);
     if (r0 >= r1) continue;
-    if (s.nc == 1 && q + 1 < last && sites[q + 1].nc == 1 && sites[q + 1].off == s.off) {
-      PairRows1(s, sites[q + 1], ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows);
-      ++q;
-      continue;
-    }
     switch (s.nc) {
       case 1: SiteRows<1, 4>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
       case 2: SiteRows<2, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
@@ -332,7 +289,7 @@ int CountWanted(const std::array<bool, kNumStress>& w) {
 }
 
 // Sites grouped by depth (each by the window row it starts reading at, row
-// j descending, then components wanted, then column), each depth's largest / smallest site i, j and
+// j descending, then column), each depth's largest / smallest site i, j and
 // components, and the sites' states in that order.
 void SortSites(const KernelTables& kt, const std::vector<StressSite>& sites, FoldScratch* w) {
   const int n = kt.n;
@@ -362,17 +319,12 @@ void SortSites(const KernelTables& kt, const std::vector<StressSite>& sites, Fol
     for (size_t s = 0; s < sites.size(); ++s)
       w->sites_by_depth[fill[sites[s].depth_index]++] = static_cast<int>(s);
     // Each depth's sites by the window row they start at (row j, descending),
-    // then components wanted (a row's one-component sites adjacent: SumBand
-    // pairs them), then column (fixed by the sites alone, so the same order
-    // every step).
+    // then column (fixed by the sites alone, so the same order every step).
     for (int d = 0; d < D; ++d)
       std::sort(w->sites_by_depth.begin() + w->depth_begin[d],
                 w->sites_by_depth.begin() + w->depth_begin[d + 1], [&](int a, int b) {
                   const StressSite &sa = sites[a], &sb = sites[b];
-                  const int na = CountWanted(sa.want), nb = CountWanted(sb.want);
-                  if (sa.j != sb.j) return sa.j > sb.j;
-                  if (na != nb) return na < nb;
-                  return sa.i != sb.i ? sa.i < sb.i : a < b;
+                  return sa.j != sb.j ? sa.j > sb.j : (sa.i != sb.i ? sa.i < sb.i : a < b);
                 });
   }
   // Each depth's table window, and its sites' states in the order of the
