@@ -148,10 +148,12 @@ def test_aligned_sums_and_rx_cache_are_the_legacy_bits(sliding_contact, engine):
 
 
 def test_site_stress_does_not_depend_on_other_sites(sliding_contact):
-    # SumBand pairs one-component sites of a lattice row (one pressure load
-    # for both): each site must get the bits it gets alone, whichever sites
-    # share its row (one-component pairs, a triple, a six-component site
-    # between them, a site alone), on 1 and 3 threads, with and without shear.
+    # A site's sum is its own fixed sequence of operations (what makes the
+    # output the same for any thread split, and any future sharing of loads
+    # between sites of a row): each site must get the bits it gets alone,
+    # whichever sites share its lattice row (one-component pairs, a triple, a
+    # six-component site between them, a site alone), on 1 and 3 threads,
+    # with and without shear.
     tip, p, ratio = sliding_contact
     n = tip.nx
     ij = [(50, 64), (61, 64), (77, 64), (70, 64), (40, 40), (83, 40), (66, 90), (58, 20),
