@@ -185,18 +185,6 @@ inline __attribute__((always_inline)) void FoldRowCells(const float* kp, const f
   }
 }
 
-__attribute__((target_clones("avx2", "default")))
-void FoldRow(const float* kp, const float* kx, const float* ky, float rx, float ry, float sign,
-             bool shear, int len, float* e) {
-  FoldRowCells<false>(kp, kx, ky, rx, ry, sign, shear, len, e);
-}
-
-__attribute__((target_clones("avx2", "default")))
-void FoldRowReversed(const float* kp, const float* kx, const float* ky, float rx, float ry,
-                     float sign, bool shear, int len, float* e) {
-  FoldRowCells<true>(kp, kx, ky, rx, ry, sign, shear, len, e);
-}
-
 // e[x] = sign (h[x] + ry ky[x]) with h = kp + rx kx precomputed (the same
 // float as FoldRow's inner sum, so the same bits), or from a mirrored source
 // read backwards (h[-x], ky[-x]): two table reads per cell instead of three.
@@ -217,25 +205,16 @@ inline __attribute__((always_inline)) void FoldRowHCells(const float* h, const f
       });
 }
 
-__attribute__((target_clones("avx2", "default")))
-void FoldRowH(const float* h, const float* ky, float ry, float sign, int len, float* e) {
-  FoldRowHCells<false>(h, ky, ry, sign, len, e);
-}
-
-__attribute__((target_clones("avx2", "default")))
-void FoldRowHReversed(const float* h, const float* ky, float ry, float sign, int len,
-                      float* e) {
-  FoldRowHCells<true>(h, ky, ry, sign, len, e);
-}
-
 // One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
 // the tables' rows at |dy| and columns |dx| only (KernelTables::
 // mirror_symmetric): the signs of the reflections folded into the ratios,
 // E = sp (Kp + (sp sx rx) Kx + (sp sy ry) Ky), exactly the value the full
 // tables give when they are mirror images.
 // h (or null): the FoldScratch::h quadrants of (d, comp) for +rx and -rx.
-void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy, int x0, int w,
-                     float rx, float ry, bool shear, const float* const* h, float* e) {
+inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& kt, int d,
+                                                           StressComponent comp, int dy, int x0,
+                                                           int w, float rx, float ry, bool shear,
+                                                           const float* const* h, float* e) {
   const int n = kt.n, L = 2 * n - 1;
   const int ady = dy < 0 ? -dy : dy;
   if (ady > n - 1) {
@@ -268,18 +247,31 @@ void FoldMirroredRow(const KernelTables& kt, int d, StressComponent comp, int dy
     if (shear && h) {  // kp + a kx from the quadrant of a = +rx or -rx
       const float* hrow = h[sp * sx < 0] + static_cast<size_t>(ady) * n;
       if (side == 0)
-        FoldRowH(hrow + lo, Ky + lo, b, sp, hi - lo + 1, e + (lo - x0));
+        FoldRowHCells<false>(hrow + lo, Ky + lo, b, sp, hi - lo + 1, e + (lo - x0));
       else
-        FoldRowHReversed(hrow - lo, Ky - lo, b, sp, hi - lo + 1, e + (lo - x0));
+        FoldRowHCells<true>(hrow - lo, Ky - lo, b, sp, hi - lo + 1, e + (lo - x0));
       continue;
     }
     if (side == 0) {
-      FoldRow(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
+      FoldRowCells<false>(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1,
+                          e + (lo - x0));
     } else {
       // e at dx = lo .. hi reads the positive-offset row at -lo .. -hi.
-      FoldRowReversed(Kp - lo, Kx - lo, Ky - lo, a, b, sp, shear, hi - lo + 1, e + (lo - x0));
+      FoldRowCells<true>(Kp - lo, Kx - lo, Ky - lo, a, b, sp, shear, hi - lo + 1,
+                         e + (lo - x0));
     }
   }
+}
+
+// Rows dy0 .. dy0 + rows - 1 of a folded window into e (rows ew apart): one
+// dispatch per band, not two per row side.
+__attribute__((target_clones("avx2", "default")))
+void FoldMirroredRows(const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
+                      int x0, int w, float rx, float ry, bool shear, const float* const* h,
+                      float* e, int ew) {
+  for (int t = 0; t < rows; ++t)
+    FoldMirroredRow(kt, d, comp, dy0 + t, x0, w, rx, ry, shear, h,
+                    e + static_cast<size_t>(t) * ew);
 }
 
 // The first 64-byte aligned float at or after p (buffers allocate 16 more).
@@ -537,10 +529,9 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
           h[0] = w->h.data() + w->h_offset[d * kNumStress + c];
           h[1] = h[0] + static_cast<size_t>(n) * n;
         }
-        for (int t = T0; t < T1; ++t)
-          FoldMirroredRow(kt, d, static_cast<StressComponent>(c), t + win.y0, win.x0 + c0,
-                          c1 - c0, rx, ry, shear, use_h ? h : nullptr,
-                          ebuf[c] + static_cast<size_t>(t - T0) * ew + c0);
+        FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, T1 - T0,
+                         win.x0 + c0, c1 - c0, rx, ry, shear, use_h ? h : nullptr,
+                         ebuf[c] + c0, ew);
       }
       SumBand(fs, first, last, ebuf, ew, T0, T1, P0, ps, lo, hi, rows, aligned);
     }
