@@ -221,9 +221,11 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
     std::fill(e, e + w, 0.0f);
     return;
   }
-  // Zero beyond the tables' offsets; the two sides below write the rest.
-  std::fill(e, e + std::clamp(-(n - 1) - x0, 0, w), 0.0f);
-  std::fill(e + std::clamp(n - x0, 0, w), e + w, 0.0f);
+  // Zero beyond the tables' offsets (rarely any); the two sides below write
+  // the rest.
+  const int z0 = std::clamp(-(n - 1) - x0, 0, w), z1 = std::clamp(n - x0, 0, w);
+  if (z0 > 0) std::fill(e, e + z0, 0.0f);
+  if (z1 < w) std::fill(e + z1, e + w, 0.0f);
   const size_t row = static_cast<size_t>(ady + n - 1) * L + (n - 1);  // offset (0, |dy|)
   const float* Kp = kt.At(d, kLoadPressure, comp) + row;
   const float* Kx = kt.At(d, kLoadShearX, comp) + row;
