@@ -147,6 +147,30 @@ def test_aligned_sums_and_rx_cache_are_the_legacy_bits(sliding_contact, engine):
     assert not np.array_equal(a, e.stress(edge, slip=(0.3, 0.2), method="direct"))
 
 
+def test_site_stress_does_not_depend_on_other_sites(sliding_contact):
+    # A site's sum is its own fixed sequence of operations (what makes the
+    # output the same for any thread split, and any future sharing of loads
+    # between sites of a row): each site must get the bits it gets alone,
+    # whichever sites share its lattice row (one-component pairs, a triple, a
+    # six-component site between them, a site alone), on 1 and 3 threads,
+    # with and without shear.
+    tip, p, ratio = sliding_contact
+    n = tip.nx
+    ij = [(50, 64), (61, 64), (77, 64), (70, 64), (40, 40), (83, 40), (66, 90), (58, 20),
+          (59, 20)]
+    comps = [(2,), (2,), (2,), range(6), (2,), (2,), (2,), (0, 2), (2,)]
+    e = core.StressEngine(core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], ij, components=comps,
+                          method="direct")
+    alone = [core.StressEngine(core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], [s],
+                               components=[c], method="direct") for s, c in zip(ij, comps)]
+    for slip in (ratio, None):
+        want = np.concatenate([a.stress(p, slip=slip, method="direct") for a in alone])
+        assert np.abs(want[:, 2]).min() > 0  # every site under the contact's stress
+        for threads in (1, 3):
+            got = e.stress(p, slip=slip, method="direct", threads=threads)
+            assert np.array_equal(got, want)
+
+
 def test_fold_false_is_the_reference_sum(sliding_contact, engine):
     # fold=False with explicit shear fields is the same arithmetic as the
     # shear fields without slip information (the `contacts` model's path).
