@@ -281,7 +281,12 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     touching = SplatContacts(grid, in.contacts, &tf);
     state[kStContactDepth] = 0.0;
   } else if (!in.surfaces.empty()) {
-    ClearTraction(grid, &tf);
+    // Winkler with shear (fast paths): solved first, then the field written
+    // over the last one (WriteWinklerSlipTraction), which clears only what
+    // the new contact does not cover.
+    const bool winkler_slip = !ws->reference_paths &&
+                              cfg.pressure_model == PressureModel::kWinkler && cfg.shear;
+    if (!winkler_slip) ClearTraction(grid, &tf);
     // Warm start: the last step's indentation depth (approach minus smallest
     // gap) bounds which cells can touch; cells provably above 1.5x that
     // depth are not rendered. A cell whose gap exceeds the approach cannot
@@ -301,6 +306,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       return level;
     };
     double cull = render(cull_rel);
+    double solved_approach = 0.0;  // winkler_slip: the field to write
     for (int pass = 0; pass < 2 && !touching; ++pass) {
       if (pass == 1) cull = render(kInf);
       const double gmin = MinGap(grid, box, ws->gap, ws->coverage);
@@ -308,10 +314,16 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       double approach = 0.0;
       if (cfg.pressure_model == PressureModel::kWinkler) {
         const double guess = warm ? gmin + depth_prev : std::nan("");
-        touching = (fast ? WinklerPressure : WinklerPressureReference)(
-            grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m, in.normal_force_n, guess,
-            &tf);
-        approach = tf.approach_m;
+        if (winkler_slip) {
+          touching = SolveWinkler(grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m,
+                                  in.normal_force_n, guess, &tf, &approach);
+          solved_approach = approach;
+        } else {
+          touching = (fast ? WinklerPressure : WinklerPressureReference)(
+              grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m, in.normal_force_n,
+              guess, &tf);
+          approach = tf.approach_m;
+        }
       } else {
         const ElasticContact& ec = *model.elastic();
         // Cells without coverage never touch.
@@ -387,14 +399,23 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       }
       if (touching && approach >= cull && pass == 0) {
         touching = false;  // render all and solve again
-        ClearTraction(grid, &tf);
+        if (!winkler_slip) ClearTraction(grid, &tf);
         continue;
       }
       if (touching) {
         state[kStContactDepth] = approach - gmin;
       }
     }
-    if (touching && cfg.shear) {
+    if (winkler_slip) {
+      // the solve's field, or (no contact) the cleared one
+      if (touching) {
+        touching = WriteWinklerSlipTraction(grid, box, solved_approach, in.normal_force_n,
+                                            in.shear_x_n, in.shear_y_n, &tf);
+        finished = true;
+      } else {
+        ClearTraction(grid, &tf);
+      }
+    } else if (touching && cfg.shear) {
       if (ws->reference_paths) {
         UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
       } else {  // the shear and FinishTraction in one pass
