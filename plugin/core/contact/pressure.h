@@ -49,6 +49,7 @@ struct TractionField {
   std::vector<double> scratch_gap, scratch_cov, scratch_load;
   ActiveRuns scratch_spans, solved_runs, scratch_runs;
   double solved_total = 0;
+  double scan_gmin = 0, scan_covmax = 0;  // ScanWinklerCandidates
 };
 
 // Size every array to the grid and zero the last support: an empty field.
@@ -82,11 +83,18 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap_m,
 
 // WinklerPressure's solve alone: the approach (*approach_m), the touching
 // cells and their unscaled loads (scratch); the fields are left as they are.
-// False if no cell touches.
+// False if no cell touches. `scanned`: ScanWinklerCandidates ran on the same
+// arrays and box (its results in `out` are used, not computed again).
 bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
                   const std::vector<double>& coverage, const CellBox& box,
                   double stiffness_pa_per_m, double normal_force_n, double approach_guess_m,
-                  TractionField* out, double* approach_m);
+                  TractionField* out, double* approach_m, bool scanned = false);
+// SolveWinkler's first pass over the box (into `out`'s scratch); returns the
+// smallest gap of the cells with coverage > 0, as a row-by-row minimum would
+// find it up to the sign of a zero.
+double ScanWinklerCandidates(const TaxelGrid& grid, const std::vector<double>& gap_m,
+                             const std::vector<double>& coverage, const CellBox& box,
+                             TractionField* out);
 
 // After SolveWinkler (approach c, on `box`): what WinklerPressure then
 // FinishUniformSlipTraction would leave on a field cleared by ClearTraction,

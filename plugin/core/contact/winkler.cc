@@ -37,37 +37,46 @@ inline bool Candidate(double g, double w) { return (w > 0.0) & (std::abs(g) < kI
 // would bound one chain), SSE2 by hand (GCC turns the selects into
 // branches). The minimum does not depend on the order but for the sign of a
 // zero: a zero minimum is taken again in box order, as std::min keeps it.
+// `covered_min`: the smallest gap of the cells with coverage > 0 (MinGap's,
+// -inf included) but for the sign of a zero.
 void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
-                    const CellBox& box, double* gmin, double* covmax, ActiveRuns* spans) {
+                    const CellBox& box, double* gmin, double* covmax, ActiveRuns* spans,
+                    double* covered_min) {
   spans->Clear();
-  double lo = kInf, hi = 0.0;
+  double lo = kInf, hi = 0.0, lo_cov = kInf;
   __m128d lo01 = _mm_set1_pd(kInf), lo23 = lo01, hi01 = _mm_setzero_pd(), hi23 = hi01;
+  __m128d all01 = lo01, all23 = lo01;
   const __m128d inf = _mm_set1_pd(kInf), zero = _mm_setzero_pd();
   const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
-  auto lanes = [&](const double* g, const double* w, __m128d* l, __m128d* h) {
+  auto lanes = [&](const double* g, const double* w, __m128d* l, __m128d* h, __m128d* all) {
     const __m128d gv = _mm_loadu_pd(g), wv = _mm_loadu_pd(w);
-    const __m128d valid = _mm_and_pd(_mm_cmpgt_pd(wv, zero),
-                                     _mm_cmplt_pd(_mm_and_pd(gv, abs_mask), inf));
+    const __m128d covered = _mm_cmpgt_pd(wv, zero);
+    const __m128d valid = _mm_and_pd(covered, _mm_cmplt_pd(_mm_and_pd(gv, abs_mask), inf));
     const __m128d gs = _mm_or_pd(_mm_and_pd(valid, gv), _mm_andnot_pd(valid, inf));
     *l = _mm_min_pd(gs, *l);                   // gs < l ? gs : l
     *h = _mm_max_pd(_mm_and_pd(valid, wv), *h);  // w > h ? w : h
+    // (a NaN gap: minpd returns the second operand)
+    *all = _mm_min_pd(_mm_or_pd(_mm_and_pd(covered, gv), _mm_andnot_pd(covered, inf)), *all);
   };
   for (int j = box.j0; j < box.j0 + box.ny; ++j) {
     const double* g = gap + static_cast<size_t>(j) * grid.n;
     const double* w = cov + static_cast<size_t>(j) * grid.n;
     int a = box.i0, b = box.i0 + box.nx;
-    while (a < b && !Candidate(g[a], w[a])) ++a;
-    while (b > a && !Candidate(g[b - 1], w[b - 1])) --b;
+    for (; a < b && !Candidate(g[a], w[a]); ++a)
+      if (w[a] > 0.0) lo_cov = std::min(lo_cov, g[a]);
+    for (; b > a && !Candidate(g[b - 1], w[b - 1]); --b)
+      if (w[b - 1] > 0.0) lo_cov = std::min(lo_cov, g[b - 1]);
     if (a == b) continue;
     spans->row.push_back(j);
     spans->begin.push_back(a);
     spans->end.push_back(b);
     int i = a;
     for (; i + 4 <= b; i += 4) {
-      lanes(g + i, w + i, &lo01, &hi01);
-      lanes(g + i + 2, w + i + 2, &lo23, &hi23);
+      lanes(g + i, w + i, &lo01, &hi01, &all01);
+      lanes(g + i + 2, w + i + 2, &lo23, &hi23, &all23);
     }
     for (; i < b; ++i) {
+      if (w[i] > 0.0) lo_cov = std::min(lo_cov, g[i]);
       if (!Candidate(g[i], w[i])) continue;
       lo = std::min(lo, g[i]);
       hi = std::max(hi, w[i]);
@@ -81,6 +90,7 @@ void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
   };
   *gmin = std::min(lo, std::min(lo_of(lo01), lo_of(lo23)));
   *covmax = std::max(hi, std::max(hi_of(hi01), hi_of(hi23)));
+  *covered_min = std::min(lo_cov, std::min(lo_of(all01), lo_of(all23)));
   if (*gmin == 0.0) {
     double m = kInf;
     for (size_t r = 0; r < spans->row.size(); ++r) {
@@ -191,9 +201,18 @@ void ZeroCells(TractionField* f, size_t a, size_t b) {
 
 }  // namespace
 
+double ScanWinklerCandidates(const TaxelGrid& grid, const std::vector<double>& gap_m,
+                             const std::vector<double>& coverage, const CellBox& box,
+                             TractionField* out) {
+  double covered_min;
+  ScanCandidates(grid, gap_m.data(), coverage.data(), box, &out->scan_gmin, &out->scan_covmax,
+                 &out->scratch_spans, &covered_min);
+  return covered_min;
+}
+
 bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
                   const std::vector<double>& coverage, const CellBox& box, double k, double force,
-                  double guess, TractionField* out, double* approach_m) {
+                  double guess, TractionField* out, double* approach_m, bool scanned) {
   // WinklerPressureReference's approach with fewer passes: Newton from a
   // warm start right of the root (or one step from its left); a
   // closed-form pass whose contact set did not change would repeat the last
@@ -208,8 +227,8 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   const double* gap = gap_m.data();
   const double* cov = coverage.data();
   const double target = force / (k * grid.Area());
-  double gmin, covmax;
-  ScanCandidates(grid, gap, cov, box, &gmin, &covmax, &spans);
+  if (!scanned) ScanWinklerCandidates(grid, gap_m, coverage, box, out);
+  const double gmin = out->scan_gmin, covmax = out->scan_covmax;
   if (!std::isfinite(gmin) || !(force > 0.0)) return false;
   const bool warm = std::isfinite(guess);
   double c = gmin + target / std::max(covmax, 1e-12);

@@ -309,14 +309,17 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     double solved_approach = 0.0;  // winkler_slip: the field to write
     for (int pass = 0; pass < 2 && !touching; ++pass) {
       if (pass == 1) cull = render(kInf);
-      const double gmin = MinGap(grid, box, ws->gap, ws->coverage);
+      // (winkler_slip: the solve's first pass finds it; MinGap fixes a zero's sign)
+      double gmin = winkler_slip ? ScanWinklerCandidates(grid, ws->gap, ws->coverage, box, &tf)
+                                 : MinGap(grid, box, ws->gap, ws->coverage);
+      if (winkler_slip && gmin == 0.0) gmin = MinGap(grid, box, ws->gap, ws->coverage);
       if (!std::isfinite(gmin)) break;
       double approach = 0.0;
       if (cfg.pressure_model == PressureModel::kWinkler) {
         const double guess = warm ? gmin + depth_prev : std::nan("");
         if (winkler_slip) {
           touching = SolveWinkler(grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m,
-                                  in.normal_force_n, guess, &tf, &approach);
+                                  in.normal_force_n, guess, &tf, &approach, true);
           solved_approach = approach;
         } else {
           touching = (fast ? WinklerPressure : WinklerPressureReference)(

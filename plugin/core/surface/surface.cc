@@ -399,6 +399,7 @@ struct RowSpan {
 };
 
 template <bool kPlane>
+__attribute__((target_clones("avx2", "default")))
 void AlignedRow(const RowSpan& r, int i0, int i1, const double* z, const double* u,
                 const double* ox, const double* mean, double* __restrict gp,
                 double* __restrict cp, double* __restrict took) {
