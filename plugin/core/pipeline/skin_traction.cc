@@ -300,7 +300,8 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       const double t0 = ws->render_time_s ? ThreadCpuSeconds() : 0.0;
       const double level = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_above_m,
                                      &ws->gap, &ws->coverage, true, &model.skin_blocks(), &box,
-                                     fast, fast ? &ws->gap_written : nullptr);
+                                     fast, fast ? &ws->gap_written : nullptr,
+                                     winkler_slip ? &ws->render_summary : nullptr);
       if (!fast) ws->gap_written = CellBox::All(grid);  // the reference cleared it all
       if (ws->render_time_s) *ws->render_time_s += ThreadCpuSeconds() - t0;
       return level;
@@ -309,10 +310,20 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     double solved_approach = 0.0;  // winkler_slip: the field to write
     for (int pass = 0; pass < 2 && !touching; ++pass) {
       if (pass == 1) cull = render(kInf);
-      // (winkler_slip: the solve's first pass finds it; MinGap fixes a zero's sign)
-      double gmin = winkler_slip ? ScanWinklerCandidates(grid, ws->gap, ws->coverage, box, &tf)
-                                 : MinGap(grid, box, ws->gap, ws->coverage);
-      if (winkler_slip && gmin == 0.0) gmin = MinGap(grid, box, ws->gap, ws->coverage);
+      // (winkler_slip: from the render's summary of the covered cells, else
+      // the solve's first pass; MinGap fixes a zero's sign)
+      double gmin;
+      if (!winkler_slip) {
+        gmin = MinGap(grid, box, ws->gap, ws->coverage);
+      } else if (const RenderSummary& rs = ws->render_summary;
+                 rs.valid && rs.gap_min_m != 0.0) {
+        gmin = tf.scan_gmin = rs.gap_min_m;  // covered cells: finite gaps
+        tf.scan_covmax = rs.coverage_max;
+        tf.scratch_spans = rs.spans;
+      } else {
+        gmin = ScanWinklerCandidates(grid, ws->gap, ws->coverage, box, &tf);
+        if (gmin == 0.0) gmin = MinGap(grid, box, ws->gap, ws->coverage);
+      }
       if (!std::isfinite(gmin)) break;
       double approach = 0.0;
       if (cfg.pressure_model == PressureModel::kWinkler) {

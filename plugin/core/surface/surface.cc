@@ -389,6 +389,7 @@ struct AlignedFace {
 
 struct Extent {
   int i_lo, i_hi, j_lo, j_hi;
+  bool wrote = false;  // some cell written
 };
 
 // One row segment [i0, i1) of an aligned face. Branch-free (bitwise &,
@@ -417,12 +418,50 @@ void AlignedRow(const RowSpan& r, int i0, int i1, const double* z, const double*
   }
 }
 
+// Four double lanes (one AVX2 vector, two SSE2 ones in the default clone).
+typedef double v4d __attribute__((vector_size(32)));
+typedef long long v4l __attribute__((vector_size(32)));
+
+// Running extrema of the covered cells (coverage > 0, finite gap), in four
+// lanes (RenderSummary).
+struct Extrema {
+  double lo[4] = {kInf, kInf, kInf, kInf}, hi[4] = {0, 0, 0, 0};
+};
+
+// Adds the covered cells of [a, b) of one row (lane k: the cells a + k mod 4;
+// exact: a minimum or maximum rounds nothing).
+__attribute__((target_clones("avx2", "default")))
+void AddExtrema(const double* g, const double* w, int a, int b, Extrema* e) {
+  v4d lo, hi;
+  std::memcpy(&lo, e->lo, sizeof(lo));
+  std::memcpy(&hi, e->hi, sizeof(hi));
+  const v4d zero = {0, 0, 0, 0}, inf = {kInf, kInf, kInf, kInf}, ninf = -inf;
+  int i = a;
+  for (; i + 4 <= b; i += 4) {
+    v4d gv, wv;
+    std::memcpy(&gv, g + i, sizeof(gv));
+    std::memcpy(&wv, w + i, sizeof(wv));
+    const v4l in = (wv > zero) & (gv < inf) & (gv > ninf);
+    const v4d gs = in ? gv : inf, ws = in ? wv : zero;
+    lo = gs < lo ? gs : lo;
+    hi = ws > hi ? ws : hi;
+  }
+  std::memcpy(e->lo, &lo, sizeof(lo));
+  std::memcpy(e->hi, &hi, sizeof(hi));
+  for (; i < b; ++i) {
+    if (!(w[i] > 0.0 && std::abs(g[i]) < kInf)) continue;
+    e->lo[0] = std::min(e->lo[0], g[i]);
+    e->hi[0] = std::max(e->hi[0], w[i]);
+  }
+}
+
 // Renders the face into gap_m / coverage; `covers_only`: renders nothing
 // and returns whether every cell mean within reach is known per column and
 // >= 0 (so the texture's gap is at most its base plane's everywhere).
 bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
                        const AlignedFace& f, const SkinBlocks& blocks, const double* block_lb,
-                       double* gap_m, double* coverage, Extent* ext, bool covers_only = false) {
+                       double* gap_m, double* coverage, Extent* ext, bool covers_only = false,
+                       Extrema* extrema = nullptr, ActiveRuns* spans = nullptr) {
   using T = CounterSurface::Type;
   const CounterSurface& s = f.s;
   const double* R = f.R;
@@ -529,6 +568,14 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
       ext->i_hi = std::max(ext->i_hi, hi);
       ext->j_lo = std::min(ext->j_lo, j);
       ext->j_hi = std::max(ext->j_hi, j);
+      ext->wrote = true;
+      if (extrema) {  // the row is still in L1
+        const size_t base = static_cast<size_t>(j) * n;
+        AddExtrema(gap_m + base, coverage + base, lo, hi + 1, extrema);
+        spans->row.push_back(j);
+        spans->begin.push_back(lo);
+        spans->end.push_back(hi + 1);
+      }
     }
   }
   return true;
@@ -540,8 +587,15 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  const Pose& pad, const std::vector<CounterSurface>& surfaces,
                  double cull_above_m, std::vector<double>* gap_m,
                  std::vector<double>* coverage, bool area_average, const SkinBlocks* blocks,
-                 CellBox* rendered, bool fast_paths, CellBox* written) {
+                 CellBox* rendered, bool fast_paths, CellBox* written,
+                 RenderSummary* summary) {
   const size_t N = grid.Size();
+  Extrema extrema;
+  int writers = 0, aligned_writers = 0;  // surfaces that wrote cells (RenderSummary)
+  if (summary) {
+    summary->valid = false;
+    summary->spans.Clear();
+  }
   if (written && gap_m->size() == N && coverage->size() == N) {
     const CellBox& w = *written;
     for (int j = w.j0; j < w.j0 + w.ny; ++j) {
@@ -685,7 +739,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
         // above the face's and equal only with the same coverage, so the
         // face would change no cell's result.
         const Frame& T = frames[k + 1];
-        Extent none{};
+        Extent none{0, 0, 0, 0};
         if (RenderAlignedFace(grid, skin_z, AlignedFace{surfaces[k + 1], T.R, T.t, T.hx, T.hy, cull},
                               *blocks, &block_lb[(k + 1) * nb * nb], nullptr, nullptr, &none,
                               true))
@@ -693,12 +747,17 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
       }
       Extent ext{i_lo, i_hi, j_lo, j_hi};
       RenderAlignedFace(grid, skin_z, AlignedFace{s, R, F.t, F.hx, F.hy, cull}, *blocks,
-                        &block_lb[k * nb * nb], gap_m->data(), coverage->data(), &ext);
+                        &block_lb[k * nb * nb], gap_m->data(), coverage->data(), &ext, false,
+                        summary && aligned_writers == 0 ? &extrema : nullptr,
+                        summary ? &summary->spans : nullptr);
       i_lo = ext.i_lo, i_hi = ext.i_hi, j_lo = ext.j_lo, j_hi = ext.j_hi;
+      writers += ext.wrote;
+      aligned_writers += ext.wrote;
       continue;
     }
     const double area = 4.0 * F.hx * F.hy;
     const bool line = IsLineType(s.type);
+    bool general_wrote = false;
     // The pad's z axis in the surface frame.
     const double d_loc[3] = {R[2], R[5], R[8]};
     for (int b = 0; b < nb * nb; ++b) {
@@ -758,6 +817,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
         if (gap < (*gap_m)[idx]) {
           (*gap_m)[idx] = gap;
           (*coverage)[idx] = cov;
+          general_wrote = true;
           i_lo = std::min(i_lo, i);
           i_hi = std::max(i_hi, i);
           j_lo = std::min(j_lo, j);
@@ -765,6 +825,14 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
         }
       });
     }
+    writers += general_wrote;
+  }
+  if (summary && writers == 1 && aligned_writers == 1) {
+    summary->valid = true;
+    summary->gap_min_m = std::min(std::min(extrema.lo[0], extrema.lo[1]),
+                                  std::min(extrema.lo[2], extrema.lo[3]));
+    summary->coverage_max = std::max(std::max(extrema.hi[0], extrema.hi[1]),
+                                     std::max(extrema.hi[2], extrema.hi[3]));
   }
   // Every cell written above is in this box (a write takes a gap below the
   // cell's, and extends the box).
