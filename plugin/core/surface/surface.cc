@@ -399,7 +399,9 @@ struct RowSpan {
   double top, cull, oy, area;
 };
 
-template <bool kPlane>
+// kOverwrite: the cells' old values are taken as +inf / 0 (not read), as
+// after a clear (RenderGap's exclusive surface).
+template <bool kPlane, bool kOverwrite>
 __attribute__((target_clones("avx2", "default")))
 void AlignedRow(const RowSpan& r, int i0, int i1, const double* z, const double* u,
                 const double* ox, const double* mean, double* __restrict gp,
@@ -410,7 +412,7 @@ void AlignedRow(const RowSpan& r, int i0, int i1, const double* z, const double*
     const double cov = kPlane ? 1.0 : ox[i] * r.oy / r.area;  // area > 0 (IsAlignedFace)
     const bool reach = (std::abs(zi) < kInf) & !(qz - r.top > r.cull) & (cov > 0.0);
     const double gap = qz - mean[i];  // NaN (per-cell mean) never takes
-    const double old_gap = gp[i], old_cov = cp[i];
+    const double old_gap = kOverwrite ? kInf : gp[i], old_cov = kOverwrite ? 0.0 : cp[i];
     const bool take = reach & (gap < old_gap);
     gp[i] = take ? gap : old_gap;
     cp[i] = take ? cov : old_cov;
@@ -461,7 +463,12 @@ void AddExtrema(const double* g, const double* w, int a, int b, Extrema* e) {
 bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
                        const AlignedFace& f, const SkinBlocks& blocks, const double* block_lb,
                        double* gap_m, double* coverage, Extent* ext, bool covers_only = false,
-                       Extrema* extrema = nullptr, ActiveRuns* spans = nullptr) {
+                       Extrema* extrema = nullptr, ActiveRuns* spans = nullptr,
+                       CellBox* overwrite = nullptr) {
+  // overwrite: the cells hold stale values; every cell of the rows and
+  // columns of the blocks within reach is written (+inf / 0 where nothing
+  // takes), and *overwrite is set to that rectangle.
+  if (overwrite) *overwrite = CellBox{};
   using T = CounterSurface::Type;
   const CounterSurface& s = f.s;
   const double* R = f.R;
@@ -511,6 +518,7 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
     negative |= mean[i] < 0.0;
   }
   if (covers_only) return !per_cell && !negative;
+  if (overwrite) *overwrite = CellBox{c0, r0, c1 - c0, r1 - r0};
   for (int j = r0; j < r1; ++j) {
     const double qy = f.t[1] + R[4] * grid.Centre(j);
     oy[j] = Overlap1D(qy - f.hy, qy + f.hy, -s.half_y_m, s.half_y_m);
@@ -524,7 +532,15 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
     const int bj = j / B;
     int lo = n, hi = -1;
     for (int bi = bi0; bi <= bi1; ++bi) {
-      if (!(block_lb[bj * nb + bi] <= cull)) continue;
+      if (!(block_lb[bj * nb + bi] <= cull)) {
+        if (overwrite) {  // out of reach: what a clear leaves
+          const size_t a = static_cast<size_t>(j) * n + bi * B;
+          const size_t b = static_cast<size_t>(j) * n + std::min(n, bi * B + B);
+          std::fill(gap_m + a, gap_m + b, kInf);
+          std::fill(coverage + a, coverage + b, 0.0);
+        }
+        continue;
+      }
       // A run of consecutive blocks within reach: one branch-free loop.
       int bend = bi;
       while (bend + 1 <= bi1 && block_lb[bj * nb + bend + 1] <= cull) ++bend;
@@ -535,8 +551,13 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
       double* gp = gap_m + base;
       double* cp = coverage + base;
       const RowSpan row{tz, r6, r7 * v, r8, top, cull, oyj, area};
-      if (plane) AlignedRow<true>(row, i0, i1, z, u, ox, mean, gp, cp, took);
-      else AlignedRow<false>(row, i0, i1, z, u, ox, mean, gp, cp, took);
+      if (overwrite) {
+        if (plane) AlignedRow<true, true>(row, i0, i1, z, u, ox, mean, gp, cp, took);
+        else AlignedRow<false, true>(row, i0, i1, z, u, ox, mean, gp, cp, took);
+      } else {
+        if (plane) AlignedRow<true, false>(row, i0, i1, z, u, ox, mean, gp, cp, took);
+        else AlignedRow<false, false>(row, i0, i1, z, u, ox, mean, gp, cp, took);
+      }
       int a = i0, b = i1 - 1;
       while (a <= b && took[a] == 0.0) ++a;
       while (b >= a && took[b] == 0.0) --b;
@@ -596,14 +617,20 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
     summary->valid = false;
     summary->spans.Clear();
   }
-  if (written && gap_m->size() == N && coverage->size() == N) {
-    const CellBox& w = *written;
-    for (int j = w.j0; j < w.j0 + w.ny; ++j) {
-      const size_t a = static_cast<size_t>(j) * grid.n + w.i0;
-      std::fill(gap_m->begin() + a, gap_m->begin() + a + w.nx, kInf);
-      std::fill(coverage->begin() + a, coverage->begin() + a + w.nx, 0.0);
+  // Cells [i0, i1) x [j0, j1) of the last result's box (`written`) back to
+  // +inf / 0 (the rest of the grid holds them already).
+  const bool reuse = written && gap_m->size() == N && coverage->size() == N;
+  const CellBox last = reuse ? *written : CellBox{};
+  auto clear_last = [&](int i0, int i1, int j0, int j1) {
+    i0 = std::max(i0, last.i0);
+    i1 = std::min(i1, last.i0 + last.nx);
+    for (int j = std::max(j0, last.j0); j < std::min(j1, last.j0 + last.ny) && i0 < i1; ++j) {
+      const size_t a = static_cast<size_t>(j) * grid.n;
+      std::fill(gap_m->begin() + a + i0, gap_m->begin() + a + i1, kInf);
+      std::fill(coverage->begin() + a + i0, coverage->begin() + a + i1, 0.0);
     }
-  } else {
+  };
+  if (!reuse) {
     gap_m->assign(N, kInf);
     coverage->assign(N, 0.0);
   }
@@ -727,29 +754,61 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
            std::memcmp(Fa.t, Fb.t, sizeof(Fa.t)) == 0 && Fa.hx == Fb.hx && Fa.hy == Fb.hy;
   };
   const double g = area_average ? 0.5 * h / std::sqrt(3.0) : 0.0;
+  // Which surfaces render (0: none, 1: aligned-face path, 2: general) and
+  // how many have cells within reach. If one alone does, through the
+  // aligned path, it overwrites its rectangle and only the rest of the last
+  // box is cleared (exclusive); else the last box is cleared first.
+  std::vector<char> path(surfaces.size(), 0);
+  int reaching = 0, exclusive = -1;
+  for (size_t k = 0; k < surfaces.size(); ++k) {
+    const Frame& F = frames[k];
+    const bool aligned = fast_paths && area_average && IsAlignedFace(surfaces[k], F.R, F.hx, F.hy);
+    if (aligned && k + 1 < surfaces.size() && texture_on_face(k)) {
+      // A texture on this face (the plate proxy under its height field,
+      // next in the list) whose cell means are all >= 0: its gap is never
+      // above the face's and equal only with the same coverage, so the
+      // face would change no cell's result.
+      const Frame& T = frames[k + 1];
+      Extent none{0, 0, 0, 0};
+      if (RenderAlignedFace(grid, skin_z, AlignedFace{surfaces[k + 1], T.R, T.t, T.hx, T.hy, cull},
+                            *blocks, &block_lb[(k + 1) * nb * nb], nullptr, nullptr, &none,
+                            true))
+        continue;
+    }
+    path[k] = aligned ? 1 : 2;
+    bool reach = false;
+    for (int b = 0; b < nb * nb && !reach; ++b) reach = block_lb[k * nb * nb + b] <= cull;
+    if (!reach) continue;
+    ++reaching;
+    exclusive = aligned ? static_cast<int>(k) : -1;
+  }
+  if (!(reuse && reaching == 1 && exclusive >= 0)) exclusive = -1;
+  if (reuse && exclusive < 0) clear_last(0, grid.n, 0, grid.n);
   int i_lo = grid.n, i_hi = -1, j_lo = grid.n, j_hi = -1;
   for (size_t k = 0; k < surfaces.size(); ++k) {
     const CounterSurface& s = surfaces[k];
     const Frame& F = frames[k];
     const double* R = F.R;
-    if (fast_paths && area_average && IsAlignedFace(s, R, F.hx, F.hy)) {
-      if (k + 1 < surfaces.size() && texture_on_face(k)) {
-        // A texture on this face (the plate proxy under its height field,
-        // next in the list) whose cell means are all >= 0: its gap is never
-        // above the face's and equal only with the same coverage, so the
-        // face would change no cell's result.
-        const Frame& T = frames[k + 1];
-        Extent none{0, 0, 0, 0};
-        if (RenderAlignedFace(grid, skin_z, AlignedFace{surfaces[k + 1], T.R, T.t, T.hx, T.hy, cull},
-                              *blocks, &block_lb[(k + 1) * nb * nb], nullptr, nullptr, &none,
-                              true))
-          continue;
-      }
+    if (path[k] == 0) continue;
+    if (path[k] == 1) {
       Extent ext{i_lo, i_hi, j_lo, j_hi};
+      CellBox rect;
+      const bool own = static_cast<int>(k) == exclusive;
       RenderAlignedFace(grid, skin_z, AlignedFace{s, R, F.t, F.hx, F.hy, cull}, *blocks,
                         &block_lb[k * nb * nb], gap_m->data(), coverage->data(), &ext, false,
                         summary && aligned_writers == 0 ? &extrema : nullptr,
-                        summary ? &summary->spans : nullptr);
+                        summary ? &summary->spans : nullptr, own ? &rect : nullptr);
+      if (own) {  // the last box outside the rectangle written
+        const int ri1 = rect.i0 + rect.nx, rj1 = rect.j0 + rect.ny;
+        if (rect.empty()) {
+          clear_last(0, grid.n, 0, grid.n);
+        } else {
+          clear_last(0, grid.n, 0, rect.j0);
+          clear_last(0, grid.n, rj1, grid.n);
+          clear_last(0, rect.i0, rect.j0, rj1);
+          clear_last(ri1, grid.n, rect.j0, rj1);
+        }
+      }
       i_lo = ext.i_lo, i_hi = ext.i_hi, j_lo = ext.j_lo, j_hi = ext.j_hi;
       writers += ext.wrote;
       aligned_writers += ext.wrote;
