@@ -21,6 +21,11 @@ constexpr int kElasticMaxIterations = 500;
 constexpr int kBoxMarginCells = 3;
 // Solves on a grown box before the whole rendered box.
 constexpr int kBoxAttempts = 3;
+// Winkler + shear (fast paths): the cull level above the smallest gap, in
+// last step's indentation depths plus a margin (the other models: 1.5 and
+// 20 um). Any level gives the same result (a level the approach reaches
+// renders again without culling); a tight one renders and scans fewer cells.
+constexpr double kWinklerCullDepths = 1.15, kWinklerCullM = 5e-6;
 
 // CPU time of the calling thread (benchmarks: Workspace::render_time_s).
 double ThreadCpuSeconds() {
@@ -293,7 +298,9 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     // touch in either model (the skin's displacement only adds to the gap),
     // so if the solved approach reaches the cull level, render everything and
     // solve again: the result is exact either way.
-    const double cull_rel = warm ? 1.5 * depth_prev + 20e-6 : kInf;
+    const double cull_rel = !warm ? kInf
+                            : winkler_slip ? kWinklerCullDepths * depth_prev + kWinklerCullM
+                                           : 1.5 * depth_prev + 20e-6;
     const bool fast = !ws->reference_paths;
     CellBox box;
     auto render = [&](double cull_above_m) {
