@@ -166,10 +166,13 @@ def test_stages_1_2_fast_paths_match_reference_over_a_slide(yaw_deg):
     assert np.array_equal(ref[3][:, 6] > 0, p_ref != 0)  # active cells: the loaded ones
 
 
+@pytest.mark.parametrize("pressure", ["winkler", "elastic"])
 @pytest.mark.parametrize("yaw_deg", [0.0, 20.0])
-def test_stages_1_2_fields_over_lost_and_regained_contact(yaw_deg):
+def test_stages_1_2_fields_over_lost_and_regained_contact(yaw_deg, pressure):
     # The fast Winkler + shear path writes each step's field over the last
-    # one, clearing only what the new contact leaves: over load jumps (the
+    # one, clearing only what the new contact leaves, and the render writes
+    # over the last gap where one surface reaches (both models): over load
+    # jumps (the
     # warm start left of the root, the cull too tight), steps without force
     # and steps with the pad moved off the plate, every field stage 3
     # reads must still equal the reference path's (which clears the grid
@@ -189,7 +192,8 @@ def test_stages_1_2_fields_over_lost_and_regained_contact(yaw_deg):
     forces[:, 0] = np.where(np.arange(T) % 7 < 3, 0.15, 0.6)  # jumps both ways
     forces[10:15, 0] = 0.0  # no contact force
     forces[:, 1], forces[:, 2] = -0.08, 0.05
-    config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05"}
+    config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05",
+              "pressure": pressure}
     ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
                                reference=True, fields=True)
     fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
