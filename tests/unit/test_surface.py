@@ -205,3 +205,43 @@ def test_stages_1_2_fields_over_lost_and_regained_contact(yaw_deg, pressure):
     assert fast[3].tobytes() == ref[3].tobytes()
     p_ref = ref[3][:, 0]
     assert_allclose(p_ref[touching].sum(axis=(1, 2)) * PITCH**2, forces[touching, 0], rtol=1e-9)
+
+
+@pytest.mark.parametrize("pressure", ["winkler", "elastic"])
+def test_stages_1_2_fields_when_a_second_body_comes_within_reach(pressure):
+    # While the texture alone reaches the skin, the render overwrites its
+    # rectangle and clears only the rest of the last result's box; when the
+    # load drops that box shrinks, and when a bump then comes within reach
+    # (two surfaces: the last box is cleared first and each cell keeps the
+    # lower gap) no stale gap may survive: every field must equal the
+    # reference path's (which clears the grid every step).
+    T = 40
+    samples = _samples("grating")
+    surfaces = np.zeros((3, 20))
+    surfaces[0, 0], surfaces[0, 4:13], surfaces[0, 16:18] = 1, np.eye(3).ravel(), (4e-3, 3e-3)
+    surfaces[1, 0], surfaces[1, 4:13], surfaces[1, 16:18] = 2, np.eye(3).ravel(), HALF
+    surfaces[1, 18] = surfaces[1, 19] = 1e-4
+    # a sphere 2.4 mm right of the texture's centre, its top 0.27 mm up: off
+    # the grid while the pad is left, under the skin's flank once it is right
+    surfaces[2, 0], surfaces[2, 4:13], surfaces[2, 13] = 3, np.eye(3).ravel(), 0.3e-3
+    surfaces[2, 1:4] = (2.4e-3, 0.0, 0.27e-3 - 0.3e-3)
+    pos = np.zeros((T, 3))
+    pos[:, 0] = np.linspace(-1.0e-3, 1.0e-3, T)
+    pos[:, 2] = SEMI[2] + 5e-5
+    mat = np.tile(np.eye(3).ravel(), (T, 1))
+    forces = np.zeros((T, 3))
+    forces[:, 0] = 2.0
+    forces[[5, 12, 13, 14, 27], 0] = 0.02  # the contact shrinks (the bump reaches from step 15 on)
+    forces[:, 1] = 0.05
+    config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05",
+              "pressure": pressure}
+    ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
+                               reference=True, fields=True)
+    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
+                                fields=True)
+    assert np.isfinite(ref[2]).all()
+    assert fast[2].tobytes() == ref[2].tobytes()
+    assert fast[3].tobytes() == ref[3].tobytes()
+    # the bump carries load at the end (loaded cells right of the pad's pole)
+    right = ref[3][-1, 0][:, N // 2 + 15:]
+    assert np.count_nonzero(right) > 0
