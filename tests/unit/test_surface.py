@@ -164,3 +164,84 @@ def test_stages_1_2_fast_paths_match_reference_over_a_slide(yaw_deg):
     assert_allclose(p_ref.sum(axis=(1, 2)) * PITCH**2, forces[:, 0], rtol=1e-9)
     assert_allclose(ref[3][:, 1].sum(axis=(1, 2)) * PITCH**2, forces[:, 1], rtol=1e-9)
     assert np.array_equal(ref[3][:, 6] > 0, p_ref != 0)  # active cells: the loaded ones
+
+
+@pytest.mark.parametrize("pressure", ["winkler", "elastic"])
+@pytest.mark.parametrize("yaw_deg", [0.0, 20.0])
+def test_stages_1_2_fields_over_lost_and_regained_contact(yaw_deg, pressure):
+    # The fast Winkler + shear path writes each step's field over the last
+    # one, clearing only what the new contact leaves, and the render writes
+    # over the last gap where one surface reaches (both models): over load
+    # jumps (the
+    # warm start left of the root, the cull too tight), steps without force
+    # and steps with the pad moved off the plate, every field stage 3
+    # reads must still equal the reference path's (which clears the grid
+    # first), and where no cell is over a surface the step reports no contact.
+    T = 40
+    samples = _samples("grating")
+    surfaces = np.zeros((2, 20))
+    surfaces[0, 0], surfaces[0, 4:13], surfaces[0, 16:18] = 1, np.eye(3).ravel(), (4e-3, 3e-3)
+    surfaces[1, 0], surfaces[1, 4:13], surfaces[1, 16:18] = 2, np.eye(3).ravel(), HALF
+    surfaces[1, 18] = surfaces[1, 19] = 1e-4
+    pos = np.zeros((T, 3))
+    pos[:, 0] = np.linspace(-0.3e-3, 0.6e-3, T)
+    pos[:, 2] = SEMI[2] + 5e-5
+    pos[30:35, 0] = 20e-3  # off the plate: no cell over a surface
+    mat = np.tile(_rot(yaw_deg).ravel(), (T, 1))
+    forces = np.zeros((T, 3))
+    forces[:, 0] = np.where(np.arange(T) % 7 < 3, 0.15, 0.6)  # jumps both ways
+    forces[10:15, 0] = 0.0  # no contact force
+    forces[:, 1], forces[:, 2] = -0.08, 0.05
+    config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05",
+              "pressure": pressure}
+    ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
+                               reference=True, fields=True)
+    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
+                                fields=True)
+    touching = np.isfinite(ref[2])
+    assert not touching[10:15].any() and not touching[30:35].any()
+    assert touching[:10].all() and touching[15:30].all() and touching[35:].all()
+    assert fast[2].tobytes() == ref[2].tobytes()
+    assert fast[3].tobytes() == ref[3].tobytes()
+    p_ref = ref[3][:, 0]
+    assert_allclose(p_ref[touching].sum(axis=(1, 2)) * PITCH**2, forces[touching, 0], rtol=1e-9)
+
+
+@pytest.mark.parametrize("pressure", ["winkler", "elastic"])
+def test_stages_1_2_fields_when_a_second_body_comes_within_reach(pressure):
+    # While the texture alone reaches the skin, the render overwrites its
+    # rectangle and clears only the rest of the last result's box; when the
+    # load drops that box shrinks, and when a bump then comes within reach
+    # (two surfaces: the last box is cleared first and each cell keeps the
+    # lower gap) no stale gap may survive: every field must equal the
+    # reference path's (which clears the grid every step).
+    T = 40
+    samples = _samples("grating")
+    surfaces = np.zeros((3, 20))
+    surfaces[0, 0], surfaces[0, 4:13], surfaces[0, 16:18] = 1, np.eye(3).ravel(), (4e-3, 3e-3)
+    surfaces[1, 0], surfaces[1, 4:13], surfaces[1, 16:18] = 2, np.eye(3).ravel(), HALF
+    surfaces[1, 18] = surfaces[1, 19] = 1e-4
+    # a sphere 2.4 mm right of the texture's centre, its top 0.27 mm up: off
+    # the grid while the pad is left, under the skin's flank once it is right
+    surfaces[2, 0], surfaces[2, 4:13], surfaces[2, 13] = 3, np.eye(3).ravel(), 0.3e-3
+    surfaces[2, 1:4] = (2.4e-3, 0.0, 0.27e-3 - 0.3e-3)
+    pos = np.zeros((T, 3))
+    pos[:, 0] = np.linspace(-1.0e-3, 1.0e-3, T)
+    pos[:, 2] = SEMI[2] + 5e-5
+    mat = np.tile(np.eye(3).ravel(), (T, 1))
+    forces = np.zeros((T, 3))
+    forces[:, 0] = 2.0
+    forces[[5, 12, 13, 14, 27], 0] = 0.02  # the contact shrinks (the bump reaches from step 15 on)
+    forces[:, 1] = 0.05
+    config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05",
+              "pressure": pressure}
+    ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
+                               reference=True, fields=True)
+    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
+                                fields=True)
+    assert np.isfinite(ref[2]).all()
+    assert fast[2].tobytes() == ref[2].tobytes()
+    assert fast[3].tobytes() == ref[3].tobytes()
+    # the bump carries load at the end (loaded cells right of the pad's pole)
+    right = ref[3][-1, 0][:, N // 2 + 15:]
+    assert np.count_nonzero(right) > 0

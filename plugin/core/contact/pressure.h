@@ -42,9 +42,14 @@ struct TractionField {
   // Every array is zero outside `runs` (FinishUniformSlipTraction), so
   // ClearTraction clears the runs alone, not the whole box.
   bool support_in_runs = false;
-  // Solver scratch (no meaning between calls): the packed candidates.
-  std::vector<double> scratch_gap, scratch_cov;
-  std::vector<size_t> scratch_index;
+  // Solver scratch (no meaning between calls): the reference's packed
+  // candidates; SolveWinkler's candidate spans per row, touching cells
+  // (runs, box order), their loads cov (c - gap) and the loads' sum; the
+  // last support's runs (WriteWinklerSlipTraction).
+  std::vector<double> scratch_gap, scratch_cov, scratch_load;
+  ActiveRuns scratch_spans, solved_runs, scratch_runs;
+  double solved_total = 0;
+  double scan_gmin = 0, scan_covmax = 0;  // ScanWinklerCandidates
 };
 
 // Size every array to the grid and zero the last support: an empty field.
@@ -75,6 +80,31 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap_m,
                      const std::vector<double>& coverage, const CellBox& box,
                      double stiffness_pa_per_m, double normal_force_n, double approach_guess_m,
                      TractionField* out);
+
+// WinklerPressure's solve alone: the approach (*approach_m), the touching
+// cells and their unscaled loads (scratch); the fields are left as they are.
+// False if no cell touches. `scanned`: ScanWinklerCandidates ran on the same
+// arrays and box (its results in `out` are used, not computed again).
+bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
+                  const std::vector<double>& coverage, const CellBox& box,
+                  double stiffness_pa_per_m, double normal_force_n, double approach_guess_m,
+                  TractionField* out, double* approach_m, bool scanned = false);
+// SolveWinkler's first pass over the box (into `out`'s scratch); returns the
+// smallest gap of the cells with coverage > 0, as a row-by-row minimum would
+// find it up to the sign of a zero.
+double ScanWinklerCandidates(const TaxelGrid& grid, const std::vector<double>& gap_m,
+                             const std::vector<double>& coverage, const CellBox& box,
+                             TractionField* out);
+
+// After SolveWinkler (approach c, on `box`): what WinklerPressure then
+// FinishUniformSlipTraction would leave on a field cleared by ClearTraction,
+// bit for bit, in two passes over the touching cells, and without
+// ClearTraction: `out` may hold the last step's field (zero outside its
+// support), of which only the cells outside the new runs are cleared.
+// False (and the field cleared) if the load is not positive.
+bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double approach_m,
+                              double normal_force_n, double ft_x_n, double ft_y_n,
+                              TractionField* out);
 
 // The same solve without the fast path's shortcuts (every pass over every
 // candidate, then NormalizeLoad): the reference WinklerPressure is tested

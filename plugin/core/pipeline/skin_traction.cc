@@ -21,6 +21,11 @@ constexpr int kElasticMaxIterations = 500;
 constexpr int kBoxMarginCells = 3;
 // Solves on a grown box before the whole rendered box.
 constexpr int kBoxAttempts = 3;
+// Winkler + shear (fast paths): the cull level above the smallest gap, in
+// last step's indentation depths plus a margin (the other models: 1.5 and
+// 20 um). Any level gives the same result (a level the approach reaches
+// renders again without culling); a tight one renders and scans fewer cells.
+constexpr double kWinklerCullDepths = 1.15, kWinklerCullM = 5e-6;
 
 // CPU time of the calling thread (benchmarks: Workspace::render_time_s).
 double ThreadCpuSeconds() {
@@ -281,37 +286,65 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     touching = SplatContacts(grid, in.contacts, &tf);
     state[kStContactDepth] = 0.0;
   } else if (!in.surfaces.empty()) {
-    ClearTraction(grid, &tf);
+    // Winkler with shear (fast paths): solved first, then the field written
+    // over the last one (WriteWinklerSlipTraction), which clears only what
+    // the new contact does not cover.
+    const bool winkler_slip = !ws->reference_paths &&
+                              cfg.pressure_model == PressureModel::kWinkler && cfg.shear;
+    if (!winkler_slip) ClearTraction(grid, &tf);
     // Warm start: the last step's indentation depth (approach minus smallest
     // gap) bounds which cells can touch; cells provably above 1.5x that
     // depth are not rendered. A cell whose gap exceeds the approach cannot
     // touch in either model (the skin's displacement only adds to the gap),
     // so if the solved approach reaches the cull level, render everything and
     // solve again: the result is exact either way.
-    const double cull_rel = warm ? 1.5 * depth_prev + 20e-6 : kInf;
+    const double cull_rel = !warm ? kInf
+                            : winkler_slip ? kWinklerCullDepths * depth_prev + kWinklerCullM
+                                           : 1.5 * depth_prev + 20e-6;
     const bool fast = !ws->reference_paths;
     CellBox box;
     auto render = [&](double cull_above_m) {
       const double t0 = ws->render_time_s ? ThreadCpuSeconds() : 0.0;
       const double level = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_above_m,
                                      &ws->gap, &ws->coverage, true, &model.skin_blocks(), &box,
-                                     fast, fast ? &ws->gap_written : nullptr);
+                                     fast, fast ? &ws->gap_written : nullptr,
+                                     winkler_slip ? &ws->render_summary : nullptr);
       if (!fast) ws->gap_written = CellBox::All(grid);  // the reference cleared it all
       if (ws->render_time_s) *ws->render_time_s += ThreadCpuSeconds() - t0;
       return level;
     };
     double cull = render(cull_rel);
+    double solved_approach = 0.0;  // winkler_slip: the field to write
     for (int pass = 0; pass < 2 && !touching; ++pass) {
       if (pass == 1) cull = render(kInf);
-      const double gmin = MinGap(grid, box, ws->gap, ws->coverage);
+      // (winkler_slip: from the render's summary of the covered cells, else
+      // the solve's first pass; MinGap fixes a zero's sign)
+      double gmin;
+      if (!winkler_slip) {
+        gmin = MinGap(grid, box, ws->gap, ws->coverage);
+      } else if (const RenderSummary& rs = ws->render_summary;
+                 rs.valid && rs.gap_min_m != 0.0) {
+        gmin = tf.scan_gmin = rs.gap_min_m;  // covered cells: finite gaps
+        tf.scan_covmax = rs.coverage_max;
+        tf.scratch_spans = rs.spans;
+      } else {
+        gmin = ScanWinklerCandidates(grid, ws->gap, ws->coverage, box, &tf);
+        if (gmin == 0.0) gmin = MinGap(grid, box, ws->gap, ws->coverage);
+      }
       if (!std::isfinite(gmin)) break;
       double approach = 0.0;
       if (cfg.pressure_model == PressureModel::kWinkler) {
         const double guess = warm ? gmin + depth_prev : std::nan("");
-        touching = (fast ? WinklerPressure : WinklerPressureReference)(
-            grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m, in.normal_force_n, guess,
-            &tf);
-        approach = tf.approach_m;
+        if (winkler_slip) {
+          touching = SolveWinkler(grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m,
+                                  in.normal_force_n, guess, &tf, &approach, true);
+          solved_approach = approach;
+        } else {
+          touching = (fast ? WinklerPressure : WinklerPressureReference)(
+              grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m, in.normal_force_n,
+              guess, &tf);
+          approach = tf.approach_m;
+        }
       } else {
         const ElasticContact& ec = *model.elastic();
         ws->elastic.fft.threads = cfg.threads;  // the operator's FFTs, the stencil
@@ -388,14 +421,23 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       }
       if (touching && approach >= cull && pass == 0) {
         touching = false;  // render all and solve again
-        ClearTraction(grid, &tf);
+        if (!winkler_slip) ClearTraction(grid, &tf);
         continue;
       }
       if (touching) {
         state[kStContactDepth] = approach - gmin;
       }
     }
-    if (touching && cfg.shear) {
+    if (winkler_slip) {
+      // the solve's field, or (no contact) the cleared one
+      if (touching) {
+        touching = WriteWinklerSlipTraction(grid, box, solved_approach, in.normal_force_n,
+                                            in.shear_x_n, in.shear_y_n, &tf);
+        finished = true;
+      } else {
+        ClearTraction(grid, &tf);
+      }
+    } else if (touching && cfg.shear) {
       if (ws->reference_paths) {
         UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
       } else {  // the shear and FinishTraction in one pass

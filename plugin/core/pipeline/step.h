@@ -30,6 +30,7 @@ struct Workspace {
   std::shared_ptr<const ReceptorStepper> stepper;
   std::vector<double> gap, coverage;
   CellBox gap_written;  // outside it gap / coverage are +inf / 0 (RenderGap `written`)
+  RenderSummary render_summary;  // the last render's covered cells (winkler)
   TractionField traction;
   std::vector<double> quantity;  // per receptor
   ElasticWork elastic;

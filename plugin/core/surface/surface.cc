@@ -1,5 +1,6 @@
 #include "surface/surface.h"
 
+#include "surface/aligned_face.h"
 #include "surface/mesh_surface.h"
 
 #include <algorithm>
@@ -8,6 +9,9 @@
 #include <limits>
 
 namespace mjtouch {
+
+using namespace surface_detail;
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -56,10 +60,6 @@ double HatWeight(const HatSpan& h, int c) {
     return c == h.first ? 1.0 - f : f;
   }
   return (HatCdf(h.s1 - c) - HatCdf(h.s0 - c)) * h.inv;
-}
-
-double Overlap1D(double a0, double a1, double b0, double b1) {
-  return std::max(0.0, std::min(a1, b1) - std::max(a0, b0));
 }
 
 }  // namespace
@@ -199,21 +199,6 @@ std::vector<double> HeightFieldRowPrefix(int nrow, int ncol, const float* sample
   }
   return prefix;
 }
-
-namespace {
-
-// Integral from 0 to s (grid units, 0 <= s <= ncol - 1) of row r's linear
-// interpolant, from the running integrals.
-double RowIntegral(const CounterSurface& s, int r, double x) {
-  const float* h = s.samples + static_cast<size_t>(r) * s.ncol;
-  const double* P = s.row_prefix + static_cast<size_t>(r) * s.ncol;
-  int c = static_cast<int>(x);
-  c = std::clamp(c, 0, s.ncol - 2);
-  const double f = x - c;
-  return P[c] + f * h[c] + 0.5 * f * f * (double(h[c + 1]) - h[c]);
-}
-
-}  // namespace
 
 double HeightFieldBoxMean(const CounterSurface& s, double x0, double x1,
                           double y0, double y1) {
@@ -362,193 +347,33 @@ SkinBlocks MakeSkinBlocks(const TaxelGrid& grid, const std::vector<double>& skin
   return sb;
 }
 
-namespace {
-
-// Fast path for a face (plane, rectangle, height field) whose x and y axes
-// are the pad's up to sign and scale (R = S^T P mixes no axes in its first
-// two rows): a pad sliding over a level texture. A cell's footprint in the
-// surface frame then depends on its column alone in x and on its row alone
-// in y, so the coverage factors and, for a height field whose rows are all
-// equal (gratings), the texture's cell mean are computed once per column or
-// row and broadcast. Values equal the general path's bit for bit: the terms
-// left out are exact zeros (0 * finite), which can change only the sign of
-// a zero, and the next subtraction of a nonzero half width removes it.
-bool IsAlignedFace(const CounterSurface& s, const double R[9], double hx, double hy) {
-  using T = CounterSurface::Type;
-  if (s.type != T::kPlane && s.type != T::kRectangle && s.type != T::kHeightField) return false;
-  return R[1] == 0.0 && R[2] == 0.0 && R[3] == 0.0 && R[5] == 0.0 && hx > 0.0 && hy > 0.0;
-}
-
-struct AlignedFace {
-  const CounterSurface& s;
-  const double* R;  // pad frame -> surface frame
-  const double* t;  // pad origin in the surface frame
-  double hx, hy;    // half extents of a cell's footprint (surface frame)
-  double cull;      // cells whose gap lower bound exceeds it are skipped
-};
-
-struct Extent {
-  int i_lo, i_hi, j_lo, j_hi;
-};
-
-// One row segment [i0, i1) of an aligned face. Branch-free (bitwise &,
-// selects, the taken flags in `took`) so that the compiler vectorises it.
-struct RowSpan {
-  double tz, r6, r7v, r8;  // qz = t_z + R[6] u + R[7] v + R[8] z, in that order
-  double top, cull, oy, area;
-};
-
-template <bool kPlane>
-void AlignedRow(const RowSpan& r, int i0, int i1, const double* z, const double* u,
-                const double* ox, const double* mean, double* __restrict gp,
-                double* __restrict cp, double* __restrict took) {
-  for (int i = i0; i < i1; ++i) {
-    const double zi = z[i];
-    const double qz = r.tz + r.r6 * u[i] + r.r7v + r.r8 * zi;
-    const double cov = kPlane ? 1.0 : ox[i] * r.oy / r.area;  // area > 0 (IsAlignedFace)
-    const bool reach = (std::abs(zi) < kInf) & !(qz - r.top > r.cull) & (cov > 0.0);
-    const double gap = qz - mean[i];  // NaN (per-cell mean) never takes
-    const double old_gap = gp[i], old_cov = cp[i];
-    const bool take = reach & (gap < old_gap);
-    gp[i] = take ? gap : old_gap;
-    cp[i] = take ? cov : old_cov;
-    took[i] = take ? 1.0 : 0.0;
-  }
-}
-
-// Renders the face into gap_m / coverage; `covers_only`: renders nothing
-// and returns whether every cell mean within reach is known per column and
-// >= 0 (so the texture's gap is at most its base plane's everywhere).
-bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
-                       const AlignedFace& f, const SkinBlocks& blocks, const double* block_lb,
-                       double* gap_m, double* coverage, Extent* ext, bool covers_only = false) {
-  using T = CounterSurface::Type;
-  const CounterSurface& s = f.s;
-  const double* R = f.R;
-  const int n = grid.n, B = SkinBlocks::kSide, nb = blocks.nb;
-  // Column and row ranges of the blocks within reach.
-  int bi0 = nb, bi1 = -1, bj0 = nb, bj1 = -1;
-  for (int bj = 0; bj < nb; ++bj)
-    for (int bi = 0; bi < nb; ++bi)
-      if (block_lb[bj * nb + bi] <= f.cull) {
-        bi0 = std::min(bi0, bi);
-        bi1 = std::max(bi1, bi);
-        bj0 = std::min(bj0, bj);
-        bj1 = std::max(bj1, bj);
-      }
-  if (bi1 < 0) return true;
-  const int c0 = bi0 * B, c1 = std::min(n, bi1 * B + B);
-  const int r0 = bj0 * B, r1 = std::min(n, bj1 * B + B);
-  const bool plane = s.type == T::kPlane, hfield = s.type == T::kHeightField;
-  const double area = 4.0 * f.hx * f.hy;
-  // Per column: x overlap with the face, the footprint's x range and (a
-  // height field with equal rows) the texture's mean over the footprint,
-  // NaN where it must be computed per cell. Per row: the same in y.
-  thread_local std::vector<double> cols, rows;
-  cols.resize(static_cast<size_t>(6) * n);
-  rows.resize(static_cast<size_t>(3) * n);
-  double *ox = cols.data(), *x0 = ox + n, *x1 = x0 + n, *mean = x1 + n, *u = mean + n;
-  double* took = u + n;
-  double *oy = rows.data(), *y0 = oy + n, *y1 = y0 + n;
-  const bool row_means = hfield && s.rows_identical && s.row_prefix;
-  const double scx = hfield ? (s.ncol - 1) / (2.0 * s.half_x_m) : 0.0;
-  bool per_cell = false, negative = false;
-  for (int i = c0; i < c1; ++i) {
-    u[i] = grid.Centre(i);
-    const double qx = f.t[0] + R[0] * u[i];
-    ox[i] = Overlap1D(qx - f.hx, qx + f.hx, -s.half_x_m, s.half_x_m);
-    x0[i] = std::max(qx - f.hx, -s.half_x_m);
-    x1[i] = std::min(qx + f.hx, s.half_x_m);
-    mean[i] = std::numeric_limits<double>::quiet_NaN();
-    if (row_means && ox[i] > 0.0) {  // HeightFieldBoxMean's identical-rows branch
-      const double sx0 = std::clamp((x0[i] + s.half_x_m) * scx, 0.0, s.ncol - 1.0);
-      const double sx1 = std::clamp((x1[i] + s.half_x_m) * scx, 0.0, s.ncol - 1.0);
-      if (sx1 - sx0 > 1e-6)
-        mean[i] = s.elevation_m * (RowIntegral(s, 0, sx1) - RowIntegral(s, 0, sx0)) / (sx1 - sx0);
-    }
-    if (!hfield) mean[i] = 0.0;
-    per_cell |= mean[i] != mean[i] && ox[i] > 0.0;
-    negative |= mean[i] < 0.0;
-  }
-  if (covers_only) return !per_cell && !negative;
-  for (int j = r0; j < r1; ++j) {
-    const double qy = f.t[1] + R[4] * grid.Centre(j);
-    oy[j] = Overlap1D(qy - f.hy, qy + f.hy, -s.half_y_m, s.half_y_m);
-    y0[j] = std::max(qy - f.hy, -s.half_y_m);
-    y1[j] = std::min(qy + f.hy, s.half_y_m);
-  }
-  const double tz = f.t[2], r6 = R[6], r7 = R[7], r8 = R[8], top = s.max_height_m;
-  const double cull = f.cull;
-  for (int j = r0; j < r1; ++j) {
-    const double v = grid.Centre(j), oyj = oy[j];
-    const int bj = j / B;
-    int lo = n, hi = -1;
-    for (int bi = bi0; bi <= bi1; ++bi) {
-      if (!(block_lb[bj * nb + bi] <= cull)) continue;
-      // A run of consecutive blocks within reach: one branch-free loop.
-      int bend = bi;
-      while (bend + 1 <= bi1 && block_lb[bj * nb + bend + 1] <= cull) ++bend;
-      const int i0 = bi * B, i1 = std::min(n, bend * B + B);
-      bi = bend;
-      const size_t base = static_cast<size_t>(j) * n;
-      const double* z = skin_z.data() + base;
-      double* gp = gap_m + base;
-      double* cp = coverage + base;
-      const RowSpan row{tz, r6, r7 * v, r8, top, cull, oyj, area};
-      if (plane) AlignedRow<true>(row, i0, i1, z, u, ox, mean, gp, cp, took);
-      else AlignedRow<false>(row, i0, i1, z, u, ox, mean, gp, cp, took);
-      int a = i0, b = i1 - 1;
-      while (a <= b && took[a] == 0.0) ++a;
-      while (b >= a && took[b] == 0.0) --b;
-      if (a <= b) {
-        lo = std::min(lo, a);
-        hi = std::max(hi, b);
-      }
-      if (!per_cell) continue;  // every column's mean is known
-      // Cells whose texture mean depends on the row too (2D height fields,
-      // footprints clipped to a sliver at the texture's edge).
-      for (int i = i0; i < i1; ++i) {
-        const double zi = z[i];
-        if (!(std::abs(zi) < kInf) || mean[i] == mean[i]) continue;
-        const double qz = tz + r6 * u[i] + r7 * v + r8 * zi;
-        if (qz - top > cull) continue;
-        const double cov = area > 0 ? ox[i] * oyj / area : 0.0;
-        if (cov <= 0.0) continue;
-        const double gap = qz - HeightFieldBoxMean(s, x0[i], x1[i], y0[j], y1[j]);
-        if (gap < gp[i]) {
-          gp[i] = gap;
-          cp[i] = cov;
-          lo = std::min(lo, i);
-          hi = std::max(hi, i);
-        }
-      }
-    }
-    if (hi >= 0) {
-      ext->i_lo = std::min(ext->i_lo, lo);
-      ext->i_hi = std::max(ext->i_hi, hi);
-      ext->j_lo = std::min(ext->j_lo, j);
-      ext->j_hi = std::max(ext->j_hi, j);
-    }
-  }
-  return true;
-}
-
-}  // namespace
-
 double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  const Pose& pad, const std::vector<CounterSurface>& surfaces,
                  double cull_above_m, std::vector<double>* gap_m,
                  std::vector<double>* coverage, bool area_average, const SkinBlocks* blocks,
-                 CellBox* rendered, bool fast_paths, CellBox* written) {
+                 CellBox* rendered, bool fast_paths, CellBox* written,
+                 RenderSummary* summary) {
   const size_t N = grid.Size();
-  if (written && gap_m->size() == N && coverage->size() == N) {
-    const CellBox& w = *written;
-    for (int j = w.j0; j < w.j0 + w.ny; ++j) {
-      const size_t a = static_cast<size_t>(j) * grid.n + w.i0;
-      std::fill(gap_m->begin() + a, gap_m->begin() + a + w.nx, kInf);
-      std::fill(coverage->begin() + a, coverage->begin() + a + w.nx, 0.0);
+  Extrema extrema;
+  int writers = 0, aligned_writers = 0;  // surfaces that wrote cells (RenderSummary)
+  if (summary) {
+    summary->valid = false;
+    summary->spans.Clear();
+  }
+  // Cells [i0, i1) x [j0, j1) of the last result's box (`written`) back to
+  // +inf / 0 (the rest of the grid holds them already).
+  const bool reuse = written && gap_m->size() == N && coverage->size() == N;
+  const CellBox last = reuse ? *written : CellBox{};
+  auto clear_last = [&](int i0, int i1, int j0, int j1) {
+    i0 = std::max(i0, last.i0);
+    i1 = std::min(i1, last.i0 + last.nx);
+    for (int j = std::max(j0, last.j0); j < std::min(j1, last.j0 + last.ny) && i0 < i1; ++j) {
+      const size_t a = static_cast<size_t>(j) * grid.n;
+      std::fill(gap_m->begin() + a + i0, gap_m->begin() + a + i1, kInf);
+      std::fill(coverage->begin() + a + i0, coverage->begin() + a + i1, 0.0);
     }
-  } else {
+  };
+  if (!reuse) {
     gap_m->assign(N, kInf);
     coverage->assign(N, 0.0);
   }
@@ -672,32 +497,69 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
            std::memcmp(Fa.t, Fb.t, sizeof(Fa.t)) == 0 && Fa.hx == Fb.hx && Fa.hy == Fb.hy;
   };
   const double g = area_average ? 0.5 * h / std::sqrt(3.0) : 0.0;
+  // Which surfaces render (0: none, 1: aligned-face path, 2: general) and
+  // how many have cells within reach. If one alone does, through the
+  // aligned path, it overwrites its rectangle and only the rest of the last
+  // box is cleared (exclusive); else the last box is cleared first.
+  std::vector<char> path(surfaces.size(), 0);
+  int reaching = 0, exclusive = -1;
+  for (size_t k = 0; k < surfaces.size(); ++k) {
+    const Frame& F = frames[k];
+    const bool aligned = fast_paths && area_average && IsAlignedFace(surfaces[k], F.R, F.hx, F.hy);
+    if (aligned && k + 1 < surfaces.size() && texture_on_face(k)) {
+      // A texture on this face (the plate proxy under its height field,
+      // next in the list) whose cell means are all >= 0: its gap is never
+      // above the face's and equal only with the same coverage, so the
+      // face would change no cell's result.
+      const Frame& T = frames[k + 1];
+      Extent none{0, 0, 0, 0};
+      if (RenderAlignedFace(grid, skin_z, AlignedFace{surfaces[k + 1], T.R, T.t, T.hx, T.hy, cull},
+                            *blocks, &block_lb[(k + 1) * nb * nb], nullptr, nullptr, &none,
+                            true))
+        continue;
+    }
+    path[k] = aligned ? 1 : 2;
+    bool reach = false;
+    for (int b = 0; b < nb * nb && !reach; ++b) reach = block_lb[k * nb * nb + b] <= cull;
+    if (!reach) continue;
+    ++reaching;
+    exclusive = aligned ? static_cast<int>(k) : -1;
+  }
+  if (!(reuse && reaching == 1 && exclusive >= 0)) exclusive = -1;
+  if (reuse && exclusive < 0) clear_last(0, grid.n, 0, grid.n);
   int i_lo = grid.n, i_hi = -1, j_lo = grid.n, j_hi = -1;
   for (size_t k = 0; k < surfaces.size(); ++k) {
     const CounterSurface& s = surfaces[k];
     const Frame& F = frames[k];
     const double* R = F.R;
-    if (fast_paths && area_average && IsAlignedFace(s, R, F.hx, F.hy)) {
-      if (k + 1 < surfaces.size() && texture_on_face(k)) {
-        // A texture on this face (the plate proxy under its height field,
-        // next in the list) whose cell means are all >= 0: its gap is never
-        // above the face's and equal only with the same coverage, so the
-        // face would change no cell's result.
-        const Frame& T = frames[k + 1];
-        Extent none{};
-        if (RenderAlignedFace(grid, skin_z, AlignedFace{surfaces[k + 1], T.R, T.t, T.hx, T.hy, cull},
-                              *blocks, &block_lb[(k + 1) * nb * nb], nullptr, nullptr, &none,
-                              true))
-          continue;
-      }
+    if (path[k] == 0) continue;
+    if (path[k] == 1) {
       Extent ext{i_lo, i_hi, j_lo, j_hi};
+      CellBox rect;
+      const bool own = static_cast<int>(k) == exclusive;
       RenderAlignedFace(grid, skin_z, AlignedFace{s, R, F.t, F.hx, F.hy, cull}, *blocks,
-                        &block_lb[k * nb * nb], gap_m->data(), coverage->data(), &ext);
+                        &block_lb[k * nb * nb], gap_m->data(), coverage->data(), &ext, false,
+                        summary && aligned_writers == 0 ? &extrema : nullptr,
+                        summary ? &summary->spans : nullptr, own ? &rect : nullptr);
+      if (own) {  // the last box outside the rectangle written
+        const int ri1 = rect.i0 + rect.nx, rj1 = rect.j0 + rect.ny;
+        if (rect.empty()) {
+          clear_last(0, grid.n, 0, grid.n);
+        } else {
+          clear_last(0, grid.n, 0, rect.j0);
+          clear_last(0, grid.n, rj1, grid.n);
+          clear_last(0, rect.i0, rect.j0, rj1);
+          clear_last(ri1, grid.n, rect.j0, rj1);
+        }
+      }
       i_lo = ext.i_lo, i_hi = ext.i_hi, j_lo = ext.j_lo, j_hi = ext.j_hi;
+      writers += ext.wrote;
+      aligned_writers += ext.wrote;
       continue;
     }
     const double area = 4.0 * F.hx * F.hy;
     const bool line = IsLineType(s.type);
+    bool general_wrote = false;
     // The pad's z axis in the surface frame.
     const double d_loc[3] = {R[2], R[5], R[8]};
     for (int b = 0; b < nb * nb; ++b) {
@@ -757,6 +619,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
         if (gap < (*gap_m)[idx]) {
           (*gap_m)[idx] = gap;
           (*coverage)[idx] = cov;
+          general_wrote = true;
           i_lo = std::min(i_lo, i);
           i_hi = std::max(i_hi, i);
           j_lo = std::min(j_lo, j);
@@ -764,6 +627,14 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
         }
       });
     }
+    writers += general_wrote;
+  }
+  if (summary && writers == 1 && aligned_writers == 1) {
+    summary->valid = true;
+    summary->gap_min_m = std::min(std::min(extrema.lo[0], extrema.lo[1]),
+                                  std::min(extrema.lo[2], extrema.lo[3]));
+    summary->coverage_max = std::max(std::max(extrema.hi[0], extrema.hi[1]),
+                                     std::max(extrema.hi[2], extrema.hi[3]));
   }
   // Every cell written above is in this box (a write takes a gap below the
   // cell's, and extends the box).

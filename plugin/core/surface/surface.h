@@ -123,12 +123,27 @@ struct SkinBlocks;
 // `written`: if given, in: a box outside which gap_m / coverage (already
 // grid-sized) hold +inf / 0, so only it is reset (not the whole grid); out:
 // the same for this call's result (the cells it rendered).
+// `summary`: if given, filled when one surface alone wrote cells, through
+// the aligned-face fast path (else summary->valid = false).
+struct RenderSummary;
 double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  const Pose& pad_pose, const std::vector<CounterSurface>& surfaces,
                  double cull_above_m, std::vector<double>* gap_m,
                  std::vector<double>* coverage, bool area_average = true,
                  const SkinBlocks* blocks = nullptr, CellBox* rendered = nullptr,
-                 bool fast_paths = true, CellBox* written = nullptr);
+                 bool fast_paths = true, CellBox* written = nullptr,
+                 RenderSummary* summary = nullptr);
+
+// The covered cells (coverage > 0, finite gap) of a RenderGap call, taken
+// while the rows are rendered (a later pass over them would read them from
+// farther than L1): their smallest gap (in four running minima: for a zero
+// the sign may differ from a row-by-row minimum's) and largest coverage,
+// and per row with any the span from the first to the last (ascending rows).
+struct RenderSummary {
+  bool valid = false;
+  double gap_min_m = 0, coverage_max = 0;
+  ActiveRuns spans;
+};
 
 // Bounds of the skin's height over blocks of kSide x kSide cells, so that
 // RenderGap skips whole blocks out of reach. +inf / -inf: no skin cell.

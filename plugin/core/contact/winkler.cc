@@ -1,0 +1,439 @@
+// The Winkler solve's fast path (pressure.h: SolveWinkler, WinklerPressure,
+// WriteWinklerSlipTraction): WinklerPressureReference's result bit for bit,
+// in a few passes over the rows of the rendered box, without packing the
+// candidates (three stores per cell, which bound a packing pass) and, for
+// the plugin's step, without clearing the last field first.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
+#include <emmintrin.h>
+
+#include "contact/pressure.h"
+
+// The 4-lane helpers are inlined into the target_clones functions, so their
+// by-value vector ABI never applies.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace mjtouch {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Four double lanes (one AVX2 vector, two SSE2 ones in the default clone;
+// the lanes round alike in both).
+typedef double v4d __attribute__((vector_size(32)));
+typedef long long v4l __attribute__((vector_size(32)));
+typedef float v4f __attribute__((vector_size(16)));
+
+// A candidate cell: coverage > 0 and a finite gap (the reference's test).
+inline bool Candidate(double g, double w) { return (w > 0.0) & (std::abs(g) < kInf); }
+
+// The smallest gap and the largest coverage of the box's candidates, and
+// per row of the box the span [begin, end) that holds its candidates (rows
+// without any are left out). The extrema run in four lanes (minsd's latency
+// would bound one chain), SSE2 by hand (GCC turns the selects into
+// branches). The minimum does not depend on the order but for the sign of a
+// zero: a zero minimum is taken again in box order, as std::min keeps it.
+// `covered_min`: the smallest gap of the cells with coverage > 0 (MinGap's,
+// -inf included) but for the sign of a zero.
+void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
+                    const CellBox& box, double* gmin, double* covmax, ActiveRuns* spans,
+                    double* covered_min) {
+  spans->Clear();
+  double lo = kInf, hi = 0.0, lo_cov = kInf;
+  __m128d lo01 = _mm_set1_pd(kInf), lo23 = lo01, hi01 = _mm_setzero_pd(), hi23 = hi01;
+  __m128d all01 = lo01, all23 = lo01;
+  const __m128d inf = _mm_set1_pd(kInf), zero = _mm_setzero_pd();
+  const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+  auto lanes = [&](const double* g, const double* w, __m128d* l, __m128d* h, __m128d* all) {
+    const __m128d gv = _mm_loadu_pd(g), wv = _mm_loadu_pd(w);
+    const __m128d covered = _mm_cmpgt_pd(wv, zero);
+    const __m128d valid = _mm_and_pd(covered, _mm_cmplt_pd(_mm_and_pd(gv, abs_mask), inf));
+    const __m128d gs = _mm_or_pd(_mm_and_pd(valid, gv), _mm_andnot_pd(valid, inf));
+    *l = _mm_min_pd(gs, *l);                   // gs < l ? gs : l
+    *h = _mm_max_pd(_mm_and_pd(valid, wv), *h);  // w > h ? w : h
+    // (a NaN gap: minpd returns the second operand)
+    *all = _mm_min_pd(_mm_or_pd(_mm_and_pd(covered, gv), _mm_andnot_pd(covered, inf)), *all);
+  };
+  for (int j = box.j0; j < box.j0 + box.ny; ++j) {
+    const double* g = gap + static_cast<size_t>(j) * grid.n;
+    const double* w = cov + static_cast<size_t>(j) * grid.n;
+    int a = box.i0, b = box.i0 + box.nx;
+    for (; a < b && !Candidate(g[a], w[a]); ++a)
+      if (w[a] > 0.0) lo_cov = std::min(lo_cov, g[a]);
+    for (; b > a && !Candidate(g[b - 1], w[b - 1]); --b)
+      if (w[b - 1] > 0.0) lo_cov = std::min(lo_cov, g[b - 1]);
+    if (a == b) continue;
+    spans->row.push_back(j);
+    spans->begin.push_back(a);
+    spans->end.push_back(b);
+    int i = a;
+    for (; i + 4 <= b; i += 4) {
+      lanes(g + i, w + i, &lo01, &hi01, &all01);
+      lanes(g + i + 2, w + i + 2, &lo23, &hi23, &all23);
+    }
+    for (; i < b; ++i) {
+      if (w[i] > 0.0) lo_cov = std::min(lo_cov, g[i]);
+      if (!Candidate(g[i], w[i])) continue;
+      lo = std::min(lo, g[i]);
+      hi = std::max(hi, w[i]);
+    }
+  }
+  auto lo_of = [](__m128d v) {
+    return std::min(_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v)));
+  };
+  auto hi_of = [](__m128d v) {
+    return std::max(_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v)));
+  };
+  *gmin = std::min(lo, std::min(lo_of(lo01), lo_of(lo23)));
+  *covmax = std::max(hi, std::max(hi_of(hi01), hi_of(hi23)));
+  *covered_min = std::min(lo_cov, std::min(lo_of(all01), lo_of(all23)));
+  if (*gmin == 0.0) {
+    double m = kInf;
+    for (size_t r = 0; r < spans->row.size(); ++r) {
+      const size_t row = static_cast<size_t>(spans->row[r]) * grid.n;
+      for (int i = spans->begin[r]; i < spans->end[r]; ++i)
+        if (Candidate(gap[row + i], cov[row + i])) m = std::min(m, gap[row + i]);
+    }
+    *gmin = m;
+  }
+}
+
+// f(c) + target and its slope: sum over the candidates below c of cov (c - g)
+// and of cov, in four interleaved partial sums (not one latency-bound
+// chain), branch-free (a candidate not below c adds +0 to sums that are
+// >= +0: no change) so that it vectorises; the same bits from either clone
+// (no FMA contraction). Their round-off only moves Newton's iterate within
+// round-off of the root: the approach is then fixed by the closed form over
+// the converged contact set, summed in the reference's order.
+__attribute__((target_clones("avx2", "default")))
+double NewtonSums(const double* gap, const double* cov, int n, const ActiveRuns& spans, double c,
+                  double* slope, double* in_max) {
+  v4d f = {0, 0, 0, 0}, s = {0, 0, 0, 0};
+  double f0 = 0.0, s0 = 0.0, m0 = -kInf;  // the rows' tails (lane 0, added last)
+  const v4d cv = {c, c, c, c}, zero = {0, 0, 0, 0}, ninf = {-kInf, -kInf, -kInf, -kInf};
+  v4d m = ninf;
+  for (size_t r = 0; r < spans.row.size(); ++r) {
+    const double* g = gap + static_cast<size_t>(spans.row[r]) * n;
+    const double* w = cov + static_cast<size_t>(spans.row[r]) * n;
+    int i = spans.begin[r];
+    const int e = spans.end[r];
+    for (; i + 4 <= e; i += 4) {
+      v4d gv, wv;
+      std::memcpy(&gv, g + i, sizeof(gv));
+      std::memcpy(&wv, w + i, sizeof(wv));
+      const v4d d = cv - gv;
+      const v4l in = (d > zero) & (wv > zero) & (gv > ninf);
+      f += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv * d) & in);
+      s += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv) & in);
+      const v4d gin = in ? gv : ninf;
+      m = gin > m ? gin : m;
+    }
+    for (; i < e; ++i) {
+      const double d = c - g[i];
+      if ((d > 0.0) & (w[i] > 0.0) & (g[i] > -kInf)) {
+        f0 += w[i] * d;
+        s0 += w[i];
+        m0 = std::max(m0, g[i]);
+      }
+    }
+  }
+  *in_max = std::max(std::max(std::max(m[0], m[1]), std::max(m[2], m[3])), m0);
+  *slope = ((s[0] + s[1]) + (s[2] + s[3])) + s0;
+  return ((f[0] + f[1]) + (f[2] + f[3])) + f0;
+}
+
+// One run of touching cells: pressure = load x scale, shear = ratio x
+// pressure and the float copies, as NormalizeLoad then SlipRun leave them;
+// a zero pressure (underflow) gets the zero shear ClearTraction leaves, not
+// rx * 0 (-0 for rx < 0). Returns whether some pressure is zero.
+__attribute__((target_clones("avx2", "default")))
+bool ScaledSlipRun(const double* __restrict load, double scale, double rx, double ry, int len,
+                   double* __restrict p, double* __restrict sx, double* __restrict sy,
+                   float* __restrict fp, float* __restrict fx, float* __restrict fy) {
+  const v4d sv = {scale, scale, scale, scale}, xv = {rx, rx, rx, rx}, yv = {ry, ry, ry, ry};
+  const v4d zero = {0, 0, 0, 0};
+  v4l zeros = {0, 0, 0, 0};
+  int k = 0;
+  for (; k + 4 <= len; k += 4) {
+    v4d lv;
+    std::memcpy(&lv, load + k, sizeof(lv));
+    const v4d pk = lv * sv;
+    const v4l on = pk != zero;
+    const v4d qx = reinterpret_cast<v4d>(reinterpret_cast<v4l>(xv * pk) & on);
+    const v4d qy = reinterpret_cast<v4d>(reinterpret_cast<v4l>(yv * pk) & on);
+    std::memcpy(p + k, &pk, sizeof(pk));
+    std::memcpy(sx + k, &qx, sizeof(qx));
+    std::memcpy(sy + k, &qy, sizeof(qy));
+    const v4f fpk = __builtin_convertvector(pk, v4f), fqx = __builtin_convertvector(qx, v4f),
+              fqy = __builtin_convertvector(qy, v4f);
+    std::memcpy(fp + k, &fpk, sizeof(fpk));
+    std::memcpy(fx + k, &fqx, sizeof(fqx));
+    std::memcpy(fy + k, &fqy, sizeof(fqy));
+    zeros |= ~on;
+  }
+  bool zero_seen = (zeros[0] | zeros[1] | zeros[2] | zeros[3]) != 0;
+  for (; k < len; ++k) {
+    const double pk = load[k] * scale;
+    const bool on = pk != 0.0;
+    const double qx = on ? rx * pk : 0.0, qy = on ? ry * pk : 0.0;
+    p[k] = pk;
+    sx[k] = qx;
+    sy[k] = qy;
+    fp[k] = static_cast<float>(pk);
+    fx[k] = static_cast<float>(qx);
+    fy[k] = static_cast<float>(qy);
+    zero_seen |= !on;
+  }
+  return zero_seen;
+}
+
+void ZeroCells(TractionField* f, size_t a, size_t b) {
+  if (a >= b) return;
+  for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa})
+    std::fill(v->begin() + a, v->begin() + b, 0.0);
+  for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y})
+    std::fill(v->begin() + a, v->begin() + b, 0.0f);
+}
+
+}  // namespace
+
+double ScanWinklerCandidates(const TaxelGrid& grid, const std::vector<double>& gap_m,
+                             const std::vector<double>& coverage, const CellBox& box,
+                             TractionField* out) {
+  double covered_min;
+  ScanCandidates(grid, gap_m.data(), coverage.data(), box, &out->scan_gmin, &out->scan_covmax,
+                 &out->scratch_spans, &covered_min);
+  return covered_min;
+}
+
+bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
+                  const std::vector<double>& coverage, const CellBox& box, double k, double force,
+                  double guess, TractionField* out, double* approach_m, bool scanned) {
+  // WinklerPressureReference's approach with fewer passes: Newton from a
+  // warm start right of the root (or one step from its left); a
+  // closed-form pass whose contact set did not change would repeat the last
+  // one exactly, so it is skipped. The closed form and the load sum keep
+  // the reference's order (box order over the candidates), so the values
+  // are its values.
+  ActiveRuns& spans = out->scratch_spans;
+  ActiveRuns& runs = out->solved_runs;
+  runs.Clear();
+  out->solved_total = 0.0;
+  const int n = grid.n;
+  const double* gap = gap_m.data();
+  const double* cov = coverage.data();
+  const double target = force / (k * grid.Area());
+  if (!scanned) ScanWinklerCandidates(grid, gap_m, coverage, box, out);
+  const double gmin = out->scan_gmin, covmax = out->scan_covmax;
+  if (!std::isfinite(gmin) || !(force > 0.0)) return false;
+  const bool warm = std::isfinite(guess);
+  double c = gmin + target / std::max(covmax, 1e-12);
+  double s = 0.0, in_max = 0.0;
+  double f = warm ? NewtonSums(gap, cov, n, spans, guess, &s, &in_max) - target : 0.0;
+  if (warm && guess > gmin && f >= 0.0) {
+    c = guess;  // to the right of the root: Newton from there
+  } else {
+    // Left of the root (the load grew): f is convex, so one Newton step
+    // from there lands right of the root, much nearer than the cold start
+    // (the load on one cell), which needs many more steps.
+    if (warm && guess > gmin && s > 0.0) {
+      const double right = guess - f / s;
+      if (right > guess && right < c) c = right;
+    }
+    f = NewtonSums(gap, cov, n, spans, c, &s, &in_max) - target;
+  }
+  for (int it = 0; it < 200; ++it) {
+    if (f <= 0.0 || s <= 0.0) break;
+    const double next = c - f / s;
+    if (!(next < c)) break;
+    c = next;
+    // The contact set {g < c} did not change (every gap in it is below the
+    // new c): the next step would be over the same set, at its root up to
+    // round-off. The closed form below starts from that set either way.
+    if (in_max < c) break;
+    if (it + 1 < 200) f = NewtonSums(gap, cov, n, spans, c, &s, &in_max) - target;
+  }
+  // Closed form from the converged contact set, as the reference. A pass
+  // whose contact set {g < c} equals the last pass's would repeat its sums
+  // and give next == c: it is skipped. The sets are compared through the
+  // largest gap in the set and the smallest candidate outside it (c - g > 0
+  // holds exactly when g < c), taken in the same loop, off its critical path.
+  bool same_set = false;
+  for (int pass = 0; pass < 4 && !same_set; ++pass) {
+    double sum_cov = 0.0, sum_cov_g = 0.0, in_max = -kInf, out_min = kInf;
+    for (size_t r = 0; r < spans.row.size(); ++r) {
+      const double* g = gap + static_cast<size_t>(spans.row[r]) * n;
+      const double* w = cov + static_cast<size_t>(spans.row[r]) * n;
+      for (int i = spans.begin[r]; i < spans.end[r]; ++i) {
+        if (!Candidate(g[i], w[i])) continue;
+        if (c - g[i] > 0.0) {
+          sum_cov += w[i];
+          sum_cov_g += w[i] * g[i];
+          in_max = std::max(in_max, g[i]);
+        } else {
+          out_min = std::min(out_min, g[i]);
+        }
+      }
+    }
+    if (!(sum_cov > 0.0)) break;
+    const double next = (target + sum_cov_g) / sum_cov;
+    if (next == c) break;
+    same_set = in_max < next && next <= out_min;
+    c = next;
+  }
+  // The touching cells (runs, in box order), their loads cov (c - g) and
+  // NormalizeLoad's sum of them (the other cells add exact zeros).
+  size_t cells = 0;
+  for (size_t r = 0; r < spans.row.size(); ++r) cells += spans.end[r] - spans.begin[r];
+  if (out->scratch_load.size() < cells) out->scratch_load.resize(cells);
+  double* load = out->scratch_load.data();
+  double total = 0.0;
+  size_t t = 0;
+  for (size_t r = 0; r < spans.row.size(); ++r) {
+    const int j = spans.row[r];
+    const double* g = gap + static_cast<size_t>(j) * n;
+    const double* w = cov + static_cast<size_t>(j) * n;
+    int start = -1;
+    for (int i = spans.begin[r]; i < spans.end[r]; ++i) {
+      const double d = c - g[i];
+      if (Candidate(g[i], w[i]) && d > 0.0) {
+        const double pi = w[i] * d;
+        load[t++] = pi;
+        total += pi;
+        if (start < 0) start = i;
+      } else if (start >= 0) {
+        runs.row.push_back(j);
+        runs.begin.push_back(start);
+        runs.end.push_back(i);
+        start = -1;
+      }
+    }
+    if (start >= 0) {
+      runs.row.push_back(j);
+      runs.begin.push_back(start);
+      runs.end.push_back(spans.end[r]);
+    }
+  }
+  out->solved_total = total;
+  *approach_m = c;
+  return total > 0.0;
+}
+
+bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
+                     const std::vector<double>& cov, const CellBox& box, double k, double force,
+                     double guess, TractionField* out) {
+  ClearTraction(grid, out);
+  double c;
+  if (!SolveWinkler(grid, gap, cov, box, k, force, guess, out, &c)) return false;
+  out->box = box;
+  out->approach_m = c;
+  // NormalizeLoad's scaling of the loads (the same product p * scale).
+  const double scale = force / (grid.Area() * out->solved_total);
+  const ActiveRuns& runs = out->solved_runs;
+  const double* load = out->scratch_load.data();
+  for (size_t r = 0; r < runs.row.size(); ++r) {
+    double* p = out->pressure_pa.data() + static_cast<size_t>(runs.row[r]) * grid.n;
+    for (int i = runs.begin[r]; i < runs.end[r]; ++i) p[i] = *load++ * scale;
+  }
+  return true;
+}
+
+bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double c, double fn,
+                              double fx, double fy, TractionField* out) {
+  const size_t N = grid.Size();
+  const int n = grid.n;
+  const bool sized = out->pressure_pa.size() == N && out->shear_x_pa.size() == N &&
+                     out->shear_y_pa.size() == N && out->pressure.size() == N &&
+                     out->shear_x.size() == N && out->shear_y.size() == N;
+  if (!sized) ClearTraction(grid, out);  // no last support
+  // The last support as row segments (ascending rows), cleared at the end
+  // where the new runs do not cover it.
+  ActiveRuns& last = out->scratch_runs;
+  last.Clear();
+  if (out->support_in_runs) {
+    std::swap(last, out->runs);
+  } else if (!out->box.empty()) {
+    const CellBox& b = out->box;
+    for (int j = b.j0; j < b.j0 + b.ny; ++j) {
+      last.row.push_back(j);
+      last.begin.push_back(b.i0);
+      last.end.push_back(b.i0 + b.nx);
+    }
+  }
+  const double total = out->solved_total;
+  if (!(total > 0.0)) {  // nothing solved: the cleared field
+    for (size_t r = 0; r < last.row.size(); ++r) {
+      const size_t row = static_cast<size_t>(last.row[r]) * n;
+      ZeroCells(out, row + last.begin[r], row + last.end[r]);
+    }
+    out->runs.Clear();
+    out->support_in_runs = false;
+    out->box = CellBox{};
+    out->active_cells = 0;
+    out->approach_m = 0.0;
+    return false;
+  }
+  const double scale = fn / (grid.Area() * total);
+  const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
+  out->runs = out->solved_runs;
+  const ActiveRuns& now = out->runs;
+  const double* load = out->scratch_load.data();
+  bool zero = false;
+  int active = 0;
+  for (size_t r = 0; r < now.row.size(); ++r) {
+    const size_t a = static_cast<size_t>(now.row[r]) * n + now.begin[r];
+    const int len = now.end[r] - now.begin[r];
+    zero |= ScaledSlipRun(load, scale, rx, ry, len, out->pressure_pa.data() + a,
+                          out->shear_x_pa.data() + a, out->shear_y_pa.data() + a,
+                          out->pressure.data() + a, out->shear_x.data() + a,
+                          out->shear_y.data() + a);
+    load += len;
+    active += len;
+  }
+  // Clear the last support outside the cells just written.
+  size_t q = 0;
+  for (size_t r = 0; r < last.row.size(); ++r) {
+    const int j = last.row[r];
+    const size_t row = static_cast<size_t>(j) * n;
+    while (q < now.row.size() && now.row[q] < j) ++q;
+    int x = last.begin[r];
+    for (size_t s = q; s < now.row.size() && now.row[s] == j && x < last.end[r]; ++s) {
+      ZeroCells(out, row + x, row + std::min(last.end[r], std::max(x, now.begin[s])));
+      x = std::max(x, now.end[s]);
+    }
+    ZeroCells(out, row + x, row + std::max(x, last.end[r]));
+  }
+  if (zero) {  // (underflow) the runs of nonzero pressure only, as FinishUniformSlipTraction
+    ActiveRuns split;
+    active = 0;
+    for (size_t r = 0; r < now.row.size(); ++r) {
+      const double* p = out->pressure_pa.data() + static_cast<size_t>(now.row[r]) * n;
+      for (int i = now.begin[r]; i < now.end[r];) {
+        while (i < now.end[r] && p[i] == 0.0) ++i;
+        if (i == now.end[r]) break;
+        const int begin = i;
+        while (i < now.end[r] && p[i] != 0.0) ++i;
+        split.row.push_back(now.row[r]);
+        split.begin.push_back(begin);
+        split.end.push_back(i);
+        active += i - begin;
+      }
+    }
+    // the zero-pressure cells hold zeros in every field already
+    std::swap(out->runs, split);
+  }
+  out->box = box;
+  out->approach_m = c;
+  out->uniform_slip = true;
+  out->slip_x = rx;
+  out->slip_y = ry;
+  out->support_in_runs = true;
+  out->active_cells = active;
+  return true;
+}
+
+}  // namespace mjtouch
