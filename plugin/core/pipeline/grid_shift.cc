@@ -21,6 +21,56 @@ double MinCoveredGap(const TaxelGrid& g, const CellBox& box, const std::vector<d
   return m;
 }
 
+constexpr int kMarginCells = 3;
+
+CellBox Intersect(const CellBox& a, const CellBox& b) {
+  const int i0 = std::max(a.i0, b.i0), j0 = std::max(a.j0, b.j0);
+  const int i1 = std::min(a.i0 + a.nx, b.i0 + b.nx), j1 = std::min(a.j0 + a.ny, b.j0 + b.ny);
+  return CellBox{i0, j0, std::max(0, i1 - i0), std::max(0, j1 - j0)};
+}
+
+// True if some rendered cell (rbox) outside sbox could touch under the
+// pressure solved on sbox: g0 + K p < approach. Cells above approach + the
+// skin's largest lift under the whole load pass without the operator; the
+// rest get K p from one application over rbox.
+bool ContactEscapes(const ShiftedGrid& sg, const CellBox& rbox, const CellBox& sbox,
+                    double force_n, ApplyPrecision precision, GridShiftWork* w) {
+  const TaxelGrid& g = sg.grid;
+  const double approach = w->stats.approach_m;
+  const double lift = sg.elastic->max_lift_m_per_pa() * force_n / g.Area();
+  auto inside = [&](int i, int j) {
+    return i >= sbox.i0 && i < sbox.i0 + sbox.nx && j >= sbox.j0 && j < sbox.j0 + sbox.ny;
+  };
+  bool any = false;
+  for (int j = rbox.j0; j < rbox.j0 + rbox.ny && !any; ++j)
+    for (int i = rbox.i0; i < rbox.i0 + rbox.nx; ++i)
+      if (!inside(i, j) && w->gap[static_cast<size_t>(j) * g.n + i] <= approach + lift) {
+        any = true;
+        break;
+      }
+  if (!any) return false;
+  const int bx = rbox.nx, by = rbox.ny;
+  std::vector<double>& pin = w->elastic.check_p;
+  std::vector<double>& u = w->elastic.check_u;
+  pin.assign(static_cast<size_t>(bx) * by, 0.0);
+  u.resize(pin.size());
+  for (int j = sbox.j0; j < sbox.j0 + sbox.ny; ++j)
+    for (int i = sbox.i0; i < sbox.i0 + sbox.nx; ++i)
+      pin[static_cast<size_t>(j - rbox.j0) * bx + (i - rbox.i0)] =
+          w->pressure[static_cast<size_t>(j) * g.n + i];
+  const SurfaceCompliance& K = sg.elastic->compliance();
+  K.Apply(*K.SpectrumFor(bx, by), pin.data(), bx, by, u.data(), &w->elastic.fft, precision);
+  for (int j = rbox.j0; j < rbox.j0 + rbox.ny; ++j)
+    for (int i = rbox.i0; i < rbox.i0 + rbox.nx; ++i) {
+      if (inside(i, j)) continue;
+      const double gap = w->gap[static_cast<size_t>(j) * g.n + i];
+      if (gap <= approach + lift &&
+          !(gap + u[static_cast<size_t>(j - rbox.j0) * bx + (i - rbox.i0)] >= approach))
+        return true;
+    }
+  return false;
+}
+
 }  // namespace
 
 bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const Pose& pad_pose,
@@ -34,7 +84,8 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
   w->main_box = field->box;
   // The same cull rule as the taxel grid's (skin_traction.cc), from this
   // step's indentation depth.
-  double cull = 1.5 * depth_m + 20e-6;
+  const double cull = 1.5 * depth_m + 20e-6;
+  const CellBox& mb = w->main_box;
   bool touching = false;
   for (int pass = 0; pass < 2 && !touching; ++pass) {
     CellBox rbox;
@@ -50,7 +101,6 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
     // Warm start: the taxel grid's solution moved onto the shifted cells
     // (shifted cell (i, j) overlaps taxel cells i - 1..i, j - 1..j).
     w->pressure.assign(g.Size(), 0.0);
-    const CellBox& mb = w->main_box;
     for (int j = std::max(rbox.j0, mb.j0); j < std::min(rbox.j0 + rbox.ny, mb.j0 + mb.ny + 1); ++j)
       for (int i = std::max(rbox.i0, mb.i0); i < std::min(rbox.i0 + rbox.nx, mb.i0 + mb.nx + 1);
            ++i) {
@@ -63,14 +113,27 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
           }
         w->pressure[static_cast<size_t>(j) * g.n + i] = 0.25 * s;
       }
-    touching = sg.elastic->Solve(w->gap, rbox, force_n, tolerance, max_iterations, &w->pressure,
+    // First on the taxel grid's solve box moved onto the shifted cells
+    // (taxel cells i0..i1 overlap shifted cells i0..i1 + 1), kMarginCells
+    // wider; if a rendered cell outside it could touch (ContactEscapes),
+    // again on every rendered cell.
+    const CellBox sbox = Intersect(rbox, CellBox{mb.i0 - kMarginCells, mb.j0 - kMarginCells,
+                                                 mb.nx + 1 + 2 * kMarginCells,
+                                                 mb.ny + 1 + 2 * kMarginCells});
+    w->guess = w->pressure;
+    touching = !sbox.empty() &&
+               sg.elastic->Solve(w->gap, sbox, force_n, tolerance, max_iterations, &w->pressure,
                                  &w->elastic, &w->stats, method, precision);
+    if (!touching || ContactEscapes(sg, rbox, sbox, force_n, precision, w)) {
+      w->pressure = w->guess;
+      touching = sg.elastic->Solve(w->gap, rbox, force_n, tolerance, max_iterations,
+                                   &w->pressure, &w->elastic, &w->stats, method, precision);
+    }
     if (!touching) return false;
     if (pass == 0 && w->stats.approach_m >= level) touching = false;  // render all, solve again
   }
   // Deposit (taxel cell (i, j) <- shifted cells i..i+1, j..j+1, a quarter
   // each) and average on the grown box.
-  const CellBox& mb = w->main_box;
   const int i0 = std::max(0, mb.i0 - 1), j0 = std::max(0, mb.j0 - 1);
   const int i1 = std::min(n, mb.i0 + mb.nx + 1), j1 = std::min(n, mb.j0 + mb.ny + 1);
   // The shifted solution's support decides the box too.

@@ -36,7 +36,7 @@ struct ShiftedGrid {
 
 // Per-simulation scratch (Workspace).
 struct GridShiftWork {
-  std::vector<double> gap, coverage, pressure;
+  std::vector<double> gap, coverage, pressure, guess;
   std::vector<double> main_pressure;  // the taxel grid's own solution (the warm-start history)
   CellBox main_box;
   ElasticWork elastic;
