@@ -212,3 +212,33 @@ def test_elastic_solve_box_grows_when_the_contact_jumps():
     assert rows_after[0] < rows_before[0] - 3 and rows_after[-1] > rows_before[-1] + 3
     rel = np.linalg.norm(warm_p - cold_p) / np.linalg.norm(cold_p)
     assert rel <= 2e-3, rel
+
+
+def test_grid_shift_copy_reset_and_rollout_are_bit_identical():
+    # grid_shift's second solve starts from this step's taxel-grid solution
+    # (no state of its own): copies, resets and two rollout threads must
+    # reproduce it bit for bit, and it must change the pressure (it is on)
+    proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
+    models = {gs: scenes.build_model(fast_tip(skin={"pressure": "elastic", "grid_shift": gs,
+                                                    "outputs": "force pressure stress"}),
+                                     scenes.Texture(period_m=0.6e-3), proto)
+              for gs in ("false", "true")}
+    m = models["true"]
+    d = mujoco.MjData(m)
+    first = _run(m, d, 320)
+    assert not np.array_equal(first, _run(models["false"], mujoco.MjData(models["false"]), 320))
+    d2 = mujoco.MjData(m)
+    mujoco.mj_copyData(d2, m, d)
+    a = _run(m, d, 60)
+    assert np.array_equal(a, _run(m, d2, 60)) and a.any()
+    mujoco.mj_resetData(m, d)
+    assert np.array_equal(_run(m, d, 320), first)
+    mujoco.mj_resetData(m, d)
+    _run(m, d, 300)
+    s0 = np.empty(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_FULLPHYSICS))
+    mujoco.mj_getState(m, d, s0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    controls = np.tile([0.03, -0.5], (2, 40, 1))
+    _, one = mujoco.rollout.rollout(m, mujoco.MjData(m), np.tile(s0, (2, 1)), controls)
+    _, two = mujoco.rollout.rollout(m, [mujoco.MjData(m), mujoco.MjData(m)],
+                                    np.tile(s0, (2, 1)), controls)
+    assert np.array_equal(one, two) and np.abs(two).max() > 0

@@ -184,3 +184,35 @@ def test_pc_grid_line_elastic_not_winkler(capsys):
     assert el["pitch_m"] == wk["pitch_m"] == 2e-4
     assert el["power_at_v_over_pitch_pa2"] > 100 * wk["power_at_v_over_pitch_pa2"] > 0
     assert el["pc_rate_hz"] > 5 * wk["pc_rate_hz"]
+
+
+def test_pc_grid_line_static_follows_the_texture_edges(capsys):
+    # Quasi-static slide, 64 x 0.2 mm, texture x2 (period 2 mm, edges rounded
+    # over 0.1 mm: a one-cell ramp): the grid line (harmonic D / pitch = 10)
+    # stands out of its neighbours; rounding the edges over 2 pitches (a
+    # 4-cell ramp) removes it (measured 1170x), and so does averaging the
+    # grid with the grid shifted by half a cell (140x), which keeps the
+    # grating's fundamental (measured 0.92x)
+    rows = {r["case"]: r for r in run_json("pc_grid_line_static.py", ["--small"], capsys)}
+    base, edges, avg = rows["default"], rows["edges resolved"], rows["grid shift average"]
+    m = base["grid_harmonic"]
+    assert m == 10
+    p = base["power_pa2"]
+    assert p[str(m)] > 3 * max(p[str(m - 1)], p[str(m + 1)])
+    assert edges["power_pa2"][str(m)] * 100 < p[str(m)]
+    assert avg["power_pa2"][str(m)] * 30 < p[str(m)]
+    assert avg["power_pa2"]["1"] == pytest.approx(p["1"], rel=0.25)
+
+
+def test_pc_grid_shift_average_cancels_the_line(capsys):
+    # The sliding scene at 0.2 mm on an odd and an even grid (centres half a
+    # cell apart), the same PC receptors: the PC stress line at V / pitch
+    # (125 Hz) is the same on both grids and cancels in their average
+    # (measured 38 / 35 -> 0.35 Pa^2), and the PC rate, which the line drove,
+    # drops (186 -> 102 Hz)
+    rows = run_json("pc_grid_shift.py", ["--small"], capsys)
+    odd, even, avg = rows
+    assert odd["v_over_pitch_hz"] == pytest.approx(125.0)
+    for r in (odd, even):
+        assert r["power_at_v_over_pitch_pa2"] > 30 * avg["power_at_v_over_pitch_pa2"] > 0
+    assert avg["pc_rate_hz"] < 0.7 * min(odd["pc_rate_hz"], even["pc_rate_hz"])

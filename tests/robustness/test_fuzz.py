@@ -33,6 +33,7 @@ CHOICES = {
     "ridges": ["true", "false", "1", "0"], "shear": ["true", "false"],
     "ridge_profile": ["sine", "triangle", "square"], "pressure": ["contacts", "winkler", "elastic"],
     "contact_solver": ["pcg", "pk"], "elastic_precision": ["float", "double"],
+    "grid_shift": ["true", "false"],
     "visual": ["none", "pad", "above", "both"], "skin": ["layered", "halfspace"],
     "interface_side": ["upper", "lower"], "stress_method": ["auto", "direct", "fft", "tree"],
     "oversample": ["auto", "1", "2", "3"],

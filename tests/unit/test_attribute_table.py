@@ -49,7 +49,7 @@ NON_DEFAULT = {
     "ridge_pitch": "5e-4", "ridge_height": "6e-5", "ridge_angle": "30",
     "ridge_profile": "square", "pressure": "winkler", "oversample": "3",
     "young": ("5e4", {"skin": "halfspace"}), "tolerance": "1e-3", "contact_solver": "pk",
-    "elastic_precision": "double",
+    "elastic_precision": "double", "grid_shift": "true",
     "stiffness": "3e7",
     "poisson": ("0.4", {"skin": "halfspace"}), "shear": "false", "radius": "2e-3",
     "classes": "SA1 RA", "density": "70 140 20", "depth": "7.5e-4 7.5e-4 1.5e-3",

@@ -175,6 +175,17 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
         model->layered_
             ? LayeredCompliance(*model->layered_, cfg.grid.pitch_m, cfg.grid.n)
             : HalfSpaceCompliance(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m, cfg.grid.n));
+    if (cfg.grid_shift) {
+      auto sg = std::make_shared<ShiftedGrid>();
+      sg->grid = TaxelGrid{cfg.grid.n + 1, cfg.grid.pitch_m};
+      sg->skin_z = SkinSurface(sg->grid, cfg.pad, cfg.ridges);
+      sg->blocks = MakeSkinBlocks(sg->grid, sg->skin_z);
+      sg->elastic = std::make_shared<ElasticContact>(
+          model->layered_ ? LayeredCompliance(*model->layered_, cfg.grid.pitch_m, sg->grid.n)
+                          : HalfSpaceCompliance(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m,
+                                                sg->grid.n));
+      model->shifted_ = std::move(sg);
+    }
   }
   cache[key] = model;
   return model;

@@ -12,6 +12,7 @@
 
 #include "contact/contact_solver.h"
 #include "pipeline/config.h"
+#include "pipeline/grid_shift.h"
 #include "stress/kernel_tables.h"
 #include "stress/stress_tree.h"
 
@@ -173,6 +174,8 @@ class SkinModel {
   const SkinBlocks& skin_blocks() const { return skin_blocks_; }
   const KernelTables* kernel() const { return kernel_.get(); }
   const ElasticContact* elastic() const { return elastic_.get(); }
+  // `grid_shift` (with `elastic`): the half-cell shifted grid, else null.
+  const ShiftedGrid* shifted() const { return shifted_.get(); }
   // The elastic skin (HalfSpace or LayeredSubstrate), its FFT spectra (null
   // unless the FFT path can pay off), the receptor sites as the stress stage
   // sees them, and the material at each class's depth (for `sed`, `strain`;
@@ -201,6 +204,7 @@ class SkinModel {
   SkinBlocks skin_blocks_;
   std::shared_ptr<const KernelTables> kernel_;
   std::shared_ptr<const ElasticContact> elastic_;  // `elastic` model only
+  std::shared_ptr<const ShiftedGrid> shifted_;     // `grid_shift` with `elastic`
   std::shared_ptr<const Substrate> substrate_;
   const LayeredSubstrate* layered_ = nullptr;  // substrate_ if layered
   std::shared_ptr<const KernelSpectra> spectra_;

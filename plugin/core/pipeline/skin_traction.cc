@@ -428,6 +428,15 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         state[kStContactDepth] = approach - gmin;
       }
     }
+    // `grid_shift`: average with the solve on the half-cell shifted grid
+    // (grid_shift.h); the history keeps the taxel grid's own solution.
+    // If the shifted solve fails (it carries the same load on nearly the
+    // same cells), the taxel grid's solution stands.
+    if (touching && model.shifted())
+      AverageWithShiftedGrid(*model.shifted(), grid, in.pad_pose, in.surfaces,
+                             in.normal_force_n, state[kStContactDepth], cfg.tolerance,
+                             kElasticMaxIterations, cfg.elastic_method, cfg.elastic_precision,
+                             fast, &ws->grid_shift, &tf);
     if (winkler_slip) {
       // the solve's field, or (no contact) the cleared one
       if (touching) {
@@ -451,8 +460,10 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     state[kStContactValid] = 1.0;
     if (history) {
       // the solve box only (the pressure is zero outside it)
-      const double* pa = tf.pressure_pa.data();
-      const CellBox& b = tf.box;
+      const bool shifted = model.shifted() != nullptr;
+      const double* pa =
+          shifted ? ws->grid_shift.main_pressure.data() : tf.pressure_pa.data();
+      const CellBox& b = shifted ? ws->grid_shift.main_box : tf.box;
       for (int j = b.j0; j < b.j0 + b.ny; ++j)
         for (int i = b.i0; i < b.i0 + b.nx; ++i) {
           const size_t k = static_cast<size_t>(j) * grid.n + i;

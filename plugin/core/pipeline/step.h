@@ -35,6 +35,7 @@ struct Workspace {
   std::vector<double> quantity;  // per receptor
   ElasticWork elastic;
   ElasticSolveStats elastic_stats;  // the last `elastic` solve (diagnostics)
+  GridShiftWork grid_shift;  // `grid_shift`
   std::vector<double> pressure_guess;  // `elastic` initial guess, n*n
   std::vector<Stress6> stress;   // per receptor, Pa
   StressScratch stress_scratch;
