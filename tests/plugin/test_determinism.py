@@ -215,9 +215,10 @@ def test_elastic_solve_box_grows_when_the_contact_jumps():
 
 
 def test_grid_shift_copy_reset_and_rollout_are_bit_identical():
-    # grid_shift's second solve starts from this step's taxel-grid solution
-    # (no state of its own): copies, resets and two rollout threads must
-    # reproduce it bit for bit, and it must change the pressure (it is on)
+    # grid_shift's second solve starts from its own history in plugin_state
+    # (a fresh MjData's scratch holds none): copies, resets and two rollout
+    # threads must reproduce it bit for bit, and it must change the
+    # pressure (it is on)
     proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
     models = {gs: scenes.build_model(fast_tip(skin={"pressure": "elastic", "grid_shift": gs,
                                                     "outputs": "force pressure stress"}),

@@ -14,6 +14,8 @@ from mjtouch import analysis, oracles, rollout, scenes
 from mjtouch.bench.configs import lattice_sites
 from mjtouch.sensor import SkinLayout
 
+from conftest import fast_tip
+
 E, NU = 80e3, 0.48
 SPEED = 0.025
 
@@ -75,3 +77,33 @@ def test_grid_shift_cancels_the_v_over_pitch_line():
     assert np.array_equal(r0.finger_x_m, r1.finger_x_m)
     r2, *_ = _slide("true")
     assert np.array_equal(r1.stress, r2.stress) and np.array_equal(r1.spikes, r2.spikes)
+
+
+def test_grid_shift_warm_start_from_its_history_reaches_the_cold_solution():
+    # the shifted solve starts from its own history in plugin_state
+    # (extrapolated 2 p(n-1) - p(n-2), its K p by linearity from the stored
+    # displacements); that may change where the CG starts, never the
+    # solution: one step from a sliding state must give the pressure of the
+    # same step with the plugin state cleared (both solves cold, uniform
+    # start). Tolerance 1e-9: what is left is the float history's rounding
+    # (K p stored as floats), measured 3e-6 relative L1 without grid_shift
+    # and 2e-6 with it; a stale or mis-placed history, or a wrong K p0,
+    # converges elsewhere
+    proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
+    tip = fast_tip(skin={"pressure": "elastic", "grid_shift": "true", "tolerance": "1e-9",
+                         "outputs": "force pressure", "noise": "0 0 0"})
+    m = scenes.build_model(tip, scenes.Texture(period_m=0.6e-3), proto)
+    layout = SkinLayout.from_model(m)
+    d = mujoco.MjData(m)
+    for _ in range(320):  # pressed at 0.05 s, then sliding at 30 mm/s
+        d.ctrl[:] = [0.03 if d.time > 0.05 else 0.0, -0.5]
+        mujoco.mj_step(m, d)
+    cold = mujoco.MjData(m)
+    mujoco.mj_copyData(cold, m, d)
+    cold.plugin_state[:] = 0.0
+    for data in (d, cold):
+        mujoco.mj_step(m, data)
+    warm_p = layout.block(d.sensordata, "pressure")
+    cold_p = layout.block(cold.sensordata, "pressure")
+    assert warm_p.sum() > 0
+    assert np.abs(warm_p - cold_p).sum() < 1e-5 * np.abs(cold_p).sum()

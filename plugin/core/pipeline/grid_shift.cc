@@ -1,5 +1,7 @@
 #include "pipeline/grid_shift.h"
 
+#include "pipeline/warm_start.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -29,55 +31,13 @@ CellBox Intersect(const CellBox& a, const CellBox& b) {
   return CellBox{i0, j0, std::max(0, i1 - i0), std::max(0, j1 - j0)};
 }
 
-// True if some rendered cell (rbox) outside sbox could touch under the
-// pressure solved on sbox: g0 + K p < approach. Cells above approach + the
-// skin's largest lift under the whole load pass without the operator; the
-// rest get K p from one application over rbox.
-bool ContactEscapes(const ShiftedGrid& sg, const CellBox& rbox, const CellBox& sbox,
-                    double force_n, ApplyPrecision precision, GridShiftWork* w) {
-  const TaxelGrid& g = sg.grid;
-  const double approach = w->stats.approach_m;
-  const double lift = sg.elastic->max_lift_m_per_pa() * force_n / g.Area();
-  auto inside = [&](int i, int j) {
-    return i >= sbox.i0 && i < sbox.i0 + sbox.nx && j >= sbox.j0 && j < sbox.j0 + sbox.ny;
-  };
-  bool any = false;
-  for (int j = rbox.j0; j < rbox.j0 + rbox.ny && !any; ++j)
-    for (int i = rbox.i0; i < rbox.i0 + rbox.nx; ++i)
-      if (!inside(i, j) && w->gap[static_cast<size_t>(j) * g.n + i] <= approach + lift) {
-        any = true;
-        break;
-      }
-  if (!any) return false;
-  const int bx = rbox.nx, by = rbox.ny;
-  std::vector<double>& pin = w->elastic.check_p;
-  std::vector<double>& u = w->elastic.check_u;
-  pin.assign(static_cast<size_t>(bx) * by, 0.0);
-  u.resize(pin.size());
-  for (int j = sbox.j0; j < sbox.j0 + sbox.ny; ++j)
-    for (int i = sbox.i0; i < sbox.i0 + sbox.nx; ++i)
-      pin[static_cast<size_t>(j - rbox.j0) * bx + (i - rbox.i0)] =
-          w->pressure[static_cast<size_t>(j) * g.n + i];
-  const SurfaceCompliance& K = sg.elastic->compliance();
-  K.Apply(*K.SpectrumFor(bx, by), pin.data(), bx, by, u.data(), &w->elastic.fft, precision);
-  for (int j = rbox.j0; j < rbox.j0 + rbox.ny; ++j)
-    for (int i = rbox.i0; i < rbox.i0 + rbox.nx; ++i) {
-      if (inside(i, j)) continue;
-      const double gap = w->gap[static_cast<size_t>(j) * g.n + i];
-      if (gap <= approach + lift &&
-          !(gap + u[static_cast<size_t>(j - rbox.j0) * bx + (i - rbox.i0)] >= approach))
-        return true;
-    }
-  return false;
-}
-
 }  // namespace
 
 bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const Pose& pad_pose,
                             const std::vector<CounterSurface>& surfaces, double force_n,
                             double depth_m, double tolerance, int max_iterations,
                             ElasticMethod method, ApplyPrecision precision, bool fast_paths,
-                            GridShiftWork* w, TractionField* field) {
+                            HistoryBlock* history, GridShiftWork* w, TractionField* field) {
   const TaxelGrid& g = sg.grid;  // g.n == grid.n + 1
   const int n = grid.n;
   w->main_pressure = field->pressure_pa;
@@ -87,6 +47,7 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
   const double cull = 1.5 * depth_m + 20e-6;
   const CellBox& mb = w->main_box;
   bool touching = false;
+  CellBox sbox, u_region;  // the final solve box, the check's K p region
   for (int pass = 0; pass < 2 && !touching; ++pass) {
     CellBox rbox;
     const double level = RenderGap(g, sg.skin_z, pad_pose, surfaces, pass == 0 ? cull : kInf,
@@ -98,39 +59,66 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
         const size_t k = static_cast<size_t>(j) * g.n + i;
         if (!(w->coverage[k] > 0.0)) w->gap[k] = kInf;
       }
-    // Warm start: the taxel grid's solution moved onto the shifted cells
-    // (shifted cell (i, j) overlaps taxel cells i - 1..i, j - 1..j).
-    w->pressure.assign(g.Size(), 0.0);
-    for (int j = std::max(rbox.j0, mb.j0); j < std::min(rbox.j0 + rbox.ny, mb.j0 + mb.ny + 1); ++j)
-      for (int i = std::max(rbox.i0, mb.i0); i < std::min(rbox.i0 + rbox.nx, mb.i0 + mb.nx + 1);
-           ++i) {
-        double s = 0.0;
-        for (int dj = -1; dj <= 0; ++dj)
-          for (int di = -1; di <= 0; ++di) {
-            const int a = i + di, b = j + dj;
-            if (a >= 0 && a < n && b >= 0 && b < n)
-              s += w->main_pressure[static_cast<size_t>(b) * n + a];
-          }
-        w->pressure[static_cast<size_t>(j) * g.n + i] = 0.25 * s;
-      }
-    // First on the taxel grid's solve box moved onto the shifted cells
-    // (taxel cells i0..i1 overlap shifted cells i0..i1 + 1), kMarginCells
-    // wider; if a rendered cell outside it could touch (ContactEscapes),
-    // again on every rendered cell.
-    const CellBox sbox = Intersect(rbox, CellBox{mb.i0 - kMarginCells, mb.j0 - kMarginCells,
-                                                 mb.nx + 1 + 2 * kMarginCells,
-                                                 mb.ny + 1 + 2 * kMarginCells});
-    w->guess = w->pressure;
-    touching = !sbox.empty() &&
-               sg.elastic->Solve(w->gap, sbox, force_n, tolerance, max_iterations, &w->pressure,
-                                 &w->elastic, &w->stats, method, precision);
-    if (!touching || ContactEscapes(sg, rbox, sbox, force_n, precision, w)) {
-      w->pressure = w->guess;
-      touching = sg.elastic->Solve(w->gap, rbox, force_n, tolerance, max_iterations,
-                                   &w->pressure, &w->elastic, &w->stats, method, precision);
+    // Warm start: the shifted grid's own history as the taxel grid's
+    // (WarmStart: its last solution, extrapolated from the last two with
+    // contact_solver = pcg, whose K p spares an operator application), so
+    // a sliding contact needs a few iterations; without history, the taxel
+    // grid's solution moved onto the shifted cells (shifted cell (i, j)
+    // overlaps taxel cells i - 1..i, j - 1..j).
+    const HistoryBlock* last =
+        history && history[1].slots[kHsValid] > 0.0 ? &history[1] : nullptr;
+    const bool extrapolate = last && method == ElasticMethod::kPreconditioned &&
+                             history[2].slots[kHsValid] > 0.0;
+    sbox = rbox;
+    if (last) {
+      WarmStart(g, rbox, last, extrapolate ? &history[2] : nullptr, &w->pressure, &w->elastic,
+                &sbox);
+    } else {
+      w->pressure.assign(g.Size(), 0.0);
+      for (int j = std::max(rbox.j0, mb.j0); j < std::min(rbox.j0 + rbox.ny, mb.j0 + mb.ny + 1);
+           ++j)
+        for (int i = std::max(rbox.i0, mb.i0); i < std::min(rbox.i0 + rbox.nx, mb.i0 + mb.nx + 1);
+             ++i) {
+          double s = 0.0;
+          for (int dj = -1; dj <= 0; ++dj)
+            for (int di = -1; di <= 0; ++di) {
+              const int a = i + di, b = j + dj;
+              if (a >= 0 && a < n && b >= 0 && b < n)
+                s += w->main_pressure[static_cast<size_t>(b) * n + a];
+            }
+          w->pressure[static_cast<size_t>(j) * g.n + i] = 0.25 * s;
+        }
+      // the taxel grid's solve box moved onto the shifted cells (taxel
+      // cells i0..i1 overlap shifted cells i0..i1 + 1), kMarginCells wider
+      sbox = Intersect(rbox, CellBox{mb.i0 - kMarginCells, mb.j0 - kMarginCells,
+                                     mb.nx + 1 + 2 * kMarginCells, mb.ny + 1 + 2 * kMarginCells});
+      if (sbox.empty()) sbox = rbox;
     }
+    const ElasticContact& ec = *sg.elastic;
+    const bool have_u0 =
+        extrapolate && ExtrapolatedDisplacement(g, ec.compliance(), *last, history[2],
+                                                w->pressure, sbox, &w->elastic);
+    // Checked and grown as the taxel grid's solve box (SolveOnGrowingBox).
+    const double lift = ec.max_lift_m_per_pa() * force_n / g.Area();
+    touching = SolveOnGrowingBox(g, ec, w->gap, rbox, force_n, lift, tolerance, max_iterations,
+                                 method, precision, have_u0 ? w->elastic.u0.data() : nullptr,
+                                 &w->pressure, &w->elastic, &w->stats, &sbox, &u_region);
     if (!touching) return false;
     if (pass == 0 && w->stats.approach_m >= level) touching = false;  // render all, solve again
+  }
+  if (history) {  // this step's shifted solution and its K p (the check's)
+    HistoryBlock& cur = history[0];
+    for (int j = sbox.j0; j < sbox.j0 + sbox.ny; ++j)
+      for (int i = sbox.i0; i < sbox.i0 + sbox.nx; ++i) {
+        const size_t k = static_cast<size_t>(j) * g.n + i;
+        cur.set_p(k, static_cast<float>(w->pressure[k]));
+      }
+    cur.SetSlotBox(kHsPBoxI0, sbox);
+    cur.SetSlotBox(kHsURegionI0, u_region);
+    const size_t nu = static_cast<size_t>(u_region.nx) * u_region.ny;
+    for (size_t k = 0; k < nu; ++k) cur.set_u(k, static_cast<float>(w->elastic.check_u[k]));
+    cur.slots[kHsValid] = 1.0;
+    cur.slots[kHsDepth] = 0.0;  // (the taxel grid's history holds it)
   }
   // Deposit (taxel cell (i, j) <- shifted cells i..i+1, j..j+1, a quarter
   // each) and average on the grown box.

@@ -12,7 +12,9 @@
 // finer pitch moves, not removes. Half a cell flips the sign of the error's
 // first Fourier component, so the average cancels the V / pitch line; the
 // physical lines at m V / D are kept (examples/pc_grid_line_static.py,
-// examples/pc_grid_shift.py). Cost: a second render and solve per step.
+// examples/pc_grid_shift.py). Cost: a second render and solve per step,
+// warm-started from the shifted grid's own history in plugin_state (model.h)
+// like the taxel grid's solve.
 #ifndef MJTOUCH_PIPELINE_GRID_SHIFT_H_
 #define MJTOUCH_PIPELINE_GRID_SHIFT_H_
 
@@ -26,6 +28,8 @@
 
 namespace mjtouch {
 
+struct HistoryBlock;  // model.h
+
 // The shifted grid's immutable tables (SkinModel, with `grid_shift`).
 struct ShiftedGrid {
   TaxelGrid grid;                  // n + 1 cells of the taxel grid's pitch
@@ -36,8 +40,8 @@ struct ShiftedGrid {
 
 // Per-simulation scratch (Workspace).
 struct GridShiftWork {
-  std::vector<double> gap, coverage, pressure, guess;
-  std::vector<double> main_pressure;  // the taxel grid's own solution (the warm-start history)
+  std::vector<double> gap, coverage, pressure;
+  std::vector<double> main_pressure;  // the taxel grid's own solution (its history's)
   CellBox main_box;
   ElasticWork elastic;
   ElasticSolveStats stats;
@@ -47,16 +51,20 @@ struct GridShiftWork {
 // force_n). Solves the contact on the shifted grid (rendered with the same
 // cull rule as the taxel grid, again without culling if the solved approach
 // reaches it, so the result is exact on the rendered cells), warm-started
-// from the taxel grid's solution; keeps the taxel grid's solution in
+// from history (the shifted grid's blocks of plugin_state: this time, the
+// last step, the one before; null: none) as the taxel grid's solve, or
+// without a last step from the taxel grid's solution; writes this step's
+// shifted solution to history[0]; keeps the taxel grid's solution in
 // w->main_pressure / w->main_box; writes the average to field (box grown by
 // one cell, load normalised to force_n). If the shifted grid renders no
 // contact, the field is left as it was. Returns false if the shifted solve
-// fails to carry the load (the field is then left as it was).
+// fails to carry the load (the field is then left as it was; history[0]
+// stays invalid in both cases).
 bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const Pose& pad_pose,
                             const std::vector<CounterSurface>& surfaces, double force_n,
                             double depth_m, double tolerance, int max_iterations,
                             ElasticMethod method, ApplyPrecision precision, bool fast_paths,
-                            GridShiftWork* w, TractionField* field);
+                            HistoryBlock* history, GridShiftWork* w, TractionField* field);
 
 }  // namespace mjtouch
 

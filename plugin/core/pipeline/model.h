@@ -65,6 +65,9 @@ enum LastPoseSlot {
 // copies); a repeated evaluation at the same time (mj_forward twice)
 // overwrites block h only, so it starts from the same history and gives the
 // same bits.
+// `grid_shift`: the same three blocks for the shifted grid's solve ((n+1)^2
+// cells, rotating with the same head), after the taxel grid's; absent
+// without it (the shipped scenes' state is unchanged).
 enum HistorySlot {
   kHsValid = 0,  // touched
   kHsDepth,      // indentation, m
@@ -111,9 +114,10 @@ struct HistoryBlock {
 struct StateLayout {
   int receptors = 0, last_spikes = 0, last_voltage = 0, history = 0, last_pose = 0;
   int history_block = 0;  // kHistorySlots + n*n; 0 without `elastic`
+  int shifted_history = 0, shifted_block = 0;  // kHistorySlots + (n+1)^2; 0 without `grid_shift`
   int history_head = 0;   // slot of h
   int size = 0;
-  size_t ncell = 0;
+  size_t ncell = 0, shifted_ncell = 0;
 
   StateLayout() = default;
   StateLayout(const SkinConfig& cfg, int nreceptor) {
@@ -124,17 +128,23 @@ struct StateLayout {
     const bool elastic = cfg.pressure_model == PressureModel::kElastic;
     ncell = cfg.grid.Size();
     history_block = elastic ? kHistorySlots + static_cast<int>(ncell) : 0;
-    history_head = history + kHistoryBlocks * history_block;
+    shifted_history = history + kHistoryBlocks * history_block;
+    if (elastic && cfg.grid_shift) {
+      shifted_ncell = static_cast<size_t>(cfg.grid.n + 1) * (cfg.grid.n + 1);
+      shifted_block = kHistorySlots + static_cast<int>(shifted_ncell);
+    }
+    history_head = shifted_history + kHistoryBlocks * shifted_block;
     last_pose = history_head + (elastic ? 1 : 0);
     size = last_pose + kLastPoseSize;
   }
   // Block k steps back from the head (0: this time, 1: last step, 2: the one
   // before).
   HistoryBlock history_at(double* state, int back) const {
-    const int h = static_cast<int>(state[history_head]);
-    double* b = state + history + static_cast<size_t>((h + kHistoryBlocks - back) % kHistoryBlocks) *
-                                      history_block;
-    return HistoryBlock{b, reinterpret_cast<char*>(b + kHistorySlots), ncell};
+    return Block(state, history, history_block, ncell, back);
+  }
+  // The same for the shifted grid (`grid_shift` only).
+  HistoryBlock shifted_history_at(double* state, int back) const {
+    return Block(state, shifted_history, shifted_block, shifted_ncell, back);
   }
   // Receptor r's membrane block.
   double* receptor(double* state, int r) const {
@@ -142,6 +152,14 @@ struct StateLayout {
   }
   const double* receptor(const double* state, int r) const {
     return state + receptors + static_cast<size_t>(r) * kReceptorStateSize;
+  }
+
+ private:
+  HistoryBlock Block(double* state, int first, int block, size_t cells, int back) const {
+    const int h = static_cast<int>(state[history_head]);
+    double* b = state + first +
+                static_cast<size_t>((h + kHistoryBlocks - back) % kHistoryBlocks) * block;
+    return HistoryBlock{b, reinterpret_cast<char*>(b + kHistorySlots), cells};
   }
 };
 

@@ -10,6 +10,7 @@
 #include <time.h>
 
 #include "pipeline/skin.h"
+#include "pipeline/warm_start.h"
 
 namespace mjtouch {
 namespace {
@@ -157,20 +158,19 @@ void HistoryRow(const HistoryBlock& h, const CellBox& pbox, int j, int n, double
     row[i] = h.p(static_cast<size_t>(j) * n + i);
 }
 
-// The warm start (`last` null: cold): ws->pressure_guess = the last step's
-// pressure, or with `prev` max(0, 2 p(n-1) - p(n-2)); *solve_box = the last
-// contact kBoxMarginCells wider (within box); with `prev`, the cells where
-// the guess on *solve_box differs from 2 p(n-1) - p(n-2) (clipped, or
-// outside the box) in ws->elastic.u0_fix (ExtrapolatedDisplacement).
+}  // namespace
+
+// (warm_start.h)
 void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* last,
-               const HistoryBlock* prev, Workspace* ws, CellBox* solve_box) {
+               const HistoryBlock* prev, std::vector<double>* guess, ElasticWork* w,
+               CellBox* solve_box) {
   const int n = grid.n;
-  ws->pressure_guess.assign(grid.Size(), 0.0);
-  ws->elastic.u0_fix.clear();
+  guess->assign(grid.Size(), 0.0);
+  w->u0_fix.clear();
   if (!last) return;
   const CellBox lb = last->p_box(), pb = prev ? prev->p_box() : CellBox{};
-  std::vector<double>& lrow = ws->elastic.row_a;
-  std::vector<double>& prow = ws->elastic.row_b;
+  std::vector<double>& lrow = w->row_a;
+  std::vector<double>& prow = w->row_b;
   lrow.resize(n);
   prow.resize(n);
   int i0 = n, i1 = -1, j0 = n, j1 = -1;
@@ -187,7 +187,7 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
   if (i1 >= 0) *solve_box = GrowBox(box, i0, i1, j0, j1);
   const CellBox both = Union(lb, pb), sb = *solve_box;
   for (int j = both.j0; j < both.j0 + both.ny; ++j) {
-    double* g = ws->pressure_guess.data() + static_cast<size_t>(j) * n;
+    double* g = guess->data() + static_cast<size_t>(j) * n;
     HistoryRow(*last, lb, j, n, lrow.data());
     if (!prev) {
       std::copy(lrow.begin() + both.i0, lrow.begin() + both.i0 + both.nx, g + both.i0);
@@ -203,12 +203,12 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
     for (int i = both.i0; i < both.i0 + both.nx; ++i) {
       const bool in = row_in && i >= sb.i0 && i < sb.i0 + sb.nx;
       if (in ? prow[i] < 0.0 : prow[i] != 0.0)
-        ws->elastic.u0_fix.push_back(static_cast<int>(static_cast<size_t>(j) * n + i));
+        w->u0_fix.push_back(static_cast<int>(static_cast<size_t>(j) * n + i));
     }
   }
 }
 
-// w->u0 = K times the extrapolated guess on `box` (bx * by): by linearity
+// (warm_start.h) w->u0 = K times the extrapolated guess on `box` (bx * by): by linearity
 // 2 u(n-1) - u(n-2) from the displacements the last two steps stored (their
 // box checks' K p over kHsURegion*), corrected by direct sums for the cells
 // where the guess is not 2 p(n-1) - p(n-2) (clipped at zero, or outside the
@@ -254,7 +254,31 @@ bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
   return true;
 }
 
-}  // namespace
+// (warm_start.h)
+bool SolveOnGrowingBox(const TaxelGrid& grid, const ElasticContact& ec,
+                       const std::vector<double>& gap, const CellBox& box, double force_n,
+                       double lift_m, double tolerance, int max_iterations,
+                       ElasticMethod method, ApplyPrecision precision, const double* u0,
+                       std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
+                       CellBox* solve_box, CellBox* u_region) {
+  *u_region = CellBox{0, 0, 0, 0};
+  bool touching = false;
+  for (int attempt = 0;; ++attempt) {
+    touching = ec.Solve(gap, *solve_box, force_n, tolerance, max_iterations, pressure, w, st,
+                        method, precision, attempt == 0 ? u0 : nullptr);
+    const CellBox& sb = *solve_box;
+    const bool whole = sb.i0 == box.i0 && sb.j0 == box.j0 && sb.nx == box.nx && sb.ny == box.ny;
+    if (whole) break;
+    CellBox grown = box;
+    if (touching && BoxHoldsContact(grid, ec.compliance(), gap, box, sb, *pressure,
+                                    st->approach_m, lift_m, precision, w, &grown, u_region))
+      break;
+    *u_region = CellBox{0, 0, 0, 0};
+    // the solution on the smaller box is a good start on the grown one
+    *solve_box = touching && attempt + 1 < kBoxAttempts ? grown : box;
+  }
+  return touching;
+}
 
 bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
                      Workspace* ws, bool new_time) {
@@ -266,7 +290,8 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   const StateLayout& lay = model.state_layout();
   const size_t ncell = grid.Size();
   const bool history = lay.history_block > 0;
-  HistoryBlock cur{}, last{}, prev{};
+  HistoryBlock cur{}, last{}, prev{}, shifted[3]{};  // shifted: this time, last, the one before
+  const bool shifted_history = lay.shifted_block > 0;
   if (history) {
     if (new_time)
       state[lay.history_head] = (static_cast<int>(state[lay.history_head]) + 1) % kHistoryBlocks;
@@ -274,6 +299,10 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     last = lay.history_at(state, 1);
     prev = lay.history_at(state, 2);
     cur.slots[kHsValid] = 0.0;
+    if (shifted_history) {
+      for (int back = 0; back < 3; ++back) shifted[back] = lay.shifted_history_at(state, back);
+      shifted[0].slots[kHsValid] = 0.0;
+    }
   }
   const bool warm = history ? last.slots[kHsValid] > 0.0 : state[kStContactValid] > 0.0;
   const double depth_prev = history ? last.slots[kHsDepth] : state[kStContactDepth];
@@ -371,34 +400,22 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         // rendered cell. The result solves the contact problem on the
         // rendered cells either way.
         CellBox solve_box = box;
-        WarmStart(grid, box, warm ? &last : nullptr, extrapolate ? &prev : nullptr, ws,
-                  &solve_box);
+        WarmStart(grid, box, warm ? &last : nullptr, extrapolate ? &prev : nullptr,
+                  &ws->pressure_guess, &ws->elastic, &solve_box);
         // Upward bulge bound: max_lift times the whole load on one cell.
         const double lift = ec.max_lift_m_per_pa() * in.normal_force_n / grid.Area();
         // K times the extrapolated guess from the last two steps' K p
         // (linear), which spares the solve an operator application.
         const bool have_u0 = extrapolate && ExtrapolatedDisplacement(
             grid, ec.compliance(), last, prev, ws->pressure_guess, solve_box, &ws->elastic);
-        CellBox u_region{0, 0, 0, 0};
+        CellBox u_region;
         ElasticSolveStats st;
-        for (int attempt = 0;; ++attempt) {
-          touching = ec.Solve(ws->gap, solve_box, in.normal_force_n, cfg.tolerance,
-                              kElasticMaxIterations, &ws->pressure_guess, &ws->elastic, &st,
-                              cfg.elastic_method, cfg.elastic_precision,
-                              have_u0 && attempt == 0 ? ws->elastic.u0.data() : nullptr);
-          const bool whole = solve_box.i0 == box.i0 && solve_box.j0 == box.j0 &&
-                             solve_box.nx == box.nx && solve_box.ny == box.ny;
-          if (whole) break;
-          CellBox grown = box;
-          if (touching && BoxHoldsContact(grid, ec.compliance(), ws->gap, box, solve_box,
-                                          ws->pressure_guess, st.approach_m, lift,
-                                          cfg.elastic_precision, &ws->elastic, &grown,
-                                          &u_region))
-            break;
-          u_region = CellBox{0, 0, 0, 0};
-          // the solution on the smaller box is a good start on the grown one
-          solve_box = touching && attempt + 1 < kBoxAttempts ? grown : box;
-        }
+        touching = SolveOnGrowingBox(grid, ec, ws->gap, box, in.normal_force_n, lift,
+                                     cfg.tolerance, kElasticMaxIterations, cfg.elastic_method,
+                                     cfg.elastic_precision,
+                                     have_u0 ? ws->elastic.u0.data() : nullptr,
+                                     &ws->pressure_guess, &ws->elastic, &st, &solve_box,
+                                     &u_region);
         if (touching) {
           tf.pressure_pa.swap(ws->pressure_guess);
           tf.box = solve_box;
@@ -429,14 +446,15 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       }
     }
     // `grid_shift`: average with the solve on the half-cell shifted grid
-    // (grid_shift.h); the history keeps the taxel grid's own solution.
-    // If the shifted solve fails (it carries the same load on nearly the
-    // same cells), the taxel grid's solution stands.
+    // (grid_shift.h), warm-started from its own history; the taxel grid's
+    // history keeps the taxel grid's own solution. If the shifted solve
+    // fails (it carries the same load on nearly the same cells), the taxel
+    // grid's solution stands.
     if (touching && model.shifted())
       AverageWithShiftedGrid(*model.shifted(), grid, in.pad_pose, in.surfaces,
                              in.normal_force_n, state[kStContactDepth], cfg.tolerance,
                              kElasticMaxIterations, cfg.elastic_method, cfg.elastic_precision,
-                             fast, &ws->grid_shift, &tf);
+                             fast, shifted_history ? shifted : nullptr, &ws->grid_shift, &tf);
     if (winkler_slip) {
       // the solve's field, or (no contact) the cleared one
       if (touching) {
