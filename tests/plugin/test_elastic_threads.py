@@ -18,10 +18,10 @@ from conftest import fast_tip
 PROTO = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
 
 
-def _model(threads: int, solver: str = "pcg", precision: str = "float"):
+def _model(threads: int, solver: str = "pcg", precision: str = "float", shift: bool = False):
     tip = fast_tip(skin={"pressure": "elastic", "threads": str(threads),
                          "contact_solver": solver, "elastic_precision": precision,
-                         "outputs": "force pressure stress"})
+                         "grid_shift": str(shift).lower(), "outputs": "force pressure stress"})
     return scenes.build_model(tip, scenes.Texture(period_m=0.6e-3), PROTO)
 
 
@@ -35,10 +35,12 @@ def _run(m, n, speed=0.03):
     return out
 
 
-@pytest.mark.parametrize("solver, precision", [("pcg", "float"), ("pk", "double")])
-def test_elastic_sensordata_identical_for_threads_1_2_3(solver, precision):
-    runs = {t: _run(_model(t, solver, precision), 320) for t in (1, 2, 3)}
-    m = _model(1, solver, precision)
+@pytest.mark.parametrize("solver, precision, shift",
+                         [("pcg", "float", False), ("pk", "double", False),
+                          ("pcg", "float", True)])  # grid_shift: its shifted solve too
+def test_elastic_sensordata_identical_for_threads_1_2_3(solver, precision, shift):
+    runs = {t: _run(_model(t, solver, precision, shift), 320) for t in (1, 2, 3)}
+    m = _model(1, solver, precision, shift)
     pressure = SkinLayout.from_model(m).block(runs[1], "pressure")
     # the solve ran: a fragmented contact of many cells while sliding
     assert (pressure[-1] > 0).sum() > 50

@@ -450,11 +450,13 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     // history keeps the taxel grid's own solution. If the shifted solve
     // fails (it carries the same load on nearly the same cells), the taxel
     // grid's solution stands.
-    if (touching && model.shifted())
+    if (touching && model.shifted()) {
+      ws->grid_shift.elastic.fft.threads = cfg.threads;
       AverageWithShiftedGrid(*model.shifted(), grid, in.pad_pose, in.surfaces,
                              in.normal_force_n, state[kStContactDepth], cfg.tolerance,
                              kElasticMaxIterations, cfg.elastic_method, cfg.elastic_precision,
                              fast, shifted_history ? shifted : nullptr, &ws->grid_shift, &tf);
+    }
     if (winkler_slip) {
       // the solve's field, or (no contact) the cleared one
       if (touching) {
