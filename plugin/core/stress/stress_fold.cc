@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "common/simd.h"
 #include "common/thread_pool.h"
 
 // The 8-lane helpers below are always inlined into the target_clones
@@ -108,7 +109,7 @@ inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* co
 // A site's sum is the same sequence of operations whichever band or job its
 // rows come in: rows in increasing order, float lanes widened to double every
 // kRowsPerFlush pressure rows (as the one-site-at-a-time sum).
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
              int T1, const float* P, int pw, const int* lo, const int* hi, int rows,
              bool aligned) {
@@ -267,7 +268,7 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
 
 // Rows dy0 .. dy0 + rows - 1 of a folded window into e (rows ew apart): one
 // dispatch per band, not two per row side.
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void FoldMirroredRows(const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
                       int x0, int w, float rx, float ry, bool shear, const float* const* h,
                       float* e, int ew) {
