@@ -12,12 +12,11 @@
 
 // MJTOUCH_TARGET_CLONES: an AVX2 copy of the function next to the baseline
 // one, picked at load time through an ifunc. Only x86 has the "avx2" target
-// and only ELF has ifuncs (not Mach-O, not PE), so elsewhere it is empty:
-// the one baseline copy, which rounds like the AVX2 one (no FMA contraction).
-#if MJTOUCH_X86_SIMD && defined(__ELF__) && defined(__has_attribute)
-#if __has_attribute(target_clones)
+// and only ELF has ifuncs (not Mach-O, not PE); Clang (14-18) rejects it on
+// templates and on member functions. Elsewhere it is empty: the one baseline
+// copy, which rounds like the AVX2 one (no FMA contraction).
+#if MJTOUCH_X86_SIMD && defined(__ELF__) && defined(__GNUC__) && !defined(__clang__)
 #define MJTOUCH_TARGET_CLONES __attribute__((target_clones("avx2", "default")))
-#endif
 #endif
 #ifndef MJTOUCH_TARGET_CLONES
 #define MJTOUCH_TARGET_CLONES

@@ -94,7 +94,13 @@ inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* co
         for (int u = 1; u < U; ++u) sum += acc[u * NC + c];
         if (U == 1) {  // lane l = pressure lane (l - shift) mod 8
           const v8i back = (v8i{0, 1, 2, 3, 4, 5, 6, 7} + shift) & (kLanes - 1);
+#if defined(__clang__)  // (no variable-mask shuffle builtin)
+          v8f rotated;
+          for (int l = 0; l < kLanes; ++l) rotated[l] = sum[back[l]];
+          sum = rotated;
+#else
           sum = __builtin_shuffle(sum, back);
+#endif
         }
         Flush(sum, s.d + 2 * c);
       }
@@ -137,7 +143,8 @@ inline __attribute__((always_inline)) void Store(float* p, v8f v) {
 template <bool kReversed>
 inline __attribute__((always_inline)) v8f Cells(const float* p, int x) {
   if (!kReversed) return Load(p + x);
-  return __builtin_shuffle(Load(p - x - (kLanes - 1)), v8i{7, 6, 5, 4, 3, 2, 1, 0});
+  const v8f v = Load(p - x - (kLanes - 1));
+  return __builtin_shufflevector(v, v, 7, 6, 5, 4, 3, 2, 1, 0);  // (GCC and Clang)
 }
 
 // e[x] = one(x) for x in [0, len), 8 cells at a time (chunk(x): cells x ..
