@@ -5,6 +5,7 @@
 #include <cstring>
 #include <type_traits>
 
+#include "common/simd.h"
 #include "common/thread_pool.h"
 
 namespace mjtouch {
@@ -117,7 +118,7 @@ inline __attribute__((always_inline)) void Butterflies(
 // vectorised and scalar code round alike.
 // kOut: Butterflies' (a last stage whose outputs r >= kOut are not needed).
 template <int R, bool kInverse, typename T, int kOut = R>
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void Stage(int n, int span, const T* tw_re, const T* tw_im, const T* in_re, const T* in_im,
            int in_stride, T* out_re, T* out_im, int out_stride, int batch) {
   const int m = n / R;
@@ -158,7 +159,7 @@ void RunStage(int radix, int n, int span, const T* twr, const T* twi, const T* i
 // j + 3 n/4 are zero: the butterfly of Butterflies<4> with x2 = x3 = 0
 // dropped, which rounds alike (x + 0 and x - 0 are x), reading half the data.
 template <bool kInverse, typename T>
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void FirstStage4HalfInput(int n, const T* in_re, const T* in_im, int in_stride, T* out_re,
                           T* out_im, int out_stride, int batch) {
   constexpr T sg = kInverse ? T(-1) : T(1);
@@ -401,7 +402,7 @@ inline __attribute__((always_inline)) void Block(const double* src, size_t ss, d
 #undef MJTOUCH_STORE
 
 template <typename T>
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void TransposeT(const T* src, size_t ss, int rows, int cols, T* dst, size_t ds) {
   constexpr int W = 32 / sizeof(T);
   const int rb = rows / W * W, cb = cols / W * W;
@@ -667,7 +668,7 @@ namespace {
 // A spectrum slab's elements times the real kernel spectrum k (layout
 // kx * ls + ky; elementwise: the same bits on every instruction set).
 template <typename T>
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void MultiplySlab(const T* __restrict k, int nx, int ls, int lo, int hi, int stride,
                   T* __restrict re, T* __restrict im) {
   const int nb = hi - lo;

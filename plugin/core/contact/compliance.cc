@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/simd.h"
 #include "common/thread_pool.h"
 #include "substrate/layered.h"
 #include "substrate/substrate.h"
@@ -113,7 +114,7 @@ void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int b
   }
 }
 
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void SurfaceCompliance::AddCellRows(int ci, int cj, double d, int bx, int j0, int j1,
                                     double* u) const {
   for (int j = j0; j < j1; ++j) {

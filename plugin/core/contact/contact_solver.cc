@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/simd.h"
 #include "common/thread_pool.h"
 
 namespace mjtouch {
@@ -187,7 +188,7 @@ double UpdateAndSum(size_t B, double s, double tau, const double* __restrict r,
 // preconditioner only shapes the search direction, so its rounding moves
 // the iterates, not the converged solution).
 template <int L, typename T>
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, double* z_out) {
   T m[L * L];
   for (int k = 0; k < L * L; ++k) m[k] = static_cast<T>(M[k]);

@@ -9,9 +9,12 @@
 #include <cstring>
 #include <limits>
 
-#include <emmintrin.h>
-
+#include "common/simd.h"
 #include "contact/pressure.h"
+
+#if MJTOUCH_X86_SIMD
+#include <emmintrin.h>
+#endif
 
 // The 4-lane helpers are inlined into the target_clones functions, so their
 // by-value vector ABI never applies.
@@ -27,6 +30,17 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 typedef double v4d __attribute__((vector_size(32)));
 typedef long long v4l __attribute__((vector_size(32)));
 typedef float v4f __attribute__((vector_size(16)));
+
+#if !MJTOUCH_X86_SIMD
+// ScanCandidates' two lanes without SSE2.
+typedef double v2d __attribute__((vector_size(16)));
+typedef long long v2l __attribute__((vector_size(16)));
+// |x| by clearing the sign bit, as SSE2's andpd with the mask (NaN stays NaN).
+inline v2d Abs(v2d x) {
+  const v2l mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL};
+  return reinterpret_cast<v2d>(reinterpret_cast<v2l>(x) & mask);
+}
+#endif
 
 // A candidate cell: coverage > 0 and a finite gap (the reference's test).
 inline bool Candidate(double g, double w) { return (w > 0.0) & (std::abs(g) < kInf); }
@@ -44,6 +58,7 @@ void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
                     double* covered_min) {
   spans->Clear();
   double lo = kInf, hi = 0.0, lo_cov = kInf;
+#if MJTOUCH_X86_SIMD
   __m128d lo01 = _mm_set1_pd(kInf), lo23 = lo01, hi01 = _mm_setzero_pd(), hi23 = hi01;
   __m128d all01 = lo01, all23 = lo01;
   const __m128d inf = _mm_set1_pd(kInf), zero = _mm_setzero_pd();
@@ -58,6 +73,34 @@ void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
     // (a NaN gap: minpd returns the second operand)
     *all = _mm_min_pd(_mm_or_pd(_mm_and_pd(covered, gv), _mm_andnot_pd(covered, inf)), *all);
   };
+  auto lo_of = [](__m128d v) {
+    return std::min(_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v)));
+  };
+  auto hi_of = [](__m128d v) {
+    return std::max(_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v)));
+  };
+#else
+  // The same selects and operand order in vector extensions (NEON on
+  // aarch64): minpd(a, b) is a < b ? a : b, maxpd(a, b) a > b ? a : b.
+  v2d lo01 = {kInf, kInf}, lo23 = lo01, hi01 = {0.0, 0.0}, hi23 = hi01;
+  v2d all01 = lo01, all23 = lo01;
+  const v2d inf = {kInf, kInf}, zero = {0.0, 0.0};
+  auto lanes = [&](const double* g, const double* w, v2d* l, v2d* h, v2d* all) {
+    v2d gv, wv;
+    std::memcpy(&gv, g, sizeof(gv));
+    std::memcpy(&wv, w, sizeof(wv));
+    const v2l covered = wv > zero;
+    const v2l valid = covered & (Abs(gv) < inf);
+    const v2d gs = valid ? gv : inf;
+    *l = gs < *l ? gs : *l;
+    const v2d ws = reinterpret_cast<v2d>(reinterpret_cast<v2l>(wv) & valid);
+    *h = ws > *h ? ws : *h;
+    const v2d gc = covered ? gv : inf;
+    *all = gc < *all ? gc : *all;
+  };
+  auto lo_of = [](v2d v) { return std::min(v[0], v[1]); };
+  auto hi_of = [](v2d v) { return std::max(v[0], v[1]); };
+#endif
   for (int j = box.j0; j < box.j0 + box.ny; ++j) {
     const double* g = gap + static_cast<size_t>(j) * grid.n;
     const double* w = cov + static_cast<size_t>(j) * grid.n;
@@ -82,12 +125,6 @@ void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
       hi = std::max(hi, w[i]);
     }
   }
-  auto lo_of = [](__m128d v) {
-    return std::min(_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v)));
-  };
-  auto hi_of = [](__m128d v) {
-    return std::max(_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v)));
-  };
   *gmin = std::min(lo, std::min(lo_of(lo01), lo_of(lo23)));
   *covmax = std::max(hi, std::max(hi_of(hi01), hi_of(hi23)));
   *covered_min = std::min(lo_cov, std::min(lo_of(all01), lo_of(all23)));
@@ -109,7 +146,7 @@ void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
 // (no FMA contraction). Their round-off only moves Newton's iterate within
 // round-off of the root: the approach is then fixed by the closed form over
 // the converged contact set, summed in the reference's order.
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 double NewtonSums(const double* gap, const double* cov, int n, const ActiveRuns& spans, double c,
                   double* slope, double* in_max) {
   v4d f = {0, 0, 0, 0}, s = {0, 0, 0, 0};
@@ -150,7 +187,7 @@ double NewtonSums(const double* gap, const double* cov, int n, const ActiveRuns&
 // pressure and the float copies, as NormalizeLoad then SlipRun leave them;
 // a zero pressure (underflow) gets the zero shear ClearTraction leaves, not
 // rx * 0 (-0 for rx < 0). Returns whether some pressure is zero.
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 bool ScaledSlipRun(const double* __restrict load, double scale, double rx, double ry, int len,
                    double* __restrict p, double* __restrict sx, double* __restrict sy,
                    float* __restrict fp, float* __restrict fx, float* __restrict fy) {

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "common/simd.h"
+
 namespace mjtouch {
 
 std::shared_ptr<const KernelTables> BuildKernelTables(
@@ -52,7 +54,7 @@ namespace {
 // lanes (vectorisable without reassociation, so the result is deterministic);
 // x / y may be null. Built for AVX2 where the CPU has it; FMA contraction is
 // off (-ffp-contract=off) so every path rounds identically.
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 float Dot3(const float* Kp, const float* Kx, const float* Ky, const float* p, const float* x,
            const float* y, int len) {
   float acc[8] = {0, 0, 0, 0, 0, 0, 0, 0};

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "common/simd.h"
 #include "common/thread_pool.h"
 
 // The 8-lane helpers below are always inlined into the target_clones
@@ -93,7 +94,13 @@ inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* co
         for (int u = 1; u < U; ++u) sum += acc[u * NC + c];
         if (U == 1) {  // lane l = pressure lane (l - shift) mod 8
           const v8i back = (v8i{0, 1, 2, 3, 4, 5, 6, 7} + shift) & (kLanes - 1);
+#if defined(__clang__)  // (no variable-mask shuffle builtin)
+          v8f rotated;
+          for (int l = 0; l < kLanes; ++l) rotated[l] = sum[back[l]];
+          sum = rotated;
+#else
           sum = __builtin_shuffle(sum, back);
+#endif
         }
         Flush(sum, s.d + 2 * c);
       }
@@ -108,7 +115,7 @@ inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* co
 // A site's sum is the same sequence of operations whichever band or job its
 // rows come in: rows in increasing order, float lanes widened to double every
 // kRowsPerFlush pressure rows (as the one-site-at-a-time sum).
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
              int T1, const float* P, int pw, const int* lo, const int* hi, int rows,
              bool aligned) {
@@ -136,7 +143,8 @@ inline __attribute__((always_inline)) void Store(float* p, v8f v) {
 template <bool kReversed>
 inline __attribute__((always_inline)) v8f Cells(const float* p, int x) {
   if (!kReversed) return Load(p + x);
-  return __builtin_shuffle(Load(p - x - (kLanes - 1)), v8i{7, 6, 5, 4, 3, 2, 1, 0});
+  const v8f v = Load(p - x - (kLanes - 1));
+  return __builtin_shufflevector(v, v, 7, 6, 5, 4, 3, 2, 1, 0);  // (GCC and Clang)
 }
 
 // e[x] = one(x) for x in [0, len), 8 cells at a time (chunk(x): cells x ..
@@ -267,7 +275,7 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
 
 // Rows dy0 .. dy0 + rows - 1 of a folded window into e (rows ew apart): one
 // dispatch per band, not two per row side.
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void FoldMirroredRows(const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
                       int x0, int w, float rx, float ry, bool shear, const float* const* h,
                       float* e, int ew) {

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "common/simd.h"
+
 namespace mjtouch {
 namespace {
 
@@ -64,7 +66,7 @@ inline void SiteSumT(const uint32_t* block, size_t nterm, const float* coef, int
   }
 }
 
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void SiteSum(const uint32_t* block, size_t nterm, const float* coef, int slots, int loads,
              int stride_loads, int n, const int* box, const std::vector<float>* moments,
              const int* blocks_per_level, const float* const* traction, float* out_slots) {

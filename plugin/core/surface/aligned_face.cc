@@ -7,6 +7,8 @@
 #include <cstring>
 #include <limits>
 
+#include "common/simd.h"
+
 namespace mjtouch {
 namespace surface_detail {
 namespace {
@@ -23,7 +25,7 @@ struct RowSpan {
 // kOverwrite: the cells' old values are taken as +inf / 0 (not read), as
 // after a clear (RenderGap's exclusive surface).
 template <bool kPlane, bool kOverwrite>
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void AlignedRow(const RowSpan& r, int i0, int i1, const double* z, const double* u,
                 const double* ox, const double* mean, double* __restrict gp,
                 double* __restrict cp, double* __restrict took) {
@@ -47,7 +49,7 @@ typedef long long v4l __attribute__((vector_size(32)));
 
 // Adds the covered cells of [a, b) of one row (lane k: the cells a + k mod 4;
 // exact: a minimum or maximum rounds nothing).
-__attribute__((target_clones("avx2", "default")))
+MJTOUCH_TARGET_CLONES
 void AddExtrema(const double* g, const double* w, int a, int b, Extrema* e) {
   v4d lo, hi;
   std::memcpy(&lo, e->lo, sizeof(lo));
