@@ -63,6 +63,10 @@ def _slide_parser(sub):
                    help="pressure model (default elastic: the skin's own compliance, which lets "
                         "the ridges carry the load in partial contact; winkler: a foundation, "
                         "faster, presses the ridges flat; contacts: MuJoCo's contact points)")
+    p.add_argument("--grid-shift", action="store_true",
+                   help="elastic: also solve on the half-cell shifted grid and average "
+                        "(skin attribute grid_shift; cancels the V/pitch grid line that PC "
+                        "rates pick up, ~1.8x the step)")
     p.add_argument("--texture-mesh", metavar="FILE",
                    help="texture from a mesh file's top surface (STL, OBJ, PLY, GLB; trimesh), "
                         "sliding along the mesh's x after placement; overrides --texture")
@@ -85,12 +89,22 @@ def slide(args) -> dict:
     return slide_with_result(args)[0]
 
 
+def _slide_skin(args) -> dict:
+    skin = {"pressure": args.pressure}
+    if getattr(args, "grid_shift", False):
+        if args.pressure != "elastic":
+            raise SystemExit("--grid-shift: needs --pressure elastic (got "
+                             f"{args.pressure!r})")
+        skin["grid_shift"] = "true"
+    return skin
+
+
 def slide_with_result(args):
     """slide(args) and the run's rollout.SlideResult (spikes, stress, force)."""
     from mjtouch import scenes
 
     tip = scenes.Fingertip(ridges=args.ridges, ridge_pitch_m=args.ridge_pitch, nx=args.nx,
-                           pitch_m=args.pitch, skin={"pressure": args.pressure})
+                           pitch_m=args.pitch, skin=_slide_skin(args))
     if getattr(args, "texture_mesh", None):
         return _slide_run(args, tip, _mesh_texture(args), args.period, "mesh")
     args.period = args.period or 1.0e-3
@@ -159,9 +173,13 @@ def _slide_run(args, tip, texture, periodic, kind):
         "expected_hz": expected,
         "nearest_peak_hz": nearest,
         "ridge_line_expected": ridge_line_expected,
-        # the elastic contact set moves cell by cell: a stress line at V / pitch
-        # (README "What accuracy costs"; examples/pc_grid_line.py)
-        "grid_line_hz": args.speed / args.pitch if args.pressure == "elastic" else None,
+        # the elastic contact misplaces texture edges sharper than a cell: a
+        # stress line at V / pitch unless grid_shift cancels it (README "What
+        # accuracy costs"; examples/pc_grid_line.py)
+        "grid_line_hz": (args.speed / args.pitch
+                         if args.pressure == "elastic" and not getattr(args, "grid_shift", False)
+                         else None),
+        "grid_shift": bool(getattr(args, "grid_shift", False)),
         "power_at_expected": power_expected,
         "speed_m_s": args.speed,
         "period_m": periodic,
@@ -238,7 +256,8 @@ def _print_human(o: dict) -> None:
                   f"({round(100 * (near[key] / e[key] - 1)) + 0:+d}%)")
     if o.get("grid_line_hz"):
         print(f"note: the elastic contact adds a grid line at V/pitch = {o['grid_line_hz']:.0f} Hz "
-              "to the stress; PC rates include it (README, \"What accuracy costs\")")
+              "to the stress; PC rates include it (--grid-shift cancels it; README, "
+              "\"What accuracy costs\")")
 
 
 def _view_parser(sub):

@@ -68,3 +68,19 @@ def test_slide_bad_arguments(args, msg):
     assert out.returncode != 0
     assert msg in out.stderr
 
+
+
+def test_slide_grid_shift_option():
+    # --grid-shift sets the skin's grid_shift: the V/pitch line is cancelled,
+    # so no grid line is reported; the texture line stays at V/D
+    out = run("slide", "--json", "--grid-shift", "--duration", "0.2", "--nx", "48",
+              "--pitch", "1.5e-4", "--dt", "2e-4", "--speed", "0.03", "--period", "1e-3")
+    assert out.returncode == 0, out.stderr
+    o = json.loads(out.stdout)
+    assert o["grid_shift"] is True and o["grid_line_hz"] is None
+    assert abs(o["nearest_peak_hz"]["texture"] - 30.0) <= o["fft_bin_hz"]
+    assert all(np.isfinite(v) for v in o["rates_hz"].values())
+    # it is an option of the elastic contact only: a clear error otherwise
+    bad = run("slide", "--grid-shift", "--pressure", "winkler", "--duration", "0.05")
+    assert bad.returncode != 0
+    assert "--grid-shift" in bad.stderr and "elastic" in bad.stderr
