@@ -130,6 +130,17 @@ def test_grating_column_means_are_the_exact_cell_integrals():
     assert np.ptp(mean) > 5e-5  # crests and grooves both under the grid
 
 
+def _plate_and_texture_rows(n: int) -> np.ndarray:
+    """n rows of ComputeTraction's surface table: the plate's 8 x 6 mm top
+    face (type 1, kRectangle) and the texture's height field on it (type 2,
+    kHeightField, 0.1 mm samples); rows from 2 on are the caller's."""
+    surfaces = np.zeros((n, 20))
+    surfaces[0, 0], surfaces[0, 4:13], surfaces[0, 16:18] = 1, np.eye(3).ravel(), (4e-3, 3e-3)
+    surfaces[1, 0], surfaces[1, 4:13], surfaces[1, 16:18] = 2, np.eye(3).ravel(), HALF
+    surfaces[1, 18] = surfaces[1, 19] = 1e-4
+    return surfaces
+
+
 @pytest.mark.parametrize("yaw_deg", [0.0, 20.0])
 def test_stages_1_2_fast_paths_match_reference_over_a_slide(yaw_deg):
     # The plugin's stages 1-2 (ComputeTraction: culled render, warm-started
@@ -139,10 +150,7 @@ def test_stages_1_2_fast_paths_match_reference_over_a_slide(yaw_deg):
     # every step, and the pressure must carry the force (sum p A = F).
     T = 40
     samples = _samples("grating")
-    surfaces = np.zeros((2, 20))
-    surfaces[0, 0], surfaces[0, 4:13], surfaces[0, 16:18] = 1, np.eye(3).ravel(), (4e-3, 3e-3)
-    surfaces[1, 0], surfaces[1, 4:13], surfaces[1, 16:18] = 2, np.eye(3).ravel(), HALF
-    surfaces[1, 18] = surfaces[1, 19] = 1e-4
+    surfaces = _plate_and_texture_rows(2)
     pos = np.zeros((T, 3))
     pos[:, 0] = np.linspace(0.0, 0.6e-3, T)
     pos[:, 2] = SEMI[2] + 5e-5
@@ -179,10 +187,7 @@ def test_stages_1_2_fields_over_lost_and_regained_contact(yaw_deg, pressure):
     # first), and where no cell is over a surface the step reports no contact.
     T = 40
     samples = _samples("grating")
-    surfaces = np.zeros((2, 20))
-    surfaces[0, 0], surfaces[0, 4:13], surfaces[0, 16:18] = 1, np.eye(3).ravel(), (4e-3, 3e-3)
-    surfaces[1, 0], surfaces[1, 4:13], surfaces[1, 16:18] = 2, np.eye(3).ravel(), HALF
-    surfaces[1, 18] = surfaces[1, 19] = 1e-4
+    surfaces = _plate_and_texture_rows(2)
     pos = np.zeros((T, 3))
     pos[:, 0] = np.linspace(-0.3e-3, 0.6e-3, T)
     pos[:, 2] = SEMI[2] + 5e-5
@@ -217,10 +222,7 @@ def test_stages_1_2_fields_when_a_second_body_comes_within_reach(pressure):
     # reference path's (which clears the grid every step).
     T = 40
     samples = _samples("grating")
-    surfaces = np.zeros((3, 20))
-    surfaces[0, 0], surfaces[0, 4:13], surfaces[0, 16:18] = 1, np.eye(3).ravel(), (4e-3, 3e-3)
-    surfaces[1, 0], surfaces[1, 4:13], surfaces[1, 16:18] = 2, np.eye(3).ravel(), HALF
-    surfaces[1, 18] = surfaces[1, 19] = 1e-4
+    surfaces = _plate_and_texture_rows(3)
     # a sphere 2.4 mm right of the texture's centre, its top 0.27 mm up: off
     # the grid while the pad is left, under the skin's flank once it is right
     surfaces[2, 0], surfaces[2, 4:13], surfaces[2, 13] = 3, np.eye(3).ravel(), 0.3e-3
