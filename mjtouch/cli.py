@@ -93,8 +93,7 @@ def _slide_skin(args) -> dict:
     skin = {"pressure": args.pressure}
     if getattr(args, "grid_shift", False):
         if args.pressure != "elastic":
-            raise SystemExit("--grid-shift: needs --pressure elastic (got "
-                             f"{args.pressure!r})")
+            raise ValueError(f"--grid-shift: needs --pressure elastic (got {args.pressure!r})")
         skin["grid_shift"] = "true"
     return skin
 
@@ -137,8 +136,17 @@ def _mesh_texture(args):
     return mt.texture()
 
 
+# Shortest `slide`: rollout.SETTLE_S settling plus 0.05 s analysed (a 20 Hz FFT bin).
+MIN_DURATION_S = 0.15
+
+
 def _slide_run(args, tip, texture, periodic, kind):
     from mjtouch import analysis, progress, rollout, scenes
+    # rates and spectra leave out the first SETTLE_S of sliding (SlideResult.window)
+    if args.duration < MIN_DURATION_S:
+        raise ValueError(f"--duration {args.duration:g} s: must be at least "
+                         f"{MIN_DURATION_S:g} s (rates and spectra leave out "
+                         f"the first {rollout.SETTLE_S:g} s of sliding, while it settles)")
     protocol = scenes.Protocol(force_n=args.force, speed_m_s=args.speed, timestep_s=args.dt)
     t0 = time.perf_counter()
     # the step count scenes.controls will make (not the array: a bad --duration is

@@ -12,6 +12,9 @@ import numpy as np
 from mjtouch import scenes
 from mjtouch.sensor import SkinLayout
 
+# Sliding left out of SlideResult.window() while the contact settles (s).
+SETTLE_S = 0.1
+
 
 @dataclasses.dataclass
 class SlideResult:
@@ -31,7 +34,7 @@ class SlideResult:
     def dt(self) -> float:
         return self.protocol.timestep_s
 
-    def window(self, settle_s: float = 0.1) -> slice:
+    def window(self, settle_s: float = SETTLE_S) -> slice:
         """Steps of steady sliding: from slide start + settle_s to the end."""
         start = int(round((self.slide_start_s + settle_s) / self.dt))
         return slice(min(start, len(self.time_s) - 1), len(self.time_s))

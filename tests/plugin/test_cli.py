@@ -64,7 +64,7 @@ def test_slide_human_output_and_plot(tmp_path):
     (["--dt", "0.1"], "timestep_s"),
 ])
 def test_slide_bad_arguments(args, msg):
-    out = run("slide", "--duration", "0.1", *args)
+    out = run("slide", "--duration", "0.2", *args)
     assert out.returncode != 0
     assert msg in out.stderr
 
@@ -81,6 +81,15 @@ def test_slide_grid_shift_option():
     assert abs(o["nearest_peak_hz"]["texture"] - 30.0) <= o["fft_bin_hz"]
     assert all(np.isfinite(v) for v in o["rates_hz"].values())
     # it is an option of the elastic contact only: a clear error otherwise
-    bad = run("slide", "--grid-shift", "--pressure", "winkler", "--duration", "0.05")
-    assert bad.returncode != 0
+    bad = run("slide", "--grid-shift", "--pressure", "winkler", "--duration", "0.2")
+    assert bad.returncode == 2
     assert "--grid-shift" in bad.stderr and "elastic" in bad.stderr
+
+
+def test_slide_too_short_to_analyse_is_a_clear_error():
+    # the first 0.1 s of sliding settle and are not analysed: a shorter run
+    # has no spectrum; the error names the option and its bound
+    bad = run("slide", "--duration", "0.1", "--nx", "32", "--pitch", "3e-4")
+    assert bad.returncode == 2
+    assert "--duration 0.1 s" in bad.stderr and "at least 0.15 s" in bad.stderr
+    assert "Traceback" not in bad.stderr
