@@ -15,6 +15,8 @@ constexpr auto kSpin = std::chrono::microseconds(50);
 inline void CpuRelax() {
 #if defined(__x86_64__) || defined(__i386__)
   __builtin_ia32_pause();
+#elif defined(__aarch64__)
+  __asm__ __volatile__("yield");  // the spin-wait hint of ARMv8
 #endif
 }
 
