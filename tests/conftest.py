@@ -2,6 +2,7 @@ import pathlib
 import sys
 
 import mujoco
+import mujoco.rollout
 import numpy as np
 import pytest
 
@@ -97,3 +98,49 @@ def registered_attributes() -> list[str]:
     plugin = lib.mjp_getPlugin(b"mjtouch.skin", ctypes.byref(slot))
     assert plugin, "mjtouch.skin is not registered"
     return [plugin.contents.attributes[i].decode() for i in range(plugin.contents.nattribute)]
+
+
+def rollout_and_serial(m_rollout: mujoco.MjModel, m_serial: mujoco.MjModel,
+                       proto: scenes.Protocol, duration_s: float,
+                       speeds=(0.02, 0.04)) -> tuple[np.ndarray, np.ndarray]:
+    """sensordata (len(speeds), nstep, nsensordata) of a press and slide at
+    each speed: by mujoco.rollout on two threads (one MjData each) with
+    m_rollout, and stepped serially with m_serial from the same state."""
+    ctrl = scenes.controls(proto, duration_s)
+    speeds = np.asarray(speeds)
+    controls = np.repeat(ctrl[None], len(speeds), axis=0)
+    controls[:, int(round(proto.press_s / proto.timestep_s)):, 0] = speeds[:, None]
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    s0 = np.empty(mujoco.mj_stateSize(m_rollout, spec))
+    mujoco.mj_getState(m_rollout, mujoco.MjData(m_rollout), s0, spec)
+    s0 = np.repeat(s0[None], len(speeds), axis=0)
+    _, two = mujoco.rollout.rollout(m_rollout, [mujoco.MjData(m_rollout),
+                                                mujoco.MjData(m_rollout)], s0, controls)
+    serial = np.empty_like(two)
+    for b in range(len(speeds)):
+        d = mujoco.MjData(m_serial)
+        for k in range(controls.shape[1]):
+            d.ctrl[:] = controls[b, k]
+            mujoco.mj_step(m_serial, d)
+            serial[b, k] = d.sensordata
+    return two, serial
+
+
+def hertz_sphere_press(h, young_pa: float, poisson: float, **skin):
+    """The elastic half-space skin pressed by h's sphere with h's load,
+    settled (1500 steps), 32 cells per Hertz contact radius on a 96^2 grid,
+    tolerance 1e-8; skin: extra attributes. Returns (force block, pressure
+    (96, 96), pitch m)."""
+    from mjtouch.sensor import SkinLayout
+    pitch, n = h.contact_radius_m / 32, 96
+    attrs = dict(nx=n, pitch=pitch, ridges="false", pressure="elastic", skin="halfspace",
+                 young=young_pa, poisson=poisson, tolerance=1e-8, outputs="force pressure",
+                 **skin)
+    m = scenes.sphere_press_spec(h.radius_m, attrs).compile()
+    d = mujoco.MjData(m)
+    layout = SkinLayout.from_model(m)
+    d.ctrl[0] = h.load_n
+    for _ in range(1500):
+        mujoco.mj_step(m, d)
+    force = layout.block(d.sensordata, "force")
+    return force, layout.block(d.sensordata, "pressure").reshape(n, n), pitch

@@ -7,7 +7,7 @@ import numpy as np
 from mjtouch import scenes
 from mjtouch.sensor import SkinLayout
 
-from conftest import fast_tip
+from conftest import fast_tip, rollout_and_serial
 
 
 def _model():
@@ -111,23 +111,9 @@ def test_rollout_two_threads_with_stress_threads_equals_serial():
     # result equals a serial run.
     m = _threads_model(2)
     proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
-    ctrl = scenes.controls(proto, 0.07)
-    speeds = np.array([0.02, 0.04])
-    controls = np.repeat(ctrl[None], len(speeds), axis=0)
-    controls[:, int(round(proto.press_s / proto.timestep_s)):, 0] = speeds[:, None]
-    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    s0 = np.empty(mujoco.mj_stateSize(m, spec))
-    mujoco.mj_getState(m, mujoco.MjData(m), s0, spec)
-    s0 = np.repeat(s0[None], len(speeds), axis=0)
-    _, two = mujoco.rollout.rollout(m, [mujoco.MjData(m), mujoco.MjData(m)], s0, controls)
-    for b in range(len(speeds)):
-        d = mujoco.MjData(m)
-        serial = np.empty_like(two[b])
-        for k in range(controls.shape[1]):
-            d.ctrl[:] = controls[b, k]
-            mujoco.mj_step(m, d)
-            serial[k] = d.sensordata
-        assert np.array_equal(serial, two[b])
+    two, serial = rollout_and_serial(m, m, proto, 0.07)
+    for b in range(len(two)):
+        assert np.array_equal(serial[b], two[b])
     assert np.abs(two).max() > 0
 
 

@@ -6,14 +6,13 @@ sensordata must not depend on the thread count; and a rollout whose threads
 share the pool with the plugin's must equal serial runs."""
 
 import mujoco
-import mujoco.rollout
 import numpy as np
 import pytest
 
 from mjtouch import scenes
 from mjtouch.sensor import SkinLayout
 
-from conftest import fast_tip
+from conftest import fast_tip, rollout_and_serial
 
 PROTO = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
 
@@ -52,22 +51,7 @@ def test_rollout_threads_share_the_pool_with_the_elastic_solve():
     # two rollout threads, each plugin instance asking for 2 threads: a busy
     # pool makes a caller run its parts itself (no deadlock, same bits)
     m = _model(2)
-    ctrl = scenes.controls(PROTO, 0.06)
-    speeds = np.array([0.02, 0.04])
-    controls = np.repeat(ctrl[None], len(speeds), axis=0)
-    controls[:, int(round(PROTO.press_s / PROTO.timestep_s)):, 0] = speeds[:, None]
-    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    s0 = np.empty(mujoco.mj_stateSize(m, spec))
-    mujoco.mj_getState(m, mujoco.MjData(m), s0, spec)
-    s0 = np.repeat(s0[None], len(speeds), axis=0)
-    _, two = mujoco.rollout.rollout(m, [mujoco.MjData(m), mujoco.MjData(m)], s0, controls)
-    serial_model = _model(1)
-    for b in range(len(speeds)):
-        d = mujoco.MjData(serial_model)
-        serial = np.empty_like(two[b])
-        for k in range(controls.shape[1]):
-            d.ctrl[:] = controls[b, k]
-            mujoco.mj_step(serial_model, d)
-            serial[k] = d.sensordata
-        assert np.array_equal(serial, two[b])
+    two, serial = rollout_and_serial(m, _model(1), PROTO, 0.06)
+    for b in range(len(two)):
+        assert np.array_equal(serial[b], two[b])
     assert SkinLayout.from_model(m).block(two, "pressure").max() > 0

@@ -2,11 +2,11 @@
 plate by MuJoCo reproduces Hertz (examples/pressure_ladder.py prints how far
 every pressure model is from it)."""
 
-import mujoco
 import pytest
 
-from mjtouch import oracles, scenes
-from mjtouch.sensor import SkinLayout
+from mjtouch import oracles
+
+from conftest import hertz_sphere_press
 
 E, NU = 80e3, 0.48
 
@@ -17,17 +17,7 @@ def test_elastic_sphere_pad_matches_hertz():
     # 32 cells per contact radius the boundary elements' own error is 1e-4
     # (tests/unit/test_pressure.py).
     h = oracles.Hertz(load_n=0.5, radius_m=0.2, young_pa=E, poisson=NU)
-    pitch, n = h.contact_radius_m / 32, 96
-    skin = dict(nx=n, pitch=pitch, ridges="false", pressure="elastic", skin="halfspace",
-                young=E, poisson=NU, tolerance=1e-8, outputs="force pressure")
-    m = scenes.sphere_press_spec(h.radius_m, skin).compile()
-    d = mujoco.MjData(m)
-    layout = SkinLayout.from_model(m)
-    d.ctrl[0] = h.load_n
-    for _ in range(1500):
-        mujoco.mj_step(m, d)
-    force = layout.block(d.sensordata, "force")
-    p = layout.block(d.sensordata, "pressure").reshape(n, n)
+    force, p, pitch = hertz_sphere_press(h, E, NU)
     assert force[0] == pytest.approx(h.load_n, rel=1e-6)  # settled on the set load
     # sum(p A) is MuJoCo's normal force (float32 pressure output: 1e-7)
     assert p.sum() * pitch**2 == pytest.approx(force[0], rel=1e-6)

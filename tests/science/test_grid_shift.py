@@ -14,7 +14,7 @@ from mjtouch import analysis, oracles, rollout, scenes
 from mjtouch.bench.configs import lattice_sites
 from mjtouch.sensor import SkinLayout
 
-from conftest import fast_tip
+from conftest import fast_tip, hertz_sphere_press
 
 E, NU = 80e3, 0.48
 SPEED = 0.025
@@ -26,18 +26,8 @@ def test_grid_shift_sphere_pad_matches_hertz():
     # by half a cell, which moves the second-moment radius by ~(h/a)^2 / 6 =
     # 1.6e-4 and the peak by ~(h/a)^2 / 8
     h = oracles.Hertz(load_n=0.5, radius_m=0.2, young_pa=E, poisson=NU)
-    pitch, n = h.contact_radius_m / 32, 96
-    skin = dict(nx=n, pitch=pitch, ridges="false", pressure="elastic", skin="halfspace",
-                young=E, poisson=NU, tolerance=1e-8, outputs="force pressure",
-                grid_shift="true")
-    m = scenes.sphere_press_spec(h.radius_m, skin).compile()
-    d = mujoco.MjData(m)
-    layout = SkinLayout.from_model(m)
-    d.ctrl[0] = h.load_n
-    for _ in range(1500):
-        mujoco.mj_step(m, d)
-    force = layout.block(d.sensordata, "force")
-    p = layout.block(d.sensordata, "pressure").reshape(n, n)
+    force, p, pitch = hertz_sphere_press(h, E, NU, grid_shift="true")
+    n = p.shape[0]
     assert force[0] == pytest.approx(h.load_n, rel=1e-6)
     assert p.sum() * pitch**2 == pytest.approx(force[0], rel=1e-6)
     err = oracles.hertz_errors(h, p, pitch, force[3])

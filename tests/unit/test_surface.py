@@ -141,6 +141,18 @@ def _plate_and_texture_rows(n: int) -> np.ndarray:
     return surfaces
 
 
+def _reference_and_fast_fields(pressure, pos, mat, forces, surfaces, samples):
+    """Stages 1-2 over the steps by the reference and the fast paths (ridged
+    skin, all fields): (reference, fast) traction_steps outputs."""
+    config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05",
+              "pressure": pressure}
+    ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
+                               reference=True, fields=True)
+    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
+                                fields=True)
+    return ref, fast
+
+
 @pytest.mark.parametrize("yaw_deg", [0.0, 20.0])
 def test_stages_1_2_fast_paths_match_reference_over_a_slide(yaw_deg):
     # The plugin's stages 1-2 (ComputeTraction: culled render, warm-started
@@ -197,12 +209,7 @@ def test_stages_1_2_fields_over_lost_and_regained_contact(yaw_deg, pressure):
     forces[:, 0] = np.where(np.arange(T) % 7 < 3, 0.15, 0.6)  # jumps both ways
     forces[10:15, 0] = 0.0  # no contact force
     forces[:, 1], forces[:, 2] = -0.08, 0.05
-    config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05",
-              "pressure": pressure}
-    ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
-                               reference=True, fields=True)
-    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
-                                fields=True)
+    ref, fast = _reference_and_fast_fields(pressure, pos, mat, forces, surfaces, samples)
     touching = np.isfinite(ref[2])
     assert not touching[10:15].any() and not touching[30:35].any()
     assert touching[:10].all() and touching[15:30].all() and touching[35:].all()
@@ -235,12 +242,7 @@ def test_stages_1_2_fields_when_a_second_body_comes_within_reach(pressure):
     forces[:, 0] = 2.0
     forces[[5, 12, 13, 14, 27], 0] = 0.02  # the contact shrinks (the bump reaches from step 15 on)
     forces[:, 1] = 0.05
-    config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05",
-              "pressure": pressure}
-    ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
-                               reference=True, fields=True)
-    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
-                                fields=True)
+    ref, fast = _reference_and_fast_fields(pressure, pos, mat, forces, surfaces, samples)
     assert np.isfinite(ref[2]).all()
     assert fast[2].tobytes() == ref[2].tobytes()
     assert fast[3].tobytes() == ref[3].tobytes()
