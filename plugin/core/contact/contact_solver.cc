@@ -53,7 +53,7 @@ void UpdateDisplacement(const Problem& P, double tau, double s, ElasticSolveStat
   const size_t nchg = w->changed.size();
   if (nchg > 0) {
     if (!P.periodic && static_cast<double>(nchg) * static_cast<double>(P.B) < P.fft_cost) {
-      for (int c : w->changed) P.K.AddCell(c, dl[c], P.bx, P.by, u);
+      P.K.AddCells(w->changed.data(), nchg, dl, P.bx, P.by, u, w->fft.threads);
     } else {
       P.K.Apply(*P.spec, dl, P.bx, P.by, r, &w->fft, P.precision);
       ++st->applies;

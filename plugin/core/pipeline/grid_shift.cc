@@ -11,26 +11,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Smallest gap over covered cells of box (+inf if none).
-double MinCoveredGap(const TaxelGrid& g, const CellBox& box, const std::vector<double>& gap,
-                     const std::vector<double>& cov) {
-  double m = kInf;
-  for (int j = box.j0; j < box.j0 + box.ny; ++j)
-    for (int i = box.i0; i < box.i0 + box.nx; ++i) {
-      const size_t k = static_cast<size_t>(j) * g.n + i;
-      if (cov[k] > 0.0) m = std::min(m, gap[k]);
-    }
-  return m;
-}
-
-constexpr int kMarginCells = 3;
-
-CellBox Intersect(const CellBox& a, const CellBox& b) {
-  const int i0 = std::max(a.i0, b.i0), j0 = std::max(a.j0, b.j0);
-  const int i1 = std::min(a.i0 + a.nx, b.i0 + b.nx), j1 = std::min(a.j0 + a.ny, b.j0 + b.ny);
-  return CellBox{i0, j0, std::max(0, i1 - i0), std::max(0, j1 - j0)};
-}
-
 }  // namespace
 
 bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const Pose& pad_pose,
@@ -52,7 +32,7 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
     CellBox rbox;
     const double level = RenderGap(g, sg.skin_z, pad_pose, surfaces, pass == 0 ? cull : kInf,
                                    &w->gap, &w->coverage, true, &sg.blocks, &rbox, fast_paths);
-    if (rbox.empty() || !std::isfinite(MinCoveredGap(g, rbox, w->gap, w->coverage)))
+    if (rbox.empty() || !std::isfinite(MinGap(g, rbox, w->gap, w->coverage)))
       return true;  // nothing under the shifted grid: keep the taxel grid's solution
     for (int j = rbox.j0; j < rbox.j0 + rbox.ny; ++j)
       for (int i = rbox.i0; i < rbox.i0 + rbox.nx; ++i) {
@@ -89,9 +69,8 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
           w->pressure[static_cast<size_t>(j) * g.n + i] = 0.25 * s;
         }
       // the taxel grid's solve box moved onto the shifted cells (taxel
-      // cells i0..i1 overlap shifted cells i0..i1 + 1), kMarginCells wider
-      sbox = Intersect(rbox, CellBox{mb.i0 - kMarginCells, mb.j0 - kMarginCells,
-                                     mb.nx + 1 + 2 * kMarginCells, mb.ny + 1 + 2 * kMarginCells});
+      // cells i0..i1 overlap shifted cells i0..i1 + 1), kBoxMarginCells wider
+      sbox = GrowBox(rbox, mb.i0, mb.i0 + mb.nx, mb.j0, mb.j0 + mb.ny);
       if (sbox.empty()) sbox = rbox;
     }
     const ElasticContact& ec = *sg.elastic;
@@ -124,10 +103,10 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
   // each) and average on the grown box.
   const int i0 = std::max(0, mb.i0 - 1), j0 = std::max(0, mb.j0 - 1);
   const int i1 = std::min(n, mb.i0 + mb.nx + 1), j1 = std::min(n, mb.j0 + mb.ny + 1);
-  // The shifted solution's support decides the box too.
+  // The shifted solution's support decides the box too (zero outside sbox).
   int si0 = g.n, si1 = -1, sj0 = g.n, sj1 = -1;
-  for (int j = 0; j < g.n; ++j)
-    for (int i = 0; i < g.n; ++i)
+  for (int j = sbox.j0; j < sbox.j0 + sbox.ny; ++j)
+    for (int i = sbox.i0; i < sbox.i0 + sbox.nx; ++i)
       if (w->pressure[static_cast<size_t>(j) * g.n + i] > 0.0) {
         si0 = std::min(si0, i);
         si1 = std::max(si1, i);

@@ -4,6 +4,7 @@
 // Everything depends on the step's inputs and `state` only (warm starts
 // come from plugin_state), so copies and resets reproduce runs bit for bit.
 #include <algorithm>
+#include <utility>
 #include <cmath>
 #include <limits>
 
@@ -35,6 +36,8 @@ double ThreadCpuSeconds() {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+}  // namespace
+
 // Cells [i0, i1] x [j0, j1] widened by kBoxMarginCells, clipped to box.
 CellBox GrowBox(const CellBox& box, int i0, int i1, int j0, int j1) {
   i0 = std::max(box.i0, i0 - kBoxMarginCells);
@@ -61,6 +64,8 @@ double MinGap(const TaxelGrid& grid, const CellBox& box, const std::vector<doubl
   }
   return std::min(std::min(m[0], m[1]), std::min(m[2], m[3]));
 }
+
+namespace {
 
 // True if no rendered cell (box) outside `inner` can touch under the
 // pressure solved on `inner` (zero elsewhere): g0 + K p >= approach there.
@@ -351,11 +356,10 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       double gmin;
       if (!winkler_slip) {
         gmin = MinGap(grid, box, ws->gap, ws->coverage);
-      } else if (const RenderSummary& rs = ws->render_summary;
-                 rs.valid && rs.gap_min_m != 0.0) {
+      } else if (RenderSummary& rs = ws->render_summary; rs.valid && rs.gap_min_m != 0.0) {
         gmin = tf.scan_gmin = rs.gap_min_m;  // covered cells: finite gaps
         tf.scan_covmax = rs.coverage_max;
-        tf.scratch_spans = rs.spans;
+        std::swap(tf.scratch_spans, rs.spans);  // (the next render clears rs.spans)
       } else {
         gmin = ScanWinklerCandidates(grid, ws->gap, ws->coverage, box, &tf);
         if (gmin == 0.0) gmin = MinGap(grid, box, ws->gap, ws->coverage);

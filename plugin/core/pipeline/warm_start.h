@@ -11,6 +11,14 @@
 
 namespace mjtouch {
 
+// Cells [i0, i1] x [j0, j1] widened by kBoxMarginCells, clipped to box
+// (empty if they miss it).
+CellBox GrowBox(const CellBox& box, int i0, int i1, int j0, int j1);
+
+// Smallest gap over the covered cells of the box (+inf if none).
+double MinGap(const TaxelGrid& grid, const CellBox& box, const std::vector<double>& gap,
+              const std::vector<double>& cov);
+
 // The warm start (`last` null: cold): *guess = the last step's pressure, or
 // with `prev` max(0, 2 p(n-1) - p(n-2)); *solve_box = the last contact
 // kBoxMarginCells wider (within box); with `prev`, the cells where the guess

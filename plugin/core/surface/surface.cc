@@ -382,6 +382,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
     double R[9], t[3], hx, hy;
     double centre_pad[3];  // surface origin in the pad frame (line types)
     double radius;         // bounding sphere (line types)
+    char path = 0;         // 0: not rendered, 1: aligned-face path, 2: general
   };
   std::vector<Frame> frames(surfaces.size());
   for (size_t k = 0; k < surfaces.size(); ++k) {
@@ -501,7 +502,6 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
   // how many have cells within reach. If one alone does, through the
   // aligned path, it overwrites its rectangle and only the rest of the last
   // box is cleared (exclusive); else the last box is cleared first.
-  std::vector<char> path(surfaces.size(), 0);
   int reaching = 0, exclusive = -1;
   for (size_t k = 0; k < surfaces.size(); ++k) {
     const Frame& F = frames[k];
@@ -518,7 +518,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                             true))
         continue;
     }
-    path[k] = aligned ? 1 : 2;
+    frames[k].path = aligned ? 1 : 2;
     bool reach = false;
     for (int b = 0; b < nb * nb && !reach; ++b) reach = block_lb[k * nb * nb + b] <= cull;
     if (!reach) continue;
@@ -532,8 +532,8 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
     const CounterSurface& s = surfaces[k];
     const Frame& F = frames[k];
     const double* R = F.R;
-    if (path[k] == 0) continue;
-    if (path[k] == 1) {
+    if (frames[k].path == 0) continue;
+    if (frames[k].path == 1) {
       Extent ext{i_lo, i_hi, j_lo, j_hi};
       CellBox rect;
       const bool own = static_cast<int>(k) == exclusive;
