@@ -110,150 +110,27 @@ inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* co
   for (int k = 0; k < U * NC; ++k) s.acc[k] = acc[k];
 }
 
-// A site's U == 1 sums (rotated back by its shift) widened into its doubles.
-template <int NC>
-inline __attribute__((always_inline)) void FlushRotated(FoldSite& s, v8f* acc, int shift) {
-  const v8i back = (v8i{0, 1, 2, 3, 4, 5, 6, 7} + shift) & (kLanes - 1);
-  for (int c = 0; c < NC; ++c) {
-#if defined(__clang__)
-    v8f rotated;
-    for (int l = 0; l < kLanes; ++l) rotated[l] = acc[c][back[l]];
-#else
-    const v8f rotated = __builtin_shuffle(acc[c], back);
-#endif
-    Flush(rotated, s.d + 2 * c);
-    acc[c] = v8f{0, 0, 0, 0, 0, 0, 0, 0};
-  }
-}
-
-// Chunks [x0, x1) (x0 on the chunk lattice) of one pressure row into one
-// site's U == 1 sums: SiteRows<NC, 1>'s inner loop.
-template <int NC>
-inline __attribute__((always_inline)) void ChunksOne(v8f* acc, const float* const* erow,
-                                                     const float* prow, int x0, int x1) {
-  for (int x = x0; x < x1; x += kLanes) {
-    const v8f p = Load(prow + x);
-    for (int c = 0; c < NC; ++c) acc[c] += Load(erow[c] + x) * p;
-  }
-}
-
-// Two sites of one window column (so the same shift and table cells) with
-// the same NC components (U == 1, aligned), over window rows [Ta, Tb) that
-// both read: each table chunk is loaded once for both sites' pressure rows.
-// Per row, a site's chunks are its own [lo - shift, hi) in increasing order
-// (the part before the other's, the common part, the part after), so each
-// site's sums are SiteRows<NC, 1>'s operations in SiteRows' order: the same
-// bits as alone. Flushes at each site's own pressure rows.
-template <int NC>
-inline __attribute__((always_inline)) void PairRows(FoldSite& a, FoldSite& b,
-                                                    const float* const* ebuf, int ew, int T0,
-                                                    const float* P, int pw, const int* lo,
-                                                    const int* hi, int Ta, int Tb, int rows) {
-  const int shift = a.col & (kLanes - 1);
-  v8f acc_a[NC], acc_b[NC];
-  for (int c = 0; c < NC; ++c) {
-    acc_a[c] = a.acc[c];
-    acc_b[c] = b.acc[c];
-  }
-  for (int T = Ta; T < Tb; ++T) {
-    const int ra = T - a.off, rb = T - b.off;
-    const float* pa = P + static_cast<size_t>(ra) * pw;
-    const float* pb = P + static_cast<size_t>(rb) * pw;
-    const float* erow[NC];
-    const size_t e0 = static_cast<size_t>(T - T0) * ew + a.col;
-    for (int c = 0; c < NC; ++c) erow[c] = ebuf[a.comp[c]] + e0;
-    // Chunk starts of each site: [x0, x1) on the common lattice (lo, hi are
-    // multiples of kLanes; both shifted alike).
-    const int xa0 = lo[ra] - shift, xb0 = lo[rb] - shift;
-    const int xa1 = hi[ra] > xa0 ? xa0 + (hi[ra] - xa0 + kLanes - 1) / kLanes * kLanes : xa0;
-    const int xb1 = hi[rb] > xb0 ? xb0 + (hi[rb] - xb0 + kLanes - 1) / kLanes * kLanes : xb0;
-    const int s = std::max(xa0, xb0), e = std::min(xa1, xb1);
-    if (s >= e) {  // no common chunk
-      ChunksOne<NC>(acc_a, erow, pa, xa0, xa1);
-      ChunksOne<NC>(acc_b, erow, pb, xb0, xb1);
-    } else {
-      ChunksOne<NC>(acc_a, erow, pa, xa0, s);
-      ChunksOne<NC>(acc_b, erow, pb, xb0, s);
-      for (int x = s; x < e; x += kLanes) {
-        const v8f p = Load(pa + x), q = Load(pb + x);
-        for (int c = 0; c < NC; ++c) {
-          const v8f t = Load(erow[c] + x);
-          acc_a[c] += t * p;
-          acc_b[c] += t * q;
-        }
-      }
-      ChunksOne<NC>(acc_a, erow, pa, e, xa1);
-      ChunksOne<NC>(acc_b, erow, pb, e, xb1);
-    }
-    if ((ra + 1) % kRowsPerFlush == 0 || ra == rows - 1) FlushRotated<NC>(a, acc_a, shift);
-    if ((rb + 1) % kRowsPerFlush == 0 || rb == rows - 1) FlushRotated<NC>(b, acc_b, shift);
-  }
-  for (int c = 0; c < NC; ++c) {
-    a.acc[c] = acc_a[c];
-    b.acc[c] = acc_b[c];
-  }
-}
-
-// One site's rows of window rows [Ta, Tb) of the band from T0 (SiteRows by
-// its component count).
-inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* const* ebuf, int ew,
-                                                    int T0, int Ta, int Tb, const float* P,
-                                                    int pw, const int* lo, const int* hi,
-                                                    int rows, bool aligned) {
-  const int r0 = std::max(0, Ta - s.off), r1 = std::min(rows, Tb - s.off);
-  if (r0 >= r1) return;
-  switch (s.nc) {
-    case 1: SiteRows<1, 4>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-    case 2: SiteRows<2, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-    case 3: SiteRows<3, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-    case 4: SiteRows<4, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-    case 5: SiteRows<5, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-    default: SiteRows<6, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-  }
-}
-
-// A pair's rows of the band: each site alone where only it reads, both
-// together where both do (rows in increasing order for each).
-inline __attribute__((always_inline)) void PairBand(FoldSite& a, FoldSite& b,
-                                                    const float* const* ebuf, int ew, int T0,
-                                                    int T1, const float* P, int pw,
-                                                    const int* lo, const int* hi, int rows) {
-  const int J0 = std::max({T0, a.off, b.off});
-  const int J1 = std::min({T1, a.off + rows, b.off + rows});
-  if (J0 >= J1) {
-    SiteBand(a, ebuf, ew, T0, T0, T1, P, pw, lo, hi, rows, true);
-    SiteBand(b, ebuf, ew, T0, T0, T1, P, pw, lo, hi, rows, true);
-    return;
-  }
-  SiteBand(a, ebuf, ew, T0, T0, J0, P, pw, lo, hi, rows, true);
-  SiteBand(b, ebuf, ew, T0, T0, J0, P, pw, lo, hi, rows, true);
-  switch (a.nc) {
-    case 4: PairRows<4>(a, b, ebuf, ew, T0, P, pw, lo, hi, J0, J1, rows); break;
-    case 5: PairRows<5>(a, b, ebuf, ew, T0, P, pw, lo, hi, J0, J1, rows); break;
-    default: PairRows<6>(a, b, ebuf, ew, T0, P, pw, lo, hi, J0, J1, rows); break;
-  }
-  SiteBand(a, ebuf, ew, T0, J1, T1, P, pw, lo, hi, rows, true);
-  SiteBand(b, ebuf, ew, T0, J1, T1, P, pw, lo, hi, rows, true);
-}
-
 // A band of folded table rows (window rows [T0, T1)) into the sums of the
 // sites [first, last) that read it (pressure row r = window row - site.off).
 // A site's sum is the same sequence of operations whichever band or job its
 // rows come in: rows in increasing order, float lanes widened to double every
-// kRowsPerFlush pressure rows (as the one-site-at-a-time sum). partner[q]:
-// another site of q's window column and components (or -1), whose rows
-// common with q's are summed together (PairBand).
+// kRowsPerFlush pressure rows (as the one-site-at-a-time sum).
 MJTOUCH_TARGET_CLONES
-void SumBand(FoldSite* sites, const int* partner, int first, int last, const float* const* ebuf,
-             int ew, int T0, int T1, const float* P, int pw, const int* lo, const int* hi,
-             int rows, bool aligned) {
+void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
+             int T1, const float* P, int pw, const int* lo, const int* hi, int rows,
+             bool aligned) {
   for (int q = first; q < last; ++q) {
-    const int p = aligned ? partner[q] : -1;
-    if (p >= first && p < last) {
-      if (p > q) PairBand(sites[q], sites[p], ebuf, ew, T0, T1, P, pw, lo, hi, rows);
-      continue;
+    FoldSite& s = sites[q];
+    const int r0 = std::max(0, T0 - s.off), r1 = std::min(rows, T1 - s.off);
+    if (r0 >= r1) continue;
+    switch (s.nc) {
+      case 1: SiteRows<1, 4>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 2: SiteRows<2, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 3: SiteRows<3, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 4: SiteRows<4, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 5: SiteRows<5, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      default: SiteRows<6, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
     }
-    SiteBand(sites[q], ebuf, ew, T0, T0, T1, P, pw, lo, hi, rows, aligned);
   }
 }
 
@@ -528,34 +405,6 @@ void SortSites(const KernelTables& kt, const std::vector<StressSite>& sites, Fol
   }
   w->site_col.resize(w->sites.size());
   for (size_t q = 0; q < w->sites.size(); ++q) w->site_col[q] = w->sites[q].col;
-  // Partners: sites of one depth, window column and components (U == 1
-  // ones, nc >= 4), paired in order of off (neighbours in off share the most
-  // table rows).
-  const int count = static_cast<int>(w->sites.size());
-  w->partner.assign(count, -1);
-  std::vector<int> by_col(count);
-  for (int q = 0; q < count; ++q) by_col[q] = q;
-  const FoldSite* fs = w->sites.data();
-  auto key_less = [&](int a, int b) {
-    const FoldSite &x = fs[a], &y = fs[b];
-    if (x.depth != y.depth) return x.depth < y.depth;
-    if (x.col != y.col) return x.col < y.col;
-    if (x.nc != y.nc) return x.nc < y.nc;
-    for (int c = 0; c < x.nc; ++c)
-      if (x.comp[c] != y.comp[c]) return x.comp[c] < y.comp[c];
-    return a < b;  // (sites are in order of off within a depth)
-  };
-  std::sort(by_col.begin(), by_col.end(), key_less);
-  for (int k = 0; k + 1 < count; ++k) {
-    const int a = by_col[k], b = by_col[k + 1];
-    const FoldSite &x = fs[a], &y = fs[b];
-    if (x.nc < 4 || x.depth != y.depth || x.col != y.col || x.nc != y.nc ||
-        !std::equal(x.comp, x.comp + x.nc, y.comp))
-      continue;
-    w->partner[a] = b;
-    w->partner[b] = a;
-    ++k;
-  }
 }
 
 }  // namespace
@@ -694,8 +543,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
                          win.x0 + c0, c1 - c0, rx, ry, shear, use_h ? h : nullptr,
                          ebuf[c] + c0, ew);
       }
-      SumBand(fs, w->partner.data(), first, last, ebuf, ew, T0, T1, P0, ps, lo, hi, rows,
-              aligned);
+      SumBand(fs, first, last, ebuf, ew, T0, T1, P0, ps, lo, hi, rows, aligned);
     }
     for (int q = job.begin; q < job.end; ++q)
       for (int c = 0; c < fs[q].nc; ++c) {

@@ -59,7 +59,6 @@ struct FoldScratch {
   std::vector<Window> window;  // per depth
   std::vector<FoldSite> sites;  // by depth, then window row of their first read
   std::vector<int> site_col;     // sites[q].col, contiguous (scanned per band)
-  std::vector<int> partner;      // per site: the site it is summed with, or -1
   struct Job { int begin, end; };  // a range of `sites` (one depth)
   std::vector<Job> jobs;
   std::vector<std::vector<float>> rowbuf;  // per job: a band of folded rows per component
