@@ -193,15 +193,36 @@ inline __attribute__((always_inline)) void FoldRowCells(const float* kp, const f
   }
 }
 
+// e[x] = sign (h[x] + ry ky[x]) with h = kp + rx kx precomputed (the same
+// float as FoldRow's inner sum, so the same bits), or from a mirrored source
+// read backwards (h[-x], ky[-x]): two table reads per cell instead of three.
+template <bool kReversed>
+inline __attribute__((always_inline)) void FoldRowHCells(const float* h, const float* ky,
+                                                         float ry, float sign, int len,
+                                                         float* e) {
+  const int d = kReversed ? -1 : 1;
+  FoldCells(
+      len, e,
+      [&](int x) {
+        const v8f v = Cells<kReversed>(h, x) + ry * Cells<kReversed>(ky, x);
+        return sign > 0 ? v : -v;
+      },
+      [&](int x) {
+        const float v = h[d * x] + ry * ky[d * x];
+        return sign > 0 ? v : -v;
+      });
+}
+
 // One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
 // the tables' rows at |dy| and columns |dx| only (KernelTables::
 // mirror_symmetric): the signs of the reflections folded into the ratios,
 // E = sp (Kp + (sp sx rx) Kx + (sp sy ry) Ky), exactly the value the full
 // tables give when they are mirror images.
+// h (or null): the FoldScratch::h quadrants of (d, comp) for +rx and -rx.
 inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& kt, int d,
                                                            StressComponent comp, int dy, int x0,
                                                            int w, float rx, float ry, bool shear,
-                                                           float* e) {
+                                                           const float* const* h, float* e) {
   const int n = kt.n, L = 2 * n - 1;
   const int ady = dy < 0 ? -dy : dy;
   if (ady > n - 1) {
@@ -233,6 +254,14 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
       sy *= MirrorSign(1, kLoadShearY, comp);
     }
     const float a = sp * sx * rx, b = sp * sy * ry;
+    if (shear && h) {  // kp + a kx from the quadrant of a = +rx or -rx
+      const float* hrow = h[sp * sx < 0] + static_cast<size_t>(ady) * n;
+      if (side == 0)
+        FoldRowHCells<false>(hrow + lo, Ky + lo, b, sp, hi - lo + 1, e + (lo - x0));
+      else
+        FoldRowHCells<true>(hrow - lo, Ky - lo, b, sp, hi - lo + 1, e + (lo - x0));
+      continue;
+    }
     if (side == 0) {
       FoldRowCells<false>(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1,
                           e + (lo - x0));
@@ -248,39 +277,11 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
 // dispatch per band, not two per row side.
 MJTOUCH_TARGET_CLONES
 void FoldMirroredRows(const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
-                      int x0, int w, float rx, float ry, bool shear, float* e, int ew) {
+                      int x0, int w, float rx, float ry, bool shear, const float* const* h,
+                      float* e, int ew) {
   for (int t = 0; t < rows; ++t)
-    FoldMirroredRow(kt, d, comp, dy0 + t, x0, w, rx, ry, shear, e + static_cast<size_t>(t) * ew);
-}
-
-// The same rows from FoldScratch::h's full tables of one (depth, component):
-// e = Hs + ry Kys, forwards over whole rows (no mirrored sides). Hs = sp h
-// and Kys = sy Ky (sp, sy = +-1: FoldMirroredRow's reflection signs) make
-// sp (h + (sp sy ry) Ky) = Hs + ry Kys exactly (float rounding is symmetric
-// under negation), but for the sign of zeros, which no sum sees (a product
-// +-0 added to a lane that is never -0 leaves it unchanged: SiteRows).
-MJTOUCH_TARGET_CLONES
-void FoldFullRows(const float* Hs, const float* Kys, int n, int dy0, int rows, int x0, int w,
-                  float ry, float* e, int ew) {
-  const int L = 2 * n - 1;
-  // Columns beyond the tables' offsets (rarely any) are zero.
-  const int z0 = std::clamp(-(n - 1) - x0, 0, w), z1 = std::clamp(n - x0, z0, w);
-  for (int t = 0; t < rows; ++t) {
-    float* et = e + static_cast<size_t>(t) * ew;
-    const int dy = dy0 + t;
-    if (dy < -(n - 1) || dy > n - 1) {
-      std::fill(et, et + w, 0.0f);
-      continue;
-    }
-    if (z0 > 0) std::fill(et, et + z0, 0.0f);
-    if (z1 < w) std::fill(et + z1, et + w, 0.0f);
-    const size_t row = static_cast<size_t>(dy + n - 1) * L + (x0 + z0 + n - 1);
-    const float* hs = Hs + row;
-    const float* ks = Kys + row;
-    FoldCells(
-        z1 - z0, et + z0, [&](int x) { return Load(hs + x) + ry * Load(ks + x); },
-        [&](int x) { return hs[x] + ry * ks[x]; });
-  }
+    FoldMirroredRow(kt, d, comp, dy0 + t, x0, w, rx, ry, shear, h,
+                    e + static_cast<size_t>(t) * ew);
 }
 
 // The first 64-byte aligned float at or after p (buffers allocate 16 more).
@@ -289,13 +290,11 @@ float* AlignUp64(float* p) {
   return p + ((64 - a % 64) % 64) / sizeof(float);
 }
 
-// FoldScratch::h: per wanted (depth, component) the full tables (all
-// offsets) Hs = sp (kp + (sp sx rx) kx) and Kys = sy ky with
-// FoldMirroredRow's reflection signs, built on the second consecutive call
-// with the same tables and float rx (a steady slide: MuJoCo's F_t / F_n at
-// the friction cone rounds to the same float step after step), dropped when
-// rx changes: the fold then reads two tables forwards (FoldFullRows), not
-// three from mirrored quadrants. Only speed depends on it (same bits).
+// FoldScratch::h: kp + (+-rx) kx over each wanted (depth, component)'s
+// quadrant, built on the second consecutive call with the same tables and
+// float rx (a steady slide: MuJoCo's F_t / F_n at the friction cone rounds
+// to the same float step after step), dropped when rx changes. Only speed
+// depends on it: FoldRowH gives FoldRow's bits.
 void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
   if (w->h_tables != &kt || w->h_components != kt.components || w->h_calls == 0 ||
       std::memcmp(&w->h_rx, &rx, sizeof(rx)) != 0) {
@@ -308,7 +307,6 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
   }
   if (w->h_valid || ++w->h_calls < 2) return;
   const int n = kt.n, L = 2 * n - 1;
-  const size_t LL = static_cast<size_t>(L) * L;
   const int D = static_cast<int>(kt.depths_m.size());
   w->h_offset.assign(static_cast<size_t>(D) * kNumStress, -1);
   size_t size = 0;
@@ -316,7 +314,7 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
     for (int c = 0; c < kNumStress; ++c)
       if (w->window[d].comps[c]) {
         w->h_offset[d * kNumStress + c] = static_cast<long>(size);
-        size += 2 * LL;
+        size += 2 * static_cast<size_t>(n) * n;
       }
   w->h.resize(size);
   for (int d = 0; d < D; ++d)
@@ -324,35 +322,15 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
       const long off = w->h_offset[d * kNumStress + c];
       if (off < 0) continue;
       const auto comp = static_cast<StressComponent>(c);
-      float* Hs = w->h.data() + off;
-      float* Kys = Hs + LL;
-      for (int dy = -(n - 1); dy <= n - 1; ++dy) {
-        const int ady = dy < 0 ? -dy : dy;
-        const size_t src = static_cast<size_t>(ady + n - 1) * L + (n - 1);  // offset (0, |dy|)
-        const float* Kp = kt.At(d, kLoadPressure, comp) + src;
-        const float* Kx = kt.At(d, kLoadShearX, comp) + src;
-        const float* Ky = kt.At(d, kLoadShearY, comp) + src;
-        float* hrow = Hs + static_cast<size_t>(dy + n - 1) * L + (n - 1);  // offset (0, dy)
-        float* krow = Kys + static_cast<size_t>(dy + n - 1) * L + (n - 1);
-        for (int side = 0; side < 2; ++side) {  // dx >= 0, then dx < 0
-          float sp = 1, sx = 1, sy = 1;
-          if (side == 1) {
-            sp *= MirrorSign(0, kLoadPressure, comp);
-            sx *= MirrorSign(0, kLoadShearX, comp);
-            sy *= MirrorSign(0, kLoadShearY, comp);
-          }
-          if (dy < 0) {
-            sp *= MirrorSign(1, kLoadPressure, comp);
-            sx *= MirrorSign(1, kLoadShearX, comp);
-            sy *= MirrorSign(1, kLoadShearY, comp);
-          }
-          const float a = sp * sx * rx;  // FoldMirroredRow's a: the same float h
-          for (int adx = side; adx <= n - 1; ++adx) {
-            const int dx = side == 0 ? adx : -adx;
-            const float h = Kp[adx] + a * Kx[adx];
-            hrow[dx] = sp > 0 ? h : -h;
-            krow[dx] = sy > 0 ? Ky[adx] : -Ky[adx];
-          }
+      for (int v = 0; v < 2; ++v) {
+        const float a = v ? -rx : rx;
+        float* H = w->h.data() + off + static_cast<size_t>(v) * n * n;
+        for (int y = 0; y < n; ++y) {
+          const size_t row = static_cast<size_t>(y + n - 1) * L + (n - 1);
+          const float* Kp = kt.At(d, kLoadPressure, comp) + row;
+          const float* Kx = kt.At(d, kLoadShearX, comp) + row;
+          float* Hy = H + static_cast<size_t>(y) * n;
+          for (int x = 0; x < n; ++x) Hy[x] = Kp[x] + a * Kx[x];
         }
       }
     }
@@ -556,14 +534,14 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       if (c0 >= c1) continue;  // no site reads this band
       for (int c = 0; c < kNumStress; ++c) {
         if (!comps[c]) continue;
+        const float* h[2] = {nullptr, nullptr};
         if (use_h) {
-          const float* Hs = w->h.data() + w->h_offset[d * kNumStress + c];
-          FoldFullRows(Hs, Hs + static_cast<size_t>(2 * n - 1) * (2 * n - 1), n, T0 + win.y0,
-                       T1 - T0, win.x0 + c0, c1 - c0, ry, ebuf[c] + c0, ew);
-        } else {
-          FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, T1 - T0,
-                           win.x0 + c0, c1 - c0, rx, ry, shear, ebuf[c] + c0, ew);
+          h[0] = w->h.data() + w->h_offset[d * kNumStress + c];
+          h[1] = h[0] + static_cast<size_t>(n) * n;
         }
+        FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, T1 - T0,
+                         win.x0 + c0, c1 - c0, rx, ry, shear, use_h ? h : nullptr,
+                         ebuf[c] + c0, ew);
       }
       SumBand(fs, first, last, ebuf, ew, T0, T1, P0, ps, lo, hi, rows, aligned);
     }

@@ -11,8 +11,7 @@
 // site's wanted components share each pressure load, and its table loads are
 // 32-byte aligned (no cache-line splits; SiteRows in stress_fold.cc). While
 // the float r_x repeats (a steady slide), K_p + r_x K_x is kept from the last
-// call (with the reflections' signs, over all offsets), so the fold reads two
-// tables forwards instead of three from mirrored quadrants. Same result as the
+// call, so the fold reads two tables instead of three. Same result as the
 // reference path (StressAtReceptor) to float rounding
 // (tests/unit/test_stress_fold.py: rel. RMS <= 1e-5); the alignment and the
 // cache do not change a bit (same file: against fold_legacy).
@@ -69,12 +68,10 @@ struct FoldScratch {
   const KernelTables* key_tables = nullptr;
   std::array<bool, kNumStress> key_components{};
   std::vector<StressSite> key_sites;
-  // Per wanted (depth, component) the full tables Hs = sp (Kp + (+-rx) Kx)
-  // and Kys = sy Ky with the reflections' signs ((2n-1)^2 each, Hs then Kys;
-  // h_offset: start, -1 if none) while the float rx repeats (UpdateRxCache
-  // in stress_fold.cc): the fold then reads two tables forwards, not three
-  // from mirrored quadrants. A cache of the inputs only: the bits do not
-  // depend on it.
+  // Kp + (+-rx) Kx per wanted (depth, component) quadrant (n x n each, +rx
+  // then -rx; h_offset: start, -1 if none) while the float rx repeats
+  // (UpdateRxCache in stress_fold.cc): the fold then reads two tables, not
+  // three. A cache of the inputs only: the bits do not depend on it.
   std::vector<float> h;
   std::vector<long> h_offset;
   const KernelTables* h_tables = nullptr;
