@@ -5,6 +5,7 @@ summation vs FFT convolution (a benchmark, not a test).
     python examples/bench_kernel.py --repeats 400 --receptors 250
     python examples/bench_kernel.py --stage-only --threads 2   # reference/folded/threads
     python examples/bench_kernel.py --scene slide_grating      # a shipped scene's own stage
+    python examples/bench_kernel.py --scene slide_grating --baseline-core OTHER/_core*.so
 
 It presses the default fingertip (scenes.Fingertip(): 128 x 128 taxels at
 0.1 mm, ridged skin) onto the default grating with 0.5 N, slides it for
@@ -25,11 +26,22 @@ winkler and elastic models take) and folded on --threads threads, with ratios.
 instead: its receptor sites, classes' components and depths, and the pressure
 and slip ratio of its winkler contact after LEAD_IN_S of sliding (the
 default scene's contact is about twice the cells of the 0.5 N press above).
+--baseline-core PATH (with --scene) also times the folded path of another
+build of mjtouch._core (e.g. main's installed one) in the same process,
+interleaved with this build's, on the same engine inputs, and prints the
+ratio and whether the two builds give the same bits. The harness itself is
+not neutral: a copy of this build as the baseline reads 1.03-1.05 (the
+baseline is built and run second) on the 2-core development machine; compare
+against that control (or swap the builds).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import ctypes
+import importlib.machinery
+import importlib.util
 import math
 import pathlib
 import time
@@ -62,7 +74,47 @@ def default_contact(force_n: float):
     return tip, p, ratio, f
 
 
-def scene_stage(name: str):
+def load_baseline_core(path):
+    """Another build of mjtouch._core (e.g. main's) as a module of this
+    process, for interleaved A/B timing. nanobind registers each bound C++
+    type once per process and domain, and both builds bind the same types: so
+    the shared nanobind state of this build is hidden while the baseline
+    initialises (it then makes and keeps its own) and put back after."""
+    api = ctypes.pythonapi
+    api.PyInterpreterState_Get.restype = ctypes.c_void_p
+    api.PyInterpreterState_GetDict.restype = ctypes.py_object
+    api.PyInterpreterState_GetDict.argtypes = [ctypes.c_void_p]
+    state = api.PyInterpreterState_GetDict(api.PyInterpreterState_Get())
+    ours = {k: v for k, v in state.items() if isinstance(k, str) and k.startswith("__nb_internals")}
+    if not ours:
+        raise RuntimeError("nanobind's state not found where expected (nanobind >= 2 keeps it "
+                           "in the interpreter's dict): cannot load a baseline build")
+    for k in ours:
+        del state[k]
+    try:
+        loader = importlib.machinery.ExtensionFileLoader("mjtouch_baseline._core", str(path))
+        module = importlib.util.module_from_spec(
+            importlib.util.spec_from_loader("mjtouch_baseline._core", loader))
+        loader.exec_module(module)
+    finally:
+        for k in [k for k in state if isinstance(k, str) and k.startswith("__nb_internals")]:
+            del state[k]
+        state.update(ours)
+    return module
+
+
+@contextlib.contextmanager
+def using_core(module):
+    """mjtouch.core's wrappers built on `module` (a baseline _core) inside."""
+    ours = core._core
+    core._core = module
+    try:
+        yield
+    finally:
+        core._core = ours
+
+
+def scene_stage(name: str, baseline=None):
     """(engine, pressure, slip ratio, description, the plugin's `stress`
     block, which sites' quantity is szz) of models/<name>.xml's stress
     stage: its sites (cells as the plugin's Grid::Nearest), depths and
@@ -90,6 +142,11 @@ def scene_stage(name: str):
     comps = [SZZ if lay.quantity[str(c)] == "szz" else ALL for c in lay.classes]
     e = core.StressEngine(core.LayeredSkin(), n, pitch, depths, ij, depth_index=depth_index,
                           components=comps, method="direct")
+    if baseline is not None:  # the same engine on another build's _core
+        with using_core(baseline):
+            e.baseline = core.StressEngine(core.LayeredSkin(), n, pitch, depths, ij,
+                                           depth_index=depth_index, components=comps,
+                                           method="direct")
     counts = {c: int((lay.classes == c).sum()) for c in ("SA1", "RA", "PC")}
     macs = sum(len(c) for c in comps) * int((p > 0).sum())
     desc = (f"{name}: {f[0]:.3f} N normal, {int((p > 0).sum())} active cells of {n}x{n} at "
@@ -166,15 +223,27 @@ def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
              "folded (legacy layout)": dict(fold=True, threads=1, fold_legacy=True),
              "folded": dict(fold=True, threads=1),
              f"folded+{threads}threads": dict(fold=True, threads=threads)}
+    base = getattr(e, "baseline", None)
+    if base is not None:  # another build's folded path (load_baseline_core)
+        paths["folded (baseline build)"] = dict(fold=True, threads=1)
     times = {k: [] for k in paths}
     outs = {}
-    for _ in range(rounds):
-        for name, kw in paths.items():
+    for rnd in range(rounds):
+        order = list(paths)
+        if base is not None:
+            # the two builds next to each other, in turn first, before the
+            # threaded run (its pool's spinning worker counts in CPU time)
+            fb, f1 = "folded (baseline build)", "folded"
+            order = [k for k in order if k not in (fb, f1)]
+            order[2:2] = [fb, f1] if rnd % 2 == 0 else [f1, fb]
+        for name in order:
+            kw = paths[name]
             # one thread: the process's CPU time (on a shared machine wall time
             # also counts waiting for a core); more: wall time
+            eng = base if name == "folded (baseline build)" else e
             c0 = time.process_time()
-            outs[name], t, _, _ = e.stress(p, slip=ratio, method="direct", repeats=repeats,
-                                           timing=True, **kw)
+            outs[name], t, _, _ = eng.stress(p, slip=ratio, method="direct", repeats=repeats,
+                                             timing=True, **kw)
             if kw["threads"] == 1:
                 t = (time.process_time() - c0) / repeats
             times[name].append(t)
@@ -195,6 +264,13 @@ def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
           f"{np.median(times[f1]) / np.median(times[ft]):.2f}, legacy layout / folded "
           f"{min(times[fl]) / min(times[f1]):.2f} / "
           f"{np.median(times[fl]) / np.median(times[f1]):.2f}")
+    if base is not None:
+        fb = "folded (baseline build)"
+        paired = np.median(np.array(times[fb]) / np.array(times[f1]))
+        print(f"  baseline build / this build (folded, one thread): min "
+              f"{min(times[fb]) / min(times[f1]):.3f}, median "
+              f"{np.median(times[fb]) / np.median(times[f1]):.3f}, median of rounds {paired:.3f}; "
+              f"same bits: {np.array_equal(outs[fb], outs[f1])}")
     return times
 
 
@@ -209,10 +285,16 @@ def main(argv=None):
     ap.add_argument("--threads", type=int, default=2, help="threads for folded+threads")
     ap.add_argument("--rounds", type=int, default=15, help="interleaved rounds (stage table)")
     ap.add_argument("--scene", help="only the stage table, on models/SCENE.xml's own stage")
+    ap.add_argument("--baseline-core", metavar="PATH",
+                    help="with --scene: also time another build's mjtouch._core (a copy of its "
+                         "_core*.so) in this process, interleaved")
     args = ap.parse_args(argv)
 
+    if args.baseline_core and not args.scene:
+        ap.error("--baseline-core needs --scene")
     if args.scene:
-        e, p, ratio, desc, _, _ = scene_stage(args.scene)
+        base = load_baseline_core(args.baseline_core) if args.baseline_core else None
+        e, p, ratio, desc, _, _ = scene_stage(args.scene, base)
         print(desc)
         print(f"stress stage, slip ratio ({ratio[0]:.3f}, {ratio[1]:.2g}), {args.rounds} "
               f"interleaved rounds of {max(1, args.repeats // 20)} calls:")

@@ -231,3 +231,40 @@ def test_bench_scene_stage_is_the_plugins():
     out = e.stress(p, slip=ratio, method="direct")
     assert szz.sum() > 100
     assert _rel_rms(-out[szz, 2], plugin_q[szz]) <= REL_RMS_TOL
+
+
+def test_bench_baseline_build_in_one_process(sliding_contact, engine, tmp_path, capsys):
+    # bench_kernel --baseline-core: another build's _core (here a copy of this
+    # one's, so the same code) loaded next to this build's in one process;
+    # its engine must run on its own module and give this build's bits, and
+    # the stage table must time it and report the comparison.
+    import importlib.util
+    import pathlib
+    import shutil
+    from mjtouch import _core
+    path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_kernel.py"
+    spec = importlib.util.spec_from_file_location("bench_kernel", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    copy = tmp_path / pathlib.Path(_core.__file__).name
+    shutil.copy(_core.__file__, copy)
+    base = bench.load_baseline_core(copy)
+    assert base is not _core and base.__file__ == str(copy)
+    tip, p, ratio = sliding_contact
+    n, h = tip.nx, tip.pitch_m
+    ij = [(40, 60), (64, 64), (70, 90), (90, 50)]
+    comps = [range(6), (2,), range(6), (2,)]
+    with bench.using_core(base):
+        e_base = core.StressEngine(core.LayeredSkin(), n, h, [0.75e-3], ij, components=comps,
+                                   method="direct")
+    assert isinstance(e_base._e, base.StressEngine)
+    assert not isinstance(e_base._e, _core.StressEngine)
+    e = core.StressEngine(core.LayeredSkin(), n, h, [0.75e-3], ij, components=comps,
+                          method="direct")
+    got = e_base.stress(p, slip=ratio, method="direct")
+    assert np.abs(got).max() > 1e3
+    assert np.array_equal(got, e.stress(p, slip=ratio, method="direct"))
+    e.baseline = e_base
+    times = bench.folded_stage(e, p, ratio, rounds=1, repeats=1, threads=2)
+    assert len(times["folded (baseline build)"]) == 1
+    assert "same bits: True" in capsys.readouterr().out
