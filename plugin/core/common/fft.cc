@@ -287,8 +287,10 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
   const bool last_part =
       needed >= 0 && stages_.size() > 1 &&
       ((last_radix == 5 && 5 * needed <= 3 * n_) || (last_radix == 3 && 3 * needed <= 2 * n_));
-  // Ping-pong between the data (row stride `stride`) and the scratch
-  // (compact, row stride `batch`).
+  // Ping-pong between the data (row stride `stride`) and the scratch (row
+  // stride `batch` rounded up to whole 32-byte vectors).
+  constexpr int kVec = 32 / sizeof(T);
+  const int scratch_stride = (batch + kVec - 1) / kVec * kVec;
   const T* ir = re;
   const T* ii = im;
   int is = stride;
@@ -296,7 +298,7 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
   for (const Stage& s : stages_) {
     T* orr = in_data ? sre : re;
     T* oi = in_data ? sim : im;
-    const int os = in_data ? batch : stride;
+    const int os = in_data ? scratch_stride : stride;
     const T* twr;
     const T* twi;
     if constexpr (std::is_same_v<T, float>) {
@@ -332,9 +334,9 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
   }
   if (!in_data) {
     for (int k = 0; k < (last_part ? needed : n_); ++k) {
-      std::memcpy(re + static_cast<size_t>(k) * stride, sre + static_cast<size_t>(k) * batch,
+      std::memcpy(re + static_cast<size_t>(k) * stride, sre + static_cast<size_t>(k) * scratch_stride,
                   batch * sizeof(T));
-      std::memcpy(im + static_cast<size_t>(k) * stride, sim + static_cast<size_t>(k) * batch,
+      std::memcpy(im + static_cast<size_t>(k) * stride, sim + static_cast<size_t>(k) * scratch_stride,
                   batch * sizeof(T));
     }
   }
@@ -713,7 +715,7 @@ void Fft2D::ConvolveReal(const double* in, int in_stride, int in_rows, int in_co
                          T* spec_im, std::vector<T>* scratch, int threads) const {
   const int h_in = (in_cols + 1) / 2, h_out = (out_cols + 1) / 2, hy = half_ny();
   const int ls = spec_stride_;
-  constexpr int kAlign = 16 / sizeof(T);  // one SSE vector of lanes (finer balance)
+  constexpr int kAlign = 32 / sizeof(T);  // whole AVX vectors (FftPlan::Transform's scratch rows)
   auto parts = [&](int n) {
     return std::max(1, std::min(std::min(threads, kMaxParts), (n + kAlign - 1) / kAlign));
   };

@@ -29,7 +29,8 @@ int NextFftSize(int n);
 // Batched 1D complex FFT of length n: element k of batch lane b is at
 // re[k * stride + b], im[...] (b < batch <= stride). Forward:
 // exp(-2 pi i j k / n); inverse: exp(+...) without the 1/n factor. In place;
-// sre / sim: scratch of n * batch elements each. T: double or float.
+// sre / sim: scratch of n * (batch rounded up to a multiple of 32 /
+// sizeof(T)) elements each (rows on whole 32-byte vectors). T: double or float.
 class FftPlan {
  public:
   explicit FftPlan(int n);  // IsFftSize(n)
