@@ -424,6 +424,75 @@ void TransposeT(const T* src, size_t ss, int rows, int cols, T* dst, size_t ds) 
   }
 }
 
+template <typename T> struct VecOf;
+template <> struct VecOf<float> { typedef V8f type; };
+template <> struct VecOf<double> { typedef V4d type; };
+
+// The split of ForwardColumns: Z = A + i B (A, B spectra of real columns),
+// A = (Z(k) + conj Z(-k)) / 2, B = (Z(k) - conj Z(-k)) / (2 i), from the y
+// pass's layout (wr / wi[ky * lw + c - c0]) straight into the spectrum rows
+// (sre / sim[c * ss + ky], ky in [lo, hi); B in row c + h for c < cols - h).
+// W x W tiles: rows ky and ny - ky as vectors along c, the four results
+// transposed in registers (Block), instead of transposing Z first (a pass
+// less). Each element's arithmetic is the scalar split's: the same bits.
+template <typename T>
+MJTOUCH_TARGET_CLONES
+void SplitToSpectrum(const T* wr, const T* wi, size_t lw, int ny, int c0, int c1, int h,
+                     int cols, int lo, int hi, T* sre, T* sim, size_t ss) {
+  constexpr int W = 32 / sizeof(T);
+  using V = typename VecOf<T>::type;
+  const int nb = c1 - c0, b_lim = cols - h;
+  const int kb = lo + (hi - lo) / W * W, jb = nb / W * W;
+  alignas(32) T tile[4][W * W];
+  alignas(32) T t[W * W];
+  for (int k0 = lo; k0 < kb; k0 += W)
+    for (int j0 = 0; j0 < jb; j0 += W) {
+      for (int i = 0; i < W; ++i) {
+        const int ky = k0 + i, km = ky == 0 ? 0 : ny - ky;
+        V zr, zi, mr, mi;
+        std::memcpy(&zr, wr + ky * lw + j0, sizeof(V));
+        std::memcpy(&zi, wi + ky * lw + j0, sizeof(V));
+        std::memcpy(&mr, wr + km * lw + j0, sizeof(V));
+        std::memcpy(&mi, wi + km * lw + j0, sizeof(V));
+        const V ar = T(0.5) * (zr + mr), ai = T(0.5) * (zi - mi);
+        const V br = T(0.5) * (zi + mi), bi = T(-0.5) * (zr - mr);
+        std::memcpy(tile[0] + i * W, &ar, sizeof(V));
+        std::memcpy(tile[1] + i * W, &ai, sizeof(V));
+        std::memcpy(tile[2] + i * W, &br, sizeof(V));
+        std::memcpy(tile[3] + i * W, &bi, sizeof(V));
+      }
+      const int c = c0 + j0;
+      Block(tile[0], W, sre + c * ss + k0, ss);
+      Block(tile[1], W, sim + c * ss + k0, ss);
+      if (c + W <= b_lim) {
+        Block(tile[2], W, sre + (c + h) * ss + k0, ss);
+        Block(tile[3], W, sim + (c + h) * ss + k0, ss);
+      } else {
+        for (int q = 0; q < 2; ++q) {
+          T* dst = q == 0 ? sre : sim;
+          Block(tile[2 + q], W, t, W);
+          for (int j = 0; j < W && c + j < b_lim; ++j)
+            std::memcpy(dst + (c + j + h) * ss + k0, t + j * W, sizeof(V));
+        }
+      }
+    }
+  // The edges (ky >= kb, or lanes >= jb) one by one.
+  for (int j = 0; j < nb; ++j) {
+    const int c = c0 + j;
+    for (int ky = j < jb ? kb : lo; ky < hi; ++ky) {
+      const int km = ky == 0 ? 0 : ny - ky;
+      const T zr = wr[ky * lw + j], zi = wi[ky * lw + j];
+      const T mr = wr[km * lw + j], mi = wi[km * lw + j];
+      sre[c * ss + ky] = T(0.5) * (zr + mr);
+      sim[c * ss + ky] = T(0.5) * (zi - mi);
+      if (c < b_lim) {
+        sre[(c + h) * ss + ky] = T(0.5) * (zi + mi);
+        sim[(c + h) * ss + ky] = T(-0.5) * (zr - mr);
+      }
+    }
+  }
+}
+
 // Scratch for a 2D transform: the y-pass work arrays (W each) and the
 // stages' ping-pong arrays (max(W, spectrum) each), in one buffer.
 template <typename T>
@@ -528,43 +597,10 @@ void Fft2D::ForwardColumns(const double* re, int stride, int rows, int cols, int
   }
   const size_t ts = static_cast<size_t>(ny_);
   py_.Transform(wr, wi, nb, lw, false, sr + c0 * ts, si + c0 * ts, rows);
-  // Split Z = A + i B (A, B spectra of real columns): A = (Z(k) + conj
-  // Z(-k)) / 2, B = (Z(k) - conj Z(-k)) / (2 i); into (x, ky), half ky.
-  // Transposed first (into this part's slice of the stages' scratch), so
-  // the split runs along contiguous ky.
-  TransposeT(wr, lw, ny_, nb, sr + c0 * ts, ts);
-  TransposeT(wi, lw, ny_, nb, si + c0 * ts, ts);
-  for (int c = c0; c < c1; ++c) {
-    const T* zr = sr + c * ts;
-    const T* zi = si + c * ts;
-    const bool has_b = c + h < cols;
-    for (int q = 0; q < nslabs; ++q) {
-      const Slab& sl = slabs[q];
-      // row c of the slab, indexed by ky
-      T* ar = spec_re + sl.offset + static_cast<size_t>(c) * sl.stride - sl.lo;
-      T* ai = spec_im + sl.offset + static_cast<size_t>(c) * sl.stride - sl.lo;
-      T* br = spec_re + sl.offset + static_cast<size_t>(c + h) * sl.stride - sl.lo;
-      T* bi = spec_im + sl.offset + static_cast<size_t>(c + h) * sl.stride - sl.lo;
-      // ky = 0 pairs with itself; ky >= 1 with ny - ky
-      if (sl.lo == 0) {
-        ar[0] = T(0.5) * (zr[0] + zr[0]);
-        ai[0] = T(0.5) * (zi[0] - zi[0]);
-        if (has_b) {
-          br[0] = T(0.5) * (zi[0] + zi[0]);
-          bi[0] = T(-0.5) * (zr[0] - zr[0]);
-        }
-      }
-      const int k0 = std::max(sl.lo, 1);
-      for (int ky = k0; ky < sl.hi; ++ky) {
-        ar[ky] = T(0.5) * (zr[ky] + zr[ny_ - ky]);
-        ai[ky] = T(0.5) * (zi[ky] - zi[ny_ - ky]);
-      }
-      if (has_b)
-        for (int ky = k0; ky < sl.hi; ++ky) {
-          br[ky] = T(0.5) * (zi[ky] + zi[ny_ - ky]);
-          bi[ky] = T(-0.5) * (zr[ky] - zr[ny_ - ky]);
-        }
-    }
+  for (int q = 0; q < nslabs; ++q) {
+    const Slab& sl = slabs[q];
+    SplitToSpectrum(wr, wi, lw, ny_, c0, c1, h, cols, sl.lo, sl.hi,
+                    spec_re + sl.offset - sl.lo, spec_im + sl.offset - sl.lo, sl.stride);
   }
 }
 
