@@ -493,6 +493,75 @@ void SplitToSpectrum(const T* wr, const T* wi, size_t lw, int ny, int c0, int c1
   }
 }
 
+// The merge of InverseColumns: Z = A + i B over the full ky range from the
+// half spectra (sre / sim[c * ss + ky], ky in [lo, hi); B in row c + h), the
+// upper half from A(-k) = conj A(k), straight into the y pass's layout
+// (wr / wi[ky * lw + c - c0]): W x W tiles of A and B transposed in
+// registers (Block), then rows ky and ny - ky as vectors along c. Columns
+// without a B (c >= cols - h) and the edges go one by one. x - (-y) ==
+// x + y and (-x) + y == y - x exactly: the conjugate half rounds as
+// sgn * (...) would; each element's arithmetic is the scalar merge's.
+template <typename T>
+MJTOUCH_TARGET_CLONES
+void MergeFromSpectrum(const T* sre, const T* sim, size_t ss, int ny, int top, int c0, int c1,
+                       int h, int cols, int lo, int hi, T* wr, T* wi, size_t lw) {
+  constexpr int W = 32 / sizeof(T);
+  using V = typename VecOf<T>::type;
+  const int nb = c1 - c0, b_lim = cols - h;
+  const int kb = lo + (hi - lo) / W * W;
+  const int jb = std::max(0, std::min(nb, b_lim - c0)) / W * W;
+  const int m0 = std::max(lo, 1), m1 = std::min(hi, top + 1);  // mirrored: ky = ny - m
+  alignas(32) T ar[W * W], ai[W * W], br[W * W], bi[W * W];
+  for (int k0 = lo; k0 < kb; k0 += W)
+    for (int j0 = 0; j0 < jb; j0 += W) {
+      const int c = c0 + j0;
+      Block(sre + c * ss + k0, ss, ar, W);
+      Block(sim + c * ss + k0, ss, ai, W);
+      Block(sre + (c + h) * ss + k0, ss, br, W);
+      Block(sim + (c + h) * ss + k0, ss, bi, W);
+      for (int i = 0; i < W; ++i) {
+        const int ky = k0 + i;
+        V a_r, a_i, b_r, b_i;
+        std::memcpy(&a_r, ar + i * W, sizeof(V));
+        std::memcpy(&a_i, ai + i * W, sizeof(V));
+        std::memcpy(&b_r, br + i * W, sizeof(V));
+        std::memcpy(&b_i, bi + i * W, sizeof(V));
+        const V zr = a_r - b_i, zi = a_i + b_r;
+        std::memcpy(wr + ky * lw + j0, &zr, sizeof(V));
+        std::memcpy(wi + ky * lw + j0, &zi, sizeof(V));
+        if (ky >= m0 && ky < m1) {
+          const V mr = a_r + b_i, mi = b_r - a_i;
+          std::memcpy(wr + (ny - ky) * lw + j0, &mr, sizeof(V));
+          std::memcpy(wi + (ny - ky) * lw + j0, &mi, sizeof(V));
+        }
+      }
+    }
+  for (int j = 0; j < nb; ++j) {
+    const int c = c0 + j;
+    const T* a_r = sre + c * ss;
+    const T* a_i = sim + c * ss;
+    for (int ky = j < jb ? kb : lo; ky < hi; ++ky) {
+      const bool mirror = ky >= m0 && ky < m1;
+      if (c < b_lim) {
+        const T b_r = sre[(c + h) * ss + ky], b_i = sim[(c + h) * ss + ky];
+        wr[ky * lw + j] = a_r[ky] - b_i;
+        wi[ky * lw + j] = a_i[ky] + b_r;
+        if (mirror) {
+          wr[(ny - ky) * lw + j] = a_r[ky] + b_i;
+          wi[(ny - ky) * lw + j] = b_r - a_i[ky];
+        }
+      } else {
+        wr[ky * lw + j] = a_r[ky] - T(0);
+        wi[ky * lw + j] = a_i[ky] + T(0);
+        if (mirror) {
+          wr[(ny - ky) * lw + j] = a_r[ky] - T(0);
+          wi[(ny - ky) * lw + j] = -a_i[ky] + T(0);
+        }
+      }
+    }
+  }
+}
+
 // Scratch for a 2D transform: the y-pass work arrays (W each) and the
 // stages' ping-pong arrays (max(W, spectrum) each), in one buffer.
 template <typename T>
@@ -639,46 +708,13 @@ void Fft2D::InverseColumns(T* spec_re, T* spec_im, const Slab* slabs, int nslabs
   const int nb = c1 - c0;
   const int hy = half_ny(), top = ny_ - hy;  // ky >= hy pair with 1 <= ny - ky <= top
   // Z = A + i B over the full ky range, the upper half from A(-k) =
-  // conj A(k) (the columns' inverses are real): along contiguous ky into
-  // this part's slice of the stages' scratch, then transposed into the y
-  // pass's layout.
-  const size_t ts = static_cast<size_t>(ny_);
-  for (int c = c0; c < c1; ++c) {
-    const bool has_b = c + h < cols;
-    T* zr = sr + c * ts;
-    T* zi = si + c * ts;
-    for (int q = 0; q < nslabs; ++q) {
-      const Slab& sl = slabs[q];
-      const T* ar = spec_re + sl.offset + static_cast<size_t>(c) * sl.stride - sl.lo;
-      const T* ai = spec_im + sl.offset + static_cast<size_t>(c) * sl.stride - sl.lo;
-      const T* br = spec_re + sl.offset + static_cast<size_t>(c + h) * sl.stride - sl.lo;
-      const T* bi = spec_im + sl.offset + static_cast<size_t>(c + h) * sl.stride - sl.lo;
-      const int m0 = std::max(sl.lo, 1), m1 = std::min(sl.hi, top + 1);
-      // x - (-y) == x + y and (-x) + y == y - x exactly: the conjugate half
-      // rounds as sgn * (...) did.
-      if (has_b) {
-        for (int ky = sl.lo; ky < sl.hi; ++ky) {
-          zr[ky] = ar[ky] - bi[ky];
-          zi[ky] = ai[ky] + br[ky];
-        }
-        for (int m = m1 - 1; m >= m0; --m) {  // ky = ny - m
-          zr[ny_ - m] = ar[m] + bi[m];
-          zi[ny_ - m] = br[m] - ai[m];
-        }
-      } else {
-        for (int ky = sl.lo; ky < sl.hi; ++ky) {
-          zr[ky] = ar[ky] - T(0);
-          zi[ky] = ai[ky] + T(0);
-        }
-        for (int m = m1 - 1; m >= m0; --m) {
-          zr[ny_ - m] = ar[m] - T(0);
-          zi[ny_ - m] = -ai[m] + T(0);
-        }
-      }
-    }
+  // conj A(k) (the columns' inverses are real), into the y pass's layout.
+  for (int q = 0; q < nslabs; ++q) {
+    const Slab& sl = slabs[q];
+    MergeFromSpectrum<T>(spec_re + sl.offset - sl.lo, spec_im + sl.offset - sl.lo, sl.stride, ny_,
+                         top, c0, c1, h, cols, sl.lo, sl.hi, wr, wi, lw);
   }
-  TransposeT(sr + c0 * ts, ts, nb, ny_, wr, lw);
-  TransposeT(si + c0 * ts, ts, nb, ny_, wi, lw);
+  const size_t ts = static_cast<size_t>(ny_);
   py_.Transform(wr, wi, nb, lw, true, sr + c0 * ts, si + c0 * ts, -1, rows);
   const int b_end = std::max(c0, std::min(c1, cols - h));
   for (int y = 0; y < rows; ++y) {
