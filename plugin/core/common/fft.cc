@@ -84,6 +84,37 @@ inline __attribute__((always_inline)) void Butterflies(
       oi[out_step] = t1i - sg * t3r;
       orr[3 * out_step] = t1r - sg * t3i;
       oi[3 * out_step] = t1i + sg * t3r;
+    } else if constexpr (R == 8) {
+      // Even and odd halves as radix-4 DFTs, the odd one times w8^k
+      // (w8 = exp(-+ 2 pi i / 8): multiples of (1 -+ i) / sqrt 2, -+i).
+      const T r2 = T(0.70710678118654752440);
+      T er[4], ei[4], pr[4], pi[4];
+      for (int q = 0; q < 2; ++q) {
+        const T a0r = xr[q], a0i = xi[q], a1r = xr[q + 2], a1i = xi[q + 2];
+        const T a2r = xr[q + 4], a2i = xi[q + 4], a3r = xr[q + 6], a3i = xi[q + 6];
+        const T t0r = a0r + a2r, t0i = a0i + a2i, t1r = a0r - a2r, t1i = a0i - a2i;
+        const T t2r = a1r + a3r, t2i = a1i + a3i, t3r = a1r - a3r, t3i = a1i - a3i;
+        T* yr = q == 0 ? er : pr;
+        T* yi = q == 0 ? ei : pi;
+        yr[0] = t0r + t2r;
+        yi[0] = t0i + t2i;
+        yr[2] = t0r - t2r;
+        yi[2] = t0i - t2i;
+        yr[1] = t1r + sg * t3i;
+        yi[1] = t1i - sg * t3r;
+        yr[3] = t1r - sg * t3i;
+        yi[3] = t1i + sg * t3r;
+      }
+      const T o1r = (pr[1] + sg * pi[1]) * r2, o1i = (pi[1] - sg * pr[1]) * r2;
+      const T o2r = sg * pi[2], o2i = -sg * pr[2];
+      const T o3r = (sg * pi[3] - pr[3]) * r2, o3i = (-sg * pr[3] - pi[3]) * r2;
+      const T qr[4] = {pr[0], o1r, o2r, o3r}, qi[4] = {pi[0], o1i, o2i, o3i};
+      for (int k = 0; k < 4; ++k) {
+        orr[k * out_step] = er[k] + qr[k];
+        oi[k * out_step] = ei[k] + qi[k];
+        orr[(k + 4) * out_step] = er[k] - qr[k];
+        oi[(k + 4) * out_step] = ei[k] - qi[k];
+      }
     } else {
       static_assert(R == 5, "radix");
       static_assert(kOut == 5 || kOut == 3, "outputs");
@@ -152,6 +183,7 @@ void RunStage(int radix, int n, int span, const T* twr, const T* twi, const T* i
     case 2: Stage<2, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
     case 3: Stage<3, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
     case 4: Stage<4, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
+    case 8: Stage<8, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
     default: Stage<5, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
   }
 }
@@ -252,8 +284,19 @@ int NextFftSize(int n) {
 FftPlan::FftPlan(int n) : n_(n) {
   std::vector<int> radices;
   int rest = n;
-  while (rest % 4 == 0) { radices.push_back(4); rest /= 4; }
-  while (rest % 2 == 0) { radices.push_back(2); rest /= 2; }
+  // Powers of two as radix-4 stages; an odd power from 2^5 on ends them
+  // with one radix-8 stage rather than a radix-2 one (a pass over the data
+  // less; the first stage stays radix 4 for Transform's half-input skip).
+  // Measured: ConvolveReal<float> 160 x 160 0.94x, 160 x 150 0.97x time.
+  int p2 = 0;
+  while (rest % 2 == 0) { rest /= 2; ++p2; }
+  if (p2 >= 5 && p2 % 2 == 1) {
+    for (int k = 0; k < (p2 - 3) / 2; ++k) radices.push_back(4);
+    radices.push_back(8);
+    p2 = 0;
+  }
+  for (; p2 >= 2; p2 -= 2) radices.push_back(4);
+  if (p2 == 1) radices.push_back(2);
   while (rest % 3 == 0) { radices.push_back(3); rest /= 3; }
   while (rest % 5 == 0) { radices.push_back(5); rest /= 5; }
   int span = 1;

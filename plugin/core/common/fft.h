@@ -1,4 +1,4 @@
-// Mixed-radix (2, 3, 4, 5) Stockham FFTs, double or float, for the contact
+// Mixed-radix (2, 3, 4, 5, 8) Stockham FFTs, double or float, for the contact
 // solver's convolutions on the taxel grid (contact/compliance.*). Pure C++.
 //
 // Why our own rather than a library: the solver needs 2D transforms of sizes
