@@ -23,11 +23,16 @@ constexpr double kPi = 3.14159265358979323846;
 // inputs r >= 1 by w[r] first. Pointers are restrict-qualified and the
 // lanes independent, so the loop vectorises (no gathers, no branches).
 // kOut (radix 5: 3 or 5; radix 3: 2 or 3): the outputs r < kOut only.
-template <int R, bool kInverse, bool kTwiddle, typename T, int kOut = R>
+// kInPlace: read the inputs from out_re / out_im (in_re / in_im unused), the
+// elements each butterfly writes being the ones it reads (a last stage).
+template <int R, bool kInverse, bool kTwiddle, typename T, int kOut = R, bool kInPlace = false>
 inline __attribute__((always_inline)) void Butterflies(
-    const T* __restrict in_re, const T* __restrict in_im, size_t in_step,
+    const T* __restrict in_re_arg, const T* __restrict in_im_arg, size_t in_step_arg,
     T* __restrict out_re, T* __restrict out_im, size_t out_step, const T* wr, const T* wi,
     int batch) {
+  const T* in_re = kInPlace ? out_re : in_re_arg;
+  const T* in_im = kInPlace ? out_im : in_im_arg;
+  const size_t in_step = kInPlace ? out_step : in_step_arg;
   constexpr T sg = kInverse ? T(-1) : T(1);
   const T c3 = T(-0.5), s3 = T(0.86602540378443864676);
   const T c51 = T(0.30901699437494742410), c52 = T(-0.80901699437494742410);
@@ -149,7 +154,10 @@ inline __attribute__((always_inline)) void Butterflies(
 // lane (no reductions) and no FMA is formed (-ffp-contract=off), so
 // vectorised and scalar code round alike.
 // kOut: Butterflies' (a last stage whose outputs r >= kOut are not needed).
-template <int R, bool kInverse, typename T, int kOut = R>
+// kInPlace: a last stage (span n / R) run on its input (out == in, same
+// stride): butterfly j reads and writes elements j + r n/R alike, so each
+// reads its inputs before writing them, and none reads another's outputs.
+template <int R, bool kInverse, typename T, int kOut = R, bool kInPlace = false>
 MJTOUCH_TARGET_CLONES
 void Stage(int n, int span, const T* tw_re, const T* tw_im, const T* in_re, const T* in_im,
            int in_stride, T* out_re, T* out_im, int out_stride, int batch) {
@@ -166,25 +174,27 @@ void Stage(int n, int span, const T* tw_re, const T* tw_im, const T* in_re, cons
     }
     const size_t io = static_cast<size_t>(j) * in_stride;
     const size_t oo = static_cast<size_t>(dst) * out_stride;
+    const T* ir = kInPlace ? nullptr : in_re + io;
+    const T* ii = kInPlace ? nullptr : in_im + io;
     if (jm != 0) {
-      Butterflies<R, kInverse, true, T, kOut>(in_re + io, in_im + io, in_step, out_re + oo,
-                                             out_im + oo, out_step, wr, wi, batch);
+      Butterflies<R, kInverse, true, T, kOut, kInPlace>(ir, ii, in_step, out_re + oo,
+                                                        out_im + oo, out_step, wr, wi, batch);
     } else {
-      Butterflies<R, kInverse, false, T, kOut>(in_re + io, in_im + io, in_step, out_re + oo,
-                                              out_im + oo, out_step, wr, wi, batch);
+      Butterflies<R, kInverse, false, T, kOut, kInPlace>(ir, ii, in_step, out_re + oo,
+                                                         out_im + oo, out_step, wr, wi, batch);
     }
   }
 }
 
-template <bool kInverse, typename T>
+template <bool kInverse, bool kInPlace, typename T>
 void RunStage(int radix, int n, int span, const T* twr, const T* twi, const T* ir,
               const T* ii, int is, T* orr, T* oi, int os, int batch) {
   switch (radix) {
-    case 2: Stage<2, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
-    case 3: Stage<3, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
-    case 4: Stage<4, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
-    case 8: Stage<8, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
-    default: Stage<5, kInverse>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
+    case 2: Stage<2, kInverse, T, 2, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
+    case 3: Stage<3, kInverse, T, 3, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
+    case 4: Stage<4, kInverse, T, 4, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
+    case 8: Stage<8, kInverse, T, 8, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
+    default: Stage<5, kInverse, T, 5, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
   }
 }
 
@@ -223,13 +233,13 @@ void FirstStage4HalfInput(int n, const T* in_re, const T* in_im, int in_stride, 
 
 // A last stage writing outputs r < kOut only: radix 5 the first three,
 // radix 3 the first two.
-template <bool kInverse, typename T>
+template <bool kInverse, bool kInPlace, typename T>
 void RunLastStagePart(int radix, int n, int span, const T* twr, const T* twi, const T* ir,
                       const T* ii, int is, T* orr, T* oi, int os, int batch) {
   if (radix == 5) {
-    Stage<5, kInverse, T, 3>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+    Stage<5, kInverse, T, 3, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
   } else {
-    Stage<3, kInverse, T, 2>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+    Stage<3, kInverse, T, 2, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
   }
 }
 
@@ -339,9 +349,12 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
   int is = stride;
   bool in_data = true;
   for (const Stage& s : stages_) {
-    T* orr = in_data ? sre : re;
-    T* oi = in_data ? sim : im;
-    const int os = in_data ? scratch_stride : stride;
+    // An odd number of stages: the last runs in place on the data (Stage's
+    // kInPlace) rather than into the scratch and back (a pass less).
+    const bool in_place = in_data && stages_.size() > 1 && &s == &stages_.back();
+    T* orr = in_data && !in_place ? sre : re;
+    T* oi = in_data && !in_place ? sim : im;
+    const int os = in_data && !in_place ? scratch_stride : stride;
     const T* twr;
     const T* twi;
     if constexpr (std::is_same_v<T, float>) {
@@ -352,10 +365,16 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
       twi = s.tw_im.data();
     }
     if (last_part && &s == &stages_.back()) {
-      if (inverse) {
-        RunLastStagePart<true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      if (in_place) {
+        if (inverse) {
+          RunLastStagePart<true, true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+        } else {
+          RunLastStagePart<false, true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+        }
+      } else if (inverse) {
+        RunLastStagePart<true, false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
       } else {
-        RunLastStagePart<false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+        RunLastStagePart<false, false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
       }
     } else if (half_input && &s == &stages_[0] && s.radix == 2) {
       FirstStage2HalfInput(n_, ir, ii, is, orr, oi, os, batch);
@@ -365,15 +384,21 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
       } else {
         FirstStage4HalfInput<false>(n_, ir, ii, is, orr, oi, os, batch);
       }
+    } else if (in_place) {
+      if (inverse) {
+        RunStage<true, true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      } else {
+        RunStage<false, true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      }
     } else if (inverse) {
-      RunStage<true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      RunStage<true, false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
     } else {
-      RunStage<false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      RunStage<false, false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
     }
     ir = orr;
     ii = oi;
     is = os;
-    in_data = !in_data;
+    in_data = in_place || !in_data;
   }
   if (!in_data) {
     for (int k = 0; k < (last_part ? needed : n_); ++k) {
