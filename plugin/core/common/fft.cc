@@ -25,11 +25,13 @@ constexpr double kPi = 3.14159265358979323846;
 // kOut (radix 5: 3 or 5; radix 3: 2 or 3): the outputs r < kOut only.
 // kInPlace: read the inputs from out_re / out_im (in_re / in_im unused), the
 // elements each butterfly writes being the ones it reads (a last stage).
-template <int R, bool kInverse, bool kTwiddle, typename T, int kOut = R, bool kInPlace = false>
+// kScale: the inputs times a real factor first (k[r * k_step + b]).
+template <int R, bool kInverse, bool kTwiddle, typename T, int kOut = R, bool kInPlace = false,
+          bool kScale = false>
 inline __attribute__((always_inline)) void Butterflies(
     const T* __restrict in_re_arg, const T* __restrict in_im_arg, size_t in_step_arg,
     T* __restrict out_re, T* __restrict out_im, size_t out_step, const T* wr, const T* wi,
-    int batch) {
+    int batch, const T* __restrict k = nullptr, size_t k_step = 0) {
   const T* in_re = kInPlace ? out_re : in_re_arg;
   const T* in_im = kInPlace ? out_im : in_im_arg;
   const size_t in_step = kInPlace ? out_step : in_step_arg;
@@ -45,10 +47,14 @@ inline __attribute__((always_inline)) void Butterflies(
 #pragma GCC ivdep
   for (int b = 0; b < batch; ++b) {
     T xr[R], xi[R];
-    xr[0] = in_re[b];
-    xi[0] = in_im[b];
+    xr[0] = kScale ? in_re[b] * k[b] : in_re[b];
+    xi[0] = kScale ? in_im[b] * k[b] : in_im[b];
     for (int r = 1; r < R; ++r) {
-      const T a = in_re[r * in_step + b], c = in_im[r * in_step + b];
+      T a = in_re[r * in_step + b], c = in_im[r * in_step + b];
+      if constexpr (kScale) {
+        a = a * k[r * k_step + b];
+        c = c * k[r * k_step + b];
+      }
       if constexpr (kTwiddle) {
         xr[r] = a * w_r[r] - c * w_i[r];
         xi[r] = a * w_i[r] + c * w_r[r];
@@ -231,6 +237,40 @@ void FirstStage4HalfInput(int n, const T* in_re, const T* in_im, int in_stride, 
   }
 }
 
+// A first (span 1, untwiddled) stage whose inputs are first multiplied by
+// the real factors k[e * ks + b] (element e, lane b): the product of a
+// spectrum with a kernel's fused into the inverse transform's first pass,
+// the same products (the same bits) as multiplying beforehand.
+template <int R, bool kInverse, typename T>
+MJTOUCH_TARGET_CLONES
+void FirstStageScaled(int n, const T* k, int ks, const T* in_re, const T* in_im, int in_stride,
+                      T* out_re, T* out_im, int out_stride, int batch) {
+  const int m = n / R;
+  const size_t in_step = static_cast<size_t>(m) * in_stride;
+  const size_t k_step = static_cast<size_t>(m) * ks;
+  const T w[R] = {};
+  for (int j = 0; j < m; ++j) {
+    const size_t io = static_cast<size_t>(j) * in_stride;
+    const size_t oo = static_cast<size_t>(j) * R * out_stride;
+    Butterflies<R, kInverse, false, T, R, false, true>(in_re + io, in_im + io, in_step,
+                                                       out_re + oo, out_im + oo, out_stride, w,
+                                                       w, batch, k + static_cast<size_t>(j) * ks,
+                                                       k_step);
+  }
+}
+
+template <bool kInverse, typename T>
+void RunFirstStageScaled(int radix, int n, const T* k, int ks, const T* ir, const T* ii, int is,
+                         T* orr, T* oi, int os, int batch) {
+  switch (radix) {
+    case 2: FirstStageScaled<2, kInverse>(n, k, ks, ir, ii, is, orr, oi, os, batch); break;
+    case 3: FirstStageScaled<3, kInverse>(n, k, ks, ir, ii, is, orr, oi, os, batch); break;
+    case 4: FirstStageScaled<4, kInverse>(n, k, ks, ir, ii, is, orr, oi, os, batch); break;
+    case 8: FirstStageScaled<8, kInverse>(n, k, ks, ir, ii, is, orr, oi, os, batch); break;
+    default: FirstStageScaled<5, kInverse>(n, k, ks, ir, ii, is, orr, oi, os, batch); break;
+  }
+}
+
 // A last stage writing outputs r < kOut only: radix 5 the first three,
 // radix 3 the first two.
 template <bool kInverse, bool kInPlace, typename T>
@@ -331,8 +371,18 @@ FftPlan::FftPlan(int n) : n_(n) {
 
 template <typename T>
 void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sre, T* sim,
-                        int nonzero, int needed) const {
+                        int nonzero, int needed, const T* scale, int scale_stride) const {
   const bool half_input = SkipsUpperHalf(nonzero);
+  // The scale fused into the first stage when that is a generic one (not
+  // half-input, not in place); otherwise multiplied beforehand.
+  const bool scale_first = scale && !half_input && stages_.size() > 1;
+  if (scale && !scale_first) {
+    for (int e = 0; e < n_; ++e)
+      for (int b = 0; b < batch; ++b) {
+        re[static_cast<size_t>(e) * stride + b] *= scale[static_cast<size_t>(e) * scale_stride + b];
+        im[static_cast<size_t>(e) * stride + b] *= scale[static_cast<size_t>(e) * scale_stride + b];
+      }
+  }
   // A last radix-R stage writes element j + r n/R from output r: with
   // needed <= 3 n / 5 (R = 5) or 2 n / 3 (R = 3), outputs 3-4 or 2 are
   // never read.
@@ -376,6 +426,12 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
       } else {
         RunLastStagePart<false, false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
       }
+    } else if (scale_first && &s == &stages_[0]) {
+      if (inverse) {
+        RunFirstStageScaled<true>(s.radix, n_, scale, scale_stride, ir, ii, is, orr, oi, os, batch);
+      } else {
+        RunFirstStageScaled<false>(s.radix, n_, scale, scale_stride, ir, ii, is, orr, oi, os, batch);
+      }
     } else if (half_input && &s == &stages_[0] && s.radix == 2) {
       FirstStage2HalfInput(n_, ir, ii, is, orr, oi, os, batch);
     } else if (half_input && &s == &stages_[0]) {
@@ -410,8 +466,9 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
   }
 }
 template void FftPlan::Transform(double*, double*, int, int, bool, double*, double*, int,
-                                 int) const;
-template void FftPlan::Transform(float*, float*, int, int, bool, float*, float*, int, int) const;
+                                 int, const double*, int) const;
+template void FftPlan::Transform(float*, float*, int, int, bool, float*, float*, int, int,
+                                 const float*, int) const;
 
 namespace {
 // Row strides an odd multiple of 8 elements: not a power of two (those put
@@ -758,13 +815,14 @@ void Fft2D::ForwardLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr
 }
 
 template <typename T>
-void Fft2D::InverseLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr, T* si) const {
+void Fft2D::InverseLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr, T* si,
+                         const T* k_hat) const {
   const int nb = sl.hi - sl.lo;
   if (nb <= 0) return;
   // columns x < cols only are read below
   const size_t tn = static_cast<size_t>(nx_);
   px_.Transform(spec_re + sl.offset, spec_im + sl.offset, nb, sl.stride, true, sr + sl.lo * tn,
-                si + sl.lo * tn, -1, cols);
+                si + sl.lo * tn, -1, cols, k_hat ? k_hat + sl.lo : nullptr, spec_stride_);
 }
 
 template <typename T>
@@ -819,24 +877,6 @@ void Fft2D::InverseReal(T* spec_re, T* spec_im, int rows, int cols, double* re, 
 }
 
 namespace {
-// A spectrum slab's elements times the real kernel spectrum k (layout
-// kx * ls + ky; elementwise: the same bits on every instruction set).
-template <typename T>
-MJTOUCH_TARGET_CLONES
-void MultiplySlab(const T* __restrict k, int nx, int ls, int lo, int hi, int stride,
-                  T* __restrict re, T* __restrict im) {
-  const int nb = hi - lo;
-  for (int kx = 0; kx < nx; ++kx) {
-    const T* kr = k + static_cast<size_t>(kx) * ls + lo;
-    T* a = re + static_cast<size_t>(kx) * stride;
-    T* b = im + static_cast<size_t>(kx) * stride;
-    for (int q = 0; q < nb; ++q) {
-      a[q] *= kr[q];
-      b[q] *= kr[q];
-    }
-  }
-}
-
 // Bounds of part k of `parts` over [0, n): the even split rounded to the
 // nearest multiple of `align` (whole vectors per part), the last part
 // ending at n.
@@ -891,8 +931,7 @@ void Fft2D::ConvolveReal(const double* in, int in_stride, int in_rows, int in_co
     ForwardColumns(in, in_stride, in_rows, in_cols, 0, h_in, wr, wi, PaddedStride(h_in), &all, 1,
                    spec_re, spec_im, sr, si);
     ForwardLanes(in_cols, all, spec_re, spec_im, sr, si);
-    MultiplySlab(k_hat, nx_, ls, 0, hy, ls, spec_re, spec_im);
-    InverseLanes(out_cols, all, spec_re, spec_im, sr, si);
+    InverseLanes(out_cols, all, spec_re, spec_im, sr, si, k_hat);
     InverseColumns(spec_re, spec_im, &all, 1, out_rows, out_cols, 0, h_out, out, out_stride, wr,
                    wi, PaddedStride(h_out), sr, si);
     return;
@@ -909,9 +948,7 @@ void Fft2D::ConvolveReal(const double* in, int in_stride, int in_rows, int in_co
   pool.Run(pb, threads, [&](int k) {
     const Slab& sl = slabs[k];
     ForwardLanes(in_cols, sl, spec_re, spec_im, sr, si);
-    MultiplySlab(k_hat, nx_, ls, sl.lo, sl.hi, sl.stride, spec_re + sl.offset,
-                 spec_im + sl.offset);
-    InverseLanes(out_cols, sl, spec_re, spec_im, sr, si);
+    InverseLanes(out_cols, sl, spec_re, spec_im, sr, si, k_hat);
   });
   pool.Run(pc, threads, [&](int k) {
     InverseColumns(spec_re, spec_im, slabs, pb, out_rows, out_cols,
