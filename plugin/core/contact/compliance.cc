@@ -138,14 +138,7 @@ void SurfaceCompliance::AddCells(const int* cells, size_t count, const double* d
         AddCellRows(c % bx, c / bx, d[c], bx, jb, std::min(j1, jb + kRows), u);
       }
   };
-  const int parts = std::max(1, std::min(threads, by / kRows));
-  if (parts == 1) {
-    rows(0, by);
-    return;
-  }
-  ThreadPool::Shared().Run(parts, threads, [&](int part) {
-    rows(by * part / parts, by * (part + 1) / parts);
-  });
+  ForRowParts(by, threads, kRows, rows);
 }
 
 std::shared_ptr<const SurfaceCompliance> HalfSpaceCompliance(double young_pa, double poisson,
