@@ -130,10 +130,8 @@ void SlipRun(const double* __restrict p, double rx, double ry, int len, double* 
 
 void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, double fy,
                                TractionField* out) {
-  const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
-  out->uniform_slip = true;
-  out->slip_x = rx;
-  out->slip_y = ry;
+  SetUniformSlip(fn, fx, fy, out);
+  const double rx = out->slip_x, ry = out->slip_y;
   const CellBox& b = out->box;
   out->runs.Clear();
   out->active_cells = 0;
@@ -269,10 +267,8 @@ bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& 
 
 void UniformSlipShear(const TaxelGrid& grid, double fn, double fx, double fy,
                       TractionField* field) {
-  const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
-  field->uniform_slip = true;
-  field->slip_x = rx;
-  field->slip_y = ry;
+  SetUniformSlip(fn, fx, fy, field);
+  const double rx = field->slip_x, ry = field->slip_y;
   // Unloaded cells keep the zero ClearTraction left (not rx * 0, which is
   // -0 for rx < 0), so that the shear is zero wherever the pressure is.
   ForBox(grid, field->box, [&](size_t i) {

@@ -27,6 +27,14 @@ inline void ZeroCells(TractionField* f, size_t a, size_t b) {
     std::fill(v->begin() + a, v->begin() + b, 0.0f);
 }
 
+// Marks f's shear as full slip (shear = ratio x pressure, ratio = tangential
+// / normal force; zero without normal force) and sets the ratios.
+inline void SetUniformSlip(double fn, double fx, double fy, TractionField* f) {
+  f->uniform_slip = true;
+  f->slip_x = fn > 0.0 ? fx / fn : 0.0;
+  f->slip_y = fn > 0.0 ? fy / fn : 0.0;
+}
+
 // Calls run(begin, end) for each maximal run [begin, end) of the cells i in
 // [i0, i1) with on(i), left to right. on must be pure: it may be called
 // twice on a cell that ends a run.

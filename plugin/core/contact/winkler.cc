@@ -317,8 +317,7 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   }
   // The touching cells (runs, in box order), their loads cov (c - g) and
   // NormalizeLoad's sum of them (the other cells add exact zeros).
-  size_t cells = 0;
-  for (size_t r = 0; r < spans.row.size(); ++r) cells += spans.end[r] - spans.begin[r];
+  const size_t cells = spans.Count();
   if (out->scratch_load.size() < cells) out->scratch_load.resize(cells);
   double* load = out->scratch_load.data();
   double total = 0.0;
@@ -386,7 +385,8 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
     for (int j = b.j0; j < b.j0 + b.ny; ++j) last.Add(j, b.i0, b.i0 + b.nx);
   }
   const double scale = fn / (grid.Area() * total);
-  const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
+  SetUniformSlip(fn, fx, fy, out);
+  const double rx = out->slip_x, ry = out->slip_y;
   out->runs = out->solved_runs;
   const ActiveRuns& now = out->runs;
   const double* load = out->scratch_load.data();
@@ -431,9 +431,6 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
   }
   out->box = box;
   out->approach_m = c;
-  out->uniform_slip = true;
-  out->slip_x = rx;
-  out->slip_y = ry;
   out->support_in_runs = true;
   out->active_cells = active;
   return true;
