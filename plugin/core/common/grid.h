@@ -36,6 +36,11 @@ struct CellBox {
 struct ActiveRuns {
   std::vector<int> row, begin, end;
   void Clear() { row.clear(); begin.clear(); end.clear(); }
+  void Add(int j, int i_begin, int i_end) {
+    row.push_back(j);
+    begin.push_back(i_begin);
+    end.push_back(i_end);
+  }
   int Count() const {
     int c = 0;
     for (size_t k = 0; k < row.size(); ++k) c += end[k] - begin[k];

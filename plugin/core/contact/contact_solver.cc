@@ -212,13 +212,7 @@ void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, doubl
 template <int L, typename T>
 void StencilRows(const double* M, const T* g_pad, int px, int bx, int by, double* z_out,
                  int threads) {
-  const int parts = std::max(1, std::min(threads, by / 8));
-  if (parts == 1) {
-    ApplyStencil<L>(M, g_pad, px, bx, by, z_out);
-    return;
-  }
-  ThreadPool::Shared().Run(parts, threads, [&](int k) {
-    const int j0 = by * k / parts, j1 = by * (k + 1) / parts;
+  ForRowParts(by, threads, 8, [&](int j0, int j1) {
     ApplyStencil<L>(M, g_pad + static_cast<size_t>(j0) * px, px, bx, j1 - j0,
                     z_out + static_cast<size_t>(j0) * bx);
   });
