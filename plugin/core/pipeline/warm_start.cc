@@ -285,12 +285,13 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
                       ElasticMethod method, ApplyPrecision precision, std::vector<double>* gap,
                       std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
                       CellBox* solve_box, CellBox* u_region) {
-  // Cells without coverage never touch.
-  for (int j = box.j0; j < box.j0 + box.ny; ++j)
-    for (int i = box.i0; i < box.i0 + box.nx; ++i) {
-      const size_t k = static_cast<size_t>(j) * grid.n + i;
-      if (!(coverage[k] > 0.0)) (*gap)[k] = kInf;
-    }
+  // Cells without coverage never touch (every cell stored, the select
+  // vectorises).
+  for (int j = box.j0; j < box.j0 + box.ny; ++j) {
+    double* g = gap->data() + static_cast<size_t>(j) * grid.n;
+    const double* c = coverage.data() + static_cast<size_t>(j) * grid.n;
+    for (int i = box.i0; i < box.i0 + box.nx; ++i) g[i] = c[i] > 0.0 ? g[i] : kInf;
+  }
   // Warm start: the last step's pressure field (plugin_state), so a sliding
   // contact needs a few iterations. With contact_solver = pcg, extrapolated
   // 2 p(n-1) - p(n-2) when both steps touched (prototype on slide_grating,
@@ -321,15 +322,23 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
 void StoreElasticHistory(const TaxelGrid& grid, const std::vector<double>& pressure,
                          const CellBox& p_box, const CellBox& u_region,
                          const std::vector<double>& u, double depth_m, HistoryBlock* cur) {
-  for (int j = p_box.j0; j < p_box.j0 + p_box.ny; ++j)
-    for (int i = p_box.i0; i < p_box.i0 + p_box.nx; ++i) {
-      const size_t k = static_cast<size_t>(j) * grid.n + i;
-      cur->set_p(k, static_cast<float>(pressure[k]));
+  // Rounded to float in chunks, then copied (stores through the block's
+  // char buffer would alias the doubles read).
+  float chunk[256];
+  auto store = [&](const double* from, size_t count, size_t to) {
+    for (size_t done = 0; done < count; done += 256) {
+      const size_t m = std::min<size_t>(256, count - done);
+      for (size_t k = 0; k < m; ++k) chunk[k] = static_cast<float>(from[done + k]);
+      cur->SetRange(to + done, m, chunk);
     }
+  };
+  for (int j = p_box.j0; j < p_box.j0 + p_box.ny; ++j) {
+    const size_t k = static_cast<size_t>(j) * grid.n + p_box.i0;
+    store(pressure.data() + k, static_cast<size_t>(std::max(p_box.nx, 0)), k);
+  }
   cur->SetSlotBox(kHsPBoxI0, p_box);
   cur->SetSlotBox(kHsURegionI0, u_region);
-  const size_t nu = static_cast<size_t>(u_region.nx) * u_region.ny;
-  for (size_t k = 0; k < nu; ++k) cur->set_u(k, static_cast<float>(u[k]));
+  store(u.data(), static_cast<size_t>(u_region.nx) * u_region.ny, cur->ncell);
   cur->slots[kHsValid] = 1.0;
   cur->slots[kHsDepth] = depth_m;
 }
