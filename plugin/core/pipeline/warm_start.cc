@@ -55,6 +55,10 @@ namespace {
 // bounding box. If some cell fails, *grown is the bounding box of inner and
 // the failing cells, kBoxMarginCells wider (within box). *u_region: the box
 // over which w->check_u holds K p (nx = 0: none computed).
+// The application is not wasted when every cell passes (it runs on ~every
+// solve of the shipped scenes): its K p is the next two steps' warm-start
+// displacement (history; ExtrapolatedDisplacement), so skipping it would
+// move an application into the next solve and change its rounding.
 bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
                      const std::vector<double>& gap, const CellBox& box, const CellBox& inner,
                      const std::vector<double>& pressure, double approach_m, double lift_m,
