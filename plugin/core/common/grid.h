@@ -3,6 +3,8 @@
 #ifndef MJTOUCH_COMMON_GRID_H_
 #define MJTOUCH_COMMON_GRID_H_
 
+#include <algorithm>
+#include <climits>
 #include <cstddef>
 #include <vector>
 
@@ -29,6 +31,25 @@ struct CellBox {
   int i0 = 0, j0 = 0, nx = 0, ny = 0;
   bool empty() const { return nx <= 0 || ny <= 0; }
   static CellBox All(const TaxelGrid& grid) { return CellBox{0, 0, grid.n, grid.n}; }
+};
+
+// The bounding rectangle of cells added one at a time (inclusive bounds;
+// empty until the first Add, or starting from a box).
+struct CellBounds {
+  int i0 = INT_MAX, j0 = INT_MAX, i1 = INT_MIN, j1 = INT_MIN;
+  CellBounds() = default;
+  explicit CellBounds(const CellBox& b)
+      : i0(b.i0), j0(b.j0), i1(b.i0 + b.nx - 1), j1(b.j0 + b.ny - 1) {}
+  void Add(int i, int j) { AddRow(i, i, j); }
+  // The cells [lo, hi] of row j.
+  void AddRow(int lo, int hi, int j) {
+    i0 = std::min(i0, lo);
+    i1 = std::max(i1, hi);
+    j0 = std::min(j0, j);
+    j1 = std::max(j1, j);
+  }
+  bool empty() const { return i1 < i0 || j1 < j0; }
+  CellBox Box() const { return empty() ? CellBox{} : CellBox{i0, j0, i1 - i0 + 1, j1 - j0 + 1}; }
 };
 
 // Cells with nonzero traction as row runs: for each grid row j with contact,

@@ -159,7 +159,7 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
   const double inv_area = 1.0 / grid.Area();
   double total = 0.0;
   const int n = grid.n;
-  int i_lo = n, i_hi = -1, j_lo = n, j_hi = -1;
+  CellBounds loaded;
   for (const ContactPoint& c : contacts) {
     // Fractional cell coordinates of the contact, clamped to the centres of
     // the outermost cells so that the whole force stays on the grid.
@@ -177,13 +177,11 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
       out->shear_x_pa[idx[k]] += w[k] * c.force_n[0] * inv_area;
       out->shear_y_pa[idx[k]] += w[k] * c.force_n[1] * inv_area;
     }
-    i_lo = std::min(i_lo, i0);
-    i_hi = std::max(i_hi, i0 + 1);
-    j_lo = std::min(j_lo, j0);
-    j_hi = std::max(j_hi, j0 + 1);
+    loaded.AddRow(i0, i0 + 1, j0);
+    loaded.AddRow(i0, i0 + 1, j0 + 1);
     total += c.force_n[2];
   }
-  if (i_hi >= 0) out->box = CellBox{i_lo, j_lo, i_hi - i_lo + 1, j_hi - j_lo + 1};
+  if (!loaded.empty()) out->box = loaded.Box();
   return total > 0.0;
 }
 

@@ -71,17 +71,17 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
   const int i0 = std::max(0, mb.i0 - 1), j0 = std::max(0, mb.j0 - 1);
   const int i1 = std::min(n, mb.i0 + mb.nx + 1), j1 = std::min(n, mb.j0 + mb.ny + 1);
   // The shifted solution's support decides the box too (zero outside sbox).
-  int si0 = g.n, si1 = -1, sj0 = g.n, sj1 = -1;
+  CellBounds s;
   for (int j = sbox.j0; j < sbox.j0 + sbox.ny; ++j)
     for (int i = sbox.i0; i < sbox.i0 + sbox.nx; ++i)
-      if (w->pressure[static_cast<size_t>(j) * g.n + i] > 0.0) {
-        si0 = std::min(si0, i);
-        si1 = std::max(si1, i);
-        sj0 = std::min(sj0, j);
-        sj1 = std::max(sj1, j);
-      }
-  const int bi0 = std::max(0, std::min(i0, si0 - 1)), bj0 = std::max(0, std::min(j0, sj0 - 1));
-  const int bi1 = std::min(n, std::max(i1, si1 + 1)), bj1 = std::min(n, std::max(j1, sj1 + 1));
+      if (w->pressure[static_cast<size_t>(j) * g.n + i] > 0.0) s.Add(i, j);
+  int bi0 = i0, bj0 = j0, bi1 = i1, bj1 = j1;
+  if (!s.empty()) {
+    bi0 = std::max(0, std::min(i0, s.i0 - 1));
+    bj0 = std::max(0, std::min(j0, s.j0 - 1));
+    bi1 = std::min(n, std::max(i1, s.i1 + 1));
+    bj1 = std::min(n, std::max(j1, s.j1 + 1));
+  }
   for (int j = bj0; j < bj1; ++j)
     for (int i = bi0; i < bi1; ++i) {
       const double* s0 = w->pressure.data() + static_cast<size_t>(j) * g.n + i;

@@ -75,19 +75,17 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
         for (int i = std::max(ia, inner.i0 + inner.nx); i < ib; ++i) fn(i, j);
     }
   };
-  int i0 = inner.i0, i1 = inner.i0 + inner.nx - 1, j0 = inner.j0, j1 = inner.j0 + inner.ny - 1;
+  CellBounds reach(inner);  // inner and the cells outside it within reach
   bool any = false;
   for_outside(box.i0, box.i0 + box.nx, box.j0, box.j0 + box.ny, [&](int i, int j) {
     if (gap[static_cast<size_t>(j) * grid.n + i] <= approach_m + lift_m) {
       any = true;
-      i0 = std::min(i0, i);
-      i1 = std::max(i1, i);
-      j0 = std::min(j0, j);
-      j1 = std::max(j1, j);
+      reach.Add(i, j);
     }
   });
   *u_region = CellBox{0, 0, 0, 0};
   if (!any) return true;
+  const int i0 = reach.i0, i1 = reach.i1, j0 = reach.j0, j1 = reach.j1;
   const int cx = i1 - i0 + 1, cy = j1 - j0 + 1;
   w->check_p.assign(static_cast<size_t>(cx) * cy, 0.0);
   w->check_u.resize(w->check_p.size());
@@ -105,20 +103,17 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
   K.Apply(*spec, w->check_p.data(), cx, cy, w->check_u.data(), &w->fft, precision,
           oy + inner.ny, ox + inner.nx);
   *u_region = CellBox{i0, j0, cx, cy};
-  int f0 = inner.i0, f1 = inner.i0 + inner.nx - 1, g0 = inner.j0, g1 = inner.j0 + inner.ny - 1;
+  CellBounds fail(inner);  // inner and the cells outside it that would touch
   bool ok = true;
   for_outside(i0, i1 + 1, j0, j1 + 1, [&](int i, int j) {
     const double g = gap[static_cast<size_t>(j) * grid.n + i];
     if (g <= approach_m + lift_m &&
         !(g + w->check_u[static_cast<size_t>(j - j0) * cx + (i - i0)] >= approach_m)) {
       ok = false;
-      f0 = std::min(f0, i);
-      f1 = std::max(f1, i);
-      g0 = std::min(g0, j);
-      g1 = std::max(g1, j);
+      fail.Add(i, j);
     }
   });
-  if (!ok) *grown = GrowBox(box, f0, f1, g0, g1);
+  if (!ok) *grown = GrowBox(box, fail.i0, fail.i1, fail.j0, fail.j1);
   return ok;
 }
 
@@ -165,18 +160,14 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
   std::vector<double>& prow = w->row_b;
   lrow.resize(n);
   prow.resize(n);
-  int i0 = n, i1 = -1, j0 = n, j1 = -1;
+  CellBounds support;  // the last contact within box
   for (int j = std::max(box.j0, lb.j0); j < std::min(box.j0 + box.ny, lb.j0 + lb.ny); ++j) {
     HistoryRow(*last, lb, j, n, lrow.data());
     for (int i = std::max(box.i0, lb.i0); i < std::min(box.i0 + box.nx, lb.i0 + lb.nx); ++i)
-      if (lrow[i] > 0.0) {
-        i0 = std::min(i0, i);
-        i1 = std::max(i1, i);
-        j0 = std::min(j0, j);
-        j1 = std::max(j1, j);
-      }
+      if (lrow[i] > 0.0) support.Add(i, j);
   }
-  if (i1 >= 0) *solve_box = GrowBox(box, i0, i1, j0, j1);
+  if (!support.empty())
+    *solve_box = GrowBox(box, support.i0, support.i1, support.j0, support.j1);
   const CellBox both = Union(lb, pb), sb = *solve_box;
   for (int j = both.j0; j < both.j0 + both.ny; ++j) {
     double* g = guess->data() + static_cast<size_t>(j) * n;
