@@ -6,6 +6,7 @@
 
 #include "common/simd.h"
 #include "common/thread_pool.h"
+#include "contact/working_set.h"
 
 namespace mjtouch {
 namespace {
@@ -160,26 +161,6 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
   }
 }
 
-// u = s (u - tau r [+ kd]) over the box; returns the sum of g0 + u over
-// the contact (p > 0; Sum4's order) and its size in *nc.
-template <bool kAdd>
-double UpdateAndSum(size_t B, double s, double tau, const double* __restrict r,
-                    const double* __restrict kd, const double* __restrict g0,
-                    const double* __restrict p, double* __restrict u, size_t* nc) {
-  size_t n = 0;
-  const double sum = Sum4(B, [&](size_t b) {
-    double v = u[b] - tau * r[b];
-    if constexpr (kAdd) v += kd[b];
-    v *= s;
-    u[b] = v;
-    const bool c = p[b] > 0.0;
-    n += c;
-    return c ? g0[b] + v : 0.0;
-  });
-  *nc = n;
-  return sum;
-}
-
 // z[j * bx + i] = sum over (dj, di) in stencil order of M[dj L + di] *
 // g_pad[(j + dj) px + i + di]. The stencil unrolled inside the loop over i,
 // which vectorises: each cell's sum runs in the same order as a per-cell
@@ -224,7 +205,11 @@ void StencilRows(const double* M, const T* g_pad, int px, int bx, int by, double
   });
 }
 
+// The working set's values live in contiguous arrays (working_set.h), whose
+// four-lane passes sum in Sum4's order; the box keeps t (zero off the set,
+// the operator's input), p, u and the operator outputs.
 void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStats* st) {
+  namespace ws = working_set;
   ElasticWork* w = P.w;
   const size_t B = P.B;
   const int bx = P.bx, by = P.by;
@@ -234,10 +219,9 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   double* g0 = w->g0.data();
   double* p = w->p.data();
   double* u = w->u.data();
-  double* g = w->g.data();
-  double* t = w->t.data();
+  double* g = w->g.data();  // scratch: K delta
+  double* t = w->t.data();  // zero on entry
   double* r = w->r.data();
-  double* pn = w->p_new.data();
   double* dl = w->delta.data();
   const bool stencil_f = P.precision == ApplyPrecision::kFloat;
   const size_t pad_size = static_cast<size_t>(px) * (by + 2 * hw);
@@ -248,42 +232,34 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   }
   double* gp = w->g_pad.data();
   float* gpf = w->g_pad_f.data();
+  for (auto* v : {&w->set_g, &w->set_z, &w->set_t, &w->set_t_old, &w->set_p, &w->set_p_new})
+    v->resize(B);
+  w->set.resize(B);
+  w->set_prev.resize(B);
+  w->changed.resize(B);
+  double* gS = w->set_g.data();
+  double* zS = w->set_z.data();
+  double* tS = w->set_t.data();
+  double* oS = w->set_t_old.data();
+  double* pS = w->set_p.data();
+  double* pnS = w->set_p_new.data();
   double G_old = 1.0;
   bool first = true;
   // The contact's gap sum and size for the next iteration (the first from
   // the initial u; later ones from the displacement update's pass).
   size_t nc = 0;
-  double sum_g = Sum4(B, [&](size_t b) {
-    const bool c = p[b] > 0.0;
-    nc += c;
-    return c ? g0[b] + u[b] : 0.0;
-  });
+  double sum_g = ws::ContactGapSum(B, g0, u, p, &nc);
+  size_t ns = 0;  // |S|; t is nonzero only on the last iteration's S
   for (int it = 1; it <= max_iter; ++it) {
     st->iterations = it;
     const double gbar = sum_g / static_cast<double>(nc);
-    // The working set: the contact plus cells that overlap; t lives on it.
-    std::vector<int>& S = w->set;
-    S.resize(B);
-    size_t ns = 0;
+    // The working set S: the contact plus cells that overlap; t lives on it.
+    std::swap(w->set, w->set_prev);
+    const size_t ns_prev = ns;
+    const int* S = w->set.data();
     // g_pad: g on S, zero elsewhere (its border stays zero, or wraps below).
-    for (int j = 0; j < by; ++j) {
-      const size_t row0 = static_cast<size_t>(j + hw) * px + hw;
-      for (int i = 0; i < bx; ++i) {
-        const size_t b = static_cast<size_t>(j) * bx + i;
-        const bool finite = std::isfinite(g0[b]);
-        const double gb = finite ? g0[b] + u[b] - gbar : 0.0;
-        g[b] = gb;
-        const bool in = p[b] > 0.0 || (finite && gb < 0.0);
-        if (stencil_f) {
-          gpf[row0 + i] = in ? static_cast<float>(gb) : 0.0f;
-        } else {
-          gp[row0 + i] = in ? gb : 0.0;
-        }
-        S[ns] = static_cast<int>(b);  // kept only if in
-        ns += in;
-      }
-    }
-    S.resize(ns);
+    ns = ws::BuildSet(bx, by, px, hw, g0, u, p, gbar, stencil_f ? nullptr : gp, gpf,
+                      w->set.data(), gS, pS);
     // A periodic operator's stencil wraps: the border repeats the far side
     // (so a field uniform along an axis stays exactly uniform).
     if (P.periodic) {
@@ -313,14 +289,8 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     } else {
       StencilRows<L>(M, gp, px, bx, by, r, w->fft.threads);
     }
-    const int* Sp = S.data();
-    const double sum_z = Sum4(ns, [&](size_t k) { return r[Sp[k]]; });
-    const double zbar = sum_z / static_cast<double>(ns);
-    const double G = Sum4(ns, [&](size_t k) {
-      const int b = Sp[k];
-      r[b] -= zbar;
-      return g[b] * r[b];
-    });
+    const double zbar = ws::GatherSum(ns, S, r, zS) / static_cast<double>(ns);
+    const double G = ws::CenterDot(ns, zbar, zS, gS);
     if (!(G > 0.0)) {  // exact solution (or a set the stencil cannot move)
       st->converged = G == 0.0;
       break;
@@ -333,30 +303,21 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     double beta = first ? 0.0 : G / G_old;
     first = false;
     G_old = G;
+    ws::Gather(ns, S, t, oS);
     double num = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
-      std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
-      const double sum_t = Sum4(ns, [&](size_t k) {
-        const int b = Sp[k];
-        pn[b] = r[b] + beta * t[b];
-        return pn[b];
-      });
-      const double tbar = sum_t / static_cast<double>(ns);
-      num = Sum4(ns, [&](size_t k) {
-        const int b = Sp[k];
-        pn[b] -= tbar;
-        return g[b] * pn[b];
-      });
+      const double tbar = ws::AxpySum(ns, beta, zS, oS, tS) / static_cast<double>(ns);
+      num = ws::CenterDot(ns, tbar, tS, gS);
       if (num > 0.0 || beta == 0.0) break;
       beta = 0.0;
     }
-    std::swap(w->t, w->p_new);
-    t = w->t.data();
-    pn = w->p_new.data();
+    const int* S_prev = w->set_prev.data();
+    for (size_t k = 0; k < ns_prev; ++k) t[S_prev[k]] = 0.0;
+    for (size_t k = 0; k < ns; ++k) t[S[k]] = tS[k];
     P.K.Apply(*P.spec, t, bx, by, r, &w->fft, P.precision);
     ++st->applies;
     // t sums to zero over S: t.(K t - mean) = t.K t
-    const double den = Sum4(ns, [&](size_t k) { return r[Sp[k]] * t[Sp[k]]; });
+    const double den = ws::GatherDot(ns, S, r, tS);
     if (!(den > 0.0) || !(num > 0.0)) {
       st->converged = false;
       break;
@@ -364,50 +325,33 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     const double tau = num / den;
     // Step and project onto p >= 0 on S; off S, p and p_new are zero (p > 0
     // lies in S), so the rescaling and the stopping test run on S only.
-    w->changed.clear();
-    const double sum_new = Sum4(ns, [&](size_t k) {
-      const int b = Sp[k];
-      double v = p[b] - tau * t[b];
-      if (v < 0.0) {
-        dl[b] = -v;
-        w->changed.push_back(b);
-        v = 0.0;
-      }
-      pn[b] = v;
-      return v;
-    });
+    size_t nchg = 0;
+    const double sum_new = ws::StepProject(ns, tau, pS, tS, S, pnS, dl, w->changed.data(), &nchg);
     if (!(sum_new > 0.0)) break;
     const double s = P.target / sum_new;
-    st->change = Sum4(ns, [&](size_t k) {
-                   const int b = Sp[k];
-                   const double v = s * pn[b], d = std::abs(v - p[b]);
-                   p[b] = v;
-                   return d;
-                 }) /
-                 P.target;
+    st->change = ws::ScaleChange(ns, s, pnS, pS, S, p) / P.target;
     // u = s (u - tau K t + K delta), K delta by direct sums (few cells) or
     // into g (free until the next iteration), in one pass that also sums
     // the next iteration's contact gap.
-    const size_t nchg = w->changed.size();
+    const int* chg = w->changed.data();
     double* kd = nullptr;
     if (nchg > 0) {
       if (!P.periodic && static_cast<double>(nchg) < DirectCellsPerApply(*P.spec, B)) {
-        P.K.AddCells(w->changed.data(), nchg, dl, bx, by, u, w->fft.threads);
+        P.K.AddCells(chg, nchg, dl, bx, by, u, w->fft.threads);
       } else {
         P.K.Apply(*P.spec, dl, bx, by, g, &w->fft, P.precision);
         ++st->applies;
         kd = g;
       }
-      for (int c : w->changed) dl[c] = 0.0;
+      for (size_t k = 0; k < nchg; ++k) dl[chg[k]] = 0.0;
     }
-    nc = 0;
-    sum_g = kd ? UpdateAndSum<true>(B, s, tau, r, kd, g0, p, u, &nc)
-               : UpdateAndSum<false>(B, s, tau, r, kd, g0, p, u, &nc);
+    sum_g = ws::UpdateAndSum(B, s, tau, r, kd, g0, p, u, &nc);
     if (st->change < tol) {
       st->converged = true;
       break;
     }
   }
+  w->changed.clear();
 }
 
 }  // namespace
@@ -445,10 +389,9 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   w->t.assign(B, 0.0);
   w->delta.assign(B, 0.0);
   if (method == ElasticMethod::kPreconditioned) {
-    // written before they are read (g, the stencil's r, each pass's p_new)
+    // written before they are read (g: K delta, r: the stencil's output)
     w->g.resize(B);
     w->r.resize(B);
-    w->p_new.resize(B);
   } else {
     w->g.assign(B, 0.0);
     w->r.assign(B, 0.0);
