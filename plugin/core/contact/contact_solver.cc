@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "common/simd.h"
 #include "common/thread_pool.h"
@@ -150,7 +149,10 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
       sum_new += v;
     }
     beta_on = overlap ? 0.0 : 1.0;
-    if (!(sum_new > 0.0)) break;
+    if (!(sum_new > 0.0)) {
+      for (int c : w->changed) dl[c] = 0.0;  // delta stays zero
+      break;
+    }
     double s;
     st->change = Accept(P, sum_new, &s);
     UpdateDisplacement(P, tau, s, st);
@@ -220,22 +222,21 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   double* p = w->p.data();
   double* u = w->u.data();
   double* g = w->g.data();  // scratch: K delta
-  double* t = w->t.data();  // zero on entry
+  double* t = w->t.data();  // zero off the last iteration's set (BuildSet zeroes it)
   double* r = w->r.data();
   double* dl = w->delta.data();
   const bool stencil_f = P.precision == ApplyPrecision::kFloat;
   const size_t pad_size = static_cast<size_t>(px) * (by + 2 * hw);
   if (stencil_f) {
-    w->g_pad_f.assign(pad_size, 0.0f);
+    w->g_pad_f.resize(pad_size);  // BuildSet writes every element
   } else {
-    w->g_pad.assign(pad_size, 0.0);
+    w->g_pad.resize(pad_size);
   }
   double* gp = w->g_pad.data();
   float* gpf = w->g_pad_f.data();
   for (auto* v : {&w->set_g, &w->set_z, &w->set_t, &w->set_t_old, &w->set_p, &w->set_p_new})
     v->resize(B);
   w->set.resize(B);
-  w->set_prev.resize(B);
   w->changed.resize(B);
   double* gS = w->set_g.data();
   double* zS = w->set_z.data();
@@ -249,17 +250,16 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   // the initial u; later ones from the displacement update's pass).
   size_t nc = 0;
   double sum_g = ws::ContactGapSum(B, g0, u, p, &nc);
-  size_t ns = 0;  // |S|; t is nonzero only on the last iteration's S
+  size_t ns = 0;  // |S|
   for (int it = 1; it <= max_iter; ++it) {
     st->iterations = it;
     const double gbar = sum_g / static_cast<double>(nc);
     // The working set S: the contact plus cells that overlap; t lives on it.
-    std::swap(w->set, w->set_prev);
-    const size_t ns_prev = ns;
+    // g_pad: g on S, zero elsewhere (its border zero, or wrapped below);
+    // the last t gathered on S (zero before the first), then zeroed.
     const int* S = w->set.data();
-    // g_pad: g on S, zero elsewhere (its border stays zero, or wraps below).
-    ns = ws::BuildSet(bx, by, px, hw, g0, u, p, gbar, stencil_f ? nullptr : gp, gpf,
-                      w->set.data(), gS, pS);
+    ns = ws::BuildSet(bx, by, px, hw, g0, u, p, gbar, stencil_f ? nullptr : gp, gpf, t, !first,
+                      w->set.data(), gS, pS, oS);
     // A periodic operator's stencil wraps: the border repeats the far side
     // (so a field uniform along an axis stays exactly uniform).
     if (P.periodic) {
@@ -303,7 +303,6 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     double beta = first ? 0.0 : G / G_old;
     first = false;
     G_old = G;
-    ws::Gather(ns, S, t, oS);
     double num = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
       const double tbar = ws::AxpySum(ns, beta, zS, oS, tS) / static_cast<double>(ns);
@@ -311,8 +310,6 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
       if (num > 0.0 || beta == 0.0) break;
       beta = 0.0;
     }
-    const int* S_prev = w->set_prev.data();
-    for (size_t k = 0; k < ns_prev; ++k) t[S_prev[k]] = 0.0;
     for (size_t k = 0; k < ns; ++k) t[S[k]] = tS[k];
     P.K.Apply(*P.spec, t, bx, by, r, &w->fft, P.precision);
     ++st->applies;
@@ -327,7 +324,10 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     // lies in S), so the rescaling and the stopping test run on S only.
     size_t nchg = 0;
     const double sum_new = ws::StepProject(ns, tau, pS, tS, S, pnS, dl, w->changed.data(), &nchg);
-    if (!(sum_new > 0.0)) break;
+    if (!(sum_new > 0.0)) {
+      for (size_t k = 0; k < nchg; ++k) dl[w->changed[k]] = 0.0;  // delta stays zero
+      break;
+    }
     const double s = P.target / sum_new;
     st->change = ws::ScaleChange(ns, s, pnS, pS, S, p) / P.target;
     // u = s (u - tau K t + K delta), K delta by direct sums (few cells) or
@@ -386,13 +386,16 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   w->g0.resize(B);
   w->p.resize(B);
   w->u.resize(B);
-  w->t.assign(B, 0.0);
-  w->delta.assign(B, 0.0);
+  // delta is zero between solves (both methods clear the cells they set)
+  w->delta.resize(B);
   if (method == ElasticMethod::kPreconditioned) {
-    // written before they are read (g: K delta, r: the stencil's output)
+    // written before they are read (t: zeroed by BuildSet, g: K delta, r:
+    // the stencil's output)
+    w->t.resize(B);
     w->g.resize(B);
     w->r.resize(B);
   } else {
+    w->t.assign(B, 0.0);
     w->g.assign(B, 0.0);
     w->r.assign(B, 0.0);
     w->p_new.assign(B, 0.0);
@@ -400,21 +403,13 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   double* g0 = w->g0.data();
   double* p = w->p.data();
   size_t ncand = 0;
-  double sum_p = 0.0;
   // Cells of the guess the solve drops (their share of initial_u removed).
-  w->changed.clear();
-  for (int j = 0; j < by; ++j)
-    for (int i = 0; i < bx; ++i) {
-      const size_t b = static_cast<size_t>(j) * bx + i, k = row_start(j) + i;
-      g0[b] = gap[k];
-      const bool cand = std::isfinite(g0[b]);
-      ncand += cand;
-      const double given = (*pressure)[k];
-      p[b] = cand ? std::max(0.0, given) : 0.0;
-      if (!std::isfinite(p[b])) p[b] = 0.0;
-      if (p[b] != given) w->changed.push_back(static_cast<int>(b));
-      sum_p += p[b];
-    }
+  w->changed.resize(B);
+  size_t ndropped = 0;
+  double sum_p = working_set::LoadGuess(bx, by, nx, gap.data() + row_start(0),
+                                        pressure->data() + row_start(0), g0, p, &ncand,
+                                        w->changed.data(), &ndropped);
+  w->changed.resize(ndropped);
   // initial_u, corrected for the dropped cells (direct sums unless they
   // are many), or a fresh K p.
   bool have_u = initial_u != nullptr && !periodic && method == ElasticMethod::kPreconditioned &&
@@ -423,7 +418,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
     // Too many dropped cells: the FFT is cheaper.
     have_u = static_cast<double>(w->changed.size()) <=
              DirectCellsPerApply(*K.SpectrumFor(bx, by), B);
-    if (have_u) {
+    if (have_u && !w->changed.empty()) {
       std::copy(initial_u, initial_u + B, w->u.begin());
       for (int c : w->changed) {
         const double given = (*pressure)[row_start(c / bx) + c % bx];
@@ -432,10 +427,21 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
       }
     }
   }
+  // The pressure outside the box is zero; inside it the solution (below).
+  const bool scaled_copy = have_u && w->changed.empty();  // u = scale initial_u
   w->changed.clear();
-  std::fill(pressure->begin(), pressure->end(), 0.0);
+  double* out = pressure->data();
+  std::fill(out, out + row_start(0), 0.0);
+  for (int j = 0; j < by; ++j) {
+    std::fill(out + row_start(j) - box.i0, out + row_start(j), 0.0);
+    std::fill(out + row_start(j) + bx, out + row_start(j) - box.i0 + nx, 0.0);
+  }
+  std::fill(out + row_start(by) - box.i0, out + pressure->size(), 0.0);
   const double target = force / A;  // sum of p over cells
-  if (ncand == 0 || !(target > 0.0)) return false;
+  if (ncand == 0 || !(target > 0.0)) {
+    for (int j = 0; j < by; ++j) std::fill(out + row_start(j), out + row_start(j) + bx, 0.0);
+    return false;
+  }
   if (!(sum_p > 0.0)) {
     for (size_t b = 0; b < B; ++b) p[b] = std::isfinite(g0[b]) ? 1.0 : 0.0;
     sum_p = static_cast<double>(ncand);
@@ -448,7 +454,9 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   st->fft_size_y = spec->fft.ny();
   const double fft_cost = 5.0 * static_cast<double>(spec->fft.nx()) * spec->fft.ny() *
                           std::log2(static_cast<double>(spec->fft.nx()) * spec->fft.ny());
-  if (have_u) {
+  if (scaled_copy) {
+    for (size_t b = 0; b < B; ++b) w->u[b] = initial_u[b] * scale;
+  } else if (have_u) {
     for (size_t b = 0; b < B; ++b) w->u[b] *= scale;
   } else {
     K.Apply(*spec, p, bx, by, w->u.data(), &w->fft, precision);
@@ -471,14 +479,8 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
     ++st->applies;
   }
   size_t nc = 0;
-  double sum_g = 0.0, max_g = -std::numeric_limits<double>::infinity();
-  for (size_t b = 0; b < B; ++b) {
-    if (p[b] > 0.0) {
-      sum_g += g0[b] + u[b];
-      max_g = std::max(max_g, g0[b]);
-      ++nc;
-    }
-  }
+  double max_g = 0.0;
+  const double sum_g = working_set::ContactSummary(B, g0, u, p, &nc, &max_g);
   st->contact_cells = static_cast<int>(nc);
   st->approach_m = nc ? sum_g / static_cast<double>(nc) : 0.0;
   st->max_contact_gap_m = max_g;

@@ -1,10 +1,15 @@
 #include "contact/working_set.h"
 
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 #include <limits>
 
 #include "common/simd.h"
+
+#if MJTOUCH_X86_SIMD
+#include <emmintrin.h>
+#endif
 
 // The vector types are only passed between inlined helpers; the
 // by-value vector ABI never applies.
@@ -19,6 +24,7 @@ namespace {
 typedef double v4d __attribute__((vector_size(32)));
 typedef long long v4l __attribute__((vector_size(32)));
 typedef float v4f __attribute__((vector_size(16)));
+typedef int v4i __attribute__((vector_size(16)));
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -40,9 +46,19 @@ MJTOUCH_LANES v4d Abs(v4d x) {
                     0x7fffffffffffffffLL};
   return reinterpret_cast<v4d>(reinterpret_cast<v4l>(x) & mask);
 }
-// The lanes of a comparison as bits 0-3.
+// The lanes of a comparison as bits 0-3 (SSE2's movmskpd on the halves:
+// GCC's lane extractions cost several times more).
 MJTOUCH_LANES int Bits(v4l m) {
+#if MJTOUCH_X86_SIMD
+  union {
+    v4l v;
+    __m128d h[2];
+  } halves;
+  halves.v = m;
+  return _mm_movemask_pd(halves.h[0]) | (_mm_movemask_pd(halves.h[1]) << 2);
+#else
   return static_cast<int>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8));
+#endif
 }
 // Sum4's end: the tail went into the first lane's partial sum s0.
 MJTOUCH_LANES double Combine(v4d acc, double s0) { return (s0 + acc[1]) + (acc[2] + acc[3]); }
@@ -83,21 +99,46 @@ MJTOUCH_LANES double UpdateAndSumT(size_t B, double s, double tau, const double*
   return Combine(acc, s0);
 }
 
-template <bool kFloat>
+// kPerm[m]: the set lanes of the 4-bit mask m first, in order; kCount[m]:
+// how many.
+constexpr v4l kPerm[16] = {{0, 0, 0, 0}, {0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0},
+                           {2, 0, 0, 0}, {0, 2, 0, 0}, {1, 2, 0, 0}, {0, 1, 2, 0},
+                           {3, 0, 0, 0}, {0, 3, 0, 0}, {1, 3, 0, 0}, {0, 1, 3, 0},
+                           {2, 3, 0, 0}, {0, 2, 3, 0}, {1, 2, 3, 0}, {0, 1, 2, 3}};
+constexpr int kCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
+
+template <bool kFloat, bool kReadT>
 MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __restrict g0,
                                const double* __restrict u, const double* __restrict p,
                                double gbar, double* __restrict gp, float* __restrict gpf,
-                               int* __restrict S, double* __restrict gS,
-                               double* __restrict pS) {
+                               double* __restrict t, int* __restrict S, double* __restrict gS,
+                               double* __restrict pS, double* __restrict oS) {
   const v4d zero = {0, 0, 0, 0}, inf = Splat(kInf), gbarv = Splat(gbar);
+  // the padded array's border: zero (a periodic caller overwrites it)
+  auto zero_pad = [&](size_t from, size_t n) {
+    for (size_t k = from; k < from + n; ++k) {
+      if constexpr (kFloat) {
+        gpf[k] = 0.0f;
+      } else {
+        gp[k] = 0.0;
+      }
+    }
+  };
+  zero_pad(0, static_cast<size_t>(hw) * px);
+  zero_pad(static_cast<size_t>(by + hw) * px, static_cast<size_t>(hw) * px);
   size_t ns = 0;
   for (int j = 0; j < by; ++j) {
     const size_t row0 = static_cast<size_t>(j + hw) * px + hw;
+    zero_pad(row0 - hw, hw);
+    zero_pad(row0 + bx, hw);
     const size_t b0 = static_cast<size_t>(j) * bx;
     int i = 0;
     for (; i + 4 <= bx; i += 4) {
       const size_t b = b0 + i;
       const v4d gv = Load(g0 + b), pv = Load(p + b);
+      v4d ov = zero;
+      if constexpr (kReadT) ov = Load(t + b);
+      Store(t + b, zero);
       const v4l finite = Abs(gv) < inf;
       const v4d gb = finite ? (gv + Load(u + b)) - gbarv : zero;
       const v4l in = (pv > zero) | (finite & (gb < zero));
@@ -108,24 +149,18 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       } else {
         Store(gp + row0 + i, gin);
       }
+      // the lanes in S moved to the front and stored whole (branch-free;
+      // the lanes past the count are overwritten by the next cells)
       const int m = Bits(in);
-      if (m == 15) {
-        const int c = static_cast<int>(b);
-        S[ns] = c;
-        S[ns + 1] = c + 1;
-        S[ns + 2] = c + 2;
-        S[ns + 3] = c + 3;
-        Store(gS + ns, gb);
-        Store(pS + ns, pv);
-        ns += 4;
-      } else if (m != 0) {
-        for (int l = 0; l < 4; ++l) {  // kept only if in
-          S[ns] = static_cast<int>(b) + l;
-          gS[ns] = gb[l];
-          pS[ns] = pv[l];
-          ns += (m >> l) & 1;
-        }
-      }
+      const v4l perm = kPerm[m];
+      const v4i lane = {static_cast<int>(perm[0]), static_cast<int>(perm[1]),
+                        static_cast<int>(perm[2]), static_cast<int>(perm[3])};
+      const v4i cells = lane + static_cast<int>(b);
+      std::memcpy(S + ns, &cells, sizeof(cells));
+      Store(gS + ns, __builtin_shuffle(gb, perm));
+      Store(pS + ns, __builtin_shuffle(pv, perm));
+      Store(oS + ns, __builtin_shuffle(ov, perm));
+      ns += kCount[m];
     }
     for (; i < bx; ++i) {
       const size_t b = b0 + i;
@@ -140,6 +175,8 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       S[ns] = static_cast<int>(b);
       gS[ns] = gb;
       pS[ns] = p[b];
+      oS[ns] = kReadT ? t[b] : 0.0;
+      t[b] = 0.0;
       ns += in;
     }
   }
@@ -180,10 +217,110 @@ double UpdateAndSum(size_t B, double s, double tau, const double* r, const doubl
 
 MJTOUCH_TARGET_CLONES
 size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* u,
-                const double* p, double gbar, double* gp, float* gpf, int* S, double* gS,
-                double* pS) {
-  return gp ? BuildSetT<false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, S, gS, pS)
-            : BuildSetT<true>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, S, gS, pS);
+                const double* p, double gbar, double* gp, float* gpf, double* t, bool read_t,
+                int* S, double* gS, double* pS, double* oS) {
+  if (gp) {
+    return read_t ? BuildSetT<false, true>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS)
+                  : BuildSetT<false, false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS);
+  }
+  return read_t ? BuildSetT<true, true>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS)
+                : BuildSetT<true, false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS);
+}
+
+MJTOUCH_TARGET_CLONES
+double LoadGuess(int bx, int by, size_t stride, const double* __restrict gap,
+                 const double* __restrict given, double* __restrict g0, double* __restrict p,
+                 size_t* ncand, int* __restrict changed, size_t* nchanged) {
+  const v4d zero = {0, 0, 0, 0}, inf = Splat(kInf);
+  double sum = 0.0;
+  v4l cand_n = {0, 0, 0, 0};
+  size_t nc = 0, nch = 0;
+  for (int j = 0; j < by; ++j) {
+    const double* gr = gap + static_cast<size_t>(j) * stride;
+    const double* qr = given + static_cast<size_t>(j) * stride;
+    double* g0r = g0 + static_cast<size_t>(j) * bx;
+    double* pr = p + static_cast<size_t>(j) * bx;
+    const int b0 = j * bx;
+    int i = 0;
+    for (; i + 4 <= bx; i += 4) {
+      const v4d gv = Load(gr + i), qv = Load(qr + i);
+      Store(g0r + i, gv);
+      const v4l cand = Abs(gv) < inf;
+      cand_n += cand;
+      // std::max(0, q) on candidates, 0 if not finite
+      const v4d v = (cand & (qv > zero) & (Abs(qv) < inf)) ? qv : zero;
+      Store(pr + i, v);
+      const int ch = Bits(v != qv);
+      if (ch != 0) {
+        for (int l = 0; l < 4; ++l)
+          if ((ch >> l) & 1) changed[nch++] = b0 + i + l;
+      }
+      // in order; zeros skipped (v >= +0 and sum >= +0: adding +0 is exact)
+      if (Bits(v != zero) != 0) {
+        sum += v[0];
+        sum += v[1];
+        sum += v[2];
+        sum += v[3];
+      }
+    }
+    for (; i < bx; ++i) {
+      g0r[i] = gr[i];
+      const bool cand = std::abs(gr[i]) < kInf;
+      nc += cand;
+      double v = cand ? std::max(0.0, qr[i]) : 0.0;
+      if (!(std::abs(v) < kInf)) v = 0.0;
+      pr[i] = v;
+      if (v != qr[i]) changed[nch++] = b0 + i;
+      sum += v;
+    }
+  }
+  *ncand = nc + Count(cand_n);
+  *nchanged = nch;
+  return sum;
+}
+
+MJTOUCH_TARGET_CLONES
+double ContactSummary(size_t B, const double* __restrict g0, const double* __restrict u,
+                      const double* __restrict p, size_t* nc, double* max_g0) {
+  const v4d zero = {0, 0, 0, 0}, ninf = Splat(-kInf);
+  double sum = 0.0;
+  v4d mx = ninf;
+  v4l cnt = {0, 0, 0, 0};
+  size_t b = 0;
+  for (; b + 4 <= B; b += 4) {
+    const v4l c = Load(p + b) > zero;
+    if (Bits(c) == 0) continue;
+    cnt += c;
+    const v4d gv = Load(g0 + b);
+    // in order; a cell off the contact adds +0 (sum is never -0): exact
+    const v4d a = c ? gv + Load(u + b) : zero;
+    sum += a[0];
+    sum += a[1];
+    sum += a[2];
+    sum += a[3];
+    const v4d m = c ? gv : ninf;
+    mx = m > mx ? m : mx;
+  }
+  size_t n = Count(cnt);
+  double m0 = std::max(std::max(mx[0], mx[1]), std::max(mx[2], mx[3]));
+  for (; b < B; ++b) {
+    if (p[b] > 0.0) {
+      sum += g0[b] + u[b];
+      m0 = std::max(m0, g0[b]);
+      ++n;
+    }
+  }
+  // The largest of finite values does not depend on the order, but for
+  // the sign of a zero (std::max keeps the first of equals): then again in
+  // box order.
+  if (m0 == 0.0) {
+    m0 = -kInf;
+    for (b = 0; b < B; ++b)
+      if (p[b] > 0.0) m0 = std::max(m0, g0[b]);
+  }
+  *nc = n;
+  *max_g0 = m0;
+  return sum;
 }
 
 MJTOUCH_TARGET_CLONES
@@ -202,11 +339,6 @@ double GatherSum(size_t ns, const int* __restrict S, const double* __restrict x,
     s0 += xS[k];
   }
   return Combine(acc, s0);
-}
-
-void Gather(size_t ns, const int* __restrict S, const double* __restrict x,
-            double* __restrict xS) {
-  for (size_t k = 0; k < ns; ++k) xS[k] = x[S[k]];
 }
 
 MJTOUCH_TARGET_CLONES

@@ -24,18 +24,31 @@ double UpdateAndSum(size_t B, double s, double tau, const double* r, const doubl
 
 // The working set of a bx x by box: g = g0 + u - gbar where g0 is finite
 // (0 elsewhere); S = cells with p > 0 or finite g0 and g < 0, in box order;
-// gS, pS: g and p on S. The preconditioner's input, g on S and 0 elsewhere,
-// goes to row j + hw, column hw of the padded array (row length px): into
-// gp (double) or, if gp is null, into gpf (float). S, gS, pS hold B
-// entries. Returns |S|.
+// gS, pS: g and p on S; oS: t on S (read_t; else 0), t then zeroed on the
+// box. The preconditioner's input, g on S and 0 elsewhere with a zero
+// border of hw, fills the padded array (row length px, by + 2 hw rows): gp
+// (double) or, if gp is null, gpf (float). S, gS, pS, oS hold B + 3
+// entries (whole four-lane stores).
+// Returns |S|.
 size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* u,
-                const double* p, double gbar, double* gp, float* gpf, int* S, double* gS,
-                double* pS);
+                const double* p, double gbar, double* gp, float* gpf, double* t, bool read_t,
+                int* S, double* gS, double* pS, double* oS);
+
+// The solve's start from a bx x by window of the grid (rows `stride`
+// apart): g0 = gap; p = max(0, given) on candidates (finite gap), 0 where
+// not a candidate or not finite; the cells whose p differs from given go to
+// changed (box order, count in *nchanged; B entries). Returns sum(p) in
+// box order; the candidates' count in *ncand.
+double LoadGuess(int bx, int by, size_t stride, const double* gap, const double* given,
+                 double* g0, double* p, size_t* ncand, int* changed, size_t* nchanged);
+
+// In box order over the contact (p > 0): the sum of g0 + u, the largest g0
+// (-inf if none) in *max_g0 and the count in *nc.
+double ContactSummary(size_t B, const double* g0, const double* u, const double* p, size_t* nc,
+                      double* max_g0);
 
 // xS[k] = x[S[k]]; returns their sum.
 double GatherSum(size_t ns, const int* S, const double* x, double* xS);
-// xS[k] = x[S[k]].
-void Gather(size_t ns, const int* S, const double* x, double* xS);
 // sum of x[S[k]] * yS[k].
 double GatherDot(size_t ns, const int* S, const double* x, const double* yS);
 // xS -= mean; returns the sum of gS * xS.
