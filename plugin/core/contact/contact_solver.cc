@@ -210,7 +210,10 @@ void StencilRows(const double* M, const T* g_pad, int px, int bx, int by, double
 // The working set's values live in contiguous arrays (working_set.h), whose
 // four-lane passes sum in Sum4's order; the box keeps t (zero off the set,
 // the operator's input), p, u and the operator outputs.
-void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStats* st) {
+// gap_sum, contacts: the first iteration's contact gap sum and size if
+// known (ScaleStart), else contacts = 0.
+void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, size_t contacts,
+                    ElasticSolveStats* st) {
   namespace ws = working_set;
   ElasticWork* w = P.w;
   const size_t B = P.B;
@@ -248,8 +251,8 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   bool first = true;
   // The contact's gap sum and size for the next iteration (the first from
   // the initial u; later ones from the displacement update's pass).
-  size_t nc = 0;
-  double sum_g = ws::ContactGapSum(B, g0, u, p, &nc);
+  size_t nc = contacts;
+  double sum_g = nc > 0 ? gap_sum : ws::ContactGapSum(B, g0, u, p, &nc);
   size_t ns = 0;  // |S|
   for (int it = 1; it <= max_iter; ++it) {
     st->iterations = it;
@@ -303,14 +306,14 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     double beta = first ? 0.0 : G / G_old;
     first = false;
     G_old = G;
+    // (each pass also writes t on the box: zero off S since BuildSet)
     double num = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
       const double tbar = ws::AxpySum(ns, beta, zS, oS, tS) / static_cast<double>(ns);
-      num = ws::CenterDot(ns, tbar, tS, gS);
+      num = ws::CenterDot(ns, tbar, tS, gS, S, t);
       if (num > 0.0 || beta == 0.0) break;
       beta = 0.0;
     }
-    for (size_t k = 0; k < ns; ++k) t[S[k]] = tS[k];
     P.K.Apply(*P.spec, t, bx, by, r, &w->fft, P.precision);
     ++st->applies;
     // t sums to zero over S: t.(K t - mean) = t.K t
@@ -447,18 +450,23 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
     sum_p = static_cast<double>(ncand);
   }
   const double scale = target / sum_p;
-  for (size_t b = 0; b < B; ++b) p[b] *= scale;
+  // pcg from initial_u: p and u scaled in the pass that sums the first
+  // iteration's contact gap
+  size_t contacts = 0;
+  double gap_sum = 0.0;
+  if (have_u) {
+    gap_sum = working_set::ScaleStart(B, scale, p, scaled_copy ? initial_u : w->u.data(),
+                                      w->u.data(), g0, &contacts);
+  } else {
+    for (size_t b = 0; b < B; ++b) p[b] *= scale;
+  }
 
   const auto spec = K.SpectrumFor(bx, by);
   st->fft_size_x = spec->fft.nx();
   st->fft_size_y = spec->fft.ny();
   const double fft_cost = 5.0 * static_cast<double>(spec->fft.nx()) * spec->fft.ny() *
                           std::log2(static_cast<double>(spec->fft.nx()) * spec->fft.ny());
-  if (scaled_copy) {
-    for (size_t b = 0; b < B; ++b) w->u[b] = initial_u[b] * scale;
-  } else if (have_u) {
-    for (size_t b = 0; b < B; ++b) w->u[b] *= scale;
-  } else {
+  if (!have_u) {
     K.Apply(*spec, p, bx, by, w->u.data(), &w->fft, precision);
     st->applies = 1;
   }
@@ -466,7 +474,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   if (method == ElasticMethod::kPolonskyKeer) {
     PolonskyKeer(P, tol, max_iter, st);
   } else {
-    Preconditioned(P, tol, max_iter, st);
+    Preconditioned(P, tol, max_iter, gap_sum, contacts, st);
   }
   // The displacement of the final pressure for the approach: P&K recomputes
   // it; the preconditioned path keeps the running u = K p (updated with the

@@ -25,6 +25,7 @@ typedef double v4d __attribute__((vector_size(32)));
 typedef long long v4l __attribute__((vector_size(32)));
 typedef float v4f __attribute__((vector_size(16)));
 typedef int v4i __attribute__((vector_size(16)));
+typedef int v8i __attribute__((vector_size(32)));
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -99,13 +100,49 @@ MJTOUCH_LANES double UpdateAndSumT(size_t B, double s, double tau, const double*
   return Combine(acc, s0);
 }
 
-// kPerm[m]: the set lanes of the 4-bit mask m first, in order; kCount[m]:
-// how many.
-constexpr v4l kPerm[16] = {{0, 0, 0, 0}, {0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0},
-                           {2, 0, 0, 0}, {0, 2, 0, 0}, {1, 2, 0, 0}, {0, 1, 2, 0},
-                           {3, 0, 0, 0}, {0, 3, 0, 0}, {1, 3, 0, 0}, {0, 1, 3, 0},
-                           {2, 3, 0, 0}, {0, 2, 3, 0}, {1, 2, 3, 0}, {0, 1, 2, 3}};
+// For the 4-bit lane mask m: kLane[m], the set lanes first, in order;
+// kHalves[m], the same as 32-bit halves (one vpermd moves four doubles);
+// kCount[m], how many.
+constexpr v4i kLane[16] = {
+    {0, 0, 0, 0},
+    {0, 0, 0, 0},
+    {1, 0, 0, 0},
+    {0, 1, 0, 0},
+    {2, 0, 0, 0},
+    {0, 2, 0, 0},
+    {1, 2, 0, 0},
+    {0, 1, 2, 0},
+    {3, 0, 0, 0},
+    {0, 3, 0, 0},
+    {1, 3, 0, 0},
+    {0, 1, 3, 0},
+    {2, 3, 0, 0},
+    {0, 2, 3, 0},
+    {1, 2, 3, 0},
+    {0, 1, 2, 3}};
+constexpr v8i kHalves[16] = {
+    {0, 1, 0, 1, 0, 1, 0, 1},
+    {0, 1, 0, 1, 0, 1, 0, 1},
+    {2, 3, 0, 1, 0, 1, 0, 1},
+    {0, 1, 2, 3, 0, 1, 0, 1},
+    {4, 5, 0, 1, 0, 1, 0, 1},
+    {0, 1, 4, 5, 0, 1, 0, 1},
+    {2, 3, 4, 5, 0, 1, 0, 1},
+    {0, 1, 2, 3, 4, 5, 0, 1},
+    {6, 7, 0, 1, 0, 1, 0, 1},
+    {0, 1, 6, 7, 0, 1, 0, 1},
+    {2, 3, 6, 7, 0, 1, 0, 1},
+    {0, 1, 2, 3, 6, 7, 0, 1},
+    {4, 5, 6, 7, 0, 1, 0, 1},
+    {0, 1, 4, 5, 6, 7, 0, 1},
+    {2, 3, 4, 5, 6, 7, 0, 1},
+    {0, 1, 2, 3, 4, 5, 6, 7}};
 constexpr int kCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
+
+// x's lanes in the order `halves` gives (bits moved, not converted).
+MJTOUCH_LANES v4d Compact(v4d x, v8i halves) {
+  return reinterpret_cast<v4d>(__builtin_shuffle(reinterpret_cast<v8i>(x), halves));
+}
 
 template <bool kFloat, bool kReadT>
 MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __restrict g0,
@@ -113,7 +150,7 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
                                double gbar, double* __restrict gp, float* __restrict gpf,
                                double* __restrict t, int* __restrict S, double* __restrict gS,
                                double* __restrict pS, double* __restrict oS) {
-  const v4d zero = {0, 0, 0, 0}, inf = Splat(kInf), gbarv = Splat(gbar);
+  const v4d zero = {0, 0, 0, 0}, gbarv = Splat(gbar);
   // the padded array's border: zero (a periodic caller overwrites it)
   auto zero_pad = [&](size_t from, size_t n) {
     for (size_t k = from; k < from + n; ++k) {
@@ -132,16 +169,18 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
     zero_pad(row0 - hw, hw);
     zero_pad(row0 + bx, hw);
     const size_t b0 = static_cast<size_t>(j) * bx;
+    v4i cells = v4i{0, 0, 0, 0} + static_cast<int>(b0);
     int i = 0;
-    for (; i + 4 <= bx; i += 4) {
+    for (; i + 4 <= bx; i += 4, cells += 4) {
       const size_t b = b0 + i;
       const v4d gv = Load(g0 + b), pv = Load(p + b);
       v4d ov = zero;
       if constexpr (kReadT) ov = Load(t + b);
       Store(t + b, zero);
-      const v4l finite = Abs(gv) < inf;
-      const v4d gb = finite ? (gv + Load(u + b)) - gbarv : zero;
-      const v4l in = (pv > zero) | (finite & (gb < zero));
+      // g0 = +inf where not finite (LoadGuess): gb is then +inf or NaN, not
+      // < 0, and p = 0 (such cells never join S; their gb goes unread)
+      const v4d gb = (gv + Load(u + b)) - gbarv;
+      const v4l in = (pv > zero) | (gb < zero);
       const v4d gin = in ? gb : zero;
       if constexpr (kFloat) {
         const v4f f = __builtin_convertvector(gin, v4f);
@@ -152,21 +191,18 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       // the lanes in S moved to the front and stored whole (branch-free;
       // the lanes past the count are overwritten by the next cells)
       const int m = Bits(in);
-      const v4l perm = kPerm[m];
-      const v4i lane = {static_cast<int>(perm[0]), static_cast<int>(perm[1]),
-                        static_cast<int>(perm[2]), static_cast<int>(perm[3])};
-      const v4i cells = lane + static_cast<int>(b);
-      std::memcpy(S + ns, &cells, sizeof(cells));
-      Store(gS + ns, __builtin_shuffle(gb, perm));
-      Store(pS + ns, __builtin_shuffle(pv, perm));
-      Store(oS + ns, __builtin_shuffle(ov, perm));
+      const v4i kept = cells + kLane[m];
+      std::memcpy(S + ns, &kept, sizeof(kept));
+      const v8i halves = kHalves[m];
+      Store(gS + ns, Compact(gb, halves));
+      Store(pS + ns, Compact(pv, halves));
+      Store(oS + ns, Compact(ov, halves));
       ns += kCount[m];
     }
     for (; i < bx; ++i) {
       const size_t b = b0 + i;
-      const bool finite = std::abs(g0[b]) < kInf;
-      const double gb = finite ? g0[b] + u[b] - gbar : 0.0;
-      const bool in = p[b] > 0.0 || (finite && gb < 0.0);
+      const double gb = g0[b] + u[b] - gbar;
+      const bool in = p[b] > 0.0 || gb < 0.0;
       if constexpr (kFloat) {
         gpf[row0 + i] = in ? static_cast<float>(gb) : 0.0f;
       } else {
@@ -200,6 +236,34 @@ double ContactGapSum(size_t B, const double* __restrict g0, const double* __rest
   double s0 = acc[0];
   size_t n = Count(cnt);
   for (; b < B; ++b) {
+    const bool c = p[b] > 0.0;
+    n += c;
+    s0 += c ? g0[b] + u[b] : 0.0;
+  }
+  *nc = n;
+  return Combine(acc, s0);
+}
+
+MJTOUCH_TARGET_CLONES
+double ScaleStart(size_t B, double scale, double* __restrict p, const double* u_from, double* u,
+                  const double* __restrict g0, size_t* nc) {
+  const v4d zero = {0, 0, 0, 0}, sv = Splat(scale);
+  v4d acc = zero;
+  v4l cnt = {0, 0, 0, 0};
+  size_t b = 0;
+  for (; b + 4 <= B; b += 4) {
+    const v4d pv = Load(p + b) * sv, uv = Load(u_from + b) * sv;
+    Store(p + b, pv);
+    Store(u + b, uv);
+    const v4l c = pv > zero;
+    acc += c ? Load(g0 + b) + uv : zero;
+    cnt += c;
+  }
+  double s0 = acc[0];
+  size_t n = Count(cnt);
+  for (; b < B; ++b) {
+    p[b] *= scale;
+    u[b] = u_from[b] * scale;
     const bool c = p[b] > 0.0;
     n += c;
     s0 += c ? g0[b] + u[b] : 0.0;
@@ -244,8 +308,8 @@ double LoadGuess(int bx, int by, size_t stride, const double* __restrict gap,
     int i = 0;
     for (; i + 4 <= bx; i += 4) {
       const v4d gv = Load(gr + i), qv = Load(qr + i);
-      Store(g0r + i, gv);
       const v4l cand = Abs(gv) < inf;
+      Store(g0r + i, cand ? gv : inf);
       cand_n += cand;
       // std::max(0, q) on candidates, 0 if not finite
       const v4d v = (cand & (qv > zero) & (Abs(qv) < inf)) ? qv : zero;
@@ -264,8 +328,8 @@ double LoadGuess(int bx, int by, size_t stride, const double* __restrict gap,
       }
     }
     for (; i < bx; ++i) {
-      g0r[i] = gr[i];
       const bool cand = std::abs(gr[i]) < kInf;
+      g0r[i] = cand ? gr[i] : kInf;
       nc += cand;
       double v = cand ? std::max(0.0, qr[i]) : 0.0;
       if (!(std::abs(v) < kInf)) v = 0.0;
@@ -352,22 +416,42 @@ double GatherDot(size_t ns, const int* __restrict S, const double* __restrict x,
   return Combine(acc, s0);
 }
 
-MJTOUCH_TARGET_CLONES
-double CenterDot(size_t ns, double mean, double* __restrict xS, const double* __restrict gS) {
+namespace {
+
+template <bool kScatter>
+MJTOUCH_LANES double CenterDotT(size_t ns, double mean, double* __restrict xS,
+                               const double* __restrict gS, const int* __restrict S,
+                               double* __restrict x_box) {
   const v4d mv = Splat(mean);
   v4d acc = {0, 0, 0, 0};
   size_t k = 0;
   for (; k + 4 <= ns; k += 4) {
     const v4d x = Load(xS + k) - mv;
     Store(xS + k, x);
+    if constexpr (kScatter) {
+      x_box[S[k]] = x[0];
+      x_box[S[k + 1]] = x[1];
+      x_box[S[k + 2]] = x[2];
+      x_box[S[k + 3]] = x[3];
+    }
     acc += Load(gS + k) * x;
   }
   double s0 = acc[0];
   for (; k < ns; ++k) {
     xS[k] -= mean;
+    if constexpr (kScatter) x_box[S[k]] = xS[k];
     s0 += gS[k] * xS[k];
   }
   return Combine(acc, s0);
+}
+
+}  // namespace
+
+MJTOUCH_TARGET_CLONES
+double CenterDot(size_t ns, double mean, double* xS, const double* gS, const int* S,
+                 double* x_box) {
+  return x_box ? CenterDotT<true>(ns, mean, xS, gS, S, x_box)
+               : CenterDotT<false>(ns, mean, xS, gS, S, x_box);
 }
 
 MJTOUCH_TARGET_CLONES

@@ -18,12 +18,17 @@ namespace working_set {
 // sum over the contact (p > 0) of g0 + u; its size in *nc.
 double ContactGapSum(size_t B, const double* g0, const double* u, const double* p, size_t* nc);
 
+// p *= scale, u = scale u_from (u_from may be u), then ContactGapSum.
+double ScaleStart(size_t B, double scale, double* p, const double* u_from, double* u,
+                  const double* g0, size_t* nc);
+
 // u = s (u - tau r [+ kd]) (kd may be null), then ContactGapSum of the new u.
 double UpdateAndSum(size_t B, double s, double tau, const double* r, const double* kd,
                     const double* g0, const double* p, double* u, size_t* nc);
 
-// The working set of a bx x by box: g = g0 + u - gbar where g0 is finite
-// (0 elsewhere); S = cells with p > 0 or finite g0 and g < 0, in box order;
+// The working set of a bx x by box: g = g0 + u - gbar; S = cells with p > 0
+// or g < 0, in box order (g0 = +inf off the candidates, as LoadGuess
+// leaves it, and p = 0 there: they stay out);
 // gS, pS: g and p on S; oS: t on S (read_t; else 0), t then zeroed on the
 // box. The preconditioner's input, g on S and 0 elsewhere with a zero
 // border of hw, fills the padded array (row length px, by + 2 hw rows): gp
@@ -35,7 +40,8 @@ size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* 
                 int* S, double* gS, double* pS, double* oS);
 
 // The solve's start from a bx x by window of the grid (rows `stride`
-// apart): g0 = gap; p = max(0, given) on candidates (finite gap), 0 where
+// apart): g0 = gap on candidates (finite gap), +inf elsewhere (one
+// comparison then tells cells that may touch); p = max(0, given) on candidates, 0 where
 // not a candidate or not finite; the cells whose p differs from given go to
 // changed (box order, count in *nchanged; B entries). Returns sum(p) in
 // box order; the candidates' count in *ncand.
@@ -51,8 +57,10 @@ double ContactSummary(size_t B, const double* g0, const double* u, const double*
 double GatherSum(size_t ns, const int* S, const double* x, double* xS);
 // sum of x[S[k]] * yS[k].
 double GatherDot(size_t ns, const int* S, const double* x, const double* yS);
-// xS -= mean; returns the sum of gS * xS.
-double CenterDot(size_t ns, double mean, double* xS, const double* gS);
+// xS -= mean (and x_box[S[k]] = xS[k] if x_box is not null); returns the
+// sum of gS * xS.
+double CenterDot(size_t ns, double mean, double* xS, const double* gS, const int* S = nullptr,
+                 double* x_box = nullptr);
 // tS = zS + beta oS; returns the sum of tS.
 double AxpySum(size_t ns, double beta, const double* zS, const double* oS, double* tS);
 
