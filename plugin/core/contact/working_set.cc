@@ -191,6 +191,7 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       // the lanes in S moved to the front and stored whole (branch-free;
       // the lanes past the count are overwritten by the next cells)
       const int m = Bits(in);
+#if MJTOUCH_X86_SIMD
       const v4i kept = cells + kLane[m];
       std::memcpy(S + ns, &kept, sizeof(kept));
       const v8i halves = kHalves[m];
@@ -198,6 +199,18 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       Store(pS + ns, Compact(pv, halves));
       Store(oS + ns, Compact(ov, halves));
       ns += kCount[m];
+#else
+      // (variable shuffles lower to scalar code without AVX2: lane by lane)
+      if (m != 0) {
+        for (int l = 0; l < 4; ++l) {
+          S[ns] = static_cast<int>(b) + l;
+          gS[ns] = gb[l];
+          pS[ns] = pv[l];
+          oS[ns] = ov[l];
+          ns += (m >> l) & 1;
+        }
+      }
+#endif
     }
     for (; i < bx; ++i) {
       const size_t b = b0 + i;
@@ -295,7 +308,7 @@ MJTOUCH_TARGET_CLONES
 double LoadGuess(int bx, int by, size_t stride, const double* __restrict gap,
                  const double* __restrict given, double* __restrict g0, double* __restrict p,
                  size_t* ncand, int* __restrict changed, size_t* nchanged) {
-  const v4d zero = {0, 0, 0, 0}, inf = Splat(kInf);
+  [[maybe_unused]] const v4d zero = {0, 0, 0, 0}, inf = Splat(kInf);
   double sum = 0.0;
   v4l cand_n = {0, 0, 0, 0};
   size_t nc = 0, nch = 0;
@@ -306,6 +319,7 @@ double LoadGuess(int bx, int by, size_t stride, const double* __restrict gap,
     double* pr = p + static_cast<size_t>(j) * bx;
     const int b0 = j * bx;
     int i = 0;
+#if MJTOUCH_X86_SIMD  // (elsewhere the scalar loop below: one running sum)
     for (; i + 4 <= bx; i += 4) {
       const v4d gv = Load(gr + i), qv = Load(qr + i);
       const v4l cand = Abs(gv) < inf;
@@ -327,6 +341,7 @@ double LoadGuess(int bx, int by, size_t stride, const double* __restrict gap,
         sum += v[3];
       }
     }
+#endif
     for (; i < bx; ++i) {
       const bool cand = std::abs(gr[i]) < kInf;
       g0r[i] = cand ? gr[i] : kInf;
@@ -346,11 +361,12 @@ double LoadGuess(int bx, int by, size_t stride, const double* __restrict gap,
 MJTOUCH_TARGET_CLONES
 double ContactSummary(size_t B, const double* __restrict g0, const double* __restrict u,
                       const double* __restrict p, size_t* nc, double* max_g0) {
-  const v4d zero = {0, 0, 0, 0}, ninf = Splat(-kInf);
+  [[maybe_unused]] const v4d zero = {0, 0, 0, 0}, ninf = Splat(-kInf);
   double sum = 0.0;
   v4d mx = ninf;
   v4l cnt = {0, 0, 0, 0};
   size_t b = 0;
+#if MJTOUCH_X86_SIMD  // (elsewhere the scalar loop below)
   for (; b + 4 <= B; b += 4) {
     const v4l c = Load(p + b) > zero;
     if (Bits(c) == 0) continue;
@@ -365,6 +381,7 @@ double ContactSummary(size_t B, const double* __restrict g0, const double* __res
     const v4d m = c ? gv : ninf;
     mx = m > mx ? m : mx;
   }
+#endif
   size_t n = Count(cnt);
   double m0 = std::max(std::max(mx[0], mx[1]), std::max(mx[2], mx[3]));
   for (; b < B; ++b) {

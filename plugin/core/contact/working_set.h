@@ -32,8 +32,8 @@ double UpdateAndSum(size_t B, double s, double tau, const double* r, const doubl
 // gS, pS: g and p on S; oS: t on S (read_t; else 0), t then zeroed on the
 // box. The preconditioner's input, g on S and 0 elsewhere with a zero
 // border of hw, fills the padded array (row length px, by + 2 hw rows): gp
-// (double) or, if gp is null, gpf (float). S, gS, pS, oS hold B + 3
-// entries (whole four-lane stores).
+// (double) or, if gp is null, gpf (float). S, gS, pS, oS hold B entries
+// (written four lanes at a time, never past the cell being read).
 // Returns |S|.
 size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* u,
                 const double* p, double gbar, double* gp, float* gpf, double* t, bool read_t,
@@ -41,10 +41,10 @@ size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* 
 
 // The solve's start from a bx x by window of the grid (rows `stride`
 // apart): g0 = gap on candidates (finite gap), +inf elsewhere (one
-// comparison then tells cells that may touch); p = max(0, given) on candidates, 0 where
-// not a candidate or not finite; the cells whose p differs from given go to
-// changed (box order, count in *nchanged; B entries). Returns sum(p) in
-// box order; the candidates' count in *ncand.
+// comparison then tells the cells that may touch); p = max(0, given) on
+// candidates, 0 where not a candidate or not finite; the cells whose p
+// differs from given go to changed (box order, count in *nchanged; B
+// entries). Returns sum(p) in box order; the candidates' count in *ncand.
 double LoadGuess(int bx, int by, size_t stride, const double* gap, const double* given,
                  double* g0, double* p, size_t* ncand, int* changed, size_t* nchanged);
 
