@@ -10,7 +10,7 @@ start), the compliance FFTs in double (elastic_precision="double", the
 reference arithmetic) and, for pcg, in float (the default). Every configuration starts from one settled sliding state (the press
 and a lead-in simulated without the plugin). Prints per configuration:
 - CG iterations per step (median, max) over the sliding steps, and the most
-  common FFT grid of the solve (set by the solve box, pipeline/skin_traction.cc);
+  common FFT grid of the solve (set by the solve box, pipeline/warm_start.cc);
 - errors against a tight reference (pk, tolerance 1e-8) over the same steps:
   pressure relative RMS (all steps pooled), and the largest indentation-depth
   difference (the force block's depth, m; its forces are MuJoCo's by

@@ -301,6 +301,14 @@ void FirstStage2HalfInput(int n, const T* in_re, const T* in_im, int in_stride, 
   }
 }
 
+// dst[r * dst_stride + c] = src[r * src_stride + c], r < rows, c < cols.
+template <typename T>
+inline void CopyRows(const T* src, size_t src_stride, int rows, int cols, T* dst,
+                     size_t dst_stride) {
+  for (int r = 0; r < rows; ++r)
+    std::memcpy(dst + r * dst_stride, src + r * src_stride, cols * sizeof(T));
+}
+
 // dst[c * dst_stride + r] = src[r * src_stride + c], r < rows, c < cols.
 void Transpose(const double* src, int src_stride, int rows, int cols, double* dst,
                int dst_stride) {
@@ -457,12 +465,10 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
     in_data = in_place || !in_data;
   }
   if (!in_data) {
-    for (int k = 0; k < (last_part ? needed : n_); ++k) {
-      std::memcpy(re + static_cast<size_t>(k) * stride, sre + static_cast<size_t>(k) * scratch_stride,
-                  batch * sizeof(T));
-      std::memcpy(im + static_cast<size_t>(k) * stride, sim + static_cast<size_t>(k) * scratch_stride,
-                  batch * sizeof(T));
-    }
+    // (a single stage only: longer plans end in the data)
+    const int rows = last_part ? needed : n_;
+    CopyRows(sre, scratch_stride, rows, batch, re, stride);
+    CopyRows(sim, scratch_stride, rows, batch, im, stride);
   }
 }
 template void FftPlan::Transform(double*, double*, int, int, bool, double*, double*, int,
@@ -717,14 +723,8 @@ void Fft2D::Forward(const double* re, const double* im, int stride, int rows, in
   // Along y, the `cols` nonzero columns only (ny x cols).
   std::fill(wr, wr + W, 0.0);
   std::fill(wi, wi + W, 0.0);
-  for (int y = 0; y < rows; ++y) {
-    std::memcpy(wr + static_cast<size_t>(y) * lw, re + static_cast<size_t>(y) * stride,
-                cols * sizeof(double));
-    if (im) {
-      std::memcpy(wi + static_cast<size_t>(y) * lw, im + static_cast<size_t>(y) * stride,
-                  cols * sizeof(double));
-    }
-  }
+  CopyRows(re, stride, rows, cols, wr, lw);
+  if (im) CopyRows(im, stride, rows, cols, wi, lw);
   py_.Transform(wr, wi, cols, lw, false, sr, si);
   // Transpose to (x, ky); zero columns stay zero.
   const int ls = spec_stride_;
@@ -746,14 +746,8 @@ void Fft2D::Inverse(double* spec_re, double* spec_im, int rows, int cols, double
   Transpose(spec_re, ls, cols, ny_, wr, lw);
   Transpose(spec_im, ls, cols, ny_, wi, lw);
   py_.Transform(wr, wi, cols, lw, true, sr, si);
-  for (int y = 0; y < rows; ++y) {
-    std::memcpy(re + static_cast<size_t>(y) * stride, wr + static_cast<size_t>(y) * lw,
-                cols * sizeof(double));
-    if (im) {
-      std::memcpy(im + static_cast<size_t>(y) * stride, wi + static_cast<size_t>(y) * lw,
-                  cols * sizeof(double));
-    }
-  }
+  CopyRows(wr, lw, rows, cols, re, stride);
+  if (im) CopyRows(wi, lw, rows, cols, im, stride);
 }
 
 // The real transforms in parts that own disjoint memory, so that

@@ -3,6 +3,8 @@
 #ifndef MJTOUCH_COMMON_GRID_H_
 #define MJTOUCH_COMMON_GRID_H_
 
+#include <algorithm>
+#include <climits>
 #include <cstddef>
 #include <vector>
 
@@ -31,11 +33,35 @@ struct CellBox {
   static CellBox All(const TaxelGrid& grid) { return CellBox{0, 0, grid.n, grid.n}; }
 };
 
+// The bounding rectangle of cells added one at a time (inclusive bounds;
+// empty until the first Add, or starting from a box).
+struct CellBounds {
+  int i0 = INT_MAX, j0 = INT_MAX, i1 = INT_MIN, j1 = INT_MIN;
+  CellBounds() = default;
+  explicit CellBounds(const CellBox& b)
+      : i0(b.i0), j0(b.j0), i1(b.i0 + b.nx - 1), j1(b.j0 + b.ny - 1) {}
+  void Add(int i, int j) { AddRow(i, i, j); }
+  // The cells [lo, hi] of row j.
+  void AddRow(int lo, int hi, int j) {
+    i0 = std::min(i0, lo);
+    i1 = std::max(i1, hi);
+    j0 = std::min(j0, j);
+    j1 = std::max(j1, j);
+  }
+  bool empty() const { return i1 < i0 || j1 < j0; }
+  CellBox Box() const { return empty() ? CellBox{} : CellBox{i0, j0, i1 - i0 + 1, j1 - j0 + 1}; }
+};
+
 // Cells with nonzero traction as row runs: for each grid row j with contact,
 // [i_begin, i_end) of active cells.
 struct ActiveRuns {
   std::vector<int> row, begin, end;
   void Clear() { row.clear(); begin.clear(); end.clear(); }
+  void Add(int j, int i_begin, int i_end) {
+    row.push_back(j);
+    begin.push_back(i_begin);
+    end.push_back(i_end);
+  }
   int Count() const {
     int c = 0;
     for (size_t k = 0; k < row.size(); ++k) c += end[k] - begin[k];

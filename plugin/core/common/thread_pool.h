@@ -13,6 +13,7 @@
 #ifndef MJTOUCH_COMMON_THREAD_POOL_H_
 #define MJTOUCH_COMMON_THREAD_POOL_H_
 
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -65,6 +66,22 @@ class ThreadPool {
   std::vector<std::thread> threads_;
   std::atomic<bool> stop_{false};
 };
+
+// Calls fn(j0, j1) on consecutive row ranges [j0, j1) that cover [0, rows):
+// min(threads, rows / min_rows) parts (at least one) of near-equal size, run
+// on the caller and the shared pool. The parts follow the thread count, so
+// fn's outputs must depend on each row alone (the same bits for any split).
+template <typename F>
+inline void ForRowParts(int rows, int threads, int min_rows, F&& fn) {
+  const int parts = std::max(1, std::min(threads, rows / min_rows));
+  if (parts == 1) {
+    fn(0, rows);
+    return;
+  }
+  ThreadPool::Shared().Run(parts, threads, [&](int k) {
+    fn(rows * k / parts, rows * (k + 1) / parts);
+  });
+}
 
 }  // namespace mjtouch
 

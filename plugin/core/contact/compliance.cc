@@ -13,6 +13,20 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+// SurfaceCompliance::Apply in T, the arithmetic of the spectra: the kernel's
+// half spectrum k_hat and the spectrum and FFT scratch buffers, all in T.
+// Real field, real even kernel: half spectra (Fft2D::ConvolveReal).
+template <typename T>
+void ApplyIn(const Fft2D& fft, const std::vector<T>& k_hat, const double* in, int bx, int by,
+             int in_rows, int in_cols, double* out, std::vector<T>* spec_re,
+             std::vector<T>* spec_im, std::vector<T>* scratch, int threads) {
+  const size_t S = fft.spectrum_size();
+  spec_re->resize(S);
+  spec_im->resize(S);
+  fft.ConvolveReal(in, bx, in_rows, in_cols, k_hat.data(), by, bx, out, bx, spec_re->data(),
+                   spec_im->data(), scratch, threads);
+}
+
 }  // namespace
 
 SurfaceCompliance::SurfaceCompliance(int n, double pitch_m, std::vector<float> table)
@@ -99,18 +113,12 @@ void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int b
                               int in_cols) const {
   if (in_rows < 0) in_rows = by;
   if (in_cols < 0) in_cols = bx;
-  // Real field, real even kernel: half spectra (Fft2D::ConvolveReal).
-  const size_t S = s.fft.spectrum_size();
   if (precision == ApplyPrecision::kFloat) {
-    w->spec_re_f.resize(S);
-    w->spec_im_f.resize(S);
-    s.fft.ConvolveReal(in, bx, in_rows, in_cols, s.k_hat_f.data(), by, bx, out, bx,
-                       w->spec_re_f.data(), w->spec_im_f.data(), &w->fft_scratch_f, w->threads);
+    ApplyIn(s.fft, s.k_hat_f, in, bx, by, in_rows, in_cols, out, &w->spec_re_f, &w->spec_im_f,
+            &w->fft_scratch_f, w->threads);
   } else {
-    w->spec_re.resize(S);
-    w->spec_im.resize(S);
-    s.fft.ConvolveReal(in, bx, in_rows, in_cols, s.k_hat.data(), by, bx, out, bx,
-                       w->spec_re.data(), w->spec_im.data(), &w->fft_scratch, w->threads);
+    ApplyIn(s.fft, s.k_hat, in, bx, by, in_rows, in_cols, out, &w->spec_re, &w->spec_im,
+            &w->fft_scratch, w->threads);
   }
 }
 
@@ -138,14 +146,7 @@ void SurfaceCompliance::AddCells(const int* cells, size_t count, const double* d
         AddCellRows(c % bx, c / bx, d[c], bx, jb, std::min(j1, jb + kRows), u);
       }
   };
-  const int parts = std::max(1, std::min(threads, by / kRows));
-  if (parts == 1) {
-    rows(0, by);
-    return;
-  }
-  ThreadPool::Shared().Run(parts, threads, [&](int part) {
-    rows(by * part / parts, by * (part + 1) / parts);
-  });
+  ForRowParts(by, threads, kRows, rows);
 }
 
 std::shared_ptr<const SurfaceCompliance> HalfSpaceCompliance(double young_pa, double poisson,

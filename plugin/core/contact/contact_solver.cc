@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "common/simd.h"
 #include "common/thread_pool.h"
+#include "contact/working_set.h"
 
 namespace mjtouch {
 namespace {
@@ -149,7 +149,10 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
       sum_new += v;
     }
     beta_on = overlap ? 0.0 : 1.0;
-    if (!(sum_new > 0.0)) break;
+    if (!(sum_new > 0.0)) {
+      for (int c : w->changed) dl[c] = 0.0;  // delta stays zero
+      break;
+    }
     double s;
     st->change = Accept(P, sum_new, &s);
     UpdateDisplacement(P, tau, s, st);
@@ -158,26 +161,6 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
       break;
     }
   }
-}
-
-// u = s (u - tau r [+ kd]) over the box; returns the sum of g0 + u over
-// the contact (p > 0; Sum4's order) and its size in *nc.
-template <bool kAdd>
-double UpdateAndSum(size_t B, double s, double tau, const double* __restrict r,
-                    const double* __restrict kd, const double* __restrict g0,
-                    const double* __restrict p, double* __restrict u, size_t* nc) {
-  size_t n = 0;
-  const double sum = Sum4(B, [&](size_t b) {
-    double v = u[b] - tau * r[b];
-    if constexpr (kAdd) v += kd[b];
-    v *= s;
-    u[b] = v;
-    const bool c = p[b] > 0.0;
-    n += c;
-    return c ? g0[b] + v : 0.0;
-  });
-  *nc = n;
-  return sum;
 }
 
 // z[j * bx + i] = sum over (dj, di) in stencil order of M[dj L + di] *
@@ -212,19 +195,20 @@ void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, doubl
 template <int L, typename T>
 void StencilRows(const double* M, const T* g_pad, int px, int bx, int by, double* z_out,
                  int threads) {
-  const int parts = std::max(1, std::min(threads, by / 8));
-  if (parts == 1) {
-    ApplyStencil<L>(M, g_pad, px, bx, by, z_out);
-    return;
-  }
-  ThreadPool::Shared().Run(parts, threads, [&](int k) {
-    const int j0 = by * k / parts, j1 = by * (k + 1) / parts;
+  ForRowParts(by, threads, 8, [&](int j0, int j1) {
     ApplyStencil<L>(M, g_pad + static_cast<size_t>(j0) * px, px, bx, j1 - j0,
                     z_out + static_cast<size_t>(j0) * bx);
   });
 }
 
-void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStats* st) {
+// The working set's values live in contiguous arrays (working_set.h), whose
+// four-lane passes sum in Sum4's order; the box keeps t (zero off the set,
+// the operator's input), p, u and the operator outputs.
+// gap_sum, contacts: the first iteration's contact gap sum and size if
+// known (ScaleStart), else contacts = 0.
+void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, size_t contacts,
+                    ElasticSolveStats* st) {
+  namespace ws = working_set;
   ElasticWork* w = P.w;
   const size_t B = P.B;
   const int bx = P.bx, by = P.by;
@@ -234,56 +218,45 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
   double* g0 = w->g0.data();
   double* p = w->p.data();
   double* u = w->u.data();
-  double* g = w->g.data();
-  double* t = w->t.data();
+  double* g = w->g.data();  // scratch: K delta
+  double* t = w->t.data();  // zero off the last iteration's set (BuildSet zeroes it)
   double* r = w->r.data();
-  double* pn = w->p_new.data();
   double* dl = w->delta.data();
   const bool stencil_f = P.precision == ApplyPrecision::kFloat;
   const size_t pad_size = static_cast<size_t>(px) * (by + 2 * hw);
   if (stencil_f) {
-    w->g_pad_f.assign(pad_size, 0.0f);
+    w->g_pad_f.resize(pad_size);  // BuildSet writes every element
   } else {
-    w->g_pad.assign(pad_size, 0.0);
+    w->g_pad.resize(pad_size);
   }
   double* gp = w->g_pad.data();
   float* gpf = w->g_pad_f.data();
+  for (auto* v : {&w->set_g, &w->set_z, &w->set_t, &w->set_t_old, &w->set_p, &w->set_p_new})
+    v->resize(B);
+  w->set.resize(B);
+  w->changed.resize(B);
+  double* gS = w->set_g.data();
+  double* zS = w->set_z.data();
+  double* tS = w->set_t.data();
+  double* oS = w->set_t_old.data();
+  double* pS = w->set_p.data();
+  double* pnS = w->set_p_new.data();
   double G_old = 1.0;
   bool first = true;
   // The contact's gap sum and size for the next iteration (the first from
   // the initial u; later ones from the displacement update's pass).
-  size_t nc = 0;
-  double sum_g = Sum4(B, [&](size_t b) {
-    const bool c = p[b] > 0.0;
-    nc += c;
-    return c ? g0[b] + u[b] : 0.0;
-  });
+  size_t nc = contacts;
+  double sum_g = nc > 0 ? gap_sum : ws::ContactGapSum(B, g0, u, p, &nc);
+  size_t ns = 0;  // |S|
   for (int it = 1; it <= max_iter; ++it) {
     st->iterations = it;
     const double gbar = sum_g / static_cast<double>(nc);
-    // The working set: the contact plus cells that overlap; t lives on it.
-    std::vector<int>& S = w->set;
-    S.resize(B);
-    size_t ns = 0;
-    // g_pad: g on S, zero elsewhere (its border stays zero, or wraps below).
-    for (int j = 0; j < by; ++j) {
-      const size_t row0 = static_cast<size_t>(j + hw) * px + hw;
-      for (int i = 0; i < bx; ++i) {
-        const size_t b = static_cast<size_t>(j) * bx + i;
-        const bool finite = std::isfinite(g0[b]);
-        const double gb = finite ? g0[b] + u[b] - gbar : 0.0;
-        g[b] = gb;
-        const bool in = p[b] > 0.0 || (finite && gb < 0.0);
-        if (stencil_f) {
-          gpf[row0 + i] = in ? static_cast<float>(gb) : 0.0f;
-        } else {
-          gp[row0 + i] = in ? gb : 0.0;
-        }
-        S[ns] = static_cast<int>(b);  // kept only if in
-        ns += in;
-      }
-    }
-    S.resize(ns);
+    // The working set S: the contact plus cells that overlap; t lives on it.
+    // g_pad: g on S, zero elsewhere (its border zero, or wrapped below);
+    // the last t gathered on S (zero before the first), then zeroed.
+    const int* S = w->set.data();
+    ns = ws::BuildSet(bx, by, px, hw, g0, u, p, gbar, stencil_f ? nullptr : gp, gpf, t, !first,
+                      w->set.data(), gS, pS, oS);
     // A periodic operator's stencil wraps: the border repeats the far side
     // (so a field uniform along an axis stays exactly uniform).
     if (P.periodic) {
@@ -313,14 +286,8 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     } else {
       StencilRows<L>(M, gp, px, bx, by, r, w->fft.threads);
     }
-    const int* Sp = S.data();
-    const double sum_z = Sum4(ns, [&](size_t k) { return r[Sp[k]]; });
-    const double zbar = sum_z / static_cast<double>(ns);
-    const double G = Sum4(ns, [&](size_t k) {
-      const int b = Sp[k];
-      r[b] -= zbar;
-      return g[b] * r[b];
-    });
+    const double zbar = ws::GatherSum(ns, S, r, zS) / static_cast<double>(ns);
+    const double G = ws::CenterDot(ns, zbar, zS, gS);
     if (!(G > 0.0)) {  // exact solution (or a set the stencil cannot move)
       st->converged = G == 0.0;
       break;
@@ -333,30 +300,18 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     double beta = first ? 0.0 : G / G_old;
     first = false;
     G_old = G;
+    // (each pass also writes t on the box: zero off S since BuildSet)
     double num = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
-      std::fill(w->p_new.begin(), w->p_new.end(), 0.0);
-      const double sum_t = Sum4(ns, [&](size_t k) {
-        const int b = Sp[k];
-        pn[b] = r[b] + beta * t[b];
-        return pn[b];
-      });
-      const double tbar = sum_t / static_cast<double>(ns);
-      num = Sum4(ns, [&](size_t k) {
-        const int b = Sp[k];
-        pn[b] -= tbar;
-        return g[b] * pn[b];
-      });
+      const double tbar = ws::AxpySum(ns, beta, zS, oS, tS) / static_cast<double>(ns);
+      num = ws::CenterDot(ns, tbar, tS, gS, S, t);
       if (num > 0.0 || beta == 0.0) break;
       beta = 0.0;
     }
-    std::swap(w->t, w->p_new);
-    t = w->t.data();
-    pn = w->p_new.data();
     P.K.Apply(*P.spec, t, bx, by, r, &w->fft, P.precision);
     ++st->applies;
     // t sums to zero over S: t.(K t - mean) = t.K t
-    const double den = Sum4(ns, [&](size_t k) { return r[Sp[k]] * t[Sp[k]]; });
+    const double den = ws::GatherDot(ns, S, r, tS);
     if (!(den > 0.0) || !(num > 0.0)) {
       st->converged = false;
       break;
@@ -364,50 +319,36 @@ void Preconditioned(const Problem& P, double tol, int max_iter, ElasticSolveStat
     const double tau = num / den;
     // Step and project onto p >= 0 on S; off S, p and p_new are zero (p > 0
     // lies in S), so the rescaling and the stopping test run on S only.
-    w->changed.clear();
-    const double sum_new = Sum4(ns, [&](size_t k) {
-      const int b = Sp[k];
-      double v = p[b] - tau * t[b];
-      if (v < 0.0) {
-        dl[b] = -v;
-        w->changed.push_back(b);
-        v = 0.0;
-      }
-      pn[b] = v;
-      return v;
-    });
-    if (!(sum_new > 0.0)) break;
+    size_t nchg = 0;
+    const double sum_new = ws::StepProject(ns, tau, pS, tS, S, pnS, dl, w->changed.data(), &nchg);
+    if (!(sum_new > 0.0)) {
+      for (size_t k = 0; k < nchg; ++k) dl[w->changed[k]] = 0.0;  // delta stays zero
+      break;
+    }
     const double s = P.target / sum_new;
-    st->change = Sum4(ns, [&](size_t k) {
-                   const int b = Sp[k];
-                   const double v = s * pn[b], d = std::abs(v - p[b]);
-                   p[b] = v;
-                   return d;
-                 }) /
-                 P.target;
+    st->change = ws::ScaleChange(ns, s, pnS, pS, S, p) / P.target;
     // u = s (u - tau K t + K delta), K delta by direct sums (few cells) or
     // into g (free until the next iteration), in one pass that also sums
     // the next iteration's contact gap.
-    const size_t nchg = w->changed.size();
+    const int* chg = w->changed.data();
     double* kd = nullptr;
     if (nchg > 0) {
       if (!P.periodic && static_cast<double>(nchg) < DirectCellsPerApply(*P.spec, B)) {
-        P.K.AddCells(w->changed.data(), nchg, dl, bx, by, u, w->fft.threads);
+        P.K.AddCells(chg, nchg, dl, bx, by, u, w->fft.threads);
       } else {
         P.K.Apply(*P.spec, dl, bx, by, g, &w->fft, P.precision);
         ++st->applies;
         kd = g;
       }
-      for (int c : w->changed) dl[c] = 0.0;
+      for (size_t k = 0; k < nchg; ++k) dl[chg[k]] = 0.0;
     }
-    nc = 0;
-    sum_g = kd ? UpdateAndSum<true>(B, s, tau, r, kd, g0, p, u, &nc)
-               : UpdateAndSum<false>(B, s, tau, r, kd, g0, p, u, &nc);
+    sum_g = ws::UpdateAndSum(B, s, tau, r, kd, g0, p, u, &nc);
     if (st->change < tol) {
       st->converged = true;
       break;
     }
   }
+  w->changed.clear();
 }
 
 }  // namespace
@@ -442,14 +383,16 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   w->g0.resize(B);
   w->p.resize(B);
   w->u.resize(B);
-  w->t.assign(B, 0.0);
-  w->delta.assign(B, 0.0);
+  // delta is zero between solves (both methods clear the cells they set)
+  w->delta.resize(B);
   if (method == ElasticMethod::kPreconditioned) {
-    // written before they are read (g, the stencil's r, each pass's p_new)
+    // written before they are read (t: zeroed by BuildSet, g: K delta, r:
+    // the stencil's output)
+    w->t.resize(B);
     w->g.resize(B);
     w->r.resize(B);
-    w->p_new.resize(B);
   } else {
+    w->t.assign(B, 0.0);
     w->g.assign(B, 0.0);
     w->r.assign(B, 0.0);
     w->p_new.assign(B, 0.0);
@@ -457,21 +400,13 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   double* g0 = w->g0.data();
   double* p = w->p.data();
   size_t ncand = 0;
-  double sum_p = 0.0;
   // Cells of the guess the solve drops (their share of initial_u removed).
-  w->changed.clear();
-  for (int j = 0; j < by; ++j)
-    for (int i = 0; i < bx; ++i) {
-      const size_t b = static_cast<size_t>(j) * bx + i, k = row_start(j) + i;
-      g0[b] = gap[k];
-      const bool cand = std::isfinite(g0[b]);
-      ncand += cand;
-      const double given = (*pressure)[k];
-      p[b] = cand ? std::max(0.0, given) : 0.0;
-      if (!std::isfinite(p[b])) p[b] = 0.0;
-      if (p[b] != given) w->changed.push_back(static_cast<int>(b));
-      sum_p += p[b];
-    }
+  w->changed.resize(B);
+  size_t ndropped = 0;
+  double sum_p = working_set::LoadGuess(bx, by, nx, gap.data() + row_start(0),
+                                        pressure->data() + row_start(0), g0, p, &ncand,
+                                        w->changed.data(), &ndropped);
+  w->changed.resize(ndropped);
   // initial_u, corrected for the dropped cells (direct sums unless they
   // are many), or a fresh K p.
   bool have_u = initial_u != nullptr && !periodic && method == ElasticMethod::kPreconditioned &&
@@ -480,7 +415,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
     // Too many dropped cells: the FFT is cheaper.
     have_u = static_cast<double>(w->changed.size()) <=
              DirectCellsPerApply(*K.SpectrumFor(bx, by), B);
-    if (have_u) {
+    if (have_u && !w->changed.empty()) {
       std::copy(initial_u, initial_u + B, w->u.begin());
       for (int c : w->changed) {
         const double given = (*pressure)[row_start(c / bx) + c % bx];
@@ -489,25 +424,43 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
       }
     }
   }
+  // The pressure outside the box is zero; inside it the solution (below).
+  const bool scaled_copy = have_u && w->changed.empty();  // u = scale initial_u
   w->changed.clear();
-  std::fill(pressure->begin(), pressure->end(), 0.0);
+  double* out = pressure->data();
+  std::fill(out, out + row_start(0), 0.0);
+  for (int j = 0; j < by; ++j) {
+    std::fill(out + row_start(j) - box.i0, out + row_start(j), 0.0);
+    std::fill(out + row_start(j) + bx, out + row_start(j) - box.i0 + nx, 0.0);
+  }
+  std::fill(out + row_start(by) - box.i0, out + pressure->size(), 0.0);
   const double target = force / A;  // sum of p over cells
-  if (ncand == 0 || !(target > 0.0)) return false;
+  if (ncand == 0 || !(target > 0.0)) {
+    for (int j = 0; j < by; ++j) std::fill(out + row_start(j), out + row_start(j) + bx, 0.0);
+    return false;
+  }
   if (!(sum_p > 0.0)) {
     for (size_t b = 0; b < B; ++b) p[b] = std::isfinite(g0[b]) ? 1.0 : 0.0;
     sum_p = static_cast<double>(ncand);
   }
   const double scale = target / sum_p;
-  for (size_t b = 0; b < B; ++b) p[b] *= scale;
+  // pcg from initial_u: p and u scaled in the pass that sums the first
+  // iteration's contact gap
+  size_t contacts = 0;
+  double gap_sum = 0.0;
+  if (have_u) {
+    gap_sum = working_set::ScaleStart(B, scale, p, scaled_copy ? initial_u : w->u.data(),
+                                      w->u.data(), g0, &contacts);
+  } else {
+    for (size_t b = 0; b < B; ++b) p[b] *= scale;
+  }
 
   const auto spec = K.SpectrumFor(bx, by);
   st->fft_size_x = spec->fft.nx();
   st->fft_size_y = spec->fft.ny();
   const double fft_cost = 5.0 * static_cast<double>(spec->fft.nx()) * spec->fft.ny() *
                           std::log2(static_cast<double>(spec->fft.nx()) * spec->fft.ny());
-  if (have_u) {
-    for (size_t b = 0; b < B; ++b) w->u[b] *= scale;
-  } else {
+  if (!have_u) {
     K.Apply(*spec, p, bx, by, w->u.data(), &w->fft, precision);
     st->applies = 1;
   }
@@ -515,7 +468,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   if (method == ElasticMethod::kPolonskyKeer) {
     PolonskyKeer(P, tol, max_iter, st);
   } else {
-    Preconditioned(P, tol, max_iter, st);
+    Preconditioned(P, tol, max_iter, gap_sum, contacts, st);
   }
   // The displacement of the final pressure for the approach: P&K recomputes
   // it; the preconditioned path keeps the running u = K p (updated with the
@@ -528,14 +481,8 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
     ++st->applies;
   }
   size_t nc = 0;
-  double sum_g = 0.0, max_g = -std::numeric_limits<double>::infinity();
-  for (size_t b = 0; b < B; ++b) {
-    if (p[b] > 0.0) {
-      sum_g += g0[b] + u[b];
-      max_g = std::max(max_g, g0[b]);
-      ++nc;
-    }
-  }
+  double max_g = 0.0;
+  const double sum_g = working_set::ContactSummary(B, g0, u, p, &nc, &max_g);
   st->contact_cells = static_cast<int>(nc);
   st->approach_m = nc ? sum_g / static_cast<double>(nc) : 0.0;
   st->max_contact_gap_m = max_g;

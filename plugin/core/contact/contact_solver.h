@@ -52,6 +52,9 @@ struct ElasticWork {
   std::vector<double> g_pad;  // preconditioner input with a zero border
   std::vector<float> g_pad_f;  // the same in float (ApplyPrecision::kFloat)
   std::vector<int> set;       // kPreconditioned: the cells of the working set
+  // g, K^-1 g, t, t's last value, p and the step's p on the working set,
+  // contiguous (index k of set; contact/working_set.h)
+  std::vector<double> set_g, set_z, set_t, set_t_old, set_p, set_p_new;
   std::vector<int> changed;
   std::vector<double> check_p, check_u;  // skin_traction.cc: the box check
   std::vector<double> u0;                 // skin_traction.cc: the warm start's K p

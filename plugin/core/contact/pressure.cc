@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "contact/traction_cells.h"
+
 namespace mjtouch {
 
 const char* PressureModelName(PressureModel m) {
@@ -40,17 +42,10 @@ void ForBox(const TaxelGrid& grid, const CellBox& box, F&& f) {
 
 void ClearTraction(const TaxelGrid& grid, TractionField* f) {
   const size_t N = grid.Size();
-  const bool sized = f->pressure_pa.size() == N && f->shear_x_pa.size() == N &&
-                     f->shear_y_pa.size() == N && f->pressure.size() == N &&
-                     f->shear_x.size() == N && f->shear_y.size() == N;
-  if (sized && f->support_in_runs) {
+  if (TractionSized(grid, *f) && f->support_in_runs) {
     for (size_t r = 0; r < f->runs.row.size(); ++r) {
-      const size_t a = static_cast<size_t>(f->runs.row[r]) * grid.n + f->runs.begin[r];
-      const size_t b = a + (f->runs.end[r] - f->runs.begin[r]);
-      for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa})
-        std::fill(v->begin() + a, v->begin() + b, 0.0);
-      for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y})
-        std::fill(v->begin() + a, v->begin() + b, 0.0f);
+      const size_t row = static_cast<size_t>(f->runs.row[r]) * grid.n;
+      ZeroCells(f, row + f->runs.begin[r], row + f->runs.end[r]);
     }
   } else {
     for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa}) {
@@ -107,16 +102,10 @@ void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out) {
     auto on = [&](int i) {
       return p[i] != 0.0 || (shear && (sx[i] != 0.0 || sy[i] != 0.0));
     };
-    for (int i = i0; i < i1;) {
-      while (i < i1 && !on(i)) ++i;
-      if (i == i1) break;
-      const int begin = i;
-      while (i < i1 && on(i)) ++i;
-      out->runs.row.push_back(j);
-      out->runs.begin.push_back(begin);
-      out->runs.end.push_back(i);
-      out->active_cells += i - begin;
-    }
+    ForEachRun(i0, i1, on, [&](int begin, int end) {
+      out->runs.Add(j, begin, end);
+      out->active_cells += end - begin;
+    });
   }
 }
 
@@ -141,10 +130,8 @@ void SlipRun(const double* __restrict p, double rx, double ry, int len, double* 
 
 void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, double fy,
                                TractionField* out) {
-  const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
-  out->uniform_slip = true;
-  out->slip_x = rx;
-  out->slip_y = ry;
+  SetUniformSlip(fn, fx, fy, out);
+  const double rx = out->slip_x, ry = out->slip_y;
   const CellBox& b = out->box;
   out->runs.Clear();
   out->active_cells = 0;
@@ -156,20 +143,13 @@ void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, doub
   for (int j = b.j0; j < b.j0 + b.ny; ++j) {
     const size_t row = static_cast<size_t>(j) * grid.n;
     const double* p = out->pressure_pa.data() + row;
-    const int i0 = b.i0, i1 = b.i0 + b.nx;
-    for (int i = i0; i < i1;) {
-      while (i < i1 && p[i] == 0.0) ++i;
-      if (i == i1) break;
-      const int begin = i;
-      while (i < i1 && p[i] != 0.0) ++i;
-      out->runs.row.push_back(j);
-      out->runs.begin.push_back(begin);
-      out->runs.end.push_back(i);
-      out->active_cells += i - begin;
-      SlipRun(p + begin, rx, ry, i - begin, out->shear_x_pa.data() + row + begin,
+    ForEachRun(b.i0, b.i0 + b.nx, [&](int i) { return p[i] != 0.0; }, [&](int begin, int end) {
+      out->runs.Add(j, begin, end);
+      out->active_cells += end - begin;
+      SlipRun(p + begin, rx, ry, end - begin, out->shear_x_pa.data() + row + begin,
               out->shear_y_pa.data() + row + begin, out->pressure.data() + row + begin,
               out->shear_x.data() + row + begin, out->shear_y.data() + row + begin);
-    }
+    });
   }
 }
 
@@ -179,7 +159,7 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
   const double inv_area = 1.0 / grid.Area();
   double total = 0.0;
   const int n = grid.n;
-  int i_lo = n, i_hi = -1, j_lo = n, j_hi = -1;
+  CellBounds loaded;
   for (const ContactPoint& c : contacts) {
     // Fractional cell coordinates of the contact, clamped to the centres of
     // the outermost cells so that the whole force stays on the grid.
@@ -197,13 +177,11 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
       out->shear_x_pa[idx[k]] += w[k] * c.force_n[0] * inv_area;
       out->shear_y_pa[idx[k]] += w[k] * c.force_n[1] * inv_area;
     }
-    i_lo = std::min(i_lo, i0);
-    i_hi = std::max(i_hi, i0 + 1);
-    j_lo = std::min(j_lo, j0);
-    j_hi = std::max(j_hi, j0 + 1);
+    loaded.AddRow(i0, i0 + 1, j0);
+    loaded.AddRow(i0, i0 + 1, j0 + 1);
     total += c.force_n[2];
   }
-  if (i_hi >= 0) out->box = CellBox{i_lo, j_lo, i_hi - i_lo + 1, j_hi - j_lo + 1};
+  if (!loaded.empty()) out->box = loaded.Box();
   return total > 0.0;
 }
 
@@ -287,10 +265,8 @@ bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& 
 
 void UniformSlipShear(const TaxelGrid& grid, double fn, double fx, double fy,
                       TractionField* field) {
-  const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
-  field->uniform_slip = true;
-  field->slip_x = rx;
-  field->slip_y = ry;
+  SetUniformSlip(fn, fx, fy, field);
+  const double rx = field->slip_x, ry = field->slip_y;
   // Unloaded cells keep the zero ClearTraction left (not rx * 0, which is
   // -0 for rx < 0), so that the shear is zero wherever the pressure is.
   ForBox(grid, field->box, [&](size_t i) {

@@ -11,6 +11,7 @@
 
 #include "common/simd.h"
 #include "contact/pressure.h"
+#include "contact/traction_cells.h"
 
 #if MJTOUCH_X86_SIMD
 #include <emmintrin.h>
@@ -228,14 +229,6 @@ bool ScaledSlipRun(const double* __restrict load, double scale, double rx, doubl
   return zero_seen;
 }
 
-void ZeroCells(TractionField* f, size_t a, size_t b) {
-  if (a >= b) return;
-  for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa})
-    std::fill(v->begin() + a, v->begin() + b, 0.0);
-  for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y})
-    std::fill(v->begin() + a, v->begin() + b, 0.0f);
-}
-
 }  // namespace
 
 double ScanWinklerCandidates(const TaxelGrid& grid, const std::vector<double>& gap_m,
@@ -324,8 +317,7 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   }
   // The touching cells (runs, in box order), their loads cov (c - g) and
   // NormalizeLoad's sum of them (the other cells add exact zeros).
-  size_t cells = 0;
-  for (size_t r = 0; r < spans.row.size(); ++r) cells += spans.end[r] - spans.begin[r];
+  const size_t cells = spans.Count();
   if (out->scratch_load.size() < cells) out->scratch_load.resize(cells);
   double* load = out->scratch_load.data();
   double total = 0.0;
@@ -343,17 +335,11 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
         total += pi;
         if (start < 0) start = i;
       } else if (start >= 0) {
-        runs.row.push_back(j);
-        runs.begin.push_back(start);
-        runs.end.push_back(i);
+        runs.Add(j, start, i);
         start = -1;
       }
     }
-    if (start >= 0) {
-      runs.row.push_back(j);
-      runs.begin.push_back(start);
-      runs.end.push_back(spans.end[r]);
-    }
+    if (start >= 0) runs.Add(j, start, spans.end[r]);
   }
   out->solved_total = total;
   *approach_m = c;
@@ -381,12 +367,13 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
 
 bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double c, double fn,
                               double fx, double fy, TractionField* out) {
-  const size_t N = grid.Size();
   const int n = grid.n;
-  const bool sized = out->pressure_pa.size() == N && out->shear_x_pa.size() == N &&
-                     out->shear_y_pa.size() == N && out->pressure.size() == N &&
-                     out->shear_x.size() == N && out->shear_y.size() == N;
-  if (!sized) ClearTraction(grid, out);  // no last support
+  const double total = out->solved_total;
+  if (!(total > 0.0)) {  // nothing solved: the cleared field
+    ClearTraction(grid, out);
+    return false;
+  }
+  if (!TractionSized(grid, *out)) ClearTraction(grid, out);  // no last support
   // The last support as row segments (ascending rows), cleared at the end
   // where the new runs do not cover it.
   ActiveRuns& last = out->scratch_runs;
@@ -395,27 +382,11 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
     std::swap(last, out->runs);
   } else if (!out->box.empty()) {
     const CellBox& b = out->box;
-    for (int j = b.j0; j < b.j0 + b.ny; ++j) {
-      last.row.push_back(j);
-      last.begin.push_back(b.i0);
-      last.end.push_back(b.i0 + b.nx);
-    }
-  }
-  const double total = out->solved_total;
-  if (!(total > 0.0)) {  // nothing solved: the cleared field
-    for (size_t r = 0; r < last.row.size(); ++r) {
-      const size_t row = static_cast<size_t>(last.row[r]) * n;
-      ZeroCells(out, row + last.begin[r], row + last.end[r]);
-    }
-    out->runs.Clear();
-    out->support_in_runs = false;
-    out->box = CellBox{};
-    out->active_cells = 0;
-    out->approach_m = 0.0;
-    return false;
+    for (int j = b.j0; j < b.j0 + b.ny; ++j) last.Add(j, b.i0, b.i0 + b.nx);
   }
   const double scale = fn / (grid.Area() * total);
-  const double rx = fn > 0.0 ? fx / fn : 0.0, ry = fn > 0.0 ? fy / fn : 0.0;
+  SetUniformSlip(fn, fx, fy, out);
+  const double rx = out->slip_x, ry = out->slip_y;
   out->runs = out->solved_runs;
   const ActiveRuns& now = out->runs;
   const double* load = out->scratch_load.data();
@@ -449,25 +420,17 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
     active = 0;
     for (size_t r = 0; r < now.row.size(); ++r) {
       const double* p = out->pressure_pa.data() + static_cast<size_t>(now.row[r]) * n;
-      for (int i = now.begin[r]; i < now.end[r];) {
-        while (i < now.end[r] && p[i] == 0.0) ++i;
-        if (i == now.end[r]) break;
-        const int begin = i;
-        while (i < now.end[r] && p[i] != 0.0) ++i;
-        split.row.push_back(now.row[r]);
-        split.begin.push_back(begin);
-        split.end.push_back(i);
-        active += i - begin;
-      }
+      ForEachRun(now.begin[r], now.end[r], [&](int i) { return p[i] != 0.0; },
+                 [&](int begin, int end) {
+                   split.Add(now.row[r], begin, end);
+                   active += end - begin;
+                 });
     }
     // the zero-pressure cells hold zeros in every field already
     std::swap(out->runs, split);
   }
   out->box = box;
   out->approach_m = c;
-  out->uniform_slip = true;
-  out->slip_x = rx;
-  out->slip_y = ry;
   out->support_in_runs = true;
   out->active_cells = active;
   return true;

@@ -20,12 +20,9 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
                             HistoryBlock* history, GridShiftWork* w, TractionField* field) {
   const TaxelGrid& g = sg.grid;  // g.n == grid.n + 1
   const int n = grid.n;
-  w->main_pressure = field->pressure_pa;
-  w->main_box = field->box;
-  // The same cull rule as the taxel grid's (skin_traction.cc), from this
-  // step's indentation depth.
-  const double cull = 1.5 * depth_m + 20e-6;
-  const CellBox& mb = w->main_box;
+  const CellBox mb = field->box;  // the taxel grid's solution's
+  // The taxel grid's cull rule, from this step's indentation depth.
+  const double cull = CullLevel(depth_m);
   bool touching = false;
   CellBox sbox, u_region;  // the final solve box, the check's K p region
   for (int pass = 0; pass < 2 && !touching; ++pass) {
@@ -34,26 +31,12 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
                                    &w->gap, &w->coverage, true, &sg.blocks, &rbox, fast_paths);
     if (rbox.empty() || !std::isfinite(MinGap(g, rbox, w->gap, w->coverage)))
       return true;  // nothing under the shifted grid: keep the taxel grid's solution
-    for (int j = rbox.j0; j < rbox.j0 + rbox.ny; ++j)
-      for (int i = rbox.i0; i < rbox.i0 + rbox.nx; ++i) {
-        const size_t k = static_cast<size_t>(j) * g.n + i;
-        if (!(w->coverage[k] > 0.0)) w->gap[k] = kInf;
-      }
-    // Warm start: the shifted grid's own history as the taxel grid's
-    // (WarmStart: its last solution, extrapolated from the last two with
-    // contact_solver = pcg, whose K p spares an operator application), so
-    // a sliding contact needs a few iterations; without history, the taxel
-    // grid's solution moved onto the shifted cells (shifted cell (i, j)
-    // overlaps taxel cells i - 1..i, j - 1..j).
-    const HistoryBlock* last =
-        history && history[1].slots[kHsValid] > 0.0 ? &history[1] : nullptr;
-    const bool extrapolate = last && method == ElasticMethod::kPreconditioned &&
-                             history[2].slots[kHsValid] > 0.0;
+    // Warm-started from the shifted grid's own history as the taxel grid's
+    // solve; without a last step, from the taxel grid's solution moved onto
+    // the shifted cells (shifted cell (i, j) overlaps taxel cells
+    // i - 1..i, j - 1..j).
     sbox = rbox;
-    if (last) {
-      WarmStart(g, rbox, last, extrapolate ? &history[2] : nullptr, &w->pressure, &w->elastic,
-                &sbox);
-    } else {
+    if (!HasWarmStart(history)) {
       w->pressure.assign(g.Size(), 0.0);
       for (int j = std::max(rbox.j0, mb.j0); j < std::min(rbox.j0 + rbox.ny, mb.j0 + mb.ny + 1);
            ++j)
@@ -64,7 +47,7 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
             for (int di = -1; di <= 0; ++di) {
               const int a = i + di, b = j + dj;
               if (a >= 0 && a < n && b >= 0 && b < n)
-                s += w->main_pressure[static_cast<size_t>(b) * n + a];
+                s += field->pressure_pa[static_cast<size_t>(b) * n + a];
             }
           w->pressure[static_cast<size_t>(j) * g.n + i] = 0.25 * s;
         }
@@ -73,54 +56,38 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
       sbox = GrowBox(rbox, mb.i0, mb.i0 + mb.nx, mb.j0, mb.j0 + mb.ny);
       if (sbox.empty()) sbox = rbox;
     }
-    const ElasticContact& ec = *sg.elastic;
-    const bool have_u0 =
-        extrapolate && ExtrapolatedDisplacement(g, ec.compliance(), *last, history[2],
-                                                w->pressure, sbox, &w->elastic);
-    // Checked and grown as the taxel grid's solve box (SolveOnGrowingBox).
-    const double lift = ec.max_lift_m_per_pa() * force_n / g.Area();
-    touching = SolveOnGrowingBox(g, ec, w->gap, rbox, force_n, lift, tolerance, max_iterations,
-                                 method, precision, have_u0 ? w->elastic.u0.data() : nullptr,
-                                 &w->pressure, &w->elastic, &w->stats, &sbox, &u_region);
+    touching = SolveElasticWarm(g, *sg.elastic, rbox, w->coverage, history, force_n, tolerance,
+                                max_iterations, method, precision, &w->gap, &w->pressure,
+                                &w->elastic, &w->stats, &sbox, &u_region);
     if (!touching) return false;
     if (pass == 0 && w->stats.approach_m >= level) touching = false;  // render all, solve again
   }
-  if (history) {  // this step's shifted solution and its K p (the check's)
-    HistoryBlock& cur = history[0];
-    for (int j = sbox.j0; j < sbox.j0 + sbox.ny; ++j)
-      for (int i = sbox.i0; i < sbox.i0 + sbox.nx; ++i) {
-        const size_t k = static_cast<size_t>(j) * g.n + i;
-        cur.set_p(k, static_cast<float>(w->pressure[k]));
-      }
-    cur.SetSlotBox(kHsPBoxI0, sbox);
-    cur.SetSlotBox(kHsURegionI0, u_region);
-    const size_t nu = static_cast<size_t>(u_region.nx) * u_region.ny;
-    for (size_t k = 0; k < nu; ++k) cur.set_u(k, static_cast<float>(w->elastic.check_u[k]));
-    cur.slots[kHsValid] = 1.0;
-    cur.slots[kHsDepth] = 0.0;  // (the taxel grid's history holds it)
-  }
+  // this step's shifted solution and its K p (the check's); the taxel
+  // grid's history holds the depth
+  if (history)
+    StoreElasticHistory(g, w->pressure, sbox, u_region, w->elastic.check_u, 0.0, &history[0]);
   // Deposit (taxel cell (i, j) <- shifted cells i..i+1, j..j+1, a quarter
   // each) and average on the grown box.
   const int i0 = std::max(0, mb.i0 - 1), j0 = std::max(0, mb.j0 - 1);
   const int i1 = std::min(n, mb.i0 + mb.nx + 1), j1 = std::min(n, mb.j0 + mb.ny + 1);
   // The shifted solution's support decides the box too (zero outside sbox).
-  int si0 = g.n, si1 = -1, sj0 = g.n, sj1 = -1;
+  CellBounds s;
   for (int j = sbox.j0; j < sbox.j0 + sbox.ny; ++j)
     for (int i = sbox.i0; i < sbox.i0 + sbox.nx; ++i)
-      if (w->pressure[static_cast<size_t>(j) * g.n + i] > 0.0) {
-        si0 = std::min(si0, i);
-        si1 = std::max(si1, i);
-        sj0 = std::min(sj0, j);
-        sj1 = std::max(sj1, j);
-      }
-  const int bi0 = std::max(0, std::min(i0, si0 - 1)), bj0 = std::max(0, std::min(j0, sj0 - 1));
-  const int bi1 = std::min(n, std::max(i1, si1 + 1)), bj1 = std::min(n, std::max(j1, sj1 + 1));
+      if (w->pressure[static_cast<size_t>(j) * g.n + i] > 0.0) s.Add(i, j);
+  int bi0 = i0, bj0 = j0, bi1 = i1, bj1 = j1;
+  if (!s.empty()) {
+    bi0 = std::max(0, std::min(i0, s.i0 - 1));
+    bj0 = std::max(0, std::min(j0, s.j0 - 1));
+    bi1 = std::min(n, std::max(i1, s.i1 + 1));
+    bj1 = std::min(n, std::max(j1, s.j1 + 1));
+  }
   for (int j = bj0; j < bj1; ++j)
     for (int i = bi0; i < bi1; ++i) {
       const double* s0 = w->pressure.data() + static_cast<size_t>(j) * g.n + i;
       const double dep = 0.25 * (s0[0] + s0[1] + s0[g.n] + s0[g.n + 1]);
       const size_t k = static_cast<size_t>(j) * n + i;
-      field->pressure_pa[k] = 0.5 * (w->main_pressure[k] + dep);
+      field->pressure_pa[k] = 0.5 * (field->pressure_pa[k] + dep);
     }
   field->box = CellBox{bi0, bj0, bi1 - bi0, bj1 - bj0};
   // The shifted cells on the grid's rim lose their outer halves.

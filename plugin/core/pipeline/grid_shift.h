@@ -41,8 +41,6 @@ struct ShiftedGrid {
 // Per-simulation scratch (Workspace).
 struct GridShiftWork {
   std::vector<double> gap, coverage, pressure;
-  std::vector<double> main_pressure;  // the taxel grid's own solution (its history's)
-  CellBox main_box;
   ElasticWork elastic;
   ElasticSolveStats stats;
 };
@@ -54,9 +52,8 @@ struct GridShiftWork {
 // from history (the shifted grid's blocks of plugin_state: this time, the
 // last step, the one before; null: none) as the taxel grid's solve, or
 // without a last step from the taxel grid's solution; writes this step's
-// shifted solution to history[0]; keeps the taxel grid's solution in
-// w->main_pressure / w->main_box; writes the average to field (box grown by
-// one cell, load normalised to force_n). If the shifted grid renders no
+// shifted solution to history[0]; writes the average to field (box grown
+// by one cell, load normalised to force_n). If the shifted grid renders no
 // contact, the field is left as it was. Returns false if the shifted solve
 // fails to carry the load (the field is then left as it was; history[0]
 // stays invalid in both cases).

@@ -93,6 +93,10 @@ struct HistoryBlock {
     return v;
   }
   void Set(size_t k, float v) { std::memcpy(floats + 4 * k, &v, 4); }
+  // count floats from index k on (pressure: k < ncell; displacement: ncell + k)
+  void SetRange(size_t k, size_t count, const float* v) {
+    std::memcpy(floats + 4 * k, v, 4 * count);
+  }
   // count displacements from index k on
   void u_row(size_t k, int count, float* out) const {
     std::memcpy(out, floats + 4 * (ncell + k), 4 * static_cast<size_t>(count));

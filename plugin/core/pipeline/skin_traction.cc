@@ -18,11 +18,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kElasticMaxIterations = 500;
-// Cells the elastic solve box extends beyond the last step's contact (a
-// sliding contact moves well under a cell per step).
-constexpr int kBoxMarginCells = 3;
-// Solves on a grown box before the whole rendered box.
-constexpr int kBoxAttempts = 3;
 // Winkler + shear (fast paths): the cull level above the smallest gap, in
 // last step's indentation depths plus a margin (the other models: 1.5 and
 // 20 um). Any level gives the same result (a level the approach reaches
@@ -38,253 +33,6 @@ double ThreadCpuSeconds() {
 
 }  // namespace
 
-// Cells [i0, i1] x [j0, j1] widened by kBoxMarginCells, clipped to box.
-CellBox GrowBox(const CellBox& box, int i0, int i1, int j0, int j1) {
-  i0 = std::max(box.i0, i0 - kBoxMarginCells);
-  j0 = std::max(box.j0, j0 - kBoxMarginCells);
-  i1 = std::min(box.i0 + box.nx - 1, i1 + kBoxMarginCells);
-  j1 = std::min(box.j0 + box.ny - 1, j1 + kBoxMarginCells);
-  return CellBox{i0, j0, i1 - i0 + 1, j1 - j0 + 1};
-}
-
-// Smallest gap over the covered cells of the box (+inf if none).
-double MinGap(const TaxelGrid& grid, const CellBox& box, const std::vector<double>& gap,
-              const std::vector<double>& cov) {
-  // Four running minima (the minimum does not depend on the order).
-  double m[4] = {kInf, kInf, kInf, kInf};
-  for (int j = box.j0; j < box.j0 + box.ny; ++j) {
-    const double* g = gap.data() + static_cast<size_t>(j) * grid.n;
-    const double* c = cov.data() + static_cast<size_t>(j) * grid.n;
-    int i = box.i0;
-    for (; i + 4 <= box.i0 + box.nx; i += 4)
-      for (int k = 0; k < 4; ++k)
-        if (c[i + k] > 0.0) m[k] = std::min(m[k], g[i + k]);
-    for (; i < box.i0 + box.nx; ++i)
-      if (c[i] > 0.0) m[0] = std::min(m[0], g[i]);
-  }
-  return std::min(std::min(m[0], m[1]), std::min(m[2], m[3]));
-}
-
-namespace {
-
-// True if no rendered cell (box) outside `inner` can touch under the
-// pressure solved on `inner` (zero elsewhere): g0 + K p >= approach there.
-// Cells with g0 > approach + lift (lift: a bound on the skin's upward bulge)
-// pass without the operator; the rest get u from one application on their
-// bounding box. If some cell fails, *grown is the bounding box of inner and
-// the failing cells, kBoxMarginCells wider (within box). *u_region: the box
-// over which w->check_u holds K p (nx = 0: none computed).
-bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
-                     const std::vector<double>& gap, const CellBox& box, const CellBox& inner,
-                     const std::vector<double>& pressure, double approach_m, double lift_m,
-                     ApplyPrecision precision, ElasticWork* w, CellBox* grown,
-                     CellBox* u_region) {
-  // fn(i, j) for the cells of [ia, ib) x [ja, jb) outside inner (row
-  // segments: inner is most of the box).
-  auto for_outside = [&](int ia, int ib, int ja, int jb, auto&& fn) {
-    for (int j = ja; j < jb; ++j) {
-      const bool row_in = j >= inner.j0 && j < inner.j0 + inner.ny;
-      const int end = row_in ? std::min(ib, inner.i0) : ib;
-      for (int i = ia; i < end; ++i) fn(i, j);
-      if (row_in)
-        for (int i = std::max(ia, inner.i0 + inner.nx); i < ib; ++i) fn(i, j);
-    }
-  };
-  int i0 = inner.i0, i1 = inner.i0 + inner.nx - 1, j0 = inner.j0, j1 = inner.j0 + inner.ny - 1;
-  bool any = false;
-  for_outside(box.i0, box.i0 + box.nx, box.j0, box.j0 + box.ny, [&](int i, int j) {
-    if (gap[static_cast<size_t>(j) * grid.n + i] <= approach_m + lift_m) {
-      any = true;
-      i0 = std::min(i0, i);
-      i1 = std::max(i1, i);
-      j0 = std::min(j0, j);
-      j1 = std::max(j1, j);
-    }
-  });
-  *u_region = CellBox{0, 0, 0, 0};
-  if (!any) return true;
-  const int cx = i1 - i0 + 1, cy = j1 - j0 + 1;
-  w->check_p.assign(static_cast<size_t>(cx) * cy, 0.0);
-  w->check_u.resize(w->check_p.size());
-  for (int j = inner.j0; j < inner.j0 + inner.ny; ++j) {
-    const double* row = pressure.data() + static_cast<size_t>(j) * grid.n + inner.i0;
-    std::copy(row, row + inner.nx,
-              w->check_p.begin() + static_cast<size_t>(j - j0) * cx + (inner.i0 - i0));
-  }
-  // The pressure lives on inner only: offsets from it to the checked cells
-  // reach less far than the box's size (a smaller FFT grid), and the
-  // columns and rows past it need no transform.
-  const int ox = inner.i0 - i0, oy = inner.j0 - j0;
-  const auto spec = K.SpectrumForReach(std::max(ox + inner.nx - 1, cx - 1 - ox),
-                                       std::max(oy + inner.ny - 1, cy - 1 - oy));
-  K.Apply(*spec, w->check_p.data(), cx, cy, w->check_u.data(), &w->fft, precision,
-          oy + inner.ny, ox + inner.nx);
-  *u_region = CellBox{i0, j0, cx, cy};
-  int f0 = inner.i0, f1 = inner.i0 + inner.nx - 1, g0 = inner.j0, g1 = inner.j0 + inner.ny - 1;
-  bool ok = true;
-  for_outside(i0, i1 + 1, j0, j1 + 1, [&](int i, int j) {
-    const double g = gap[static_cast<size_t>(j) * grid.n + i];
-    if (g <= approach_m + lift_m &&
-        !(g + w->check_u[static_cast<size_t>(j - j0) * cx + (i - i0)] >= approach_m)) {
-      ok = false;
-      f0 = std::min(f0, i);
-      f1 = std::max(f1, i);
-      g0 = std::min(g0, j);
-      g1 = std::max(g1, j);
-    }
-  });
-  if (!ok) *grown = GrowBox(box, f0, f1, g0, g1);
-  return ok;
-}
-
-// The smallest box holding both (either may be empty).
-CellBox Union(const CellBox& a, const CellBox& b) {
-  if (a.empty()) return b;
-  if (b.empty()) return a;
-  const int i0 = std::min(a.i0, b.i0), j0 = std::min(a.j0, b.j0);
-  const int i1 = std::max(a.i0 + a.nx, b.i0 + b.nx), j1 = std::max(a.j0 + a.ny, b.j0 + b.ny);
-  return CellBox{i0, j0, i1 - i0, j1 - j0};
-}
-
-bool Inside(const CellBox& b, int i, int j) {
-  return i >= b.i0 && i < b.i0 + b.nx && j >= b.j0 && j < b.j0 + b.ny;
-}
-
-// A history block's pressure at cell (i, j) (zero outside its box).
-double HistoryPressure(const HistoryBlock& h, const CellBox& pbox, int i, int j, int n) {
-  return Inside(pbox, i, j) ? static_cast<double>(h.p(static_cast<size_t>(j) * n + i)) : 0.0;
-}
-
-// One history row's pressure over [0, n) (zero outside its box).
-void HistoryRow(const HistoryBlock& h, const CellBox& pbox, int j, int n, double* row) {
-  std::fill(row, row + n, 0.0);
-  if (j < pbox.j0 || j >= pbox.j0 + pbox.ny) return;
-  for (int i = pbox.i0; i < pbox.i0 + pbox.nx; ++i)
-    row[i] = h.p(static_cast<size_t>(j) * n + i);
-}
-
-}  // namespace
-
-// (warm_start.h)
-void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* last,
-               const HistoryBlock* prev, std::vector<double>* guess, ElasticWork* w,
-               CellBox* solve_box) {
-  const int n = grid.n;
-  guess->assign(grid.Size(), 0.0);
-  w->u0_fix.clear();
-  if (!last) return;
-  const CellBox lb = last->p_box(), pb = prev ? prev->p_box() : CellBox{};
-  std::vector<double>& lrow = w->row_a;
-  std::vector<double>& prow = w->row_b;
-  lrow.resize(n);
-  prow.resize(n);
-  int i0 = n, i1 = -1, j0 = n, j1 = -1;
-  for (int j = std::max(box.j0, lb.j0); j < std::min(box.j0 + box.ny, lb.j0 + lb.ny); ++j) {
-    HistoryRow(*last, lb, j, n, lrow.data());
-    for (int i = std::max(box.i0, lb.i0); i < std::min(box.i0 + box.nx, lb.i0 + lb.nx); ++i)
-      if (lrow[i] > 0.0) {
-        i0 = std::min(i0, i);
-        i1 = std::max(i1, i);
-        j0 = std::min(j0, j);
-        j1 = std::max(j1, j);
-      }
-  }
-  if (i1 >= 0) *solve_box = GrowBox(box, i0, i1, j0, j1);
-  const CellBox both = Union(lb, pb), sb = *solve_box;
-  for (int j = both.j0; j < both.j0 + both.ny; ++j) {
-    double* g = guess->data() + static_cast<size_t>(j) * n;
-    HistoryRow(*last, lb, j, n, lrow.data());
-    if (!prev) {
-      std::copy(lrow.begin() + both.i0, lrow.begin() + both.i0 + both.nx, g + both.i0);
-      continue;
-    }
-    HistoryRow(*prev, pb, j, n, prow.data());
-    for (int i = both.i0; i < both.i0 + both.nx; ++i) {
-      const double lin = 2.0 * lrow[i] - prow[i];
-      g[i] = std::max(0.0, lin);
-      prow[i] = lin;
-    }
-    const bool row_in = j >= sb.j0 && j < sb.j0 + sb.ny;
-    for (int i = both.i0; i < both.i0 + both.nx; ++i) {
-      const bool in = row_in && i >= sb.i0 && i < sb.i0 + sb.nx;
-      if (in ? prow[i] < 0.0 : prow[i] != 0.0)
-        w->u0_fix.push_back(static_cast<int>(static_cast<size_t>(j) * n + i));
-    }
-  }
-}
-
-// (warm_start.h) w->u0 = K times the extrapolated guess on `box` (bx * by): by linearity
-// 2 u(n-1) - u(n-2) from the displacements the last two steps stored (their
-// box checks' K p over kHsURegion*), corrected by direct sums for the cells
-// where the guess is not 2 p(n-1) - p(n-2) (clipped at zero, or outside the
-// box). False (apply the operator instead) if a stored box does not cover
-// `box` or the corrections would cost more than an FFT.
-bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
-                              const HistoryBlock& last, const HistoryBlock& prev,
-                              const std::vector<double>& guess, const CellBox& box,
-                              ElasticWork* w) {
-  const CellBox rl = last.u_box(), rp = prev.u_box();
-  auto covers = [&](const CellBox& r) {
-    return r.nx > 0 && r.ny > 0 && box.i0 >= r.i0 && box.j0 >= r.j0 &&
-           box.i0 + box.nx <= r.i0 + r.nx && box.j0 + box.ny <= r.j0 + r.ny;
-  };
-  if (K.periodic() || !covers(rl) || !covers(rp)) return false;
-  // The cells to correct (WarmStart), and whether they are few enough.
-  const size_t B = static_cast<size_t>(box.nx) * box.ny;
-  if (static_cast<double>(w->u0_fix.size()) >
-      DirectCellsPerApply(*K.SpectrumFor(box.nx, box.ny), B))
-    return false;
-  const CellBox lb = last.p_box(), pb = prev.p_box();
-  w->u0.resize(static_cast<size_t>(box.nx) * box.ny);
-  double* u = w->u0.data();
-  std::vector<float>& ul = w->row_f;
-  ul.resize(2 * static_cast<size_t>(box.nx));
-  float* up = ul.data() + box.nx;
-  for (int j = 0; j < box.ny; ++j) {
-    const size_t kl = static_cast<size_t>(box.j0 + j - rl.j0) * rl.nx + (box.i0 - rl.i0);
-    const size_t kp = static_cast<size_t>(box.j0 + j - rp.j0) * rp.nx + (box.i0 - rp.i0);
-    last.u_row(kl, box.nx, ul.data());
-    prev.u_row(kp, box.nx, up);
-    double* urow = u + static_cast<size_t>(j) * box.nx;
-    for (int i = 0; i < box.nx; ++i)
-      urow[i] = 2.0 * static_cast<double>(ul[i]) - static_cast<double>(up[i]);
-  }
-  for (int k : w->u0_fix) {
-    const int i = k % grid.n, j = k / grid.n;
-    const double lin = 2.0 * HistoryPressure(last, lb, i, j, grid.n) -
-                       HistoryPressure(prev, pb, i, j, grid.n);
-    const double d = (Inside(box, i, j) ? guess[k] : 0.0) - lin;
-    K.AddCellAt(i - box.i0, j - box.j0, d, box.nx, box.ny, u);
-  }
-  return true;
-}
-
-// (warm_start.h)
-bool SolveOnGrowingBox(const TaxelGrid& grid, const ElasticContact& ec,
-                       const std::vector<double>& gap, const CellBox& box, double force_n,
-                       double lift_m, double tolerance, int max_iterations,
-                       ElasticMethod method, ApplyPrecision precision, const double* u0,
-                       std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
-                       CellBox* solve_box, CellBox* u_region) {
-  *u_region = CellBox{0, 0, 0, 0};
-  bool touching = false;
-  for (int attempt = 0;; ++attempt) {
-    touching = ec.Solve(gap, *solve_box, force_n, tolerance, max_iterations, pressure, w, st,
-                        method, precision, attempt == 0 ? u0 : nullptr);
-    const CellBox& sb = *solve_box;
-    const bool whole = sb.i0 == box.i0 && sb.j0 == box.j0 && sb.nx == box.nx && sb.ny == box.ny;
-    if (whole) break;
-    CellBox grown = box;
-    if (touching && BoxHoldsContact(grid, ec.compliance(), gap, box, sb, *pressure,
-                                    st->approach_m, lift_m, precision, w, &grown, u_region))
-      break;
-    *u_region = CellBox{0, 0, 0, 0};
-    // the solution on the smaller box is a good start on the grown one
-    *solve_box = touching && attempt + 1 < kBoxAttempts ? grown : box;
-  }
-  return touching;
-}
-
 bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
                      Workspace* ws, bool new_time) {
   const SkinConfig& cfg = model.config();
@@ -295,22 +43,21 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   const StateLayout& lay = model.state_layout();
   const size_t ncell = grid.Size();
   const bool history = lay.history_block > 0;
-  HistoryBlock cur{}, last{}, prev{}, shifted[3]{};  // shifted: this time, last, the one before
+  // this time, the last step, the one before: the taxel grid's and the shifted grid's
+  HistoryBlock taxel[3]{}, shifted[3]{};
   const bool shifted_history = lay.shifted_block > 0;
   if (history) {
     if (new_time)
       state[lay.history_head] = (static_cast<int>(state[lay.history_head]) + 1) % kHistoryBlocks;
-    cur = lay.history_at(state, 0);
-    last = lay.history_at(state, 1);
-    prev = lay.history_at(state, 2);
-    cur.slots[kHsValid] = 0.0;
+    for (int back = 0; back < 3; ++back) taxel[back] = lay.history_at(state, back);
+    taxel[0].slots[kHsValid] = 0.0;
     if (shifted_history) {
       for (int back = 0; back < 3; ++back) shifted[back] = lay.shifted_history_at(state, back);
       shifted[0].slots[kHsValid] = 0.0;
     }
   }
-  const bool warm = history ? last.slots[kHsValid] > 0.0 : state[kStContactValid] > 0.0;
-  const double depth_prev = history ? last.slots[kHsDepth] : state[kStContactDepth];
+  const bool warm = history ? HasWarmStart(taxel) : state[kStContactValid] > 0.0;
+  const double depth_prev = history ? taxel[1].slots[kHsDepth] : state[kStContactDepth];
   state[kStContactValid] = 0.0;
   if (!(in.in_contact && in.normal_force_n > 0.0)) return false;
 
@@ -334,7 +81,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     // solve again: the result is exact either way.
     const double cull_rel = !warm ? kInf
                             : winkler_slip ? kWinklerCullDepths * depth_prev + kWinklerCullM
-                                           : 1.5 * depth_prev + 20e-6;
+                                           : CullLevel(depth_prev);
     const bool fast = !ws->reference_paths;
     CellBox box;
     auto render = [&](double cull_above_m) {
@@ -349,6 +96,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     };
     double cull = render(cull_rel);
     double solved_approach = 0.0;  // winkler_slip: the field to write
+    CellBox u_region;  // elastic: the region of the check's K p (ws->elastic.check_u)
     for (int pass = 0; pass < 2 && !touching; ++pass) {
       if (pass == 1) cull = render(kInf);
       // (winkler_slip: from the render's summary of the covered cells, else
@@ -381,61 +129,18 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
       } else {
         const ElasticContact& ec = *model.elastic();
         ws->elastic.fft.threads = cfg.threads;  // the operator's FFTs, the stencil
-        // Cells without coverage never touch.
-        for (int j = box.j0; j < box.j0 + box.ny; ++j)
-          for (int i = box.i0; i < box.i0 + box.nx; ++i) {
-            const size_t k = static_cast<size_t>(j) * grid.n + i;
-            if (!(ws->coverage[k] > 0.0)) ws->gap[k] = kInf;
-          }
-        // Warm start: the last step's pressure field (plugin_state), so a
-        // sliding contact needs a few iterations; cold: uniform. With
-        // contact_solver = pcg, extrapolated 2 p(n-1) - p(n-2) when both
-        // steps touched (prototype on slide_grating, P&K: 16.6 -> 9.7
-        // iterations at the same error).
-        const bool extrapolate = warm &&
-                                 cfg.elastic_method == ElasticMethod::kPreconditioned &&
-                                 prev.slots[kHsValid] > 0.0;
-        // The solve box: the last step's contact, kBoxMarginCells wider.
-        // The gap alone bounds it poorly: an elastic contact is ~1/sqrt(2)
-        // as wide as the region where the surfaces interpenetrate, and a
-        // layered skin bulges beside a load. So the box is checked after the
-        // solve (BoxHoldsContact: no rendered cell outside it may touch) and
-        // grown around the cells that would; after kBoxAttempts, every
-        // rendered cell. The result solves the contact problem on the
-        // rendered cells either way.
-        CellBox solve_box = box;
-        WarmStart(grid, box, warm ? &last : nullptr, extrapolate ? &prev : nullptr,
-                  &ws->pressure_guess, &ws->elastic, &solve_box);
-        // Upward bulge bound: max_lift times the whole load on one cell.
-        const double lift = ec.max_lift_m_per_pa() * in.normal_force_n / grid.Area();
-        // K times the extrapolated guess from the last two steps' K p
-        // (linear), which spares the solve an operator application.
-        const bool have_u0 = extrapolate && ExtrapolatedDisplacement(
-            grid, ec.compliance(), last, prev, ws->pressure_guess, solve_box, &ws->elastic);
-        CellBox u_region;
+        CellBox solve_box = box;  // cold: uniform from the whole rendered box
+        if (!warm) ws->pressure_guess.assign(grid.Size(), 0.0);
         ElasticSolveStats st;
-        touching = SolveOnGrowingBox(grid, ec, ws->gap, box, in.normal_force_n, lift,
-                                     cfg.tolerance, kElasticMaxIterations, cfg.elastic_method,
-                                     cfg.elastic_precision,
-                                     have_u0 ? ws->elastic.u0.data() : nullptr,
-                                     &ws->pressure_guess, &ws->elastic, &st, &solve_box,
-                                     &u_region);
+        touching = SolveElasticWarm(grid, ec, box, ws->coverage, history ? taxel : nullptr,
+                                    in.normal_force_n, cfg.tolerance, kElasticMaxIterations,
+                                    cfg.elastic_method, cfg.elastic_precision, &ws->gap,
+                                    &ws->pressure_guess, &ws->elastic, &st, &solve_box,
+                                    &u_region);
         if (touching) {
           tf.pressure_pa.swap(ws->pressure_guess);
           tf.box = solve_box;
           touching = NormalizeLoad(grid, in.normal_force_n, &tf);
-        }
-        // The check's K p for the next step's warm start (NormalizeLoad's
-        // rescaling is rounding-level).
-        if (history) {
-          const int nu = touching && u_region.nx * u_region.ny <= static_cast<int>(ncell)
-                             ? u_region.nx : 0;
-          cur.SetSlotBox(kHsURegionI0, CellBox{u_region.i0, u_region.j0, nu, u_region.ny});
-          if (nu > 0) {
-            const double* cu = ws->elastic.check_u.data();
-            for (size_t k = 0; k < static_cast<size_t>(nu) * u_region.ny; ++k)
-              cur.set_u(k, static_cast<float>(cu[k]));
-          }
         }
         ws->elastic_stats = st;
         approach = st.approach_m;
@@ -449,6 +154,11 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         state[kStContactDepth] = approach - gmin;
       }
     }
+    // The taxel grid's solution and the check's K p (NormalizeLoad's
+    // rescaling is rounding-level) for the next step's warm start.
+    if (touching && history)
+      StoreElasticHistory(grid, tf.pressure_pa, tf.box, u_region, ws->elastic.check_u,
+                          state[kStContactDepth], &taxel[0]);
     // `grid_shift`: average with the solve on the half-cell shifted grid
     // (grid_shift.h), warm-started from its own history; the taxel grid's
     // history keeps the taxel grid's own solution. If the shifted solve
@@ -482,21 +192,6 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   if (touching) {
     if (!finished) FinishTraction(grid, cfg.shear, &tf);
     state[kStContactValid] = 1.0;
-    if (history) {
-      // the solve box only (the pressure is zero outside it)
-      const bool shifted = model.shifted() != nullptr;
-      const double* pa =
-          shifted ? ws->grid_shift.main_pressure.data() : tf.pressure_pa.data();
-      const CellBox& b = shifted ? ws->grid_shift.main_box : tf.box;
-      for (int j = b.j0; j < b.j0 + b.ny; ++j)
-        for (int i = b.i0; i < b.i0 + b.nx; ++i) {
-          const size_t k = static_cast<size_t>(j) * grid.n + i;
-          cur.set_p(k, static_cast<float>(pa[k]));
-        }
-      cur.SetSlotBox(kHsPBoxI0, b);
-      cur.slots[kHsValid] = 1.0;
-      cur.slots[kHsDepth] = state[kStContactDepth];
-    }
   }
   return touching;
 }

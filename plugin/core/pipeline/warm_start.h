@@ -1,7 +1,8 @@
-// The `elastic` solve's warm start from the pressure history (model.h,
-// HistoryBlock) and its box-growing solve, shared by the taxel grid's solve
-// and the half-cell shifted grid's (grid_shift.cc); defined in
-// skin_traction.cc.
+// The `elastic` solve of one step, shared by the taxel grid's solve
+// (skin_traction.cc) and the half-cell shifted grid's (grid_shift.cc): the
+// cull level, the warm start from the pressure history (model.h,
+// HistoryBlock), the solve on a growing box and the history write; defined
+// in warm_start.cc.
 #ifndef MJTOUCH_PIPELINE_WARM_START_H_
 #define MJTOUCH_PIPELINE_WARM_START_H_
 
@@ -19,35 +20,36 @@ CellBox GrowBox(const CellBox& box, int i0, int i1, int j0, int j1);
 double MinGap(const TaxelGrid& grid, const CellBox& box, const std::vector<double>& gap,
               const std::vector<double>& cov);
 
-// The warm start (`last` null: cold): *guess = the last step's pressure, or
-// with `prev` max(0, 2 p(n-1) - p(n-2)); *solve_box = the last contact
-// kBoxMarginCells wider (within box); with `prev`, the cells where the guess
-// on *solve_box differs from 2 p(n-1) - p(n-2) (clipped, or outside the box)
-// in w->u0_fix (ExtrapolatedDisplacement).
-void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* last,
-               const HistoryBlock* prev, std::vector<double>* guess, ElasticWork* w,
-               CellBox* solve_box);
+// The render's cull level above the smallest gap (m) from an indentation
+// depth (m): cells above it are not rendered. Any level gives the same
+// result (if the solved approach reaches it, the caller renders everything
+// and solves again); a tight one renders fewer cells.
+inline double CullLevel(double depth_m) { return 1.5 * depth_m + 20e-6; }
 
-// w->u0 = K times the extrapolated guess on `box` from the last two steps'
-// stored K p (linear), corrected where WarmStart clipped; false (apply the
-// operator instead) if the stored displacements do not cover `box`.
-bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
-                              const HistoryBlock& last, const HistoryBlock& prev,
-                              const std::vector<double>& guess, const CellBox& box,
-                              ElasticWork* w);
+// Whether history (this time, the last step, the one before; null: none)
+// holds a last step to warm-start from.
+bool HasWarmStart(const HistoryBlock* history);
 
-// Solves the contact on *solve_box from *pressure (u0: K *pressure there, or
-// null), checks that no rendered cell of `box` outside it could touch
-// (the skin's lift bound lift_m) and grows it around the cells that would,
-// after kBoxAttempts on all of `box`. Returns whether the load is carried;
-// *solve_box is the final box, *u_region the box over which w->check_u holds
-// K p of the solution (nx = 0: none), which the next step's warm start uses.
-bool SolveOnGrowingBox(const TaxelGrid& grid, const ElasticContact& ec,
-                       const std::vector<double>& gap, const CellBox& box, double force_n,
-                       double lift_m, double tolerance, int max_iterations,
-                       ElasticMethod method, ApplyPrecision precision, const double* u0,
-                       std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
-                       CellBox* solve_box, CellBox* u_region);
+// One step's contact solve on the rendered cells `box`: cells without
+// coverage get gap +inf (they never touch); the warm start from history (as
+// HasWarmStart; with contact_solver = pcg and a valid step before,
+// extrapolated 2 p(n-1) - p(n-2), with its K p from the stored ones), else
+// from *pressure and *solve_box as the caller set them; then solved on a
+// box grown until no rendered cell outside it can touch. Returns whether
+// the load is carried; *solve_box is the final box, *u_region the box over
+// which w->check_u holds K p of the solution (nx = 0: none).
+bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const CellBox& box,
+                      const std::vector<double>& coverage, const HistoryBlock* history,
+                      double force_n, double tolerance, int max_iterations,
+                      ElasticMethod method, ApplyPrecision precision, std::vector<double>* gap,
+                      std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
+                      CellBox* solve_box, CellBox* u_region);
+
+// Writes a solution to a history block: the pressure on p_box (zero
+// outside it), its K p u over u_region (row-major), the depth; marks it valid.
+void StoreElasticHistory(const TaxelGrid& grid, const std::vector<double>& pressure,
+                         const CellBox& p_box, const CellBox& u_region,
+                         const std::vector<double>& u, double depth_m, HistoryBlock* cur);
 
 }  // namespace mjtouch
 

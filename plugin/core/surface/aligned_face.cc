@@ -96,18 +96,13 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
   const double* R = f.R;
   const int n = grid.n, B = SkinBlocks::kSide, nb = blocks.nb;
   // Column and row ranges of the blocks within reach.
-  int bi0 = nb, bi1 = -1, bj0 = nb, bj1 = -1;
+  CellBounds reach;  // in blocks
   for (int bj = 0; bj < nb; ++bj)
     for (int bi = 0; bi < nb; ++bi)
-      if (block_lb[bj * nb + bi] <= f.cull) {
-        bi0 = std::min(bi0, bi);
-        bi1 = std::max(bi1, bi);
-        bj0 = std::min(bj0, bj);
-        bj1 = std::max(bj1, bj);
-      }
-  if (bi1 < 0) return true;
-  const int c0 = bi0 * B, c1 = std::min(n, bi1 * B + B);
-  const int r0 = bj0 * B, r1 = std::min(n, bj1 * B + B);
+      if (block_lb[bj * nb + bi] <= f.cull) reach.Add(bi, bj);
+  if (reach.empty()) return true;
+  const int c0 = reach.i0 * B, c1 = std::min(n, reach.i1 * B + B);
+  const int r0 = reach.j0 * B, r1 = std::min(n, reach.j1 * B + B);
   const bool plane = s.type == T::kPlane, hfield = s.type == T::kHeightField;
   const double area = 4.0 * f.hx * f.hy;
   // Per column: x overlap with the face, the footprint's x range and (a
@@ -153,7 +148,7 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
     const double v = grid.Centre(j), oyj = oy[j];
     const int bj = j / B;
     int lo = n, hi = -1;
-    for (int bi = bi0; bi <= bi1; ++bi) {
+    for (int bi = reach.i0; bi <= reach.i1; ++bi) {
       if (!(block_lb[bj * nb + bi] <= cull)) {
         if (overwrite) {  // out of reach: what a clear leaves
           const size_t a = static_cast<size_t>(j) * n + bi * B;
@@ -165,7 +160,7 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
       }
       // A run of consecutive blocks within reach: one branch-free loop.
       int bend = bi;
-      while (bend + 1 <= bi1 && block_lb[bj * nb + bend + 1] <= cull) ++bend;
+      while (bend + 1 <= reach.i1 && block_lb[bj * nb + bend + 1] <= cull) ++bend;
       const int i0 = bi * B, i1 = std::min(n, bend * B + B);
       bi = bend;
       const size_t base = static_cast<size_t>(j) * n;
@@ -207,10 +202,7 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
       }
     }
     if (hi >= 0) {
-      ext->i_lo = std::min(ext->i_lo, lo);
-      ext->i_hi = std::max(ext->i_hi, hi);
-      ext->j_lo = std::min(ext->j_lo, j);
-      ext->j_hi = std::max(ext->j_hi, j);
+      ext->cells.AddRow(lo, hi, j);
       ext->wrote = true;
       if (extrema) {  // the row is still in L1
         const size_t base = static_cast<size_t>(j) * n;

@@ -48,7 +48,7 @@ struct AlignedFace {
 };
 
 struct Extent {
-  int i_lo, i_hi, j_lo, j_hi;
+  CellBounds cells;
   bool wrote = false;  // some cell written
 };
 

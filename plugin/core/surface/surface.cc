@@ -512,7 +512,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
       // above the face's and equal only with the same coverage, so the
       // face would change no cell's result.
       const Frame& T = frames[k + 1];
-      Extent none{0, 0, 0, 0};
+      Extent none;
       if (RenderAlignedFace(grid, skin_z, AlignedFace{surfaces[k + 1], T.R, T.t, T.hx, T.hy, cull},
                             *blocks, &block_lb[(k + 1) * nb * nb], nullptr, nullptr, &none,
                             true))
@@ -527,14 +527,14 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
   }
   if (!(reuse && reaching == 1 && exclusive >= 0)) exclusive = -1;
   if (reuse && exclusive < 0) clear_last(0, grid.n, 0, grid.n);
-  int i_lo = grid.n, i_hi = -1, j_lo = grid.n, j_hi = -1;
+  CellBounds cells;  // written
   for (size_t k = 0; k < surfaces.size(); ++k) {
     const CounterSurface& s = surfaces[k];
     const Frame& F = frames[k];
     const double* R = F.R;
     if (frames[k].path == 0) continue;
     if (frames[k].path == 1) {
-      Extent ext{i_lo, i_hi, j_lo, j_hi};
+      Extent ext{cells};
       CellBox rect;
       const bool own = static_cast<int>(k) == exclusive;
       RenderAlignedFace(grid, skin_z, AlignedFace{s, R, F.t, F.hx, F.hy, cull}, *blocks,
@@ -552,7 +552,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
           clear_last(ri1, grid.n, rect.j0, rj1);
         }
       }
-      i_lo = ext.i_lo, i_hi = ext.i_hi, j_lo = ext.j_lo, j_hi = ext.j_hi;
+      cells = ext.cells;
       writers += ext.wrote;
       aligned_writers += ext.wrote;
       continue;
@@ -620,10 +620,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
           (*gap_m)[idx] = gap;
           (*coverage)[idx] = cov;
           general_wrote = true;
-          i_lo = std::min(i_lo, i);
-          i_hi = std::max(i_hi, i);
-          j_lo = std::min(j_lo, j);
-          j_hi = std::max(j_hi, j);
+          cells.Add(i, j);
         }
       });
     }
@@ -638,7 +635,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
   }
   // Every cell written above is in this box (a write takes a gap below the
   // cell's, and extends the box).
-  const CellBox box = i_hi < 0 ? CellBox{} : CellBox{i_lo, j_lo, i_hi - i_lo + 1, j_hi - j_lo + 1};
+  const CellBox box = cells.Box();
   if (rendered) *rendered = box;
   if (written) *written = box;
   return cull;
