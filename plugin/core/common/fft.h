@@ -1,4 +1,4 @@
-// Mixed-radix (2, 3, 4, 5) Stockham FFTs, double or float, for the contact
+// Mixed-radix (2, 3, 4, 5, 8) Stockham FFTs, double or float, for the contact
 // solver's convolutions on the taxel grid (contact/compliance.*). Pure C++.
 //
 // Why our own rather than a library: the solver needs 2D transforms of sizes
@@ -29,7 +29,8 @@ int NextFftSize(int n);
 // Batched 1D complex FFT of length n: element k of batch lane b is at
 // re[k * stride + b], im[...] (b < batch <= stride). Forward:
 // exp(-2 pi i j k / n); inverse: exp(+...) without the 1/n factor. In place;
-// sre / sim: scratch of n * batch elements each. T: double or float.
+// sre / sim: scratch of n * (batch rounded up to a multiple of 32 /
+// sizeof(T)) elements each (rows on whole 32-byte vectors). T: double or float.
 class FftPlan {
  public:
   explicit FftPlan(int n);  // IsFftSize(n)
@@ -40,9 +41,12 @@ class FftPlan {
   // only outputs k < needed are read afterwards (the others may be left
   // unwritten); at most 3 n / 5 with a trailing radix-5 stage (2 n / 3,
   // radix 3), that stage skips two of its five outputs (one of three).
+  // scale (non-null): the input's element k, lane b is first multiplied by
+  // scale[k * scale_stride + b] (in the first stage's pass).
   template <typename T>
   void Transform(T* re, T* im, int batch, int stride, bool inverse, T* sre, T* sim,
-                 int nonzero = -1, int needed = -1) const;
+                 int nonzero = -1, int needed = -1, const T* scale = nullptr,
+                 int scale_stride = 0) const;
   // Whether Transform with this `nonzero` skips (never reads) the input's
   // elements k >= n / 2.
   bool SkipsUpperHalf(int nonzero) const {
@@ -134,7 +138,9 @@ class Fft2D {
   template <typename T>
   void ForwardLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr, T* si) const;
   template <typename T>
-  void InverseLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr, T* si) const;
+  // k_hat (non-null): the spectrum times the kernel's first (ConvolveReal).
+  void InverseLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr, T* si,
+                    const T* k_hat = nullptr) const;
   template <typename T>
   void InverseColumns(T* spec_re, T* spec_im, const Slab* slabs, int nslabs, int rows, int cols,
                       int c0, int c1, double* re, int stride, T* wr, T* wi, int lw, T* sr,
