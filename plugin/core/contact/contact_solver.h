@@ -59,6 +59,8 @@ struct ElasticWork {
   std::vector<double> check_p, check_u;  // skin_traction.cc: the box check
   std::vector<double> u0;                 // skin_traction.cc: the warm start's K p
   std::vector<int> u0_fix;
+  std::vector<int> fix_i, fix_j;  // u0_fix's cells in box coordinates
+  std::vector<double> fix_d;      // and their corrections (Pa)
   std::vector<double> row_a, row_b;
   std::vector<float> row_f;
   ComplianceWork fft;

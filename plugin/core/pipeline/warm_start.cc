@@ -227,13 +227,22 @@ bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
     for (int i = 0; i < box.nx; ++i)
       urow[i] = 2.0 * static_cast<double>(ul[i]) - static_cast<double>(up[i]);
   }
-  for (int k : w->u0_fix) {
+  // (in u0_fix's order, several cells per pass over u: AddCellsAt)
+  const size_t nfix = w->u0_fix.size();
+  w->fix_i.resize(nfix);
+  w->fix_j.resize(nfix);
+  w->fix_d.resize(nfix);
+  for (size_t f = 0; f < nfix; ++f) {
+    const int k = w->u0_fix[f];
     const int i = k % grid.n, j = k / grid.n;
     const double lin = 2.0 * HistoryPressure(last, lb, i, j, grid.n) -
                        HistoryPressure(prev, pb, i, j, grid.n);
-    const double d = (Inside(box, i, j) ? guess[k] : 0.0) - lin;
-    K.AddCellAt(i - box.i0, j - box.j0, d, box.nx, box.ny, u);
+    w->fix_i[f] = i - box.i0;
+    w->fix_j[f] = j - box.j0;
+    w->fix_d[f] = (Inside(box, i, j) ? guess[k] : 0.0) - lin;
   }
+  K.AddCellsAt(w->fix_i.data(), w->fix_j.data(), w->fix_d.data(), nfix, box.nx, box.ny, u,
+               w->fft.threads);
   return true;
 }
 
