@@ -164,21 +164,23 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
 }
 
 // z[j * bx + i] = sum over (dj, di) in stencil order of M[dj L + di] *
-// g_pad[(j + dj) px + i + di]. The stencil unrolled inside the loop over i,
-// which vectorises: each cell's sum runs in the same order as a per-cell
-// loop would, in a register.
+// g_pad[(j + dj) px + i + di], for i in [lo[j], hi[j]) (the solver reads z
+// on its working set only; elsewhere z is left as it was). The stencil
+// unrolled inside the loop over i, which vectorises: each cell's sum runs
+// in the same order as a per-cell loop would, in a register.
 // T: the arithmetic (float with ApplyPrecision::kFloat: twice the lanes; the
 // preconditioner only shapes the search direction, so its rounding moves
 // the iterates, not the converged solution).
 template <int L, typename T>
 MJTOUCH_TARGET_CLONES
-void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, double* z_out) {
+void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, const int* lo,
+                  const int* hi, double* z_out) {
   T m[L * L];
   for (int k = 0; k < L * L; ++k) m[k] = static_cast<T>(M[k]);
   for (int j = 0; j < by; ++j) {
     double* __restrict z = z_out + static_cast<size_t>(j) * bx;
     const T* __restrict row = g_pad + static_cast<size_t>(j) * px;
-    for (int i = 0; i < bx; ++i) {
+    for (int i = lo[j]; i < hi[j]; ++i) {
       T acc = 0;
 #pragma GCC unroll 32
       for (int dj = 0; dj < L; ++dj)
@@ -193,10 +195,10 @@ void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, doubl
 // ApplyStencil with the rows split over `threads` pool callers (each row's
 // sums are its own: the same bits for any split).
 template <int L, typename T>
-void StencilRows(const double* M, const T* g_pad, int px, int bx, int by, double* z_out,
-                 int threads) {
+void StencilRows(const double* M, const T* g_pad, int px, int bx, int by, const int* lo,
+                 const int* hi, double* z_out, int threads) {
   ForRowParts(by, threads, 8, [&](int j0, int j1) {
-    ApplyStencil<L>(M, g_pad + static_cast<size_t>(j0) * px, px, bx, j1 - j0,
+    ApplyStencil<L>(M, g_pad + static_cast<size_t>(j0) * px, px, bx, j1 - j0, lo + j0, hi + j0,
                     z_out + static_cast<size_t>(j0) * bx);
   });
 }
@@ -234,6 +236,9 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
   for (auto* v : {&w->set_g, &w->set_z, &w->set_t, &w->set_t_old, &w->set_p, &w->set_p_new})
     v->resize(B);
   w->set.resize(B);
+  w->set_rows.resize(static_cast<size_t>(by) + 1);
+  w->set_lo.resize(by);
+  w->set_hi.resize(by);
   w->changed.resize(B);
   double* gS = w->set_g.data();
   double* zS = w->set_z.data();
@@ -256,7 +261,14 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     // the last t gathered on S (zero before the first), then zeroed.
     const int* S = w->set.data();
     ns = ws::BuildSet(bx, by, px, hw, g0, u, p, gbar, stencil_f ? nullptr : gp, gpf, t, !first,
-                      w->set.data(), gS, pS, oS);
+                      w->set.data(), gS, pS, oS, w->set_rows.data());
+    // each row's span of S (empty rows: lo = hi = 0), where z is needed
+    for (int j = 0; j < by; ++j) {
+      const size_t k0 = w->set_rows[j], k1 = w->set_rows[j + 1];
+      const bool any = k1 > k0;
+      w->set_lo[j] = any ? S[k0] - j * bx : 0;
+      w->set_hi[j] = any ? S[k1 - 1] - j * bx + 1 : 0;
+    }
     // A periodic operator's stencil wraps: the border repeats the far side
     // (so a field uniform along an axis stays exactly uniform).
     if (P.periodic) {
@@ -278,13 +290,15 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     }
     // z = M g on S (M: the inverse operator's stencil, g zero off S), then
     // its mean removed: a direction that keeps the load.
-    // Over the whole box, a row at a time (vectorises; each cell's sum runs
-    // in the stencil's order, as a per-cell loop would), read on S only.
+    // Over each row's span of S (vectorises; each cell's sum runs in the
+    // stencil's order, as a per-cell loop would), read on S only.
     // r: scratch until K t below.
+    const int* lo = w->set_lo.data();
+    const int* hi = w->set_hi.data();
     if (stencil_f) {
-      StencilRows<L>(M, gpf, px, bx, by, r, w->fft.threads);
+      StencilRows<L>(M, gpf, px, bx, by, lo, hi, r, w->fft.threads);
     } else {
-      StencilRows<L>(M, gp, px, bx, by, r, w->fft.threads);
+      StencilRows<L>(M, gp, px, bx, by, lo, hi, r, w->fft.threads);
     }
     const double zbar = ws::GatherSum(ns, S, r, zS) / static_cast<double>(ns);
     const double G = ws::CenterDot(ns, zbar, zS, gS);
