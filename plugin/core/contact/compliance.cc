@@ -32,6 +32,10 @@ void ApplyIn(const Fft2D& fft, const std::vector<T>& k_hat, const double* in, in
 SurfaceCompliance::SurfaceCompliance(int n, double pitch_m, std::vector<float> table)
     : periodic_(false), nx_(n), ny_(n), n_(n), pitch_m_(pitch_m), table_(std::move(table)) {
   for (float v : table_) max_lift_ = std::max(max_lift_, -static_cast<double>(v));
+  const size_t w = 2 * static_cast<size_t>(n) - 1;
+  table_rev_.resize(table_.size());
+  for (size_t r = 0; r < table_.size() / w; ++r)
+    for (size_t m = 0; m < w; ++m) table_rev_[r * w + m] = table_[r * w + (w - 1 - m)];
 }
 
 SurfaceCompliance::SurfaceCompliance(int nx, int ny, double pitch_m,
@@ -127,10 +131,10 @@ void SurfaceCompliance::AddCellRows(int ci, int cj, double d, int bx, int j0, in
                                     double* u) const {
   for (int j = j0; j < j1; ++j) {
     double* urow = u + static_cast<size_t>(j) * bx;
-    const float* krow =
-        table_.data() + static_cast<size_t>(cj - j + n_ - 1) * (2 * n_ - 1) + (ci + n_ - 1);
-    // K(ci - i, cj - j): walk the table row backwards with i.
-    for (int i = 0; i < bx; ++i) urow[i] += d * krow[-i];
+    // K(ci - i, cj - j) = table_rev_ at column n - 1 - ci + i
+    const double* krow =
+        table_rev_.data() + static_cast<size_t>(cj - j + n_ - 1) * (2 * n_ - 1) + (n_ - 1 - ci);
+    for (int i = 0; i < bx; ++i) urow[i] += d * krow[i];
   }
 }
 
@@ -142,14 +146,14 @@ void SurfaceCompliance::AddCellRows4(const int* ci, const int* cj, const double*
   for (int j = j0; j < j1; ++j) {
     double* __restrict urow = u + static_cast<size_t>(j) * bx;
     auto krow = [&](int k) {
-      return table_.data() + static_cast<size_t>(cj[k] - j + n_ - 1) * w + (ci[k] + n_ - 1);
+      return table_rev_.data() + static_cast<size_t>(cj[k] - j + n_ - 1) * w + (n_ - 1 - ci[k]);
     };
-    const float* __restrict k0 = krow(0);
-    const float* __restrict k1 = krow(1);
-    const float* __restrict k2 = krow(2);
-    const float* __restrict k3 = krow(3);
+    const double* __restrict k0 = krow(0);
+    const double* __restrict k1 = krow(1);
+    const double* __restrict k2 = krow(2);
+    const double* __restrict k3 = krow(3);
     for (int i = 0; i < bx; ++i)
-      urow[i] = (((urow[i] + d0 * k0[-i]) + d1 * k1[-i]) + d2 * k2[-i]) + d3 * k3[-i];
+      urow[i] = (((urow[i] + d0 * k0[i]) + d1 * k1[i]) + d2 * k2[i]) + d3 * k3[i];
   }
 }
 
