@@ -239,7 +239,8 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
   w->set_rows.resize(static_cast<size_t>(by) + 1);
   w->set_lo.resize(by);
   w->set_hi.resize(by);
-  w->changed.resize(B);
+  // (kept at B entries: no clearing per solve)
+  w->set_changed.resize(std::max(w->set_changed.size(), B));
   double* gS = w->set_g.data();
   double* zS = w->set_z.data();
   double* tS = w->set_t.data();
@@ -334,9 +335,10 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     // Step and project onto p >= 0 on S; off S, p and p_new are zero (p > 0
     // lies in S), so the rescaling and the stopping test run on S only.
     size_t nchg = 0;
-    const double sum_new = ws::StepProject(ns, tau, pS, tS, S, pnS, dl, w->changed.data(), &nchg);
+    const double sum_new = ws::StepProject(ns, tau, pS, tS, S, pnS, dl, w->set_changed.data(),
+                                                &nchg);
     if (!(sum_new > 0.0)) {
-      for (size_t k = 0; k < nchg; ++k) dl[w->changed[k]] = 0.0;  // delta stays zero
+      for (size_t k = 0; k < nchg; ++k) dl[w->set_changed[k]] = 0.0;  // delta stays zero
       break;
     }
     const double s = P.target / sum_new;
@@ -344,7 +346,7 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     // u = s (u - tau K t + K delta), K delta by direct sums (few cells) or
     // into g (free until the next iteration), in one pass that also sums
     // the next iteration's contact gap.
-    const int* chg = w->changed.data();
+    const int* chg = w->set_changed.data();
     double* kd = nullptr;
     if (nchg > 0) {
       if (!P.periodic && static_cast<double>(nchg) < DirectCellsPerApply(*P.spec, B)) {
@@ -362,7 +364,6 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
       break;
     }
   }
-  w->changed.clear();
 }
 
 }  // namespace
@@ -414,24 +415,25 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   double* g0 = w->g0.data();
   double* p = w->p.data();
   size_t ncand = 0;
-  // Cells of the guess the solve drops (their share of initial_u removed).
-  w->changed.resize(B);
+  // Cells of the guess the solve drops (their share of initial_u removed;
+  // the buffer kept at B entries: no clearing per solve).
+  w->dropped.resize(std::max(w->dropped.size(), B));
+  const int* dropped = w->dropped.data();
   size_t ndropped = 0;
   double sum_p = working_set::LoadGuess(bx, by, nx, gap.data() + row_start(0),
                                         pressure->data() + row_start(0), g0, p, &ncand,
-                                        w->changed.data(), &ndropped);
-  w->changed.resize(ndropped);
+                                        w->dropped.data(), &ndropped);
   // initial_u, corrected for the dropped cells (direct sums unless they
   // are many), or a fresh K p.
   bool have_u = initial_u != nullptr && !periodic && method == ElasticMethod::kPreconditioned &&
                 sum_p > 0.0;
   if (have_u) {
     // Too many dropped cells: the FFT is cheaper.
-    have_u = static_cast<double>(w->changed.size()) <=
-             DirectCellsPerApply(*K.SpectrumFor(bx, by), B);
-    if (have_u && !w->changed.empty()) {
+    have_u = static_cast<double>(ndropped) <= DirectCellsPerApply(*K.SpectrumFor(bx, by), B);
+    if (have_u && ndropped > 0) {
       std::copy(initial_u, initial_u + B, w->u.begin());
-      for (int c : w->changed) {
+      for (size_t k = 0; k < ndropped; ++k) {
+        const int c = dropped[k];
         const double given = (*pressure)[row_start(c / bx) + c % bx];
         if (std::isfinite(given)) K.AddCell(c, p[c] - given, bx, by, w->u.data());
         else have_u = false;
@@ -439,7 +441,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
     }
   }
   // The pressure outside the box is zero; inside it the solution (below).
-  const bool scaled_copy = have_u && w->changed.empty();  // u = scale initial_u
+  const bool scaled_copy = have_u && ndropped == 0;  // u = scale initial_u
   w->changed.clear();
   double* out = pressure->data();
   std::fill(out, out + row_start(0), 0.0);

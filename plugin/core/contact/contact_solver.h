@@ -58,6 +58,8 @@ struct ElasticWork {
   // contiguous (index k of set; contact/working_set.h)
   std::vector<double> set_g, set_z, set_t, set_t_old, set_p, set_p_new;
   std::vector<int> changed;
+  std::vector<int> set_changed;  // kPreconditioned: the step's clipped cells
+  std::vector<int> dropped;      // the guess's cells the solve drops
   std::vector<double> check_p, check_u;  // skin_traction.cc: the box check
   std::vector<double> u0;                 // skin_traction.cc: the warm start's K p
   std::vector<int> u0_fix;
