@@ -87,12 +87,20 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
   if (!any) return true;
   const int i0 = reach.i0, i1 = reach.i1, j0 = reach.j0, j1 = reach.j1;
   const int cx = i1 - i0 + 1, cy = j1 - j0 + 1;
-  w->check_p.assign(static_cast<size_t>(cx) * cy, 0.0);
+  // check_p: the pressure on inner, zero elsewhere (each element written once)
+  w->check_p.resize(static_cast<size_t>(cx) * cy);
   w->check_u.resize(w->check_p.size());
-  for (int j = inner.j0; j < inner.j0 + inner.ny; ++j) {
+  for (int j = j0; j <= j1; ++j) {
+    double* to = w->check_p.data() + static_cast<size_t>(j - j0) * cx;
+    if (j < inner.j0 || j >= inner.j0 + inner.ny) {
+      std::fill(to, to + cx, 0.0);
+      continue;
+    }
     const double* row = pressure.data() + static_cast<size_t>(j) * grid.n + inner.i0;
-    std::copy(row, row + inner.nx,
-              w->check_p.begin() + static_cast<size_t>(j - j0) * cx + (inner.i0 - i0));
+    const int a = inner.i0 - i0, b = a + inner.nx;
+    std::fill(to, to + a, 0.0);
+    std::copy(row, row + inner.nx, to + a);
+    std::fill(to + b, to + cx, 0.0);
   }
   // The pressure lives on inner only: offsets from it to the checked cells
   // reach less far than the box's size (a smaller FFT grid), and the
