@@ -65,23 +65,8 @@ void ClearTraction(const TaxelGrid& grid, TractionField* f) {
 }
 
 bool NormalizeLoad(const TaxelGrid& grid, double force, TractionField* out) {
-  // The sum in box order, blocks of four zeros skipped: total starts at +0
-  // and adding a zero of either sign to it is exact (so the same bits with
-  // a chain of additions only as long as the loaded cells).
   double total = 0.0;
-  const CellBox& b = out->box;
-  for (int j = b.j0; j < b.j0 + b.ny; ++j) {
-    const double* p = out->pressure_pa.data() + static_cast<size_t>(j) * grid.n;
-    int i = b.i0;
-    for (; i + 4 <= b.i0 + b.nx; i += 4) {
-      if ((p[i] == 0.0) & (p[i + 1] == 0.0) & (p[i + 2] == 0.0) & (p[i + 3] == 0.0)) continue;
-      total += p[i];
-      total += p[i + 1];
-      total += p[i + 2];
-      total += p[i + 3];
-    }
-    for (; i < b.i0 + b.nx; ++i) total += p[i];
-  }
+  ForBox(grid, out->box, [&](size_t k) { total += out->pressure_pa[k]; });
   if (!(total > 0.0) || !(force > 0.0)) {
     ForBox(grid, out->box, [&](size_t k) { out->pressure_pa[k] = 0.0; });
     return false;
@@ -141,21 +126,6 @@ void SlipRun(const double* __restrict p, double rx, double ry, int len, double* 
   }
 }
 
-// ForEachRun of the cells with p[i] != 0, blocks of four zeros stepped
-// over at once (a sliding contact's box is mostly unloaded).
-template <typename Run>
-void ForEachNonzeroRun(const double* p, int i0, int i1, Run&& run) {
-  for (int i = i0; i < i1;) {
-    while (i + 4 <= i1 && (p[i] == 0.0) & (p[i + 1] == 0.0) & (p[i + 2] == 0.0) & (p[i + 3] == 0.0))
-      i += 4;
-    while (i < i1 && !(p[i] != 0.0)) ++i;
-    if (i == i1) break;
-    const int begin = i;
-    while (i < i1 && p[i] != 0.0) ++i;
-    run(begin, i);
-  }
-}
-
 }  // namespace
 
 void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, double fy,
@@ -173,7 +143,7 @@ void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, doub
   for (int j = b.j0; j < b.j0 + b.ny; ++j) {
     const size_t row = static_cast<size_t>(j) * grid.n;
     const double* p = out->pressure_pa.data() + row;
-    ForEachNonzeroRun(p, b.i0, b.i0 + b.nx, [&](int begin, int end) {
+    ForEachRun(b.i0, b.i0 + b.nx, [&](int i) { return p[i] != 0.0; }, [&](int begin, int end) {
       out->runs.Add(j, begin, end);
       out->active_cells += end - begin;
       SlipRun(p + begin, rx, ry, end - begin, out->shear_x_pa.data() + row + begin,
