@@ -32,6 +32,10 @@ void ApplyIn(const Fft2D& fft, const std::vector<T>& k_hat, const double* in, in
 SurfaceCompliance::SurfaceCompliance(int n, double pitch_m, std::vector<float> table)
     : periodic_(false), nx_(n), ny_(n), n_(n), pitch_m_(pitch_m), table_(std::move(table)) {
   for (float v : table_) max_lift_ = std::max(max_lift_, -static_cast<double>(v));
+  const size_t w = 2 * static_cast<size_t>(n) - 1;
+  table_rev_.resize(table_.size());
+  for (size_t r = 0; r < table_.size() / w; ++r)
+    for (size_t m = 0; m < w; ++m) table_rev_[r * w + m] = table_[r * w + (w - 1 - m)];
 }
 
 SurfaceCompliance::SurfaceCompliance(int nx, int ny, double pitch_m,
@@ -127,26 +131,73 @@ void SurfaceCompliance::AddCellRows(int ci, int cj, double d, int bx, int j0, in
                                     double* u) const {
   for (int j = j0; j < j1; ++j) {
     double* urow = u + static_cast<size_t>(j) * bx;
-    const float* krow =
-        table_.data() + static_cast<size_t>(cj - j + n_ - 1) * (2 * n_ - 1) + (ci + n_ - 1);
-    // K(ci - i, cj - j): walk the table row backwards with i.
-    for (int i = 0; i < bx; ++i) urow[i] += d * krow[-i];
+    // K(ci - i, cj - j) = table_rev_ at column n - 1 - ci + i
+    const double* krow =
+        table_rev_.data() + static_cast<size_t>(cj - j + n_ - 1) * (2 * n_ - 1) + (n_ - 1 - ci);
+    for (int i = 0; i < bx; ++i) urow[i] += d * krow[i];
+  }
+}
+
+MJTOUCH_TARGET_CLONES
+void SurfaceCompliance::AddCellRows4(const int* ci, const int* cj, const double* d, int bx,
+                                     int j0, int j1, double* u) const {
+  const size_t w = 2 * static_cast<size_t>(n_) - 1;
+  const double d0 = d[0], d1 = d[1], d2 = d[2], d3 = d[3];
+  for (int j = j0; j < j1; ++j) {
+    double* __restrict urow = u + static_cast<size_t>(j) * bx;
+    auto krow = [&](int k) {
+      return table_rev_.data() + static_cast<size_t>(cj[k] - j + n_ - 1) * w + (n_ - 1 - ci[k]);
+    };
+    const double* __restrict k0 = krow(0);
+    const double* __restrict k1 = krow(1);
+    const double* __restrict k2 = krow(2);
+    const double* __restrict k3 = krow(3);
+    for (int i = 0; i < bx; ++i)
+      urow[i] = (((urow[i] + d0 * k0[i]) + d1 * k1[i]) + d2 * k2[i]) + d3 * k3[i];
+  }
+}
+
+template <typename Cell>
+void SurfaceCompliance::AddCellBlocks(size_t count, const Cell& cell, int bx, int j0, int j1,
+                                      double* u) const {
+  constexpr int kRows = 8;
+  for (int jb = j0; jb < j1; jb += kRows) {
+    const int je = std::min(j1, jb + kRows);
+    size_t k = 0;
+    for (; k + 4 <= count; k += 4) {
+      int ci[4], cj[4];
+      double d[4];
+      for (int l = 0; l < 4; ++l) cell(k + l, &ci[l], &cj[l], &d[l]);
+      AddCellRows4(ci, cj, d, bx, jb, je, u);
+    }
+    for (; k < count; ++k) {
+      int ci, cj;
+      double d;
+      cell(k, &ci, &cj, &d);
+      AddCellRows(ci, cj, d, bx, jb, je, u);
+    }
   }
 }
 
 void SurfaceCompliance::AddCells(const int* cells, size_t count, const double* d, int bx, int by,
                                  double* u, int threads) const {
-  // Blocks of kRows rows, every cell per block: the block of u stays in L1
-  // while the cells' table rows stream past.
-  constexpr int kRows = 8;
-  auto rows = [&](int j0, int j1) {
-    for (int jb = j0; jb < j1; jb += kRows)
-      for (size_t k = 0; k < count; ++k) {
-        const int c = cells[k];
-        AddCellRows(c % bx, c / bx, d[c], bx, jb, std::min(j1, jb + kRows), u);
-      }
+  auto cell = [&](size_t k, int* ci, int* cj, double* dk) {
+    const int c = cells[k];
+    *ci = c % bx;
+    *cj = c / bx;
+    *dk = d[c];
   };
-  ForRowParts(by, threads, kRows, rows);
+  ForRowParts(by, threads, 8, [&](int j0, int j1) { AddCellBlocks(count, cell, bx, j0, j1, u); });
+}
+
+void SurfaceCompliance::AddCellsAt(const int* ci, const int* cj, const double* d, size_t count,
+                                   int bx, int by, double* u, int threads) const {
+  auto cell = [&](size_t k, int* i, int* j, double* dk) {
+    *i = ci[k];
+    *j = cj[k];
+    *dk = d[k];
+  };
+  ForRowParts(by, threads, 8, [&](int j0, int j1) { AddCellBlocks(count, cell, bx, j0, j1, u); });
 }
 
 std::shared_ptr<const SurfaceCompliance> HalfSpaceCompliance(double young_pa, double poisson,

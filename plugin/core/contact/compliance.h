@@ -105,6 +105,10 @@ class SurfaceCompliance {
   // cells in list order: the same bits for any count).
   void AddCells(const int* cells, size_t count, const double* d, int bx, int by, double* u,
                 int threads) const;
+  // AddCellAt for the cells (ci[k], cj[k]) (box coordinates, inside the box
+  // or not), k < count in order, amounts d[k]; rows split as in AddCells.
+  void AddCellsAt(const int* ci, const int* cj, const double* d, size_t count, int bx, int by,
+                  double* u, int threads) const;
 
  private:
   // Fills s->inverse from s->k_hat (modes with k_hat <= 0 dropped: the
@@ -112,6 +116,15 @@ class SurfaceCompliance {
   static void BuildInverse(Spectrum* s);
   // AddCellAt over the box rows [j0, j1) only.
   void AddCellRows(int ci, int cj, double d, int bx, int j0, int j1, double* u) const;
+  // AddCellRows for four cells in one pass over u (each element adds them
+  // in order: four AddCellRows' bits, a quarter of the loads and stores).
+  void AddCellRows4(const int* ci, const int* cj, const double* d, int bx, int j0, int j1,
+                    double* u) const;
+  // AddCellsAt over the box rows [j0, j1) in blocks of rows (the block of u
+  // stays in L1 while the cells' table rows stream past); cell(k, &ci, &cj,
+  // &d) gives the k-th cell.
+  template <typename Cell>
+  void AddCellBlocks(size_t count, const Cell& cell, int bx, int j0, int j1, double* u) const;
   double TableAt(int di, int dj) const {
     return table_[static_cast<size_t>(dj + n_ - 1) * (2 * n_ - 1) + (di + n_ - 1)];
   }
@@ -120,6 +133,9 @@ class SurfaceCompliance {
   int nx_ = 0, ny_ = 0, n_ = 0;
   double pitch_m_ = 0;
   std::vector<float> table_;  // non-periodic, m/Pa, (2n - 1)^2
+  // table_ in double with each row reversed (the direct sums walk it
+  // forward: no conversions or lane reversals in their loops)
+  std::vector<double> table_rev_;
   double max_lift_ = 0;
   std::shared_ptr<const Spectrum> periodic_spectrum_;
   mutable std::mutex mu_;

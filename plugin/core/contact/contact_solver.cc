@@ -164,21 +164,23 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
 }
 
 // z[j * bx + i] = sum over (dj, di) in stencil order of M[dj L + di] *
-// g_pad[(j + dj) px + i + di]. The stencil unrolled inside the loop over i,
-// which vectorises: each cell's sum runs in the same order as a per-cell
-// loop would, in a register.
+// g_pad[(j + dj) px + i + di], for i in [lo[j], hi[j]) (the solver reads z
+// on its working set only; elsewhere z is left as it was). The stencil
+// unrolled inside the loop over i, which vectorises: each cell's sum runs
+// in the same order as a per-cell loop would, in a register.
 // T: the arithmetic (float with ApplyPrecision::kFloat: twice the lanes; the
 // preconditioner only shapes the search direction, so its rounding moves
 // the iterates, not the converged solution).
 template <int L, typename T>
 MJTOUCH_TARGET_CLONES
-void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, double* z_out) {
+void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, const int* lo,
+                  const int* hi, double* z_out) {
   T m[L * L];
   for (int k = 0; k < L * L; ++k) m[k] = static_cast<T>(M[k]);
   for (int j = 0; j < by; ++j) {
     double* __restrict z = z_out + static_cast<size_t>(j) * bx;
     const T* __restrict row = g_pad + static_cast<size_t>(j) * px;
-    for (int i = 0; i < bx; ++i) {
+    for (int i = lo[j]; i < hi[j]; ++i) {
       T acc = 0;
 #pragma GCC unroll 32
       for (int dj = 0; dj < L; ++dj)
@@ -193,10 +195,10 @@ void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, doubl
 // ApplyStencil with the rows split over `threads` pool callers (each row's
 // sums are its own: the same bits for any split).
 template <int L, typename T>
-void StencilRows(const double* M, const T* g_pad, int px, int bx, int by, double* z_out,
-                 int threads) {
+void StencilRows(const double* M, const T* g_pad, int px, int bx, int by, const int* lo,
+                 const int* hi, double* z_out, int threads) {
   ForRowParts(by, threads, 8, [&](int j0, int j1) {
-    ApplyStencil<L>(M, g_pad + static_cast<size_t>(j0) * px, px, bx, j1 - j0,
+    ApplyStencil<L>(M, g_pad + static_cast<size_t>(j0) * px, px, bx, j1 - j0, lo + j0, hi + j0,
                     z_out + static_cast<size_t>(j0) * bx);
   });
 }
@@ -234,7 +236,11 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
   for (auto* v : {&w->set_g, &w->set_z, &w->set_t, &w->set_t_old, &w->set_p, &w->set_p_new})
     v->resize(B);
   w->set.resize(B);
-  w->changed.resize(B);
+  w->set_rows.resize(static_cast<size_t>(by) + 1);
+  w->set_lo.resize(by);
+  w->set_hi.resize(by);
+  // (kept at B entries: no clearing per solve)
+  w->set_changed.resize(std::max(w->set_changed.size(), B));
   double* gS = w->set_g.data();
   double* zS = w->set_z.data();
   double* tS = w->set_t.data();
@@ -256,7 +262,14 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     // the last t gathered on S (zero before the first), then zeroed.
     const int* S = w->set.data();
     ns = ws::BuildSet(bx, by, px, hw, g0, u, p, gbar, stencil_f ? nullptr : gp, gpf, t, !first,
-                      w->set.data(), gS, pS, oS);
+                      w->set.data(), gS, pS, oS, w->set_rows.data());
+    // each row's span of S (empty rows: lo = hi = 0), where z is needed
+    for (int j = 0; j < by; ++j) {
+      const size_t k0 = w->set_rows[j], k1 = w->set_rows[j + 1];
+      const bool any = k1 > k0;
+      w->set_lo[j] = any ? S[k0] - j * bx : 0;
+      w->set_hi[j] = any ? S[k1 - 1] - j * bx + 1 : 0;
+    }
     // A periodic operator's stencil wraps: the border repeats the far side
     // (so a field uniform along an axis stays exactly uniform).
     if (P.periodic) {
@@ -278,13 +291,15 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     }
     // z = M g on S (M: the inverse operator's stencil, g zero off S), then
     // its mean removed: a direction that keeps the load.
-    // Over the whole box, a row at a time (vectorises; each cell's sum runs
-    // in the stencil's order, as a per-cell loop would), read on S only.
+    // Over each row's span of S (vectorises; each cell's sum runs in the
+    // stencil's order, as a per-cell loop would), read on S only.
     // r: scratch until K t below.
+    const int* lo = w->set_lo.data();
+    const int* hi = w->set_hi.data();
     if (stencil_f) {
-      StencilRows<L>(M, gpf, px, bx, by, r, w->fft.threads);
+      StencilRows<L>(M, gpf, px, bx, by, lo, hi, r, w->fft.threads);
     } else {
-      StencilRows<L>(M, gp, px, bx, by, r, w->fft.threads);
+      StencilRows<L>(M, gp, px, bx, by, lo, hi, r, w->fft.threads);
     }
     const double zbar = ws::GatherSum(ns, S, r, zS) / static_cast<double>(ns);
     const double G = ws::CenterDot(ns, zbar, zS, gS);
@@ -320,9 +335,10 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     // Step and project onto p >= 0 on S; off S, p and p_new are zero (p > 0
     // lies in S), so the rescaling and the stopping test run on S only.
     size_t nchg = 0;
-    const double sum_new = ws::StepProject(ns, tau, pS, tS, S, pnS, dl, w->changed.data(), &nchg);
+    const double sum_new = ws::StepProject(ns, tau, pS, tS, S, pnS, dl, w->set_changed.data(),
+                                                &nchg);
     if (!(sum_new > 0.0)) {
-      for (size_t k = 0; k < nchg; ++k) dl[w->changed[k]] = 0.0;  // delta stays zero
+      for (size_t k = 0; k < nchg; ++k) dl[w->set_changed[k]] = 0.0;  // delta stays zero
       break;
     }
     const double s = P.target / sum_new;
@@ -330,7 +346,7 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     // u = s (u - tau K t + K delta), K delta by direct sums (few cells) or
     // into g (free until the next iteration), in one pass that also sums
     // the next iteration's contact gap.
-    const int* chg = w->changed.data();
+    const int* chg = w->set_changed.data();
     double* kd = nullptr;
     if (nchg > 0) {
       if (!P.periodic && static_cast<double>(nchg) < DirectCellsPerApply(*P.spec, B)) {
@@ -348,7 +364,6 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
       break;
     }
   }
-  w->changed.clear();
 }
 
 }  // namespace
@@ -400,24 +415,25 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   double* g0 = w->g0.data();
   double* p = w->p.data();
   size_t ncand = 0;
-  // Cells of the guess the solve drops (their share of initial_u removed).
-  w->changed.resize(B);
+  // Cells of the guess the solve drops (their share of initial_u removed;
+  // the buffer kept at B entries: no clearing per solve).
+  w->dropped.resize(std::max(w->dropped.size(), B));
+  const int* dropped = w->dropped.data();
   size_t ndropped = 0;
   double sum_p = working_set::LoadGuess(bx, by, nx, gap.data() + row_start(0),
                                         pressure->data() + row_start(0), g0, p, &ncand,
-                                        w->changed.data(), &ndropped);
-  w->changed.resize(ndropped);
+                                        w->dropped.data(), &ndropped);
   // initial_u, corrected for the dropped cells (direct sums unless they
   // are many), or a fresh K p.
   bool have_u = initial_u != nullptr && !periodic && method == ElasticMethod::kPreconditioned &&
                 sum_p > 0.0;
   if (have_u) {
     // Too many dropped cells: the FFT is cheaper.
-    have_u = static_cast<double>(w->changed.size()) <=
-             DirectCellsPerApply(*K.SpectrumFor(bx, by), B);
-    if (have_u && !w->changed.empty()) {
+    have_u = static_cast<double>(ndropped) <= DirectCellsPerApply(*K.SpectrumFor(bx, by), B);
+    if (have_u && ndropped > 0) {
       std::copy(initial_u, initial_u + B, w->u.begin());
-      for (int c : w->changed) {
+      for (size_t k = 0; k < ndropped; ++k) {
+        const int c = dropped[k];
         const double given = (*pressure)[row_start(c / bx) + c % bx];
         if (std::isfinite(given)) K.AddCell(c, p[c] - given, bx, by, w->u.data());
         else have_u = false;
@@ -425,7 +441,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
     }
   }
   // The pressure outside the box is zero; inside it the solution (below).
-  const bool scaled_copy = have_u && w->changed.empty();  // u = scale initial_u
+  const bool scaled_copy = have_u && ndropped == 0;  // u = scale initial_u
   w->changed.clear();
   double* out = pressure->data();
   std::fill(out, out + row_start(0), 0.0);

@@ -52,13 +52,19 @@ struct ElasticWork {
   std::vector<double> g_pad;  // preconditioner input with a zero border
   std::vector<float> g_pad_f;  // the same in float (ApplyPrecision::kFloat)
   std::vector<int> set;       // kPreconditioned: the cells of the working set
+  std::vector<size_t> set_rows;  // where each box row's cells start in set
+  std::vector<int> set_lo, set_hi;  // each box row's span of set cells [lo, hi)
   // g, K^-1 g, t, t's last value, p and the step's p on the working set,
   // contiguous (index k of set; contact/working_set.h)
   std::vector<double> set_g, set_z, set_t, set_t_old, set_p, set_p_new;
   std::vector<int> changed;
+  std::vector<int> set_changed;  // kPreconditioned: the step's clipped cells
+  std::vector<int> dropped;      // the guess's cells the solve drops
   std::vector<double> check_p, check_u;  // skin_traction.cc: the box check
   std::vector<double> u0;                 // skin_traction.cc: the warm start's K p
   std::vector<int> u0_fix;
+  std::vector<int> fix_i, fix_j;  // u0_fix's cells in box coordinates
+  std::vector<double> fix_d;      // and their corrections (Pa)
   std::vector<double> row_a, row_b;
   std::vector<float> row_f;
   ComplianceWork fft;

@@ -149,7 +149,8 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
                                const double* __restrict u, const double* __restrict p,
                                double gbar, double* __restrict gp, float* __restrict gpf,
                                double* __restrict t, int* __restrict S, double* __restrict gS,
-                               double* __restrict pS, double* __restrict oS) {
+                               double* __restrict pS, double* __restrict oS,
+                               size_t* __restrict row_first) {
   const v4d zero = {0, 0, 0, 0}, gbarv = Splat(gbar);
   // the padded array's border: zero (a periodic caller overwrites it)
   auto zero_pad = [&](size_t from, size_t n) {
@@ -165,6 +166,7 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
   zero_pad(static_cast<size_t>(by + hw) * px, static_cast<size_t>(hw) * px);
   size_t ns = 0;
   for (int j = 0; j < by; ++j) {
+    row_first[j] = ns;
     const size_t row0 = static_cast<size_t>(j + hw) * px + hw;
     zero_pad(row0 - hw, hw);
     zero_pad(row0 + bx, hw);
@@ -229,6 +231,7 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       ns += in;
     }
   }
+  row_first[by] = ns;
   return ns;
 }
 
@@ -295,13 +298,17 @@ double UpdateAndSum(size_t B, double s, double tau, const double* r, const doubl
 MJTOUCH_TARGET_CLONES
 size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* u,
                 const double* p, double gbar, double* gp, float* gpf, double* t, bool read_t,
-                int* S, double* gS, double* pS, double* oS) {
+                int* S, double* gS, double* pS, double* oS, size_t* row_first) {
   if (gp) {
-    return read_t ? BuildSetT<false, true>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS)
-                  : BuildSetT<false, false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS);
+    return read_t ? BuildSetT<false, true>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS,
+                                           oS, row_first)
+                  : BuildSetT<false, false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS,
+                                            pS, oS, row_first);
   }
-  return read_t ? BuildSetT<true, true>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS)
-                : BuildSetT<true, false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS);
+  return read_t ? BuildSetT<true, true>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS,
+                                        row_first)
+                : BuildSetT<true, false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS,
+                                         oS, row_first);
 }
 
 MJTOUCH_TARGET_CLONES

@@ -34,10 +34,11 @@ double UpdateAndSum(size_t B, double s, double tau, const double* r, const doubl
 // border of hw, fills the padded array (row length px, by + 2 hw rows): gp
 // (double) or, if gp is null, gpf (float). S, gS, pS, oS hold B entries
 // (written four lanes at a time, never past the cell being read).
-// Returns |S|.
+// row_first (by + 1 entries): row j's cells are S[row_first[j] ..
+// row_first[j + 1]). Returns |S|.
 size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* u,
                 const double* p, double gbar, double* gp, float* gpf, double* t, bool read_t,
-                int* S, double* gS, double* pS, double* oS);
+                int* S, double* gS, double* pS, double* oS, size_t* row_first);
 
 // The solve's start from a bx x by window of the grid (rows `stride`
 // apart): g0 = gap on candidates (finite gap), +inf elsewhere (one

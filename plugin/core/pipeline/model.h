@@ -4,6 +4,7 @@
 #ifndef MJTOUCH_PIPELINE_MODEL_H_
 #define MJTOUCH_PIPELINE_MODEL_H_
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <memory>
@@ -96,6 +97,10 @@ struct HistoryBlock {
   // count floats from index k on (pressure: k < ncell; displacement: ncell + k)
   void SetRange(size_t k, size_t count, const float* v) {
     std::memcpy(floats + 4 * k, v, 4 * count);
+  }
+  // count pressures from index k on
+  void p_row(size_t k, int count, float* out) const {
+    std::memcpy(out, floats + 4 * k, 4 * static_cast<size_t>(std::max(count, 0)));
   }
   // count displacements from index k on
   void u_row(size_t k, int count, float* out) const {

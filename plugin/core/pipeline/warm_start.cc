@@ -87,12 +87,20 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
   if (!any) return true;
   const int i0 = reach.i0, i1 = reach.i1, j0 = reach.j0, j1 = reach.j1;
   const int cx = i1 - i0 + 1, cy = j1 - j0 + 1;
-  w->check_p.assign(static_cast<size_t>(cx) * cy, 0.0);
+  // check_p: the pressure on inner, zero elsewhere (each element written once)
+  w->check_p.resize(static_cast<size_t>(cx) * cy);
   w->check_u.resize(w->check_p.size());
-  for (int j = inner.j0; j < inner.j0 + inner.ny; ++j) {
+  for (int j = j0; j <= j1; ++j) {
+    double* to = w->check_p.data() + static_cast<size_t>(j - j0) * cx;
+    if (j < inner.j0 || j >= inner.j0 + inner.ny) {
+      std::fill(to, to + cx, 0.0);
+      continue;
+    }
     const double* row = pressure.data() + static_cast<size_t>(j) * grid.n + inner.i0;
-    std::copy(row, row + inner.nx,
-              w->check_p.begin() + static_cast<size_t>(j - j0) * cx + (inner.i0 - i0));
+    const int a = inner.i0 - i0, b = a + inner.nx;
+    std::fill(to, to + a, 0.0);
+    std::copy(row, row + inner.nx, to + a);
+    std::fill(to + b, to + cx, 0.0);
   }
   // The pressure lives on inner only: offsets from it to the checked cells
   // reach less far than the box's size (a smaller FFT grid), and the
@@ -135,25 +143,45 @@ double HistoryPressure(const HistoryBlock& h, const CellBox& pbox, int i, int j,
   return Inside(pbox, i, j) ? static_cast<double>(h.p(static_cast<size_t>(j) * n + i)) : 0.0;
 }
 
-// One history row's pressure over [0, n) (zero outside its box).
-void HistoryRow(const HistoryBlock& h, const CellBox& pbox, int j, int n, double* row) {
-  std::fill(row, row + n, 0.0);
-  if (j < pbox.j0 || j >= pbox.j0 + pbox.ny) return;
-  for (int i = pbox.i0; i < pbox.i0 + pbox.nx; ++i)
-    row[i] = h.p(static_cast<size_t>(j) * n + i);
+// One history row's pressure over [i0, i1) into row[i0, i1) (zero outside
+// its box; the box's part copied as floats, then widened).
+void HistoryRow(const HistoryBlock& h, const CellBox& pbox, int j, int n, int i0, int i1,
+                double* row, std::vector<float>* tmp) {
+  const bool row_in = j >= pbox.j0 && j < pbox.j0 + pbox.ny;
+  const int a = row_in ? std::clamp(pbox.i0, i0, i1) : i1;
+  const int b = row_in ? std::clamp(pbox.i0 + pbox.nx, a, i1) : i1;
+  std::fill(row + i0, row + a, 0.0);
+  tmp->resize(static_cast<size_t>(std::max(n, 1)));
+  float* f = tmp->data();
+  h.p_row(static_cast<size_t>(j) * n + a, b - a, f);
+  for (int i = a; i < b; ++i) row[i] = static_cast<double>(f[i - a]);
+  std::fill(row + b, row + i1, 0.0);
+}
+
+// Appends base + i for the i in [i0, i1) with hit(x[i]), in order (a
+// counting pass first: hits are rare, and it vectorises).
+template <typename Hit>
+void AppendHits(const double* x, int i0, int i1, int base, Hit hit, std::vector<int>* out) {
+  int hits = 0;
+  for (int i = i0; i < i1; ++i) hits += hit(x[i]) ? 1 : 0;
+  if (hits == 0) return;
+  for (int i = i0; i < i1; ++i)
+    if (hit(x[i])) out->push_back(base + i);
 }
 
 // The warm start (`last` null: cold): *guess = the last step's pressure, or
 // with `prev` max(0, 2 p(n-1) - p(n-2)); *solve_box = the last contact
 // kBoxMarginCells wider (within box); with `prev`, the cells where the guess
 // on *solve_box differs from 2 p(n-1) - p(n-2) (clipped, or outside the box)
-// in w->u0_fix (ExtrapolatedDisplacement).
+// in w->u0_fix (ExtrapolatedDisplacement). The solve reads the guess on
+// *solve_box only (a periodic operator's: everywhere), so only that part is
+// cleared.
 void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* last,
-               const HistoryBlock* prev, std::vector<double>* guess, ElasticWork* w,
-               CellBox* solve_box) {
+               const HistoryBlock* prev, bool periodic, std::vector<double>* guess,
+               ElasticWork* w, CellBox* solve_box) {
   const int n = grid.n;
-  guess->assign(grid.Size(), 0.0);
   w->u0_fix.clear();
+  if (!last || periodic || guess->size() != grid.Size()) guess->assign(grid.Size(), 0.0);
   if (!last) return;
   const CellBox lb = last->p_box(), pb = prev ? prev->p_box() : CellBox{};
   std::vector<double>& lrow = w->row_a;
@@ -161,33 +189,50 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
   lrow.resize(n);
   prow.resize(n);
   CellBounds support;  // the last contact within box
-  for (int j = std::max(box.j0, lb.j0); j < std::min(box.j0 + box.ny, lb.j0 + lb.ny); ++j) {
-    HistoryRow(*last, lb, j, n, lrow.data());
-    for (int i = std::max(box.i0, lb.i0); i < std::min(box.i0 + box.nx, lb.i0 + lb.nx); ++i)
-      if (lrow[i] > 0.0) support.Add(i, j);
+  {
+    const int ia = std::max(box.i0, lb.i0), ib = std::min(box.i0 + box.nx, lb.i0 + lb.nx);
+    for (int j = std::max(box.j0, lb.j0); j < std::min(box.j0 + box.ny, lb.j0 + lb.ny); ++j) {
+      if (ia >= ib) break;
+      HistoryRow(*last, lb, j, n, ia, ib, lrow.data(), &w->row_f);
+      int lo = ia, hi = ib - 1;
+      while (lo < ib && !(lrow[lo] > 0.0)) ++lo;
+      if (lo == ib) continue;
+      while (!(lrow[hi] > 0.0)) --hi;
+      support.AddRow(lo, hi, j);
+    }
   }
   if (!support.empty())
     *solve_box = GrowBox(box, support.i0, support.i1, support.j0, support.j1);
   const CellBox both = Union(lb, pb), sb = *solve_box;
+  if (!periodic) {
+    for (int j = sb.j0; j < sb.j0 + sb.ny; ++j) {
+      double* g = guess->data() + static_cast<size_t>(j) * n;
+      std::fill(g + sb.i0, g + sb.i0 + sb.nx, 0.0);
+    }
+  }
+  const int i0 = both.i0, i1 = both.i0 + both.nx;
   for (int j = both.j0; j < both.j0 + both.ny; ++j) {
     double* g = guess->data() + static_cast<size_t>(j) * n;
-    HistoryRow(*last, lb, j, n, lrow.data());
+    HistoryRow(*last, lb, j, n, i0, i1, lrow.data(), &w->row_f);
     if (!prev) {
-      std::copy(lrow.begin() + both.i0, lrow.begin() + both.i0 + both.nx, g + both.i0);
+      std::copy(lrow.begin() + i0, lrow.begin() + i1, g + i0);
       continue;
     }
-    HistoryRow(*prev, pb, j, n, prow.data());
-    for (int i = both.i0; i < both.i0 + both.nx; ++i) {
+    HistoryRow(*prev, pb, j, n, i0, i1, prow.data(), &w->row_f);
+    for (int i = i0; i < i1; ++i) {
       const double lin = 2.0 * lrow[i] - prow[i];
       g[i] = std::max(0.0, lin);
       prow[i] = lin;
     }
+    // in box order: outside sb, lin != 0; inside, lin < 0
     const bool row_in = j >= sb.j0 && j < sb.j0 + sb.ny;
-    for (int i = both.i0; i < both.i0 + both.nx; ++i) {
-      const bool in = row_in && i >= sb.i0 && i < sb.i0 + sb.nx;
-      if (in ? prow[i] < 0.0 : prow[i] != 0.0)
-        w->u0_fix.push_back(static_cast<int>(static_cast<size_t>(j) * n + i));
-    }
+    const int s0 = row_in ? std::clamp(sb.i0, i0, i1) : i1;
+    const int s1 = row_in ? std::clamp(sb.i0 + sb.nx, s0, i1) : i1;
+    const int base = j * n;
+    auto nonzero = [](double v) { return v != 0.0; };
+    AppendHits(prow.data(), i0, s0, base, nonzero, &w->u0_fix);
+    AppendHits(prow.data(), s0, s1, base, [](double v) { return v < 0.0; }, &w->u0_fix);
+    AppendHits(prow.data(), s1, i1, base, nonzero, &w->u0_fix);
   }
 }
 
@@ -227,13 +272,22 @@ bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
     for (int i = 0; i < box.nx; ++i)
       urow[i] = 2.0 * static_cast<double>(ul[i]) - static_cast<double>(up[i]);
   }
-  for (int k : w->u0_fix) {
+  // (in u0_fix's order, several cells per pass over u: AddCellsAt)
+  const size_t nfix = w->u0_fix.size();
+  w->fix_i.resize(nfix);
+  w->fix_j.resize(nfix);
+  w->fix_d.resize(nfix);
+  for (size_t f = 0; f < nfix; ++f) {
+    const int k = w->u0_fix[f];
     const int i = k % grid.n, j = k / grid.n;
     const double lin = 2.0 * HistoryPressure(last, lb, i, j, grid.n) -
                        HistoryPressure(prev, pb, i, j, grid.n);
-    const double d = (Inside(box, i, j) ? guess[k] : 0.0) - lin;
-    K.AddCellAt(i - box.i0, j - box.j0, d, box.nx, box.ny, u);
+    w->fix_i[f] = i - box.i0;
+    w->fix_j[f] = j - box.j0;
+    w->fix_d[f] = (Inside(box, i, j) ? guess[k] : 0.0) - lin;
   }
+  K.AddCellsAt(w->fix_i.data(), w->fix_j.data(), w->fix_d.data(), nfix, box.nx, box.ny, u,
+               w->fft.threads);
   return true;
 }
 
@@ -303,7 +357,9 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
   // no rendered cell outside it may touch) and grown around the cells that
   // would; after kBoxAttempts, every rendered cell. The result solves the
   // contact problem on the rendered cells either way.
-  if (last) WarmStart(grid, box, last, extrapolate ? &history[2] : nullptr, pressure, w, solve_box);
+  if (last)
+    WarmStart(grid, box, last, extrapolate ? &history[2] : nullptr, ec.compliance().periodic(),
+              pressure, w, solve_box);
   const bool have_u0 = extrapolate && ExtrapolatedDisplacement(grid, ec.compliance(), *last,
                                                                history[2], *pressure,
                                                                *solve_box, w);
