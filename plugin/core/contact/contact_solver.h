@@ -60,8 +60,8 @@ struct ElasticWork {
   std::vector<int> changed;
   std::vector<int> set_changed;  // kPreconditioned: the step's clipped cells
   std::vector<int> dropped;      // the guess's cells the solve drops
-  std::vector<double> check_p, check_u;  // skin_traction.cc: the box check
-  std::vector<double> u0;                 // skin_traction.cc: the warm start's K p
+  std::vector<double> check_p, check_u;  // pipeline/warm_start.cc: the box check
+  std::vector<double> u0;                 // pipeline/warm_start.cc: the warm start's K p
   std::vector<int> u0_fix;
   std::vector<int> fix_i, fix_j;  // u0_fix's cells in box coordinates
   std::vector<double> fix_d;      // and their corrections (Pa)
