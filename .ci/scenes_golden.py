@@ -3,6 +3,8 @@ bit for bit across refactors:
     python .ci/scenes_golden.py record before.npz   # on the old build
     python .ci/scenes_golden.py record after.npz    # on the new build
     python .ci/scenes_golden.py compare before.npz after.npz
+(a rounding-level change: compare prints, per sensordata block, the largest
+difference over each channel's largest value, and the spike totals).
 Press 0.5 N from t = 0, slide at 40 mm/s from t = 0.1 s."""
 import pathlib
 import sys
@@ -39,7 +41,28 @@ def compare(a, b):
         same = A[name].shape == B[name].shape and np.array_equal(A[name], B[name])
         ok &= same
         print(f"{name}: {'bit-identical' if same else 'DIFFERENT'}")
+        if not same and A[name].shape == B[name].shape:
+            print("  " + "; ".join(_block_differences(name, A[name], B[name])))
     sys.exit(0 if ok else 1)
+
+
+def _block_differences(name, x, y):
+    import mujoco
+    from mjtouch.sensor import SkinLayout
+    models = pathlib.Path(__file__).resolve().parents[1] / "models"
+    layout = SkinLayout.from_model(mujoco.MjModel.from_xml_path(str(models / f"{name}.xml")))
+    out = []
+    for block in layout.blocks:
+        a = np.stack([layout.block(r, block) for r in x])
+        b = np.stack([layout.block(r, block) for r in y])
+        if block == "spikes":
+            out.append(f"spikes {a.sum():.0f} -> {b.sum():.0f} ({int((a != b).sum())} entries differ)")
+            continue
+        scale = np.abs(a).max(axis=0)
+        scale[scale == 0] = 1.0
+        rel = (np.abs(a - b) / scale).max(axis=0)
+        out.append(f"{block}: max {rel.max():.1e}, median {np.median(rel):.1e} of each channel's largest")
+    return out
 
 
 if __name__ == "__main__":
