@@ -30,15 +30,11 @@
 
 namespace mjtouch {
 
-// One site's running sums on the folded path: float lanes of the current
-// band of rows (acc[u * nc + c]) and the double sums (d[2c], d[2c + 1]).
-// Aligned explicitly: a 32-byte vector type is only 16-byte aligned where
-// AVX is not enabled (this header), but AVX code assumes 32.
-struct alignas(32) FoldSite {
+// One site's running sums on the folded path: its 16 double lanes per
+// component (d[c][l]: lane l = the cells at dx = l mod 16, stress_fold.cc).
+struct alignas(64) FoldSite {
   typedef float Lanes8 __attribute__((vector_size(32)));
-  typedef double Lanes4 __attribute__((vector_size(32)));
-  alignas(32) Lanes8 acc[kNumStress];
-  alignas(32) Lanes4 d[2 * kNumStress];
+  alignas(64) double d[kNumStress][16];
   int nc = 0;                 // components summed
   int comp[kNumStress] = {};  // which
   int col = 0, off = 0;       // window column / row of pressure cell (0, 0)
@@ -48,7 +44,8 @@ struct alignas(32) FoldSite {
 // Per-simulation scratch of the folded path (no meaning between calls).
 struct FoldScratch {
   std::vector<float> pressure;       // padded window, rows of `width` cells
-  std::vector<int> row_lo, row_hi;   // per window row: chunk-aligned cell range
+  std::vector<int> row_lo, row_hi;   // per pressure row: its active cells
+  std::vector<int> band_lo, band_hi; // per 8 pressure rows ending at r + 7: the union
   std::vector<int> sites_by_depth;   // site indices grouped by depth
   std::vector<int> depth_begin;      // ranges into sites_by_depth
   struct Window {
