@@ -48,36 +48,51 @@ inline __attribute__((always_inline)) v16f Load16(const float* p) {
 }
 
 // One band of a site (stress_fold.h: the canonical sum): the kTableRowsPerBand
-// pressure rows P[t * ps] (t = 0 ..), cells [x, x + 16 K), against the folded
-// rows ebuf[comp] + t * ew at the same cells (16 lanes = dx mod 16 when x is
-// on a dx multiple of 16). Each row's lanes summed in float over its chunks
-// in order (R rows at once: independent chains, so one-component sites are
-// not bound by the add latency), the rows' sums added in row order, then
-// widened into the site's double lanes. Every ISA does these operations in
-// this order (GCC vector lanes are elementwise: one 512-bit register, two
-// AVX2 ones, or four SSE2 / NEON ones).
+// pressure rows P + t ps (t = 0 ..; cells rlo[t] .. rhi[t], none: lo >= hi)
+// against the folded rows ebuf[comp] + t ew at the same cells, in chunks of
+// 16 on dx multiples of 16 (dx of pressure column x: g + x), so lane l = the
+// cells at dx = l mod 16. Each row's lanes summed in float over its chunks
+// in order (R rows at once, over their cells' union: independent chains, so
+// one-component sites are not bound by the add latency), the rows' sums
+// added in row order, then widened into the site's double lanes. Which
+// zero cells or rows a chunk range adds does not change a bit (a float lane
+// that starts at +0 never holds -0, and x + (+-0) = x), so the sum is the
+// same sequence of operations on the nonzero products for any R, layout or
+// thread split; and every ISA does the same elementwise operations (GCC
+// vector lanes: one 512-bit register, two AVX2 ones, four SSE2 / NEON ones).
 template <int NC, int R>
 inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* const* ebuf, int ew,
-                                                    const float* P, int ps, int x, int K) {
+                                                    const float* P, int ps, const int* rlo,
+                                                    const int* rhi, int g) {
   static_assert(kTableRowsPerBand % R == 0, "rows at once must divide the band");
   const float* erow[NC];
-  for (int c = 0; c < NC; ++c) erow[c] = ebuf[s.comp[c]] + s.col + x;
-  P += x;
+  for (int c = 0; c < NC; ++c) erow[c] = ebuf[s.comp[c]] + s.col;
   v16f f[NC];
+  for (int c = 0; c < NC; ++c) f[c] = v16f{};
+  bool any = false;
 #pragma GCC unroll 8
   for (int t = 0; t < kTableRowsPerBand; t += R) {
+    int lo = rlo[t], hi = rhi[t];
+    for (int u = 1; u < R; ++u) {
+      lo = std::min(lo, rlo[t + u]);
+      hi = std::max(hi, rhi[t + u]);
+    }
+    if (lo >= hi) continue;  // zero rows: no-ops
+    any = true;
+    const int x = lo - ((g + lo) & (kSumLanes - 1));
     v16f r[R][NC];
     for (int u = 0; u < R; ++u)
       for (int c = 0; c < NC; ++c) r[u][c] = v16f{};
-    for (int k = 0; k < K * kSumLanes; k += kSumLanes)
+    for (int k = x; k < hi; k += kSumLanes)
       for (int u = 0; u < R; ++u) {
-        const v16f p = Load16(P + static_cast<size_t>(t + u) * ps + k);
+        const v16f p = Load16(P + static_cast<ptrdiff_t>(t + u) * ps + k);
         for (int c = 0; c < NC; ++c)
-          r[u][c] += Load16(erow[c] + static_cast<size_t>(t + u) * ew + k) * p;
+          r[u][c] += Load16(erow[c] + static_cast<ptrdiff_t>(t + u) * ew + k) * p;
       }
     for (int u = 0; u < R; ++u)
-      for (int c = 0; c < NC; ++c) f[c] = t + u == 0 ? r[u][c] : f[c] + r[u][c];
+      for (int c = 0; c < NC; ++c) f[c] += r[u][c];
   }
+  if (!any) return;
   for (int c = 0; c < NC; ++c) {
     v8d* d = reinterpret_cast<v8d*>(s.d[c]);
     d[0] += __builtin_convertvector(__builtin_shufflevector(f[c], f[c], 0, 1, 2, 3, 4, 5, 6, 7),
@@ -89,29 +104,25 @@ inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* co
 
 // A band of folded table rows (window rows [T0, T0 + kTableRowsPerBand), one
 // dy block) into the sums of the sites [first, last) that read it: site q's
-// pressure rows T0 - off .. (zero rows outside the contact), its cells from
-// blo[r] to bhi[r] (r = T0 - off + kTableRowsPerBand - 1: the band's
-// occupied cells) widened to chunks on its dx multiples of 16.
+// pressure rows T0 - off .. (rlo / rhi: each pressure row's cells, from row
+// -kTableRowsPerBand; none outside the contact).
 MJTOUCH_TARGET_CLONES_AVX512
 void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
-             const float* P, int ps, const int* blo, const int* bhi, int x0) {
+             const float* P, int ps, const int* rlo, const int* rhi, int x0) {
   for (int q = first; q < last; ++q) {
     FoldSite& s = sites[q];
     const int r0 = T0 - s.off;
-    const int lo = blo[r0 + kTableRowsPerBand - 1], hi = bhi[r0 + kTableRowsPerBand - 1];
-    if (lo >= hi) continue;
-    // dx of pressure column x: x0 + col + x; chunks from lo's dx rounded down
-    // to a multiple of 16.
-    const int x = lo - ((x0 + s.col + lo) & (kSumLanes - 1));
-    const int K = (hi - x + kSumLanes - 1) / kSumLanes;
     const float* Pr = P + static_cast<ptrdiff_t>(r0) * ps;
+    const int* lo = rlo + r0 + kTableRowsPerBand;
+    const int* hi = rhi + r0 + kTableRowsPerBand;
+    const int g = x0 + s.col;
     switch (s.nc) {
-      case 1: SiteBand<1, 4>(s, ebuf, ew, Pr, ps, x, K); break;
-      case 2: SiteBand<2, 2>(s, ebuf, ew, Pr, ps, x, K); break;
-      case 3: SiteBand<3, 2>(s, ebuf, ew, Pr, ps, x, K); break;
-      case 4: SiteBand<4, 1>(s, ebuf, ew, Pr, ps, x, K); break;
-      case 5: SiteBand<5, 1>(s, ebuf, ew, Pr, ps, x, K); break;
-      default: SiteBand<6, 1>(s, ebuf, ew, Pr, ps, x, K); break;
+      case 1: SiteBand<1, 4>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 2: SiteBand<2, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 3: SiteBand<3, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 4: SiteBand<4, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 5: SiteBand<5, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      default: SiteBand<6, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
     }
   }
 }
@@ -416,26 +427,18 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
   const int ps = (pw + 2 * kSumLanes + kSumLanes - 1) / kSumLanes * kSumLanes;
   w->pressure.assign(static_cast<size_t>(rows + 2 * band) * ps + 16, 0.0f);
   float* const P0 = AlignUp64(w->pressure.data()) + static_cast<size_t>(band) * ps + kSumLanes;
-  w->row_lo.assign(rows, pw);
-  w->row_hi.assign(rows, 0);
+  // Each pressure row's cells (none: lo >= hi), from row -band to rows + band.
+  w->row_lo.assign(rows + 2 * band, pw);
+  w->row_hi.assign(rows + 2 * band, 0);
   for (size_t r = 0; r < runs.row.size(); ++r) {
     const int y = runs.row[r] - j0;
     const int b = runs.begin[r] - i0, e = runs.end[r] - i0;
     std::copy(pressure + static_cast<size_t>(runs.row[r]) * n + runs.begin[r],
               pressure + static_cast<size_t>(runs.row[r]) * n + runs.end[r],
               P0 + static_cast<size_t>(y) * ps + b);
-    w->row_lo[y] = std::min(w->row_lo[y], b);
-    w->row_hi[y] = std::max(w->row_hi[y], e);
+    w->row_lo[y + band] = std::min(w->row_lo[y + band], b);
+    w->row_hi[y + band] = std::max(w->row_hi[y + band], e);
   }
-  // band_lo / band_hi[r + band - 1]: the cells of pressure rows r .. r + band
-  // - 1 (r from -band + 1; empty: lo >= hi).
-  w->band_lo.assign(rows + band - 1, pw);
-  w->band_hi.assign(rows + band - 1, 0);
-  for (int y = 0; y < rows; ++y)
-    for (int t = 0; t < band; ++t) {
-      w->band_lo[y + t] = std::min(w->band_lo[y + t], w->row_lo[y]);
-      w->band_hi[y + t] = std::max(w->band_hi[y + t], w->row_hi[y]);
-    }
   // Sites grouped by depth, each depth's window of table offsets and the
   // sites' states: fixed by the sites, so kept while they are unchanged.
   auto same = [](const StressSite& a, const StressSite& b) {
@@ -505,7 +508,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     for (int c = 0; c < kNumStress; ++c)
       ebuf[c] = base + static_cast<size_t>(c) * band * ew;
     int lo_min = pw, hi_max = 0;
-    for (int r = 0; r < rows; ++r)
+    for (int r = 0; r < rows + 2 * band; ++r)
       if (w->row_lo[r] < w->row_hi[r]) {
         lo_min = std::min(lo_min, w->row_lo[r]);
         hi_max = std::max(hi_max, w->row_hi[r]);
@@ -537,7 +540,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
                          win.x0 + c0, c1 - c0, rx, ry, shear, use_h ? h : nullptr,
                          ebuf[c] + c0, ew);
       }
-      SumBand(fs, first, last, ebuf, ew, T0, P0, ps, w->band_lo.data(), w->band_hi.data(),
+      SumBand(fs, first, last, ebuf, ew, T0, P0, ps, w->row_lo.data(), w->row_hi.data(),
               win.x0);
     }
     // The 16 double lanes of each component, in one fixed order.
