@@ -10,15 +10,16 @@
 #include "common/simd.h"
 #include "common/thread_pool.h"
 
-// The 8-lane helpers below are always inlined into the target_clones
+// The vector helpers below are always inlined into the target_clones
 // functions, so their by-value vector ABI never applies.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace mjtouch {
 namespace {
 
-constexpr int kLanes = 8;           // cells per fold chunk (one AVX2 vector)
+constexpr int kLanes = 8;           // cells per chunk of the cost model
 constexpr int kSumLanes = 16;       // canonical lanes of the sums (stress_fold.h)
+constexpr int kFoldLanes = 16;      // cells per fold chunk (one AVX-512 vector)
 constexpr int kSitesPerChunk = 8;
 // Folded table rows per band: folded together, then read by every site; also
 // the rows whose float sums are widened to double at once (a site's sum has
@@ -31,15 +32,8 @@ constexpr int kTableRowsPerBand = 8;
 constexpr double kFoldedSecondsPerMac = 0.05e-9;
 constexpr double kFoldSecondsPerCell = 0.22e-9;
 
-typedef FoldSite::Lanes8 v8f;
 typedef float v16f __attribute__((vector_size(64)));
 typedef double v8d __attribute__((vector_size(64)));
-
-inline __attribute__((always_inline)) v8f Load(const float* p) {
-  v8f v;
-  std::memcpy(&v, p, sizeof(v));
-  return v;
-}
 
 inline __attribute__((always_inline)) v16f Load16(const float* p) {
   v16f v;
@@ -127,37 +121,40 @@ void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int
   }
 }
 
-inline __attribute__((always_inline)) void Store(float* p, v8f v) {
+inline __attribute__((always_inline)) void Store(float* p, v16f v) {
   std::memcpy(p, &v, sizeof(v));
 }
 
-// 8 cells [x, x + 8) of a table row read forwards (p[x] ...) or backwards
+// 16 cells [x, x + 16) of a table row read forwards (p[x] ...) or backwards
 // (p[-x] ...).
 template <bool kReversed>
-inline __attribute__((always_inline)) v8f Cells(const float* p, int x) {
-  if (!kReversed) return Load(p + x);
-  const v8f v = Load(p - x - (kLanes - 1));
-  return __builtin_shufflevector(v, v, 7, 6, 5, 4, 3, 2, 1, 0);  // (GCC and Clang)
+inline __attribute__((always_inline)) v16f Cells(const float* p, int x) {
+  if (!kReversed) return Load16(p + x);
+  const v16f v = Load16(p - x - (kFoldLanes - 1));
+  return __builtin_shufflevector(v, v, 15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1,
+                                 0);  // (GCC and Clang)
 }
 
-// e[x] = one(x) for x in [0, len), 8 cells at a time (chunk(x): cells x ..
-// x + 7, the same operations per cell as one), with the stores on e's
-// 32-byte boundaries: a first chunk at 0, then from e's first boundary on, a
-// last chunk ending at len; overlapping chunks rewrite the same values. No
-// cell outside [0, len) is read or written and there is no scalar tail:
-// folded rows are ~100 cells, and the vectorised loops' tails, alias checks
-// and cache-line-split stores cost about as much as the cells (a replica of
-// slide_grating's fold, CPU time: 31 us -> 24 us per step).
+// e[x] = one(x) for x in [0, len), 16 cells at a time (chunk(x): cells x ..
+// x + 15, the same operations per cell as one: elementwise, so the same bits
+// at any width), with the stores on e's 64-byte boundaries: a first chunk at
+// 0, then from e's first boundary on, a last chunk ending at len;
+// overlapping chunks rewrite the same values. No cell outside [0, len) is
+// read or written and there is no scalar tail: folded rows are ~100 cells,
+// and the vectorised loops' tails, alias checks and cache-line-split stores
+// cost about as much as the cells (a replica of slide_grating's fold, CPU
+// time: 31 us -> 24 us per step).
 template <typename Chunk, typename One>
 inline __attribute__((always_inline)) void FoldCells(int len, float* e, Chunk chunk, One one) {
-  if (len < kLanes) {
+  if (len < kFoldLanes) {
     for (int x = 0; x < len; ++x) e[x] = one(x);
     return;
   }
   Store(e, chunk(0));
-  int x = kLanes - static_cast<int>(reinterpret_cast<uintptr_t>(e) / sizeof(float) & (kLanes - 1));
-  for (; x + kLanes <= len; x += kLanes) Store(e + x, chunk(x));
-  if (x < len) Store(e + len - kLanes, chunk(len - kLanes));
+  int x = kFoldLanes -
+          static_cast<int>(reinterpret_cast<uintptr_t>(e) / sizeof(float) & (kFoldLanes - 1));
+  for (; x + kFoldLanes <= len; x += kFoldLanes) Store(e + x, chunk(x));
+  if (x < len) Store(e + len - kFoldLanes, chunk(len - kFoldLanes));
 }
 
 // e[x] = sign ((kp[x] + rx kx[x]) + ry ky[x]) (float; sign +-1, exact), or
@@ -197,7 +194,7 @@ inline __attribute__((always_inline)) void FoldRowHCells(const float* h, const f
   FoldCells(
       len, e,
       [&](int x) {
-        const v8f v = Cells<kReversed>(h, x) + ry * Cells<kReversed>(ky, x);
+        const v16f v = Cells<kReversed>(h, x) + ry * Cells<kReversed>(ky, x);
         return sign > 0 ? v : -v;
       },
       [&](int x) {
@@ -268,7 +265,7 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
 
 // Rows dy0 .. dy0 + rows - 1 of a folded window into e (rows ew apart): one
 // dispatch per band, not two per row side.
-MJTOUCH_TARGET_CLONES
+MJTOUCH_TARGET_CLONES_AVX512
 void FoldMirroredRows(const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
                       int x0, int w, float rx, float ry, bool shear, const float* const* h,
                       float* e, int ew) {

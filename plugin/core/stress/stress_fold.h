@@ -33,7 +33,6 @@ namespace mjtouch {
 // One site's running sums on the folded path: its 16 double lanes per
 // component (d[c][l]: lane l = the cells at dx = l mod 16, stress_fold.cc).
 struct alignas(64) FoldSite {
-  typedef float Lanes8 __attribute__((vector_size(32)));
   alignas(64) double d[kNumStress][16];
   int nc = 0;                 // components summed
   int comp[kNumStress] = {};  // which
