@@ -114,17 +114,17 @@ def test_stress_bit_identical_for_any_thread_count(sliding_contact, engine, fold
 
 
 def test_aligned_sums_and_rx_cache_are_the_legacy_bits(sliding_contact, engine):
-    # The sums' aligned layout (table loads shifted onto 32-byte boundaries,
-    # lanes rotated back at each flush; stress_fold.cc SiteRows) and the fold
-    # from the cached Kp + rx Kx (from the second call with the same float rx
-    # on) must give the same bits as the path before them (fold_legacy), for
-    # sites at every column mod 8 (every shift), contacts at the grid's edges
-    # (the padded cells are read), with and without shear, on any thread
+    # The sums' aligned layout (table loads on 64-byte boundaries at dx
+    # multiples of 16; stress_fold.cc SiteBand) and the fold from the cached
+    # Kp + rx Kx (from the second call with the same float rx on) must give
+    # the same bits as unaligned loads without the cache (fold_legacy), for
+    # sites at every column mod 16 (every lane offset), contacts at the grid's
+    # edges (the padded cells are read), with and without shear, on any thread
     # count, while rx repeats and after it changes.
     tip, p, ratio = sliding_contact
     n = engine.n
     ij = [(i, j) for j in (20, 64, 100) for i in range(56, 72)]  # 16 columns: every shift
-    assert {i % 8 for i, _ in ij} == set(range(8))
+    assert {i % 16 for i, _ in ij} == set(range(16))
     comps = [range(6) if k % 3 else (2,) for k in range(len(ij))]  # 1 and 6 components
     e = core.StressEngine(core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], ij,
                           components=comps, method="direct")

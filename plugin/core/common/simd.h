@@ -21,3 +21,15 @@
 #ifndef MJTOUCH_TARGET_CLONES
 #define MJTOUCH_TARGET_CLONES
 #endif
+
+// MJTOUCH_TARGET_CLONES_AVX512: also an AVX-512 copy, for loops written in
+// 16-float GCC vectors (one 512-bit register per vector; two AVX2 ones, four
+// SSE2 / NEON ones elsewhere: the same elementwise operations, so the same
+// bits on every ISA). Where there are no clones: the one baseline copy.
+#if MJTOUCH_X86_SIMD && defined(__ELF__) && defined(__GNUC__) && !defined(__clang__)
+#define MJTOUCH_TARGET_CLONES_AVX512 \
+  __attribute__((target_clones("avx512f", "avx2", "default")))
+#endif
+#ifndef MJTOUCH_TARGET_CLONES_AVX512
+#define MJTOUCH_TARGET_CLONES_AVX512
+#endif

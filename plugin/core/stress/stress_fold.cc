@@ -10,20 +10,21 @@
 #include "common/simd.h"
 #include "common/thread_pool.h"
 
-// The 8-lane helpers below are always inlined into the target_clones
+// The vector helpers below are always inlined into the target_clones
 // functions, so their by-value vector ABI never applies.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace mjtouch {
 namespace {
 
-constexpr int kLanes = 8;           // cells per chunk (one AVX2 vector)
+constexpr int kLanes = 8;           // cells per chunk of the cost model
+constexpr int kSumLanes = 16;       // canonical lanes of the sums (stress_fold.h)
+constexpr int kFoldLanes = 16;      // cells per fold chunk (one AVX-512 vector)
 constexpr int kSitesPerChunk = 8;
-// Folded table rows per band: folded together, then read by every site.
-constexpr int kTableRowsPerBand = 8;
-// Float lanes are widened to double every this many rows (a site's sum has
+// Folded table rows per band: folded together, then read by every site; also
+// the rows whose float sums are widened to double at once (a site's sum has
 // ~10^3-10^4 terms; float over a few rows keeps the error ~1e-7).
-constexpr int kRowsPerFlush = 8;
+constexpr int kTableRowsPerBand = 8;
 // Cost model of the folded path (one core; examples/bench_kernel.py
 // --calibrate fits them): per site x component x active cell, and per folded
 // table cell. Measured on the 2-core development machine under load, scaled
@@ -31,140 +32,129 @@ constexpr int kRowsPerFlush = 8;
 constexpr double kFoldedSecondsPerMac = 0.05e-9;
 constexpr double kFoldSecondsPerCell = 0.22e-9;
 
-typedef FoldSite::Lanes8 v8f;
-typedef float v4f __attribute__((vector_size(16)));
-typedef int v8i __attribute__((vector_size(32)));
-typedef FoldSite::Lanes4 v4d;
+typedef float v16f __attribute__((vector_size(64)));
+typedef double v8d __attribute__((vector_size(64)));
 
-inline __attribute__((always_inline)) v8f Load(const float* p) {
-  v8f v;
+inline __attribute__((always_inline)) v16f Load16(const float* p) {
+  v16f v;
   std::memcpy(&v, p, sizeof(v));
   return v;
 }
 
-// Widen a float vector's halves into two double accumulators.
-inline __attribute__((always_inline)) void Flush(v8f a, v4d* d) {
-  const v4f lo = {a[0], a[1], a[2], a[3]};
-  const v4f hi = {a[4], a[5], a[6], a[7]};
-  d[0] += __builtin_convertvector(lo, v4d);
-  d[1] += __builtin_convertvector(hi, v4d);
-}
-
-// Pressure rows [r0, r1) of one site's NC components, read from a band of
-// folded table rows (ebuf[comp]: the band's first row; rows ew apart): E_c * p
-// summed in float lanes (U interleaved accumulators per component, acc[u * NC
-// + c], so one-component sites are not bound by the add latency), held in
-// registers across the rows and widened into the site's double sums at the
-// end of each band of kRowsPerFlush pressure rows. The order of every
-// operation is fixed by the inputs.
-// aligned (U == 1 only): each row's chunks start `shift` cells before the
-// pressure chunks, where the table row is 32-byte aligned, so the NC table
-// loads per chunk do not split cache lines (the one pressure load may); the
-// cells added before lo / from hi on are zeros of the padded pressure row
-// (an exact no-op: a lane that starts at +0 never holds -0), so lane l holds
-// the pressure lane (l - shift) mod 8's products in the same order, and the
-// lanes are rotated back before each flush: the same bits as shift 0.
-template <int NC, int U>
-inline __attribute__((always_inline)) void SiteRows(FoldSite& s, const float* const* ebuf,
-                                                    int ew, int T0, const float* P, int pw,
-                                                    const int* lo, const int* hi, int r0, int r1,
-                                                    int rows, bool aligned) {
-  const int shift = U == 1 && aligned ? s.col & (kLanes - 1) : 0;
-  v8f acc[U * NC];
-  for (int k = 0; k < U * NC; ++k) acc[k] = s.acc[k];
-  for (int r = r0; r < r1; ++r) {
-    const float* prow = P + static_cast<size_t>(r) * pw;
-    const float* erow[NC];
-    const size_t e0 = static_cast<size_t>(s.off + r - T0) * ew + s.col;
-    for (int c = 0; c < NC; ++c) erow[c] = ebuf[s.comp[c]] + e0;
-    const int x1 = hi[r];
-    int x = lo[r] - shift;
-    for (; x + U * kLanes <= x1; x += U * kLanes)
-      for (int u = 0; u < U; ++u) {
-        const v8f p = Load(prow + x + u * kLanes);
-        for (int c = 0; c < NC; ++c) acc[u * NC + c] += Load(erow[c] + x + u * kLanes) * p;
-      }
-    for (; x < x1; x += kLanes) {
-      const v8f p = Load(prow + x);
-      for (int c = 0; c < NC; ++c) acc[c] += Load(erow[c] + x) * p;
+// One band of a site (stress_fold.h: the canonical sum): the kTableRowsPerBand
+// pressure rows P + t ps (t = 0 ..; cells rlo[t] .. rhi[t], none: lo >= hi)
+// against the folded rows ebuf[comp] + t ew at the same cells, in chunks of
+// 16 on dx multiples of 16 (dx of pressure column x: g + x), so lane l = the
+// cells at dx = l mod 16. Each row's lanes summed in float over its chunks
+// in order (R rows at once, over their cells' union: independent chains, so
+// one-component sites are not bound by the add latency), the rows' sums
+// added in row order, then widened into the site's double lanes. Which
+// zero cells or rows a chunk range adds does not change a bit (a float lane
+// that starts at +0 never holds -0, and x + (+-0) = x), so the sum is the
+// same sequence of operations on the nonzero products for any R, layout or
+// thread split; and every ISA does the same elementwise operations (GCC
+// vector lanes: one 512-bit register, two AVX2 ones, four SSE2 / NEON ones).
+template <int NC, int R>
+inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* const* ebuf, int ew,
+                                                    const float* P, int ps, const int* rlo,
+                                                    const int* rhi, int g) {
+  static_assert(kTableRowsPerBand % R == 0, "rows at once must divide the band");
+  const float* erow[NC];
+  for (int c = 0; c < NC; ++c) erow[c] = ebuf[s.comp[c]] + s.col;
+  v16f f[NC];
+  for (int c = 0; c < NC; ++c) f[c] = v16f{};
+  bool any = false;
+#pragma GCC unroll 8
+  for (int t = 0; t < kTableRowsPerBand; t += R) {
+    int lo = rlo[t], hi = rhi[t];
+    for (int u = 1; u < R; ++u) {
+      lo = std::min(lo, rlo[t + u]);
+      hi = std::max(hi, rhi[t + u]);
     }
-    if ((r + 1) % kRowsPerFlush == 0 || r == rows - 1) {
-      for (int c = 0; c < NC; ++c) {
-        v8f sum = acc[c];
-        for (int u = 1; u < U; ++u) sum += acc[u * NC + c];
-        if (U == 1) {  // lane l = pressure lane (l - shift) mod 8
-          const v8i back = (v8i{0, 1, 2, 3, 4, 5, 6, 7} + shift) & (kLanes - 1);
-#if defined(__clang__)  // (no variable-mask shuffle builtin)
-          v8f rotated;
-          for (int l = 0; l < kLanes; ++l) rotated[l] = sum[back[l]];
-          sum = rotated;
-#else
-          sum = __builtin_shuffle(sum, back);
-#endif
-        }
-        Flush(sum, s.d + 2 * c);
+    if (lo >= hi) continue;  // zero rows: no-ops
+    any = true;
+    const int x = lo - ((g + lo) & (kSumLanes - 1));
+    v16f r[R][NC];
+    for (int u = 0; u < R; ++u)
+      for (int c = 0; c < NC; ++c) r[u][c] = v16f{};
+    for (int k = x; k < hi; k += kSumLanes)
+      for (int u = 0; u < R; ++u) {
+        const v16f p = Load16(P + static_cast<ptrdiff_t>(t + u) * ps + k);
+        for (int c = 0; c < NC; ++c)
+          r[u][c] += Load16(erow[c] + static_cast<ptrdiff_t>(t + u) * ew + k) * p;
       }
-      for (int k = 0; k < U * NC; ++k) acc[k] = v8f{0, 0, 0, 0, 0, 0, 0, 0};
-    }
+    for (int u = 0; u < R; ++u)
+      for (int c = 0; c < NC; ++c) f[c] += r[u][c];
   }
-  for (int k = 0; k < U * NC; ++k) s.acc[k] = acc[k];
+  if (!any) return;
+  for (int c = 0; c < NC; ++c) {
+    v8d* d = reinterpret_cast<v8d*>(s.d[c]);
+    d[0] += __builtin_convertvector(__builtin_shufflevector(f[c], f[c], 0, 1, 2, 3, 4, 5, 6, 7),
+                                    v8d);
+    d[1] += __builtin_convertvector(
+        __builtin_shufflevector(f[c], f[c], 8, 9, 10, 11, 12, 13, 14, 15), v8d);
+  }
 }
 
-// A band of folded table rows (window rows [T0, T1)) into the sums of the
-// sites [first, last) that read it (pressure row r = window row - site.off).
-// A site's sum is the same sequence of operations whichever band or job its
-// rows come in: rows in increasing order, float lanes widened to double every
-// kRowsPerFlush pressure rows (as the one-site-at-a-time sum).
-MJTOUCH_TARGET_CLONES
+// A band of folded table rows (window rows [T0, T0 + kTableRowsPerBand), one
+// dy block) into the sums of the sites [first, last) that read it: site q's
+// pressure rows T0 - off .. (rlo / rhi: each pressure row's cells, from row
+// -kTableRowsPerBand; none outside the contact).
+MJTOUCH_TARGET_CLONES_AVX512
 void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
-             int T1, const float* P, int pw, const int* lo, const int* hi, int rows,
-             bool aligned) {
+             const float* P, int ps, const int* rlo, const int* rhi, int x0) {
   for (int q = first; q < last; ++q) {
     FoldSite& s = sites[q];
-    const int r0 = std::max(0, T0 - s.off), r1 = std::min(rows, T1 - s.off);
-    if (r0 >= r1) continue;
+    const int r0 = T0 - s.off;
+    const float* Pr = P + static_cast<ptrdiff_t>(r0) * ps;
+    const int* lo = rlo + r0 + kTableRowsPerBand;
+    const int* hi = rhi + r0 + kTableRowsPerBand;
+    const int g = x0 + s.col;
     switch (s.nc) {
-      case 1: SiteRows<1, 4>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-      case 2: SiteRows<2, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-      case 3: SiteRows<3, 2>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-      case 4: SiteRows<4, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-      case 5: SiteRows<5, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
-      default: SiteRows<6, 1>(s, ebuf, ew, T0, P, pw, lo, hi, r0, r1, rows, aligned); break;
+      case 1: SiteBand<1, 4>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 2: SiteBand<2, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 3: SiteBand<3, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 4: SiteBand<4, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 5: SiteBand<5, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      default: SiteBand<6, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
     }
   }
 }
 
-inline __attribute__((always_inline)) void Store(float* p, v8f v) {
+inline __attribute__((always_inline)) void Store(float* p, v16f v) {
   std::memcpy(p, &v, sizeof(v));
 }
 
-// 8 cells [x, x + 8) of a table row read forwards (p[x] ...) or backwards
+// 16 cells [x, x + 16) of a table row read forwards (p[x] ...) or backwards
 // (p[-x] ...).
 template <bool kReversed>
-inline __attribute__((always_inline)) v8f Cells(const float* p, int x) {
-  if (!kReversed) return Load(p + x);
-  const v8f v = Load(p - x - (kLanes - 1));
-  return __builtin_shufflevector(v, v, 7, 6, 5, 4, 3, 2, 1, 0);  // (GCC and Clang)
+inline __attribute__((always_inline)) v16f Cells(const float* p, int x) {
+  if (!kReversed) return Load16(p + x);
+  const v16f v = Load16(p - x - (kFoldLanes - 1));
+  return __builtin_shufflevector(v, v, 15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1,
+                                 0);  // (GCC and Clang)
 }
 
-// e[x] = one(x) for x in [0, len), 8 cells at a time (chunk(x): cells x ..
-// x + 7, the same operations per cell as one), with the stores on e's
-// 32-byte boundaries: a first chunk at 0, then from e's first boundary on, a
-// last chunk ending at len; overlapping chunks rewrite the same values. No
-// cell outside [0, len) is read or written and there is no scalar tail:
-// folded rows are ~100 cells, and the vectorised loops' tails, alias checks
-// and cache-line-split stores cost about as much as the cells (a replica of
-// slide_grating's fold, CPU time: 31 us -> 24 us per step).
+// e[x] = one(x) for x in [0, len), 16 cells at a time (chunk(x): cells x ..
+// x + 15, the same operations per cell as one: elementwise, so the same bits
+// at any width), with the stores on e's 64-byte boundaries: a first chunk at
+// 0, then from e's first boundary on, a last chunk ending at len;
+// overlapping chunks rewrite the same values. No cell outside [0, len) is
+// read or written and there is no scalar tail: folded rows are ~100 cells,
+// and the vectorised loops' tails, alias checks and cache-line-split stores
+// cost about as much as the cells (a replica of slide_grating's fold, CPU
+// time: 31 us -> 24 us per step).
 template <typename Chunk, typename One>
 inline __attribute__((always_inline)) void FoldCells(int len, float* e, Chunk chunk, One one) {
-  if (len < kLanes) {
+  if (len < kFoldLanes) {
     for (int x = 0; x < len; ++x) e[x] = one(x);
     return;
   }
   Store(e, chunk(0));
-  int x = kLanes - static_cast<int>(reinterpret_cast<uintptr_t>(e) / sizeof(float) & (kLanes - 1));
-  for (; x + kLanes <= len; x += kLanes) Store(e + x, chunk(x));
-  if (x < len) Store(e + len - kLanes, chunk(len - kLanes));
+  int x = kFoldLanes -
+          static_cast<int>(reinterpret_cast<uintptr_t>(e) / sizeof(float) & (kFoldLanes - 1));
+  for (; x + kFoldLanes <= len; x += kFoldLanes) Store(e + x, chunk(x));
+  if (x < len) Store(e + len - kFoldLanes, chunk(len - kFoldLanes));
 }
 
 // e[x] = sign ((kp[x] + rx kx[x]) + ry ky[x]) (float; sign +-1, exact), or
@@ -204,7 +194,7 @@ inline __attribute__((always_inline)) void FoldRowHCells(const float* h, const f
   FoldCells(
       len, e,
       [&](int x) {
-        const v8f v = Cells<kReversed>(h, x) + ry * Cells<kReversed>(ky, x);
+        const v16f v = Cells<kReversed>(h, x) + ry * Cells<kReversed>(ky, x);
         return sign > 0 ? v : -v;
       },
       [&](int x) {
@@ -275,7 +265,7 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
 
 // Rows dy0 .. dy0 + rows - 1 of a folded window into e (rows ew apart): one
 // dispatch per band, not two per row side.
-MJTOUCH_TARGET_CLONES
+MJTOUCH_TARGET_CLONES_AVX512
 void FoldMirroredRows(const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
                       int x0, int w, float rx, float ry, bool shear, const float* const* h,
                       float* e, int ew) {
@@ -426,23 +416,25 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     j1 = std::max(j1, runs.row[r]);
   }
   const int rows = j1 - j0 + 1;
-  const int pw = (i1 - i0 + kLanes) / kLanes * kLanes;
-  // Rows of ps cells, 64-byte aligned, with kLanes zero cells on each side
-  // that the aligned sums read (SiteRows); the legacy layout: rows of pw.
-  const bool aligned = !w->fold_legacy;
-  const int ps = aligned ? pw + 2 * kLanes : pw;
-  w->pressure.assign(static_cast<size_t>(rows) * ps + (aligned ? 16 : 0), 0.0f);
-  float* const P0 = aligned ? AlignUp64(w->pressure.data()) + kLanes : w->pressure.data();
-  w->row_lo.assign(rows, pw);
-  w->row_hi.assign(rows, 0);
+  const int pw = i1 - i0 + 1;
+  // Rows of ps cells, 64-byte aligned, with kSumLanes zero cells on each side
+  // and kTableRowsPerBand zero rows above and below, which the sums' chunks
+  // and bands read (SumBand: zero cells are exact no-ops).
+  const int band = kTableRowsPerBand;
+  const int ps = (pw + 2 * kSumLanes + kSumLanes - 1) / kSumLanes * kSumLanes;
+  w->pressure.assign(static_cast<size_t>(rows + 2 * band) * ps + 16, 0.0f);
+  float* const P0 = AlignUp64(w->pressure.data()) + static_cast<size_t>(band) * ps + kSumLanes;
+  // Each pressure row's cells (none: lo >= hi), from row -band to rows + band.
+  w->row_lo.assign(rows + 2 * band, pw);
+  w->row_hi.assign(rows + 2 * band, 0);
   for (size_t r = 0; r < runs.row.size(); ++r) {
     const int y = runs.row[r] - j0;
     const int b = runs.begin[r] - i0, e = runs.end[r] - i0;
     std::copy(pressure + static_cast<size_t>(runs.row[r]) * n + runs.begin[r],
               pressure + static_cast<size_t>(runs.row[r]) * n + runs.end[r],
               P0 + static_cast<size_t>(y) * ps + b);
-    w->row_lo[y] = std::min(w->row_lo[y], b / kLanes * kLanes);
-    w->row_hi[y] = std::max(w->row_hi[y], (e + kLanes - 1) / kLanes * kLanes);
+    w->row_lo[y + band] = std::min(w->row_lo[y + band], b);
+    w->row_hi[y + band] = std::max(w->row_hi[y + band], e);
   }
   // Sites grouped by depth, each depth's window of table offsets and the
   // sites' states: fixed by the sites, so kept while they are unchanged.
@@ -485,48 +477,50 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
   }
   if (w->rowbuf.size() < w->jobs.size()) w->rowbuf.resize(w->jobs.size());
   const float rx = static_cast<float>(slip_x), ry = static_cast<float>(slip_y);
+  const bool legacy = w->fold_legacy;
   const auto t0 = std::chrono::steady_clock::now();
-  if (shear && !w->fold_legacy) UpdateRxCache(kt, rx, w);
-  const bool use_h = shear && !w->fold_legacy && w->h_valid;
+  if (shear && !legacy) UpdateRxCache(kt, rx, w);
+  const bool use_h = shear && !legacy && w->h_valid;
   ThreadPool::Shared().Run(static_cast<int>(w->jobs.size()), threads, [&](int k) {
     const FoldScratch::Job job = w->jobs[k];
     FoldSite* fs = w->sites.data();
     const int d = fs[job.begin].depth;
     const auto& win = w->window[d];
     std::vector<float>& buf = w->rowbuf[k];
-    const int band = kTableRowsPerBand;
-    // Folded rows of ew cells, 64-byte aligned, column 0 kLanes in (the
-    // aligned sums read up to kLanes - 1 cells either side of a site's span).
-    const int ew = aligned ? (win.w + 2 * kLanes + 15) / 16 * 16 : win.w;
-    const int margin = aligned ? kLanes - 1 : 0;
-    buf.resize(static_cast<size_t>(kNumStress) * band * ew + (aligned ? 16 : 0));
-    float* const base = aligned ? AlignUp64(buf.data()) + kLanes : buf.data();
+    // Folded rows of ew cells, 64-byte aligned at dx multiples of 16 (window
+    // column x: dx = win.x0 + x), kSumLanes cells of margin on each side
+    // (the chunks reach 15 cells beyond a site's span); legacy: one cell off
+    // (every table load splits a cache line; the same bits).
+    const int ew = (win.w + 4 * kSumLanes) / kSumLanes * kSumLanes;
+    const int margin = kSumLanes - 1;
+    buf.resize(static_cast<size_t>(kNumStress) * band * ew + 32);
+    float* const base = AlignUp64(buf.data()) + kSumLanes + (win.x0 & (kSumLanes - 1)) +
+                        (legacy ? 1 : 0);
     float* ebuf[kNumStress];
     bool comps[kNumStress] = {};
     for (int q = job.begin; q < job.end; ++q) {
       for (int c = 0; c < fs[q].nc; ++c) comps[fs[q].comp[c]] = true;
-      for (auto& v : fs[q].acc) v = v8f{0, 0, 0, 0, 0, 0, 0, 0};
-      for (auto& v : fs[q].d) v = v4d{0, 0, 0, 0};
+      std::memset(fs[q].d, 0, sizeof(fs[q].d));
     }
     for (int c = 0; c < kNumStress; ++c)
       ebuf[c] = base + static_cast<size_t>(c) * band * ew;
     int lo_min = pw, hi_max = 0;
-    for (int r = 0; r < rows; ++r)
+    for (int r = 0; r < rows + 2 * band; ++r)
       if (w->row_lo[r] < w->row_hi[r]) {
         lo_min = std::min(lo_min, w->row_lo[r]);
         hi_max = std::max(hi_max, w->row_hi[r]);
       }
-    const int* lo = w->row_lo.data();
-    const int* hi = w->row_hi.data();
     const int* col = w->site_col.data();  // fs[q].col, contiguous
     int first = job.begin, last = job.begin;
+    // Bands on dy multiples of kTableRowsPerBand (window row T: dy = T + y0).
+    const int t_begin = fs[job.begin].off - (((fs[job.begin].off + win.y0) % band) + band) % band;
     const int t_end = fs[job.end - 1].off + rows;
-    for (int T0 = fs[job.begin].off; T0 < t_end; T0 += band) {
-      const int T1 = std::min(t_end, T0 + band);
+    for (int T0 = t_begin; T0 < t_end; T0 += band) {
+      const int T1 = T0 + band;
       while (last < job.end && fs[last].off < T1) ++last;
       while (first < last && fs[first].off + rows <= T0) ++first;
       // Fold the band over the columns its sites read.
-      int c0 = win.w + kLanes, c1 = -kLanes;
+      int c0 = win.w + kSumLanes, c1 = -kSumLanes;
       for (int q = first; q < last; ++q) {
         c0 = std::min(c0, col[q] + lo_min - margin);
         c1 = std::max(c1, col[q] + hi_max + margin);
@@ -539,16 +533,21 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
           h[0] = w->h.data() + w->h_offset[d * kNumStress + c];
           h[1] = h[0] + static_cast<size_t>(n) * n;
         }
-        FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, T1 - T0,
+        FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, band,
                          win.x0 + c0, c1 - c0, rx, ry, shear, use_h ? h : nullptr,
                          ebuf[c] + c0, ew);
       }
-      SumBand(fs, first, last, ebuf, ew, T0, T1, P0, ps, lo, hi, rows, aligned);
+      SumBand(fs, first, last, ebuf, ew, T0, P0, ps, w->row_lo.data(), w->row_hi.data(),
+              win.x0);
     }
+    // The 16 double lanes of each component, in one fixed order.
     for (int q = job.begin; q < job.end; ++q)
       for (int c = 0; c < fs[q].nc; ++c) {
-        const v4d s = fs[q].d[2 * c] + fs[q].d[2 * c + 1];
-        out[fs[q].site][fs[q].comp[c]] = (s[0] + s[1]) + (s[2] + s[3]);
+        const double* l = fs[q].d[c];
+        double a[8];
+        for (int i = 0; i < 8; ++i) a[i] = l[i] + l[i + 8];
+        out[fs[q].site][fs[q].comp[c]] =
+            ((a[0] + a[4]) + (a[2] + a[6])) + ((a[1] + a[5]) + (a[3] + a[7]));
       }
   });
   w->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

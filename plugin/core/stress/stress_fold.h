@@ -6,15 +6,23 @@
 // a third of the multiply-adds and of the table reads per site. The table is
 // folded band by band of kTableRowsPerBand rows (stress_fold.cc), only over
 // the offsets (active cells - sites) that some site reads, and each band is
-// read at once by every site of the depth while it is in L1/L2; the pressure is
-// copied into rows of whole 8-cell chunks, so the inner loop has no tails; a
-// site's wanted components share each pressure load, and its table loads are
-// 32-byte aligned (no cache-line splits; SiteRows in stress_fold.cc). While
-// the float r_x repeats (a steady slide), K_p + r_x K_x is kept from the last
-// call, so the fold reads two tables instead of three. Same result as the
-// reference path (StressAtReceptor) to float rounding
-// (tests/unit/test_stress_fold.py: rel. RMS <= 1e-5); the alignment and the
-// cache do not change a bit (same file: against fold_legacy).
+// read at once by every site of the depth while it is in L1/L2. While the
+// float r_x repeats (a steady slide), K_p + r_x K_x is kept from the last
+// call, so the fold reads two tables instead of three.
+// The canonical sum (one sequence of float operations, whatever the ISA,
+// layout or thread split): a site's cells in blocks of 8 rows on multiples
+// of 8 of dy = cell row - site row (the bands), each row's products E_c * p
+// summed in 16 float lanes (lane l: the cells at dx = l mod 16) over its
+// chunks of 16 in increasing dx, the block's 8 row sums added in row order,
+// then widened and added to 16 double lanes (blocks in increasing dy); the 16
+// lanes reduced in a fixed order at the end. Zero cells are exact no-ops
+// (a lane that starts at +0 never holds -0), so the chunk ranges (padding,
+// rows summed together) do not change a bit. The same order runs as one
+// AVX-512 register, two AVX2 ones or four SSE2 / NEON ones (GCC vector
+// lanes are elementwise; -ffp-contract=off). Same result as the reference
+// path (StressAtReceptor) to float rounding (tests/unit/test_stress_fold.py:
+// rel. RMS <= 1e-5); the alignment and the cache do not change a bit (same
+// file: against fold_legacy).
 //
 // Threads: each depth's sites split into `threads` ranges, each range
 // folding the bands it reads; a site's sum is one fixed sequence of
@@ -30,15 +38,10 @@
 
 namespace mjtouch {
 
-// One site's running sums on the folded path: float lanes of the current
-// band of rows (acc[u * nc + c]) and the double sums (d[2c], d[2c + 1]).
-// Aligned explicitly: a 32-byte vector type is only 16-byte aligned where
-// AVX is not enabled (this header), but AVX code assumes 32.
-struct alignas(32) FoldSite {
-  typedef float Lanes8 __attribute__((vector_size(32)));
-  typedef double Lanes4 __attribute__((vector_size(32)));
-  alignas(32) Lanes8 acc[kNumStress];
-  alignas(32) Lanes4 d[2 * kNumStress];
+// One site's running sums on the folded path: its 16 double lanes per
+// component (d[c][l]: lane l = the cells at dx = l mod 16, stress_fold.cc).
+struct alignas(64) FoldSite {
+  alignas(64) double d[kNumStress][16];
   int nc = 0;                 // components summed
   int comp[kNumStress] = {};  // which
   int col = 0, off = 0;       // window column / row of pressure cell (0, 0)
@@ -48,7 +51,7 @@ struct alignas(32) FoldSite {
 // Per-simulation scratch of the folded path (no meaning between calls).
 struct FoldScratch {
   std::vector<float> pressure;       // padded window, rows of `width` cells
-  std::vector<int> row_lo, row_hi;   // per window row: chunk-aligned cell range
+  std::vector<int> row_lo, row_hi;   // per pressure row: its active cells
   std::vector<int> sites_by_depth;   // site indices grouped by depth
   std::vector<int> depth_begin;      // ranges into sites_by_depth
   struct Window {
@@ -80,8 +83,8 @@ struct FoldScratch {
   int h_calls = 0;
   bool h_valid = false;
   double seconds = 0;  // the last call's fold + sums (diagnostics)
-  // The sums' memory layout before #13 (unaligned rows, no chunk shift) and
-  // no rx cache (the same bits): for the benchmark's old / new ratio.
+  // The table loads unaligned (every one splits a cache line) and no rx
+  // cache (the same bits): for the benchmark's ratio and the tests.
   bool fold_legacy = false;
 };
 
