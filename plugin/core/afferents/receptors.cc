@@ -264,6 +264,17 @@ std::string ReceptorParamsKey(const ReceptorParams& p) {
   return s.str();
 }
 
+namespace {
+// Membrane time constant of class cls, variant var (s), as Advance takes it.
+double MembraneTau(const ReceptorParams& p, ReceptorClass cls, const VariantScale& var) {
+  switch (cls) {
+    case ReceptorClass::kSA1: return p.sa1.resistance_ohm * p.sa1.capacitance_f * var.tau;
+    case ReceptorClass::kRA: return p.ra.tau_s * var.tau;
+    default: return p.pc.tau_s * var.tau;
+  }
+}
+}  // namespace
+
 ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), dt_(dt_s) {
   // Exact propagation of x' = A x + B v for v constant over dt: the
   // exponential of the augmented matrix [[A, B], [0, 0]] dt.
@@ -307,6 +318,11 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
   }
   noise_rho_ = std::exp(-dt_s / p.noise.tau_s);
   rate_decay_ = std::exp(-dt_s / p.rate_tau_s);
+  for (int c = 0; c < kNumClasses; ++c)
+    for (int v = 0; v < kNumVariants; ++v)
+      step_span_[c][v] = PrecomputeSpan(
+          dt_s, MembraneTau(p, static_cast<ReceptorClass>(c), ReceptorVariant(static_cast<ReceptorClass>(c), v)),
+          p.adapt[c]);
 }
 
 void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
@@ -363,8 +379,8 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
     l0[0] = gain * y0;
     l1[0] = gain * y1;
   };
-  const VariantScale& var =
-      ReceptorVariant(cls, static_cast<int>(st[kVariant]));
+  const int variant = static_cast<int>(st[kVariant]);
+  const VariantScale& var = ReceptorVariant(cls, variant);
   Adaptation adapt = p_.adapt[ci];
   adapt.jump *= var.adapt;
   switch (cls) {
@@ -390,19 +406,19 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
         l0[k] = scale * (m * (s.k0_a_per_pa * qs0 + s.k1_a_s_per_pa * r0) + s.i0_a);
         l1[k] = scale * (m * (s.k0_a_per_pa * qs1 + s.k1_a_s_per_pa * r1) + s.i0_a);
       }
-      tau = s.resistance_ohm * s.capacitance_f * var.tau;
+      tau = MembraneTau(p_, cls, var);
       refractory = s.refractory_s;
       break;
     }
     case ReceptorClass::kRA:
       filter(ra_, p_.ra.gain_s_per_pa * var.gain, v);
       full_wave = true;
-      tau = p_.ra.tau_s * var.tau;
+      tau = MembraneTau(p_, cls, var);
       refractory = p_.ra.refractory_s;
       break;
     case ReceptorClass::kPC:
       filter(pc_, p_.pc.gain_s2_per_pa * var.gain, v);
-      tau = p_.pc.tau_s * var.tau;
+      tau = MembraneTau(p_, cls, var);
       refractory = p_.pc.refractory_s;
       break;
   }
@@ -487,7 +503,7 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
       }
       sink.offset = ta;
       spikes += LinearDriveLIF(nodes, st + kU0, a, b, span, tau, refractory, st + kRefractory,
-                               adapt, st + kAdapt, OnSpike, &sink);
+                               adapt, st + kAdapt, OnSpike, &sink, &step_span_[ci][variant]);
     }
   }
   st[kRate] = st[kRate] * rate_decay_ + sink.rate_sum / p_.rate_tau_s;

@@ -197,6 +197,8 @@ class ReceptorStepper {
   Filter sa1_, ra_, pc_;
   Filter ra_sub_[kMaxSubLevels];  // RA filter over dt / 2^k, k = 1..
   double noise_rho_, rate_decay_;
+  // Membrane exponentials over a whole step, per class and variant.
+  MembraneSpan step_span_[kNumClasses][kNumVariants];
 };
 
 // The state of a receptor at rest with quantity q (first call): filters at
