@@ -58,6 +58,12 @@ double FirstCrossing(double u0, double a, double b, double tau, double span,
   double hi = span;
   const double c = u0 - a + b * tau;
   if (c < 0.0 && b < 0.0) {
+    // Under a falling drive the membrane never exceeds max(u0, a): below 1
+    // by far more than the round-off of Membrane, no point of the interval
+    // can evaluate to >= 1, so the search below would return +inf too
+    // (skips its log and exponentials).
+    const double margin = 1e-9 * (1.0 + std::abs(u0) + std::abs(a) + std::abs(b) * (tau + span));
+    if (std::max(u0, a) < 1.0 - margin) return kInf;
     const double ratio = c / (b * tau);
     if (ratio <= 1.0) return kInf;  // falling from the start
     hi = std::min(span, tau * std::log(ratio));
