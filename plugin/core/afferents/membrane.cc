@@ -58,12 +58,16 @@ double FirstCrossing(double u0, double a, double b, double tau, double span,
   double hi = span;
   const double c = u0 - a + b * tau;
   if (c < 0.0 && b < 0.0) {
-    // Under a falling drive the membrane never exceeds max(u0, a): below 1
-    // by far more than the round-off of Membrane, no point of the interval
-    // can evaluate to >= 1, so the search below would return +inf too
-    // (skips its log and exponentials).
+    // Under a falling drive (b tau Phi2 <= 0) the membrane stays below
+    // u0 + (a - u0) Phi1(t / tau), monotone in t: below max(u0, a), and
+    // over the whole span (`pre`) below max(u0, its value at the span's
+    // end). If that is under 1 by far more than the round-off of Membrane,
+    // no point of the interval can evaluate to >= 1, so the search below
+    // would return +inf too (skips its log and exponentials).
     const double margin = 1e-9 * (1.0 + std::abs(u0) + std::abs(a) + std::abs(b) * (tau + span));
-    if (std::max(u0, a) < 1.0 - margin) return kInf;
+    const double bound = pre && span == pre->span ? std::max(u0, u0 * pre->decay + a * pre->phi1)
+                                                  : std::max(u0, a);
+    if (bound < 1.0 - margin) return kInf;
     const double ratio = c / (b * tau);
     if (ratio <= 1.0) return kInf;  // falling from the start
     hi = std::min(span, tau * std::log(ratio));
@@ -219,9 +223,9 @@ int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, doubl
     if (!(hit <= left)) {
       double end[kMaxNodes];
       bool over = false;
+      const double adapt_end = AdaptResponse(w, tau, tau_a, left, pre);  // the same for every node
       for (int k = 0; k < nodes && k < kMaxNodes; ++k) {
-        end[k] = Membrane(u[k], a[k] + b[k] * t, b[k], tau, left, pre) +
-                 AdaptResponse(w, tau, tau_a, left, pre);
+        end[k] = Membrane(u[k], a[k] + b[k] * t, b[k], tau, left, pre) + adapt_end;
         over = over || end[k] >= 1.0;
       }
       if (!over) {
