@@ -122,13 +122,17 @@ uint64_t SplitMix64(uint64_t x) {
   return x ^ (x >> 31);
 }
 
-// Standard normal deviate, a pure function of (seed, stream, count).
-double Normal(uint64_t seed, uint64_t stream, uint64_t count) {
-  const uint64_t h1 = SplitMix64(SplitMix64(SplitMix64(seed) ^ stream) ^ count);
+// Standard normal deviate, a pure function of (seed, stream, count);
+// NormalHashed takes SplitMix64(seed) (ReceptorStepper: hashed once).
+double NormalHashed(uint64_t seed_hash, uint64_t stream, uint64_t count) {
+  const uint64_t h1 = SplitMix64(SplitMix64(seed_hash ^ stream) ^ count);
   const uint64_t h2 = SplitMix64(h1);
   const double u1 = (static_cast<double>(h1 >> 11) + 0.5) * 0x1p-53;  // (0, 1)
   const double u2 = static_cast<double>(h2 >> 11) * 0x1p-53;
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
+}
+double Normal(uint64_t seed, uint64_t stream, uint64_t count) {
+  return NormalHashed(SplitMix64(seed), stream, count);
 }
 
 // exp(A) of an m x m row-major matrix (m <= 5): scaling and squaring with a
@@ -324,6 +328,8 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
   }
   noise_rho_ = std::exp(-dt_s / p.noise.tau_s);
   rate_decay_ = std::exp(-dt_s / p.rate_tau_s);
+  seed_hash_ = SplitMix64(p.noise.seed);
+  sa1_scale_ = p.sa1.resistance_ohm / p.sa1.threshold_v;
   for (int c = 0; c < kNumClasses; ++c)
     noise_gain_[c] = NoiseSd(p, static_cast<ReceptorClass>(c)) *
                      std::sqrt(1.0 - noise_rho_ * noise_rho_);
@@ -363,8 +369,8 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
   if (NoiseSd(p_, cls) > 0.0) {  // exact Ornstein-Uhlenbeck update
     const double count = st[kCount] + 1.0;
     st[kCount] = count;
-    n1 = noise_rho_ * n0 + noise_gain_[ci] * Normal(p_.noise.seed, stream,
-                                                    static_cast<uint64_t>(count));
+    n1 = noise_rho_ * n0 + noise_gain_[ci] * NormalHashed(seed_hash_, stream,
+                                                          static_cast<uint64_t>(count));
     st[kNoise] = n1;
   }
 
@@ -398,7 +404,7 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
     case ReceptorClass::kSA1: {
       const SA1Params& s = p_.sa1;
       nodes = static_cast<int>(std::min<size_t>(s.merkel_cells.size(), kMaxNodes));
-      const double scale = s.resistance_ohm / s.threshold_v;  // A -> threshold units
+      const double scale = sa1_scale_;  // A -> threshold units
       // saturated input (kFiltered), taken linear over the step like q
       const double qs0 = SaturateSA1(s, q0), qs1 = SaturateSA1(s, q1);
       const double vs = (qs1 - qs0) / dt;
