@@ -22,9 +22,16 @@ double Phi2(double x) {
   return sum;
 }
 
+// Equal time constants make kappa singular; a relative offset of 1e-9
+// changes the membrane by ~1e-9 of the adaptation current.
+double AdaptTau(const Adaptation& adapt, double tau) {
+  return std::abs(adapt.tau_s - tau) < 1e-9 * tau ? tau * (1 + 1e-9) : adapt.tau_s;
+}
+
 // Membrane at time s from u0 under the drive a + b t: exact solution of
-// tau du/dt = -u + a + b t.
-double Membrane(double u0, double a, double b, double tau, double s) {
+// tau du/dt = -u + a + b t. `pre` (tau its own): its exponentials at s = its span.
+double Membrane(double u0, double a, double b, double tau, double s, const MembraneSpan* pre) {
+  if (pre && s == pre->span) return u0 * pre->decay + a * pre->phi1 + b * tau * pre->phi2;
   const double x = s / tau;
   return u0 * std::exp(-x) + a * Phi1(x) + b * tau * Phi2(x);
 }
@@ -32,33 +39,51 @@ double Membrane(double u0, double a, double b, double tau, double s) {
 // The membrane's response at s to the current -c exp(-t / tau_a) from t = 0
 // (u(0) = 0): -c kappa (exp(-s / tau_a) - exp(-s / tau)),
 // kappa = tau_a / (tau_a - tau).
-double AdaptResponse(double c, double tau, double tau_a, double s) {
+double AdaptResponse(double c, double tau, double tau_a, double s, const MembraneSpan* pre) {
   if (c == 0.0) return 0.0;
+  if (pre && s == pre->span)
+    return -c * tau_a / (tau_a - tau) * pre->adapt_decay * pre->adapt_rise;
   const double x = s / tau, xa = s / tau_a;
   // exp(-xa) - exp(-x) = exp(-xa) (1 - exp(xa - x)), accurate for small s
   return -c * tau_a / (tau_a - tau) * std::exp(-xa) * -std::expm1(xa - x);
+}
+
+// Under a falling drive (b < 0: b tau Phi2 <= 0) the membrane stays below
+// u0 + (a - u0) Phi1(t / tau), monotone in t: below max(u0, a), and over
+// the whole span (`pre`) below max(u0, its value at the span's end). Whether
+// that is under 1 by far more than the round-off of Membrane: then no point
+// of the interval can evaluate to >= 1, and FirstCrossing's search would
+// return +inf too (this skips its log and exponentials).
+bool FallingStaysBelow(double u0, double a, double b, double tau, double span,
+                       const MembraneSpan* pre) {
+  const double margin = 1e-9 * (1.0 + std::abs(u0) + std::abs(a) + std::abs(b) * (tau + span));
+  const double bound = pre && span == pre->span ? std::max(u0, u0 * pre->decay + a * pre->phi1)
+                                                : std::max(u0, a);
+  return bound < 1.0 - margin;
 }
 
 // First time in (0, span] at which the membrane reaches 1, or +inf. With
 // c = u0 - a + b tau the membrane is a + b (t - tau) + c exp(-t / tau):
 // convex for c >= 0 (one crossing at most, from below), concave for c < 0
 // (rising to a maximum at tau ln(c / (b tau)) when b < 0).
-double FirstCrossing(double u0, double a, double b, double tau, double span) {
+double FirstCrossing(double u0, double a, double b, double tau, double span,
+                     const MembraneSpan* pre) {
   if (u0 >= 1.0) return 0.0;
   double hi = span;
   const double c = u0 - a + b * tau;
   if (c < 0.0 && b < 0.0) {
+    if (FallingStaysBelow(u0, a, b, tau, span, pre)) return kInf;
     const double ratio = c / (b * tau);
     if (ratio <= 1.0) return kInf;  // falling from the start
     hi = std::min(span, tau * std::log(ratio));
   }
-  if (Membrane(u0, a, b, tau, hi) < 1.0) return kInf;
+  if (Membrane(u0, a, b, tau, hi, pre) < 1.0) return kInf;
   // Bracketed: f(lo) < 0 <= f(hi), f increasing through its one root.
   // Safeguarded Newton; returns the bracket's upper end (membrane >= 1).
   const double tol = 1e-15 * span;
   double lo = 0.0, s = hi;
   for (int it = 0; it < 200; ++it) {
-    const double u = Membrane(u0, a, b, tau, s);
+    const double u = Membrane(u0, a, b, tau, s, nullptr);
     if (u >= 1.0) hi = s; else lo = s;
     if (hi - lo <= tol) break;
     const double du = (a + b * s - u) / tau;
@@ -71,7 +96,7 @@ double FirstCrossing(double u0, double a, double b, double tau, double span) {
       // whole span late).
       const double base = std::max(next, s);
       for (double step = tol; base + step < hi; step *= 2.0) {
-        if (Membrane(u0, a, b, tau, base + step) >= 1.0) {
+        if (Membrane(u0, a, b, tau, base + step, nullptr) >= 1.0) {
           hi = base + step;
           break;
         }
@@ -111,8 +136,8 @@ double Bisect(const F& f, double lo, double hi) {
 // with at most one sign change, so at most two extrema: split [t0, span]
 // at them and take the first monotone piece that reaches 1.
 double FirstCrossingAdapted(double u0, double a, double b, double tau, double c, double tau_a,
-                            double span) {
-  const double t0 = FirstCrossing(u0, a, b, tau, span);
+                            double span, const MembraneSpan* pre) {
+  const double t0 = FirstCrossing(u0, a, b, tau, span, pre);
   if (!(t0 <= span)) return kInf;
   if (t0 == 0.0) return 0.0;  // u0 >= 1
   const double kappa = tau_a / (tau_a - tau);
@@ -156,19 +181,60 @@ double FirstCrossingAdapted(double u0, double a, double b, double tau, double c,
 
 }  // namespace
 
+MembraneSpan PrecomputeSpan(double span, double tau, const Adaptation& adapt) {
+  MembraneSpan p;
+  p.span = span;
+  p.tau = tau;
+  p.tau_a = AdaptTau(adapt, tau);
+  // as Membrane, AdaptResponse and LinearDriveLIF's decay evaluate them
+  const double x = span / tau, xa = span / p.tau_a;
+  p.decay = std::exp(-x);
+  p.phi1 = Phi1(x);
+  p.phi2 = Phi2(x);
+  p.adapt_decay = std::exp(-xa);
+  p.adapt_rise = -std::expm1(xa - x);
+  return p;
+}
+
 int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, double span,
                    double tau, double refractory, double* refractory_left,
                    const Adaptation& adapt, double* adapt_current,
-                   void (*on_spike)(double t, void* ctx), void* ctx) {
-  // Equal time constants make kappa singular; a relative offset of 1e-9
-  // changes the membrane by ~1e-9 of the adaptation current.
-  const double tau_a = std::abs(adapt.tau_s - tau) < 1e-9 * tau ? tau * (1 + 1e-9) : adapt.tau_s;
+                   void (*on_spike)(double t, void* ctx), void* ctx, const MembraneSpan* pre) {
+  const double tau_a = AdaptTau(adapt, tau);
+  if (pre && !(pre->tau == tau && pre->tau_a == tau_a)) pre = nullptr;
   int spikes = 0;
   double t = 0.0;
   double& w = *adapt_current;
   auto decay = [&](double s) {
-    if (w != 0.0) w *= std::exp(-s / tau_a);
+    if (w != 0.0) w *= pre && s == pre->span ? pre->adapt_decay : std::exp(-s / tau_a);
   };
+  // The common step: the whole interval of `pre`, no refractory time, no
+  // spike. Decided node by node as the loop below decides it at t = 0
+  // (FirstCrossing's no-crossing exits; FirstCrossingAdapted starts with
+  // FirstCrossing), each node's end membrane computed once for both.
+  if (pre && span == pre->span && !(*refractory_left > 0.0) && nodes <= kMaxNodes) {
+    double end[kMaxNodes];
+    bool quiet = true;
+    const double adapt_end = AdaptResponse(w, tau, tau_a, span, pre);
+    for (int k = 0; k < nodes && quiet; ++k) {
+      const double u0 = u[k], bk = b[k], ak = a[k] + bk * t;  // t = 0, as the loop takes it
+      const double m = Membrane(u0, ak, bk, tau, span, pre);
+      if (u0 >= 1.0) {
+        quiet = false;
+      } else if (u0 - ak + bk * tau < 0.0 && bk < 0.0) {
+        quiet = FallingStaysBelow(u0, ak, bk, tau, span, pre);
+      } else {
+        quiet = m < 1.0;
+      }
+      end[k] = m + adapt_end;
+      quiet = quiet && !(end[k] >= 1.0);
+    }
+    if (quiet) {
+      for (int k = 0; k < nodes; ++k) u[k] = end[k];
+      decay(span);
+      return 0;
+    }
+  }
   while (t < span) {
     if (*refractory_left > 0.0) {  // membranes held at reset
       const double used = std::min(*refractory_left, span - t);
@@ -182,16 +248,16 @@ int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, doubl
     double hit = kInf;
     for (int k = 0; k < nodes; ++k) {
       const double ak = a[k] + b[k] * t;
-      const double h = w > 0.0 ? FirstCrossingAdapted(u[k], ak, b[k], tau, w, tau_a, left)
-                               : FirstCrossing(u[k], ak, b[k], tau, left);
+      const double h = w > 0.0 ? FirstCrossingAdapted(u[k], ak, b[k], tau, w, tau_a, left, pre)
+                               : FirstCrossing(u[k], ak, b[k], tau, left, pre);
       hit = std::min(hit, h);
     }
     if (!(hit <= left)) {
       double end[kMaxNodes];
       bool over = false;
+      const double adapt_end = AdaptResponse(w, tau, tau_a, left, pre);  // the same for every node
       for (int k = 0; k < nodes && k < kMaxNodes; ++k) {
-        end[k] = Membrane(u[k], a[k] + b[k] * t, b[k], tau, left) +
-                 AdaptResponse(w, tau, tau_a, left);
+        end[k] = Membrane(u[k], a[k] + b[k] * t, b[k], tau, left, pre) + adapt_end;
         over = over || end[k] >= 1.0;
       }
       if (!over) {

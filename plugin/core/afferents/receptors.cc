@@ -9,15 +9,17 @@
 namespace mjtouch {
 namespace {
 
+// Eigenvalues of a symmetric 3x3 (Smith 1961), ascending; l2 and l3 may be
+// null when only the smallest is wanted (skips a cosine).
 void Principal(const double s[6], double* l1, double* l2, double* l3) {
-  // Eigenvalues of a symmetric 3x3 (Smith 1961), ascending.
   const double xx = s[0], yy = s[1], zz = s[2], xy = s[3], xz = s[4], yz = s[5];
   const double p1 = xy * xy + xz * xz + yz * yz;
   const double q = (xx + yy + zz) / 3.0;
   if (p1 <= 1e-30 * (xx * xx + yy * yy + zz * zz + 1e-300)) {
     double e[3] = {xx, yy, zz};
     std::sort(e, e + 3);
-    *l1 = e[0]; *l2 = e[1]; *l3 = e[2];
+    *l1 = e[0];
+    if (l3) { *l2 = e[1]; *l3 = e[2]; }
     return;
   }
   const double p2 = (xx - q) * (xx - q) + (yy - q) * (yy - q) + (zz - q) * (zz - q) + 2 * p1;
@@ -28,9 +30,10 @@ void Principal(const double s[6], double* l1, double* l2, double* l3) {
                      b02 * (b01 * b12 - b11 * b02);
   const double r = std::clamp(det / 2.0, -1.0, 1.0);
   const double phi = std::acos(r) / 3.0;
-  const double e3 = q + 2 * p * std::cos(phi);
   const double e1 = q + 2 * p * std::cos(phi + 2.0943951023931957);
   *l1 = e1;
+  if (!l3) return;
+  const double e3 = q + 2 * p * std::cos(phi);
   *l3 = e3;
   *l2 = 3 * q - e1 - e3;
 }
@@ -79,8 +82,11 @@ double ReceptorQuantity(Quantity q, const double s[6]) {
     }
     default: {
       double l1, l2, l3;
+      if (q == Quantity::kMaxCompressive) {
+        Principal(s, &l1, nullptr, nullptr);
+        return std::max(0.0, -l1);
+      }
       Principal(s, &l1, &l2, &l3);
-      if (q == Quantity::kMaxCompressive) return std::max(0.0, -l1);
       return 0.5 * (l3 - l1);
     }
   }
@@ -116,13 +122,17 @@ uint64_t SplitMix64(uint64_t x) {
   return x ^ (x >> 31);
 }
 
-// Standard normal deviate, a pure function of (seed, stream, count).
-double Normal(uint64_t seed, uint64_t stream, uint64_t count) {
-  const uint64_t h1 = SplitMix64(SplitMix64(SplitMix64(seed) ^ stream) ^ count);
+// Standard normal deviate, a pure function of (seed, stream, count);
+// NormalHashed takes SplitMix64(seed) (ReceptorStepper: hashed once).
+double NormalHashed(uint64_t seed_hash, uint64_t stream, uint64_t count) {
+  const uint64_t h1 = SplitMix64(SplitMix64(seed_hash ^ stream) ^ count);
   const uint64_t h2 = SplitMix64(h1);
   const double u1 = (static_cast<double>(h1 >> 11) + 0.5) * 0x1p-53;  // (0, 1)
   const double u2 = static_cast<double>(h2 >> 11) * 0x1p-53;
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
+}
+double Normal(uint64_t seed, uint64_t stream, uint64_t count) {
+  return NormalHashed(SplitMix64(seed), stream, count);
 }
 
 // exp(A) of an m x m row-major matrix (m <= 5): scaling and squaring with a
@@ -264,6 +274,17 @@ std::string ReceptorParamsKey(const ReceptorParams& p) {
   return s.str();
 }
 
+namespace {
+// Membrane time constant of class cls, variant var (s), as Advance takes it.
+double MembraneTau(const ReceptorParams& p, ReceptorClass cls, const VariantScale& var) {
+  switch (cls) {
+    case ReceptorClass::kSA1: return p.sa1.resistance_ohm * p.sa1.capacitance_f * var.tau;
+    case ReceptorClass::kRA: return p.ra.tau_s * var.tau;
+    default: return p.pc.tau_s * var.tau;
+  }
+}
+}  // namespace
+
 ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), dt_(dt_s) {
   // Exact propagation of x' = A x + B v for v constant over dt: the
   // exponential of the augmented matrix [[A, B], [0, 0]] dt.
@@ -307,6 +328,20 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
   }
   noise_rho_ = std::exp(-dt_s / p.noise.tau_s);
   rate_decay_ = std::exp(-dt_s / p.rate_tau_s);
+  seed_hash_ = SplitMix64(p.noise.seed);
+  sa1_scale_ = p.sa1.resistance_ohm / p.sa1.threshold_v;
+  for (int c = 0; c < kNumClasses; ++c)
+    noise_gain_[c] = NoiseSd(p, static_cast<ReceptorClass>(c)) *
+                     std::sqrt(1.0 - noise_rho_ * noise_rho_);
+  for (int level = 0; level < kMaxSubLevels; ++level) {
+    sub_error_den_[level] = 4.0 * p.ra.saturation * std::ldexp(1.0, 2 * level);
+    sub_error_skip_[level] = 0.99e-4 * sub_error_den_[level];
+  }
+  for (int c = 0; c < kNumClasses; ++c)
+    for (int v = 0; v < kNumVariants; ++v)
+      step_span_[c][v] = PrecomputeSpan(
+          dt_s, MembraneTau(p, static_cast<ReceptorClass>(c), ReceptorVariant(static_cast<ReceptorClass>(c), v)),
+          p.adapt[c]);
 }
 
 void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
@@ -329,15 +364,13 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
   const double v = (q1 - q0) / dt;  // q linear over the step
   st[kPrevQ] = q1;
   const int ci = static_cast<int>(cls);
-
   const double n0 = st[kNoise];
   double n1 = n0;
-  const double sd = NoiseSd(p_, cls);
-  if (sd > 0.0) {  // exact Ornstein-Uhlenbeck update
+  if (NoiseSd(p_, cls) > 0.0) {  // exact Ornstein-Uhlenbeck update
     const double count = st[kCount] + 1.0;
     st[kCount] = count;
-    n1 = noise_rho_ * n0 + sd * std::sqrt(1.0 - noise_rho_ * noise_rho_) *
-                               Normal(p_.noise.seed, stream, static_cast<uint64_t>(count));
+    n1 = noise_rho_ * n0 + noise_gain_[ci] * NormalHashed(seed_hash_, stream,
+                                                          static_cast<uint64_t>(count));
     st[kNoise] = n1;
   }
 
@@ -363,15 +396,15 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
     l0[0] = gain * y0;
     l1[0] = gain * y1;
   };
-  const VariantScale& var =
-      ReceptorVariant(cls, static_cast<int>(st[kVariant]));
+  const int variant = static_cast<int>(st[kVariant]);
+  const VariantScale& var = ReceptorVariant(cls, variant);
   Adaptation adapt = p_.adapt[ci];
   adapt.jump *= var.adapt;
   switch (cls) {
     case ReceptorClass::kSA1: {
       const SA1Params& s = p_.sa1;
       nodes = static_cast<int>(std::min<size_t>(s.merkel_cells.size(), kMaxNodes));
-      const double scale = s.resistance_ohm / s.threshold_v;  // A -> threshold units
+      const double scale = sa1_scale_;  // A -> threshold units
       // saturated input (kFiltered), taken linear over the step like q
       const double qs0 = SaturateSA1(s, q0), qs1 = SaturateSA1(s, q1);
       const double vs = (qs1 - qs0) / dt;
@@ -390,19 +423,19 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
         l0[k] = scale * (m * (s.k0_a_per_pa * qs0 + s.k1_a_s_per_pa * r0) + s.i0_a);
         l1[k] = scale * (m * (s.k0_a_per_pa * qs1 + s.k1_a_s_per_pa * r1) + s.i0_a);
       }
-      tau = s.resistance_ohm * s.capacitance_f * var.tau;
+      tau = MembraneTau(p_, cls, var);
       refractory = s.refractory_s;
       break;
     }
     case ReceptorClass::kRA:
       filter(ra_, p_.ra.gain_s_per_pa * var.gain, v);
       full_wave = true;
-      tau = p_.ra.tau_s * var.tau;
+      tau = MembraneTau(p_, cls, var);
       refractory = p_.ra.refractory_s;
       break;
     case ReceptorClass::kPC:
       filter(pc_, p_.pc.gain_s2_per_pa * var.gain, v);
-      tau = p_.pc.tau_s * var.tau;
+      tau = MembraneTau(p_, cls, var);
       refractory = p_.pc.refractory_s;
       break;
   }
@@ -421,7 +454,9 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
   if (sat > 0.0) {
     const double d = l1[0] - l0[0];
     int level = 0;
-    while (level < kMaxSubLevels && d * d / (4.0 * sat * std::ldexp(1.0, 2 * level)) > 1e-4)
+    // d^2 at most 0.99e-4 den fails the test without the division
+    while (level < kMaxSubLevels && !(d * d <= sub_error_skip_[level]) &&
+           d * d / sub_error_den_[level] > 1e-4)
       ++level;
     nsub = 1 << level;
     knots[0] = saturate(l0[0]);
@@ -464,7 +499,8 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
     int ncut = 0;
     cuts[ncut++] = t0;
     for (int k = 0; k < nodes; ++k) {
-      if ((la[k] < 0.0 && lb[k] > 0.0) || (la[k] > 0.0 && lb[k] < 0.0)) {
+      // bitwise: no branch on the (unpredictable) signs themselves
+      if (((la[k] < 0.0) & (lb[k] > 0.0)) | ((la[k] > 0.0) & (lb[k] < 0.0))) {
         const double t = t0 + len * la[k] / (la[k] - lb[k]);
         if (t > t0 && t < t1) cuts[ncut++] = t;
       }
@@ -472,10 +508,12 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
     for (int i = 2; i < ncut; ++i)  // insertion sort of the kinks
       for (int m = i; m > 1 && cuts[m] < cuts[m - 1]; --m) std::swap(cuts[m], cuts[m - 1]);
     cuts[ncut++] = t1;
+    // (t - t0) / len and t / dt, their exact values at the ends without a division
     auto drive = [&](int k, double t) {
-      const double l = la[k] + (lb[k] - la[k]) * ((t - t0) / len);
+      const double f = t == t0 ? 0.0 : t == t1 ? 1.0 : (t - t0) / len;
+      const double l = la[k] + (lb[k] - la[k]) * f;
       const double rect = full_wave ? std::abs(l) : std::max(0.0, l);
-      return rect + n0 + (n1 - n0) * (t / dt);
+      return rect + n0 + (n1 - n0) * (t == 0.0 ? 0.0 : t == dt ? 1.0 : t / dt);
     };
     for (int i = 0; i + 1 < ncut; ++i) {
       const double ta = cuts[i], tb = cuts[i + 1], span = tb - ta;
@@ -487,7 +525,7 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
       }
       sink.offset = ta;
       spikes += LinearDriveLIF(nodes, st + kU0, a, b, span, tau, refractory, st + kRefractory,
-                               adapt, st + kAdapt, OnSpike, &sink);
+                               adapt, st + kAdapt, OnSpike, &sink, &step_span_[ci][variant]);
     }
   }
   st[kRate] = st[kRate] * rate_decay_ + sink.rate_sum / p_.rate_tau_s;

@@ -197,6 +197,13 @@ class ReceptorStepper {
   Filter sa1_, ra_, pc_;
   Filter ra_sub_[kMaxSubLevels];  // RA filter over dt / 2^k, k = 1..
   double noise_rho_, rate_decay_;
+  unsigned long long seed_hash_;  // SplitMix64 of the noise seed
+  double sa1_scale_;              // SA1: R / U_th, A -> threshold units
+  double noise_gain_[kNumClasses];        // sd sqrt(1 - rho^2): the OU innovation
+  double sub_error_den_[kMaxSubLevels];   // RA sub-steps: 4 s 4^k
+  double sub_error_skip_[kMaxSubLevels];  // 0.99e-4 of it
+  // Membrane exponentials over a whole step, per class and variant.
+  MembraneSpan step_span_[kNumClasses][kNumVariants];
 };
 
 // The state of a receptor at rest with quantity q (first call): filters at
