@@ -337,11 +337,12 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
     sub_error_den_[level] = 4.0 * p.ra.saturation * std::ldexp(1.0, 2 * level);
     sub_error_skip_[level] = 0.99e-4 * sub_error_den_[level];
   }
-  for (int c = 0; c < kNumClasses; ++c)
+  for (int c = 0; c < kNumClasses; ++c) {
+    const ReceptorClass cls = static_cast<ReceptorClass>(c);
     for (int v = 0; v < kNumVariants; ++v)
-      step_span_[c][v] = PrecomputeSpan(
-          dt_s, MembraneTau(p, static_cast<ReceptorClass>(c), ReceptorVariant(static_cast<ReceptorClass>(c), v)),
-          p.adapt[c]);
+      step_span_[c][v] =
+          PrecomputeSpan(dt_s, MembraneTau(p, cls, ReceptorVariant(cls, v)), p.adapt[c]);
+  }
 }
 
 void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
