@@ -138,8 +138,9 @@ int main() {
   std::mt19937_64 rng(11);
   // Plans (fft.cc): 6 [6], 9 [9], 18 [6 3], 27 [9 3], 36 [4 9],
   // 54 [6 9], 90 [6 3 5], 108 [4 9 3], 144 [4 4 9], 150 [6 5 5],
-  // 162 [6 9 3], 180 [4 9 5]; 160 [4 8 5] and 30 [6 5] for the others.
-  const int sizes[] = {6, 9, 18, 27, 30, 36, 54, 90, 108, 144, 150, 160, 162, 180};
+  // 162 [6 9 3], 180 [4 9 5]; 32 [4 8], 96 [4 8 3], 160 [4 8 5] (half
+  // input: FirstStages4Half8) and 30 [6 5] for the others.
+  const int sizes[] = {6, 9, 18, 27, 30, 32, 36, 54, 90, 96, 108, 144, 150, 160, 162, 180};
   int checked = 0;
   for (int n : sizes)
     for (int inverse = 0; inverse < 2; ++inverse)
