@@ -2,7 +2,8 @@
 // hashes of the bits of (1) the Winkler fast solve on gaps with NaN, +-inf
 // and +-0 (ScanCandidates' SSE2 / portable extrema; exits 1 if it differs
 // from the reference solve) and (2) 120 pipeline steps (winkler, elastic) of
-// a pad pressed into and slid over a plane. Two builds (x86-64 with AVX2
+// a pad pressed into and slid over a plane, (3) ConvolveReal<float / double>
+// on the shipped scenes' grids (fft.cc's fused and half-input stages). Two builds (x86-64 with AVX2
 // clones, MJTOUCH_PORTABLE_SIMD, aarch64) must print the same lines:
 //   bash .ci/portable --aarch64
 #include <cmath>
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "common/fft.h"
 #include "contact/pressure.h"
 #include "pipeline/config.h"
 #include "pipeline/model.h"
@@ -72,8 +74,34 @@ static bool Adversarial() {
   return mismatch == 0;
 }
 
+// ConvolveReal on 160 x 150, 180 x 150 and 160 x 160 (the scenes' grids:
+// radix-6 / radix-9 fused stages, the half radix-4 + 8 stage), float and
+// double, threads 1: a hash of the outputs' bits.
+template <typename T>
+static void FftHash() {
+  uint64_t rng = 777, h = 1469598103934665603ull;
+  auto uni = [&] { rng = rng * 6364136223846793005ull + 1442695040888963407ull;
+                   return (rng >> 11) * (1.0 / 9007199254740992.0); };
+  const int grids[][2] = {{160, 150}, {180, 150}, {160, 160}};
+  for (const auto& g : grids) {
+    const Fft2D fft(g[0], g[1]);
+    const int bx = g[0] / 2 - 1, by = g[1] / 2 - 1;
+    std::vector<T> k_hat(fft.spectrum_size()), sre(k_hat.size()), sim(k_hat.size()), work;
+    for (T& v : k_hat) v = static_cast<T>(uni());
+    std::vector<double> in(static_cast<size_t>(bx) * by), out(in.size());
+    for (double& v : in) v = uni();
+    fft.ConvolveReal(in.data(), bx, by, bx, k_hat.data(), by, bx, out.data(), bx, sre.data(),
+                     sim.data(), &work, 1);
+    h = Fnv(h, out.data(), out.size() * sizeof(double));
+  }
+  std::printf("fft ConvolveReal<%s> 160x150 180x150 160x160: hash %016llx\n",
+              sizeof(T) == 4 ? "float" : "double", (unsigned long long)h);
+}
+
 int main() {
   const bool ok = Adversarial();
+  FftHash<float>();
+  FftHash<double>();
   for (PressureModel pm : {PressureModel::kWinkler, PressureModel::kElastic}) {
     SkinConfig cfg;
     cfg.grid = TaxelGrid{48, 1e-4};

@@ -1,5 +1,6 @@
-// Mixed-radix (2, 3, 4, 5, 8) Stockham FFTs, double or float, for the contact
-// solver's convolutions on the taxel grid (contact/compliance.*). Pure C++.
+// Mixed-radix (2, 3, 4, 5, 8; 2 x 3 and 3 x 3 fused) Stockham FFTs, double
+// or float, for the contact solver's convolutions on the taxel grid
+// (contact/compliance.*). Pure C++.
 //
 // Why our own rather than a library: the solver needs 2D transforms of sizes
 // just above 2m - 1 for an m-cell contact box (zero padding, DC-FFT); sizes
@@ -36,8 +37,8 @@ class FftPlan {
   explicit FftPlan(int n);  // IsFftSize(n)
   int size() const { return n_; }
   // nonzero (< 0: n): only elements k < nonzero of the input are nonzero;
-  // at most n / 2 with a leading radix-4 or -2 stage, that stage skips the
-  // zero half (the same bits: x + 0 and x - 0 are x). needed (< 0: n):
+  // at most n / 2 with a leading radix-4 or -2 stage (or 2 fused with 3),
+  // that stage skips the zero half (the same bits: x + 0 and x - 0 are x). needed (< 0: n):
   // only outputs k < needed are read afterwards (the others may be left
   // unwritten); at most 3 n / 5 with a trailing radix-5 stage (2 n / 3,
   // radix 3), that stage skips two of its five outputs (one of three).
@@ -51,15 +52,21 @@ class FftPlan {
   // elements k >= n / 2.
   bool SkipsUpperHalf(int nonzero) const {
     return nonzero >= 0 && 2 * nonzero <= n_ && !stages_.empty() &&
-           (stages_[0].radix == 4 || stages_[0].radix == 2);
+           (stages_[0].radix == 4 || stages_[0].radix == 2 || stages_[0].ra == 2);
   }
 
  private:
   struct Stage {
     int radix = 0;
     int span = 0;  // product of the earlier stages' radices
+    // Nonzero: two stages, radix ra (span) then radix / ra (span ra), run
+    // as one in registers (fft.cc's FusedStage); tw: the first's table,
+    // tw2 the second's.
+    int ra = 0;
     std::vector<double> tw_re, tw_im;  // span x radix: exp(-2 pi i r j / (span radix))
     std::vector<float> tw_re_f, tw_im_f;  // the same, rounded to float
+    std::vector<double> tw2_re, tw2_im;
+    std::vector<float> tw2_re_f, tw2_im_f;
   };
   int n_;
   std::vector<Stage> stages_;

@@ -1,5 +1,6 @@
-// Internal to the FFTs (fft.cc, fft_real.cc): row strides, the aligned
-// scratch layout and the in-register block transposes. Not a public API.
+// Internal to the FFTs (fft.cc, fft_real.cc; the butterflies: fft_kernels.h):
+// row strides, the aligned scratch layout and the in-register block
+// transposes. Not a public API.
 #ifndef MJTOUCH_COMMON_FFT_LAYOUT_H_
 #define MJTOUCH_COMMON_FFT_LAYOUT_H_
 
