@@ -176,13 +176,23 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
     for (; i + 4 <= bx; i += 4, cells += 4) {
       const size_t b = b0 + i;
       const v4d gv = Load(g0 + b), pv = Load(p + b);
-      v4d ov = zero;
-      if constexpr (kReadT) ov = Load(t + b);
-      Store(t + b, zero);
       // g0 = +inf where not finite (LoadGuess): gb is then +inf or NaN, not
       // < 0, and p = 0 (such cells never join S; their gb goes unread)
       const v4d gb = (gv + Load(u + b)) - gbarv;
       const v4l in = (pv > zero) | (gb < zero);
+      const int m = Bits(in);
+      if (m == 0) {  // none in S (most of the box): only zeros to write
+        Store(t + b, zero);
+        if constexpr (kFloat) {
+          std::memset(gpf + row0 + i, 0, 4 * sizeof(float));
+        } else {
+          Store(gp + row0 + i, zero);
+        }
+        continue;
+      }
+      v4d ov = zero;
+      if constexpr (kReadT) ov = Load(t + b);
+      Store(t + b, zero);
       const v4d gin = in ? gb : zero;
       if constexpr (kFloat) {
         const v4f f = __builtin_convertvector(gin, v4f);
@@ -192,7 +202,6 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       }
       // the lanes in S moved to the front and stored whole (branch-free;
       // the lanes past the count are overwritten by the next cells)
-      const int m = Bits(in);
 #if MJTOUCH_X86_SIMD
       const v4i kept = cells + kLane[m];
       std::memcpy(S + ns, &kept, sizeof(kept));
@@ -203,14 +212,12 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       ns += kCount[m];
 #else
       // (variable shuffles lower to scalar code without AVX2: lane by lane)
-      if (m != 0) {
-        for (int l = 0; l < 4; ++l) {
-          S[ns] = static_cast<int>(b) + l;
-          gS[ns] = gb[l];
-          pS[ns] = pv[l];
-          oS[ns] = ov[l];
-          ns += (m >> l) & 1;
-        }
+      for (int l = 0; l < 4; ++l) {
+        S[ns] = static_cast<int>(b) + l;
+        gS[ns] = gb[l];
+        pS[ns] = pv[l];
+        oS[ns] = ov[l];
+        ns += (m >> l) & 1;
       }
 #endif
     }
