@@ -64,25 +64,33 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
                      const std::vector<double>& pressure, double approach_m, double lift_m,
                      ApplyPrecision precision, ElasticStepWork* w, CellBox* grown,
                      CellBox* u_region) {
-  // fn(i, j) for the cells of [ia, ib) x [ja, jb) outside inner (row
-  // segments: inner is most of the box).
-  auto for_outside = [&](int ia, int ib, int ja, int jb, auto&& fn) {
+  // Adds to *bounds the cells of [ia, ib) x [ja, jb) outside inner with
+  // hit(i, j) (row segments, inner being most of the box: each segment's
+  // first and last hit, found from its ends); true if any.
+  auto add_outside = [&](int ia, int ib, int ja, int jb, CellBounds* bounds, auto&& hit) {
+    bool found = false;
+    auto segment = [&](int a, int b, int j) {
+      int lo = a;
+      while (lo < b && !hit(lo, j)) ++lo;
+      if (lo == b) return;
+      int hi = b - 1;
+      while (!hit(hi, j)) --hi;
+      bounds->AddRow(lo, hi, j);
+      found = true;
+    };
     for (int j = ja; j < jb; ++j) {
       const bool row_in = j >= inner.j0 && j < inner.j0 + inner.ny;
-      const int end = row_in ? std::min(ib, inner.i0) : ib;
-      for (int i = ia; i < end; ++i) fn(i, j);
-      if (row_in)
-        for (int i = std::max(ia, inner.i0 + inner.nx); i < ib; ++i) fn(i, j);
+      segment(ia, row_in ? std::min(ib, inner.i0) : ib, j);
+      if (row_in) segment(std::max(ia, inner.i0 + inner.nx), ib, j);
     }
+    return found;
   };
   CellBounds reach(inner);  // inner and the cells outside it within reach
-  bool any = false;
-  for_outside(box.i0, box.i0 + box.nx, box.j0, box.j0 + box.ny, [&](int i, int j) {
-    if (gap[static_cast<size_t>(j) * grid.n + i] <= approach_m + lift_m) {
-      any = true;
-      reach.Add(i, j);
-    }
-  });
+  const bool any = add_outside(box.i0, box.i0 + box.nx, box.j0, box.j0 + box.ny, &reach,
+                               [&](int i, int j) {
+                                 return gap[static_cast<size_t>(j) * grid.n + i] <=
+                                        approach_m + lift_m;
+                               });
   *u_region = CellBox{0, 0, 0, 0};
   if (!any) return true;
   const int i0 = reach.i0, i1 = reach.i1, j0 = reach.j0, j1 = reach.j1;
@@ -112,14 +120,10 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
           oy + inner.ny, ox + inner.nx);
   *u_region = CellBox{i0, j0, cx, cy};
   CellBounds fail(inner);  // inner and the cells outside it that would touch
-  bool ok = true;
-  for_outside(i0, i1 + 1, j0, j1 + 1, [&](int i, int j) {
+  const bool ok = !add_outside(i0, i1 + 1, j0, j1 + 1, &fail, [&](int i, int j) {
     const double g = gap[static_cast<size_t>(j) * grid.n + i];
-    if (g <= approach_m + lift_m &&
-        !(g + w->check_u[static_cast<size_t>(j - j0) * cx + (i - i0)] >= approach_m)) {
-      ok = false;
-      fail.Add(i, j);
-    }
+    return g <= approach_m + lift_m &&
+           !(g + w->check_u[static_cast<size_t>(j - j0) * cx + (i - i0)] >= approach_m);
   });
   if (!ok) *grown = GrowBox(box, fail.i0, fail.i1, fail.j0, fail.j1);
   return ok;
@@ -143,19 +147,16 @@ double HistoryPressure(const HistoryBlock& h, const CellBox& pbox, int i, int j,
   return Inside(pbox, i, j) ? static_cast<double>(h.p(static_cast<size_t>(j) * n + i)) : 0.0;
 }
 
-// One history row's pressure over [i0, i1) into row[i0, i1) (zero outside
-// its box; the box's part copied as floats, then widened).
+// One history row's pressure over [i0, i1) into row[i0, i1), as stored
+// (float; zero outside its box).
 void HistoryRow(const HistoryBlock& h, const CellBox& pbox, int j, int n, int i0, int i1,
-                double* row, std::vector<float>* tmp) {
+                float* row) {
   const bool row_in = j >= pbox.j0 && j < pbox.j0 + pbox.ny;
   const int a = row_in ? std::clamp(pbox.i0, i0, i1) : i1;
   const int b = row_in ? std::clamp(pbox.i0 + pbox.nx, a, i1) : i1;
-  std::fill(row + i0, row + a, 0.0);
-  tmp->resize(static_cast<size_t>(std::max(n, 1)));
-  float* f = tmp->data();
-  h.p_row(static_cast<size_t>(j) * n + a, b - a, f);
-  for (int i = a; i < b; ++i) row[i] = static_cast<double>(f[i - a]);
-  std::fill(row + b, row + i1, 0.0);
+  std::fill(row + i0, row + a, 0.0f);
+  h.p_row(static_cast<size_t>(j) * n + a, b - a, row + a);
+  std::fill(row + b, row + i1, 0.0f);
 }
 
 // Appends base + i for the i in [i0, i1) with hit(x[i]), in order (a
@@ -188,10 +189,10 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
   const CellBox lb = last->p_box(), pb = prev ? prev->p_box() : CellBox{};
   const CellBox both = Union(lb, pb);
   const int i0 = both.i0, i1 = both.i0 + both.nx;
-  std::vector<double>& lrow = w->row_a;
-  std::vector<double>& prow = w->row_b;
-  lrow.resize(n);
-  prow.resize(n);
+  // the rows as stored (float): widened exactly where they are used
+  w->row_f.resize(2 * static_cast<size_t>(std::max(n, 1)));
+  float* lrow = w->row_f.data();
+  float* prow = lrow + n;
   if (prev) w->warm_lin.resize(static_cast<size_t>(std::max(both.nx, 0)) * std::max(both.ny, 0));
   // the last contact within box: its cells in box's columns of lb
   const int ia = std::max(box.i0, lb.i0), ib = std::min(box.i0 + box.nx, lb.i0 + lb.nx);
@@ -199,23 +200,23 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
   CellBounds support;
   for (int j = both.j0; j < both.j0 + both.ny; ++j) {
     double* g = guess->data() + static_cast<size_t>(j) * n;
-    HistoryRow(*last, lb, j, n, i0, i1, lrow.data(), &w->row_f);
+    HistoryRow(*last, lb, j, n, i0, i1, lrow);
     if (j >= ja && j < jb && ia < ib) {
       int lo = ia, hi = ib - 1;
-      while (lo < ib && !(lrow[lo] > 0.0)) ++lo;
+      while (lo < ib && !(lrow[lo] > 0.0f)) ++lo;
       if (lo < ib) {
-        while (!(lrow[hi] > 0.0)) --hi;
+        while (!(lrow[hi] > 0.0f)) --hi;
         support.AddRow(lo, hi, j);
       }
     }
     if (!prev) {
-      std::copy(lrow.begin() + i0, lrow.begin() + i1, g + i0);
+      for (int i = i0; i < i1; ++i) g[i] = static_cast<double>(lrow[i]);
       continue;
     }
-    HistoryRow(*prev, pb, j, n, i0, i1, prow.data(), &w->row_f);
+    HistoryRow(*prev, pb, j, n, i0, i1, prow);
     double* lin = w->warm_lin.data() + static_cast<size_t>(j - both.j0) * both.nx - i0;
     for (int i = i0; i < i1; ++i) {
-      const double v = 2.0 * lrow[i] - prow[i];
+      const double v = 2.0 * static_cast<double>(lrow[i]) - static_cast<double>(prow[i]);
       g[i] = std::max(0.0, v);
       lin[i] = v;
     }

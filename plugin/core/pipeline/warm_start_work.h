@@ -21,8 +21,7 @@ struct ElasticStepWork {
   std::vector<int> fix_i, fix_j;  // u0_fix's cells in box coordinates
   std::vector<double> fix_d;      // and their corrections (Pa)
   std::vector<double> warm_lin;   // 2 p(n-1) - p(n-2) on the history boxes' union (Pa)
-  std::vector<double> row_a, row_b;  // one history row each (Pa)
-  std::vector<float> row_f;          // a history row as stored
+  std::vector<float> row_f;       // history rows as stored (Pa)
 };
 
 }  // namespace mjtouch
