@@ -64,33 +64,25 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
                      const std::vector<double>& pressure, double approach_m, double lift_m,
                      ApplyPrecision precision, ElasticStepWork* w, CellBox* grown,
                      CellBox* u_region) {
-  // Adds to *bounds the cells of [ia, ib) x [ja, jb) outside inner with
-  // hit(i, j) (row segments, inner being most of the box: each segment's
-  // first and last hit, found from its ends); true if any.
-  auto add_outside = [&](int ia, int ib, int ja, int jb, CellBounds* bounds, auto&& hit) {
-    bool found = false;
-    auto segment = [&](int a, int b, int j) {
-      int lo = a;
-      while (lo < b && !hit(lo, j)) ++lo;
-      if (lo == b) return;
-      int hi = b - 1;
-      while (!hit(hi, j)) --hi;
-      bounds->AddRow(lo, hi, j);
-      found = true;
-    };
+  // fn(i, j) for the cells of [ia, ib) x [ja, jb) outside inner (row
+  // segments: inner is most of the box).
+  auto for_outside = [&](int ia, int ib, int ja, int jb, auto&& fn) {
     for (int j = ja; j < jb; ++j) {
       const bool row_in = j >= inner.j0 && j < inner.j0 + inner.ny;
-      segment(ia, row_in ? std::min(ib, inner.i0) : ib, j);
-      if (row_in) segment(std::max(ia, inner.i0 + inner.nx), ib, j);
+      const int end = row_in ? std::min(ib, inner.i0) : ib;
+      for (int i = ia; i < end; ++i) fn(i, j);
+      if (row_in)
+        for (int i = std::max(ia, inner.i0 + inner.nx); i < ib; ++i) fn(i, j);
     }
-    return found;
   };
   CellBounds reach(inner);  // inner and the cells outside it within reach
-  const bool any = add_outside(box.i0, box.i0 + box.nx, box.j0, box.j0 + box.ny, &reach,
-                               [&](int i, int j) {
-                                 return gap[static_cast<size_t>(j) * grid.n + i] <=
-                                        approach_m + lift_m;
-                               });
+  bool any = false;
+  for_outside(box.i0, box.i0 + box.nx, box.j0, box.j0 + box.ny, [&](int i, int j) {
+    if (gap[static_cast<size_t>(j) * grid.n + i] <= approach_m + lift_m) {
+      any = true;
+      reach.Add(i, j);
+    }
+  });
   *u_region = CellBox{0, 0, 0, 0};
   if (!any) return true;
   const int i0 = reach.i0, i1 = reach.i1, j0 = reach.j0, j1 = reach.j1;
@@ -120,10 +112,14 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
           oy + inner.ny, ox + inner.nx);
   *u_region = CellBox{i0, j0, cx, cy};
   CellBounds fail(inner);  // inner and the cells outside it that would touch
-  const bool ok = !add_outside(i0, i1 + 1, j0, j1 + 1, &fail, [&](int i, int j) {
+  bool ok = true;
+  for_outside(i0, i1 + 1, j0, j1 + 1, [&](int i, int j) {
     const double g = gap[static_cast<size_t>(j) * grid.n + i];
-    return g <= approach_m + lift_m &&
-           !(g + w->check_u[static_cast<size_t>(j - j0) * cx + (i - i0)] >= approach_m);
+    if (g <= approach_m + lift_m &&
+        !(g + w->check_u[static_cast<size_t>(j - j0) * cx + (i - i0)] >= approach_m)) {
+      ok = false;
+      fail.Add(i, j);
+    }
   });
   if (!ok) *grown = GrowBox(box, fail.i0, fail.i1, fail.j0, fail.j1);
   return ok;
