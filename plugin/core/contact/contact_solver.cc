@@ -444,12 +444,16 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   const bool scaled_copy = have_u && ndropped == 0;  // u = scale initial_u
   w->changed.clear();
   double* out = pressure->data();
-  std::fill(out, out + row_start(0), 0.0);
-  for (int j = 0; j < by; ++j) {
-    std::fill(out + row_start(j) - box.i0, out + row_start(j), 0.0);
-    std::fill(out + row_start(j) + bx, out + row_start(j) - box.i0 + nx, 0.0);
+  // (between two box rows one run: the end of one grid row and the start
+  // of the next)
+  if (by > 0) {
+    std::fill(out, out + row_start(0), 0.0);
+    for (int j = 0; j + 1 < by; ++j)
+      std::fill(out + row_start(j) + bx, out + row_start(j + 1), 0.0);
+    std::fill(out + row_start(by - 1) + bx, out + pressure->size(), 0.0);
+  } else {
+    std::fill(out, out + pressure->size(), 0.0);
   }
-  std::fill(out + row_start(by) - box.i0, out + pressure->size(), 0.0);
   const double target = force / A;  // sum of p over cells
   if (ncand == 0 || !(target > 0.0)) {
     for (int j = 0; j < by; ++j) std::fill(out + row_start(j), out + row_start(j) + bx, 0.0);

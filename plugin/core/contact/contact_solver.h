@@ -60,13 +60,6 @@ struct ElasticWork {
   std::vector<int> changed;
   std::vector<int> set_changed;  // kPreconditioned: the step's clipped cells
   std::vector<int> dropped;      // the guess's cells the solve drops
-  std::vector<double> check_p, check_u;  // pipeline/warm_start.cc: the box check
-  std::vector<double> u0;                 // pipeline/warm_start.cc: the warm start's K p
-  std::vector<int> u0_fix;
-  std::vector<int> fix_i, fix_j;  // u0_fix's cells in box coordinates
-  std::vector<double> fix_d;      // and their corrections (Pa)
-  std::vector<double> row_a, row_b;
-  std::vector<float> row_f;
   ComplianceWork fft;
 };
 

@@ -162,27 +162,49 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       }
     }
   };
+  // a row's ends: the solver's stencil half width (2) as two stores, not
+  // two memset calls per row
+  auto zero_ends = [&](size_t from) {
+    if (hw == 2) {
+      if constexpr (kFloat) {
+        gpf[from] = gpf[from + 1] = 0.0f;
+      } else {
+        gp[from] = gp[from + 1] = 0.0;
+      }
+    } else {
+      zero_pad(from, hw);
+    }
+  };
   zero_pad(0, static_cast<size_t>(hw) * px);
   zero_pad(static_cast<size_t>(by + hw) * px, static_cast<size_t>(hw) * px);
   size_t ns = 0;
   for (int j = 0; j < by; ++j) {
     row_first[j] = ns;
     const size_t row0 = static_cast<size_t>(j + hw) * px + hw;
-    zero_pad(row0 - hw, hw);
-    zero_pad(row0 + bx, hw);
+    zero_ends(row0 - hw);
+    zero_ends(row0 + bx);
     const size_t b0 = static_cast<size_t>(j) * bx;
-    v4i cells = v4i{0, 0, 0, 0} + static_cast<int>(b0);
-    int i = 0;
-    for (; i + 4 <= bx; i += 4, cells += 4) {
+    // cells b0 + i .. b0 + i + 3, the first `done` of them classified already
+    auto block = [&](int i, int done) {
       const size_t b = b0 + i;
       const v4d gv = Load(g0 + b), pv = Load(p + b);
-      v4d ov = zero;
-      if constexpr (kReadT) ov = Load(t + b);
-      Store(t + b, zero);
       // g0 = +inf where not finite (LoadGuess): gb is then +inf or NaN, not
       // < 0, and p = 0 (such cells never join S; their gb goes unread)
       const v4d gb = (gv + Load(u + b)) - gbarv;
       const v4l in = (pv > zero) | (gb < zero);
+      const int m = Bits(in) & (0xf << done);
+      if (Bits(in) == 0) {  // none in S (most of the box): only zeros to write
+        Store(t + b, zero);
+        if constexpr (kFloat) {
+          std::memset(gpf + row0 + i, 0, 4 * sizeof(float));
+        } else {
+          Store(gp + row0 + i, zero);
+        }
+        return;
+      }
+      v4d ov = zero;
+      if constexpr (kReadT) ov = Load(t + b);
+      Store(t + b, zero);
       const v4d gin = in ? gb : zero;
       if constexpr (kFloat) {
         const v4f f = __builtin_convertvector(gin, v4f);
@@ -192,9 +214,8 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       }
       // the lanes in S moved to the front and stored whole (branch-free;
       // the lanes past the count are overwritten by the next cells)
-      const int m = Bits(in);
 #if MJTOUCH_X86_SIMD
-      const v4i kept = cells + kLane[m];
+      const v4i kept = kLane[m] + static_cast<int>(b);
       std::memcpy(S + ns, &kept, sizeof(kept));
       const v8i halves = kHalves[m];
       Store(gS + ns, Compact(gb, halves));
@@ -203,16 +224,24 @@ MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __r
       ns += kCount[m];
 #else
       // (variable shuffles lower to scalar code without AVX2: lane by lane)
-      if (m != 0) {
-        for (int l = 0; l < 4; ++l) {
-          S[ns] = static_cast<int>(b) + l;
-          gS[ns] = gb[l];
-          pS[ns] = pv[l];
-          oS[ns] = ov[l];
-          ns += (m >> l) & 1;
-        }
+      for (int l = 0; l < 4; ++l) {
+        S[ns] = static_cast<int>(b) + l;
+        gS[ns] = gb[l];
+        pS[ns] = pv[l];
+        oS[ns] = ov[l];
+        ns += (m >> l) & 1;
       }
 #endif
+    };
+    int i = 0;
+    for (; i + 4 <= bx; i += 4) block(i, 0);
+    // The row's last cells as the four ending the row (the ones already
+    // classified masked off; t there is zero now and g_pad rewritten with
+    // its value). Not on the last row: S's four-lane stores must stay
+    // within B entries.
+    if (i < bx && bx >= 4 && j + 1 < by) {
+      block(bx - 4, 4 - (bx - i));
+      i = bx;
     }
     for (; i < bx; ++i) {
       const size_t b = b0 + i;

@@ -24,6 +24,7 @@
 #include "common/grid.h"
 #include "contact/contact_solver.h"
 #include "contact/pressure.h"
+#include "pipeline/warm_start_work.h"
 #include "surface/surface.h"
 
 namespace mjtouch {
@@ -41,7 +42,7 @@ struct ShiftedGrid {
 // Per-simulation scratch (Workspace).
 struct GridShiftWork {
   std::vector<double> gap, coverage, pressure;
-  ElasticWork elastic;
+  ElasticStepWork elastic;
   ElasticSolveStats stats;
 };
 

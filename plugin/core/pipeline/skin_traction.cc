@@ -128,7 +128,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         }
       } else {
         const ElasticContact& ec = *model.elastic();
-        ws->elastic.fft.threads = cfg.threads;  // the operator's FFTs, the stencil
+        ws->elastic.solve.fft.threads = cfg.threads;  // the operator's FFTs, the stencil
         CellBox solve_box = box;  // cold: uniform from the whole rendered box
         if (!warm) ws->pressure_guess.assign(grid.Size(), 0.0);
         ElasticSolveStats st;
@@ -165,7 +165,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     // fails (it carries the same load on nearly the same cells), the taxel
     // grid's solution stands.
     if (touching && model.shifted()) {
-      ws->grid_shift.elastic.fft.threads = cfg.threads;
+      ws->grid_shift.elastic.solve.fft.threads = cfg.threads;
       AverageWithShiftedGrid(*model.shifted(), grid, in.pad_pose, in.surfaces,
                              in.normal_force_n, state[kStContactDepth], cfg.tolerance,
                              kElasticMaxIterations, cfg.elastic_method, cfg.elastic_precision,

@@ -33,7 +33,7 @@ struct Workspace {
   RenderSummary render_summary;  // the last render's covered cells (winkler)
   TractionField traction;
   std::vector<double> quantity;  // per receptor
-  ElasticWork elastic;
+  ElasticStepWork elastic;  // `elastic`
   ElasticSolveStats elastic_stats;  // the last `elastic` solve (diagnostics)
   GridShiftWork grid_shift;  // `grid_shift`
   std::vector<double> pressure_guess;  // `elastic` initial guess, n*n

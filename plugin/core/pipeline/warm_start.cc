@@ -62,7 +62,7 @@ namespace {
 bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
                      const std::vector<double>& gap, const CellBox& box, const CellBox& inner,
                      const std::vector<double>& pressure, double approach_m, double lift_m,
-                     ApplyPrecision precision, ElasticWork* w, CellBox* grown,
+                     ApplyPrecision precision, ElasticStepWork* w, CellBox* grown,
                      CellBox* u_region) {
   // fn(i, j) for the cells of [ia, ib) x [ja, jb) outside inner (row
   // segments: inner is most of the box).
@@ -108,7 +108,7 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
   const int ox = inner.i0 - i0, oy = inner.j0 - j0;
   const auto spec = K.SpectrumForReach(std::max(ox + inner.nx - 1, cx - 1 - ox),
                                        std::max(oy + inner.ny - 1, cy - 1 - oy));
-  K.Apply(*spec, w->check_p.data(), cx, cy, w->check_u.data(), &w->fft, precision,
+  K.Apply(*spec, w->check_p.data(), cx, cy, w->check_u.data(), &w->solve.fft, precision,
           oy + inner.ny, ox + inner.nx);
   *u_region = CellBox{i0, j0, cx, cy};
   CellBounds fail(inner);  // inner and the cells outside it that would touch
@@ -143,19 +143,16 @@ double HistoryPressure(const HistoryBlock& h, const CellBox& pbox, int i, int j,
   return Inside(pbox, i, j) ? static_cast<double>(h.p(static_cast<size_t>(j) * n + i)) : 0.0;
 }
 
-// One history row's pressure over [i0, i1) into row[i0, i1) (zero outside
-// its box; the box's part copied as floats, then widened).
+// One history row's pressure over [i0, i1) into row[i0, i1), as stored
+// (float; zero outside its box).
 void HistoryRow(const HistoryBlock& h, const CellBox& pbox, int j, int n, int i0, int i1,
-                double* row, std::vector<float>* tmp) {
+                float* row) {
   const bool row_in = j >= pbox.j0 && j < pbox.j0 + pbox.ny;
   const int a = row_in ? std::clamp(pbox.i0, i0, i1) : i1;
   const int b = row_in ? std::clamp(pbox.i0 + pbox.nx, a, i1) : i1;
-  std::fill(row + i0, row + a, 0.0);
-  tmp->resize(static_cast<size_t>(std::max(n, 1)));
-  float* f = tmp->data();
-  h.p_row(static_cast<size_t>(j) * n + a, b - a, f);
-  for (int i = a; i < b; ++i) row[i] = static_cast<double>(f[i - a]);
-  std::fill(row + b, row + i1, 0.0);
+  std::fill(row + i0, row + a, 0.0f);
+  h.p_row(static_cast<size_t>(j) * n + a, b - a, row + a);
+  std::fill(row + b, row + i1, 0.0f);
 }
 
 // Appends base + i for the i in [i0, i1) with hit(x[i]), in order (a
@@ -175,64 +172,79 @@ void AppendHits(const double* x, int i0, int i1, int base, Hit hit, std::vector<
 // on *solve_box differs from 2 p(n-1) - p(n-2) (clipped, or outside the box)
 // in w->u0_fix (ExtrapolatedDisplacement). The solve reads the guess on
 // *solve_box only (a periodic operator's: everywhere), so only that part is
-// cleared.
+// cleared. One pass over the history rows: the guess, the last contact's
+// extent and 2 p(n-1) - p(n-2) (kept in w->warm_lin), which is classified
+// once the solve box is known.
 void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* last,
                const HistoryBlock* prev, bool periodic, std::vector<double>* guess,
-               ElasticWork* w, CellBox* solve_box) {
+               ElasticStepWork* w, CellBox* solve_box) {
   const int n = grid.n;
   w->u0_fix.clear();
   if (!last || periodic || guess->size() != grid.Size()) guess->assign(grid.Size(), 0.0);
   if (!last) return;
   const CellBox lb = last->p_box(), pb = prev ? prev->p_box() : CellBox{};
-  std::vector<double>& lrow = w->row_a;
-  std::vector<double>& prow = w->row_b;
-  lrow.resize(n);
-  prow.resize(n);
-  CellBounds support;  // the last contact within box
-  {
-    const int ia = std::max(box.i0, lb.i0), ib = std::min(box.i0 + box.nx, lb.i0 + lb.nx);
-    for (int j = std::max(box.j0, lb.j0); j < std::min(box.j0 + box.ny, lb.j0 + lb.ny); ++j) {
-      if (ia >= ib) break;
-      HistoryRow(*last, lb, j, n, ia, ib, lrow.data(), &w->row_f);
+  const CellBox both = Union(lb, pb);
+  const int i0 = both.i0, i1 = both.i0 + both.nx;
+  // the rows as stored (float): widened exactly where they are used
+  w->row_f.resize(2 * static_cast<size_t>(std::max(n, 1)));
+  float* lrow = w->row_f.data();
+  float* prow = lrow + n;
+  if (prev) w->warm_lin.resize(static_cast<size_t>(std::max(both.nx, 0)) * std::max(both.ny, 0));
+  // the last contact within box: its cells in box's columns of lb
+  const int ia = std::max(box.i0, lb.i0), ib = std::min(box.i0 + box.nx, lb.i0 + lb.nx);
+  const int ja = std::max(box.j0, lb.j0), jb = std::min(box.j0 + box.ny, lb.j0 + lb.ny);
+  CellBounds support;
+  for (int j = both.j0; j < both.j0 + both.ny; ++j) {
+    double* g = guess->data() + static_cast<size_t>(j) * n;
+    HistoryRow(*last, lb, j, n, i0, i1, lrow);
+    if (j >= ja && j < jb && ia < ib) {
       int lo = ia, hi = ib - 1;
-      while (lo < ib && !(lrow[lo] > 0.0)) ++lo;
-      if (lo == ib) continue;
-      while (!(lrow[hi] > 0.0)) --hi;
-      support.AddRow(lo, hi, j);
+      while (lo < ib && !(lrow[lo] > 0.0f)) ++lo;
+      if (lo < ib) {
+        while (!(lrow[hi] > 0.0f)) --hi;
+        support.AddRow(lo, hi, j);
+      }
+    }
+    if (!prev) {
+      for (int i = i0; i < i1; ++i) g[i] = static_cast<double>(lrow[i]);
+      continue;
+    }
+    HistoryRow(*prev, pb, j, n, i0, i1, prow);
+    double* lin = w->warm_lin.data() + static_cast<size_t>(j - both.j0) * both.nx - i0;
+    for (int i = i0; i < i1; ++i) {
+      const double v = 2.0 * static_cast<double>(lrow[i]) - static_cast<double>(prow[i]);
+      g[i] = std::max(0.0, v);
+      lin[i] = v;
     }
   }
   if (!support.empty())
     *solve_box = GrowBox(box, support.i0, support.i1, support.j0, support.j1);
-  const CellBox both = Union(lb, pb), sb = *solve_box;
+  const CellBox sb = *solve_box;
+  // the guess zero on sb outside the rows just written
   if (!periodic) {
     for (int j = sb.j0; j < sb.j0 + sb.ny; ++j) {
       double* g = guess->data() + static_cast<size_t>(j) * n;
-      std::fill(g + sb.i0, g + sb.i0 + sb.nx, 0.0);
+      const int a = sb.i0, b = sb.i0 + sb.nx;
+      if (j < both.j0 || j >= both.j0 + both.ny || i0 >= i1) {
+        std::fill(g + a, g + b, 0.0);
+      } else {
+        std::fill(g + a, g + std::clamp(i0, a, b), 0.0);
+        std::fill(g + std::clamp(i1, a, b), g + b, 0.0);
+      }
     }
   }
-  const int i0 = both.i0, i1 = both.i0 + both.nx;
+  if (!prev) return;
   for (int j = both.j0; j < both.j0 + both.ny; ++j) {
-    double* g = guess->data() + static_cast<size_t>(j) * n;
-    HistoryRow(*last, lb, j, n, i0, i1, lrow.data(), &w->row_f);
-    if (!prev) {
-      std::copy(lrow.begin() + i0, lrow.begin() + i1, g + i0);
-      continue;
-    }
-    HistoryRow(*prev, pb, j, n, i0, i1, prow.data(), &w->row_f);
-    for (int i = i0; i < i1; ++i) {
-      const double lin = 2.0 * lrow[i] - prow[i];
-      g[i] = std::max(0.0, lin);
-      prow[i] = lin;
-    }
+    const double* lin = w->warm_lin.data() + static_cast<size_t>(j - both.j0) * both.nx - i0;
     // in box order: outside sb, lin != 0; inside, lin < 0
     const bool row_in = j >= sb.j0 && j < sb.j0 + sb.ny;
     const int s0 = row_in ? std::clamp(sb.i0, i0, i1) : i1;
     const int s1 = row_in ? std::clamp(sb.i0 + sb.nx, s0, i1) : i1;
     const int base = j * n;
     auto nonzero = [](double v) { return v != 0.0; };
-    AppendHits(prow.data(), i0, s0, base, nonzero, &w->u0_fix);
-    AppendHits(prow.data(), s0, s1, base, [](double v) { return v < 0.0; }, &w->u0_fix);
-    AppendHits(prow.data(), s1, i1, base, nonzero, &w->u0_fix);
+    AppendHits(lin, i0, s0, base, nonzero, &w->u0_fix);
+    AppendHits(lin, s0, s1, base, [](double v) { return v < 0.0; }, &w->u0_fix);
+    AppendHits(lin, s1, i1, base, nonzero, &w->u0_fix);
   }
 }
 
@@ -245,7 +257,7 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
 bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
                               const HistoryBlock& last, const HistoryBlock& prev,
                               const std::vector<double>& guess, const CellBox& box,
-                              ElasticWork* w) {
+                              ElasticStepWork* w) {
   const CellBox rl = last.u_box(), rp = prev.u_box();
   auto covers = [&](const CellBox& r) {
     return r.nx > 0 && r.ny > 0 && box.i0 >= r.i0 && box.j0 >= r.j0 &&
@@ -287,7 +299,7 @@ bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
     w->fix_d[f] = (Inside(box, i, j) ? guess[k] : 0.0) - lin;
   }
   K.AddCellsAt(w->fix_i.data(), w->fix_j.data(), w->fix_d.data(), nfix, box.nx, box.ny, u,
-               w->fft.threads);
+               w->solve.fft.threads);
   return true;
 }
 
@@ -301,13 +313,13 @@ bool SolveOnGrowingBox(const TaxelGrid& grid, const ElasticContact& ec,
                        const std::vector<double>& gap, const CellBox& box, double force_n,
                        double lift_m, double tolerance, int max_iterations,
                        ElasticMethod method, ApplyPrecision precision, const double* u0,
-                       std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
+                       std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
                        CellBox* solve_box, CellBox* u_region) {
   *u_region = CellBox{0, 0, 0, 0};
   bool touching = false;
   for (int attempt = 0;; ++attempt) {
-    touching = ec.Solve(gap, *solve_box, force_n, tolerance, max_iterations, pressure, w, st,
-                        method, precision, attempt == 0 ? u0 : nullptr);
+    touching = ec.Solve(gap, *solve_box, force_n, tolerance, max_iterations, pressure,
+                        &w->solve, st, method, precision, attempt == 0 ? u0 : nullptr);
     const CellBox& sb = *solve_box;
     const bool whole = sb.i0 == box.i0 && sb.j0 == box.j0 && sb.nx == box.nx && sb.ny == box.ny;
     if (whole) break;
@@ -332,7 +344,7 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
                       const std::vector<double>& coverage, const HistoryBlock* history,
                       double force_n, double tolerance, int max_iterations,
                       ElasticMethod method, ApplyPrecision precision, std::vector<double>* gap,
-                      std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
+                      std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
                       CellBox* solve_box, CellBox* u_region) {
   // Cells without coverage never touch (every cell stored, the select
   // vectorises).

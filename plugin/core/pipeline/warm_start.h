@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "pipeline/model.h"
+#include "pipeline/warm_start_work.h"
 
 namespace mjtouch {
 
@@ -42,7 +43,7 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
                       const std::vector<double>& coverage, const HistoryBlock* history,
                       double force_n, double tolerance, int max_iterations,
                       ElasticMethod method, ApplyPrecision precision, std::vector<double>* gap,
-                      std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
+                      std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
                       CellBox* solve_box, CellBox* u_region);
 
 // Writes a solution to a history block: the pressure on p_box (zero
