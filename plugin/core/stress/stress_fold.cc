@@ -500,7 +500,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     bool comps[kNumStress] = {};
     for (int q = job.begin; q < job.end; ++q) {
       for (int c = 0; c < fs[q].nc; ++c) comps[fs[q].comp[c]] = true;
-      std::memset(fs[q].d, 0, sizeof(fs[q].d));
+      std::memset(fs[q].d, 0, sizeof(fs[q].d[0]) * fs[q].nc);
     }
     for (int c = 0; c < kNumStress; ++c)
       ebuf[c] = base + static_cast<size_t>(c) * band * ew;
