@@ -436,6 +436,15 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     w->row_lo[y + band] = std::min(w->row_lo[y + band], b);
     w->row_hi[y + band] = std::max(w->row_hi[y + band], e);
   }
+  // Each band's cells: band_lo / band_hi[r] over pressure rows r .. r + band - 1
+  // (indices as row_lo's).
+  w->band_lo.assign(rows + band + 1, pw);
+  w->band_hi.assign(rows + band + 1, 0);
+  for (int r = 0; r <= rows + band; ++r)
+    for (int t = 0; t < band; ++t) {
+      w->band_lo[r] = std::min(w->band_lo[r], w->row_lo[r + t]);
+      w->band_hi[r] = std::max(w->band_hi[r], w->row_hi[r + t]);
+    }
   // Sites grouped by depth, each depth's window of table offsets and the
   // sites' states: fixed by the sites, so kept while they are unchanged.
   auto same = [](const StressSite& a, const StressSite& b) {
@@ -488,11 +497,10 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     const auto& win = w->window[d];
     std::vector<float>& buf = w->rowbuf[k];
     // Folded rows of ew cells, 64-byte aligned at dx multiples of 16 (window
-    // column x: dx = win.x0 + x), kSumLanes cells of margin on each side
-    // (the chunks reach 15 cells beyond a site's span); legacy: one cell off
+    // column x: dx = win.x0 + x), room for whole chunks on each side (the
+    // chunks reach 15 cells beyond a site's span); legacy: one cell off
     // (every table load splits a cache line; the same bits).
     const int ew = (win.w + 4 * kSumLanes) / kSumLanes * kSumLanes;
-    const int margin = kSumLanes - 1;
     buf.resize(static_cast<size_t>(kNumStress) * band * ew + 32);
     float* const base = AlignUp64(buf.data()) + kSumLanes + (win.x0 & (kSumLanes - 1)) +
                         (legacy ? 1 : 0);
@@ -504,12 +512,8 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     }
     for (int c = 0; c < kNumStress; ++c)
       ebuf[c] = base + static_cast<size_t>(c) * band * ew;
-    int lo_min = pw, hi_max = 0;
-    for (int r = 0; r < rows + 2 * band; ++r)
-      if (w->row_lo[r] < w->row_hi[r]) {
-        lo_min = std::min(lo_min, w->row_lo[r]);
-        hi_max = std::max(hi_max, w->row_hi[r]);
-      }
+    const int* blo = w->band_lo.data();  // a band's pressure rows' cells
+    const int* bhi = w->band_hi.data();
     const int* col = w->site_col.data();  // fs[q].col, contiguous
     int first = job.begin, last = job.begin;
     // Bands on dy multiples of kTableRowsPerBand (window row T: dy = T + y0).
@@ -520,12 +524,18 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       while (last < job.end && fs[last].off < T1) ++last;
       while (first < last && fs[first].off + rows <= T0) ++first;
       // Fold the band over the columns its sites read.
+      // Only the chunks (dx multiples of 16) that the sites' rows in this band
+      // read: whole chunks, so the fold's stores are aligned too.
       int c0 = win.w + kSumLanes, c1 = -kSumLanes;
       for (int q = first; q < last; ++q) {
-        c0 = std::min(c0, col[q] + lo_min - margin);
-        c1 = std::max(c1, col[q] + hi_max + margin);
+        const int r = T0 - fs[q].off + band;
+        if (blo[r] >= bhi[r]) continue;
+        c0 = std::min(c0, col[q] + blo[r]);
+        c1 = std::max(c1, col[q] + bhi[r]);
       }
       if (c0 >= c1) continue;  // no site reads this band
+      c0 = ((win.x0 + c0) & ~(kSumLanes - 1)) - win.x0;
+      c1 = ((win.x0 + c1 + kSumLanes - 1) & ~(kSumLanes - 1)) - win.x0;
       for (int c = 0; c < kNumStress; ++c) {
         if (!comps[c]) continue;
         const float* h[2] = {nullptr, nullptr};

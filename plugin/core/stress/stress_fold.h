@@ -52,6 +52,7 @@ struct alignas(64) FoldSite {
 struct FoldScratch {
   std::vector<float> pressure;       // padded window, rows of `width` cells
   std::vector<int> row_lo, row_hi;   // per pressure row: its active cells
+  std::vector<int> band_lo, band_hi; // per band of pressure rows: the same
   std::vector<int> sites_by_depth;   // site indices grouped by depth
   std::vector<int> depth_begin;      // ranges into sites_by_depth
   struct Window {
