@@ -205,6 +205,15 @@ inline __attribute__((always_inline)) void FoldRowHCells(const float* h, const f
       });
 }
 
+// FoldScratch::h's layout: quadrant rows RxCacheStride(n) floats apart from a
+// 64-byte boundary, the -rx quadrant's cells shifted by 15. The +rx one is
+// read forwards (dx >= 0: cells x .. x + 15) and the -rx one backwards
+// (dx < 0: cells x - 15 .. x), x = |dx| = 0 mod 16 (sp sx = +1 for dx >= 0,
+// -1 for dx < 0, every component), so no fold load of them splits a cache
+// line (a replica of slide_grating's stage: ~2% of it).
+constexpr int kRxCacheShift[2] = {0, kFoldLanes - 1};
+inline int RxCacheStride(int n) { return (n + 2 * kFoldLanes - 1) / kFoldLanes * kFoldLanes; }
+
 // One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
 // the tables' rows at |dy| and columns |dx| only (KernelTables::
 // mirror_symmetric): the signs of the reflections folded into the ratios,
@@ -247,7 +256,7 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
     }
     const float a = sp * sx * rx, b = sp * sy * ry;
     if (shear && h) {  // kp + a kx from the quadrant of a = +rx or -rx
-      const float* hrow = h[sp * sx < 0] + static_cast<size_t>(ady) * n;
+      const float* hrow = h[sp * sx < 0] + static_cast<size_t>(ady) * RxCacheStride(n);
       if (side == 0)
         FoldRowHCells<false>(hrow + lo, Ky + lo, b, sp, hi - lo + 1, e + (lo - x0));
       else
@@ -301,14 +310,16 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
   const int n = kt.n, L = 2 * n - 1;
   const int D = static_cast<int>(kt.depths_m.size());
   w->h_offset.assign(static_cast<size_t>(D) * kNumStress, -1);
+  const size_t hs = RxCacheStride(n);
   size_t size = 0;
   for (int d = 0; d < D; ++d)
     for (int c = 0; c < kNumStress; ++c)
       if (w->window[d].comps[c]) {
         w->h_offset[d * kNumStress + c] = static_cast<long>(size);
-        size += 2 * static_cast<size_t>(n) * n;
+        size += 2 * hs * n;
       }
-  w->h.resize(size);
+  w->h.resize(size + 16);
+  float* const h0 = AlignUp64(w->h.data());
   for (int d = 0; d < D; ++d)
     for (int c = 0; c < kNumStress; ++c) {
       const long off = w->h_offset[d * kNumStress + c];
@@ -316,12 +327,12 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
       const auto comp = static_cast<StressComponent>(c);
       for (int v = 0; v < 2; ++v) {
         const float a = v ? -rx : rx;
-        float* H = w->h.data() + off + static_cast<size_t>(v) * n * n;
+        float* H = h0 + off + v * hs * n + kRxCacheShift[v];
         for (int y = 0; y < n; ++y) {
           const size_t row = static_cast<size_t>(y + n - 1) * L + (n - 1);
           const float* Kp = kt.At(d, kLoadPressure, comp) + row;
           const float* Kx = kt.At(d, kLoadShearX, comp) + row;
-          float* Hy = H + static_cast<size_t>(y) * n;
+          float* Hy = H + y * hs;
           for (int x = 0; x < n; ++x) Hy[x] = Kp[x] + a * Kx[x];
         }
       }
@@ -542,8 +553,9 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
         if (!comps[c]) continue;
         const float* h[2] = {nullptr, nullptr};
         if (use_h) {
-          h[0] = w->h.data() + w->h_offset[d * kNumStress + c];
-          h[1] = h[0] + static_cast<size_t>(n) * n;
+          const size_t hs = RxCacheStride(n);
+          h[0] = AlignUp64(w->h.data()) + w->h_offset[d * kNumStress + c];
+          h[1] = h[0] + hs * n + kRxCacheShift[1];
         }
         FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, band,
                          win.x0 + c0, c1 - c0, rx, ry, shear, use_h ? h : nullptr,

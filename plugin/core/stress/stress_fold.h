@@ -72,8 +72,9 @@ struct FoldScratch {
   const KernelTables* key_tables = nullptr;
   std::array<bool, kNumStress> key_components{};
   std::vector<StressSite> key_sites;
-  // Kp + (+-rx) Kx per wanted (depth, component) quadrant (n x n each, +rx
-  // then -rx; h_offset: start, -1 if none) while the float rx repeats
+  // Kp + (+-rx) Kx per wanted (depth, component) quadrant (n rows each, +rx
+  // then -rx, laid out for aligned loads: stress_fold.cc RxCacheStride;
+  // h_offset: start from h's first 64-byte boundary, -1 if none) while the float rx repeats
   // (UpdateRxCache in stress_fold.cc): the fold then reads two tables, not
   // three. A cache of the inputs only: the bits do not depend on it.
   std::vector<float> h;
