@@ -306,6 +306,10 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
     w->h_valid = false;
     return;
   }
+  // A copied scratch (mj_copyData) holds the cache at another alignment:
+  // laid out again (the layout is by index from h_pad, so it reads right
+  // either way; only the loads' alignment is lost).
+  if (w->h_valid && AlignUp64(w->h.data()) != w->h.data() + w->h_pad) w->h_valid = false;
   if (w->h_valid || ++w->h_calls < 2) return;
   const int n = kt.n, L = 2 * n - 1;
   const int D = static_cast<int>(kt.depths_m.size());
@@ -319,7 +323,8 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
         size += 2 * hs * n;
       }
   w->h.resize(size + 16);
-  float* const h0 = AlignUp64(w->h.data());
+  w->h_pad = AlignUp64(w->h.data()) - w->h.data();
+  float* const h0 = w->h.data() + w->h_pad;
   for (int d = 0; d < D; ++d)
     for (int c = 0; c < kNumStress; ++c) {
       const long off = w->h_offset[d * kNumStress + c];
@@ -554,7 +559,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
         const float* h[2] = {nullptr, nullptr};
         if (use_h) {
           const size_t hs = RxCacheStride(n);
-          h[0] = AlignUp64(w->h.data()) + w->h_offset[d * kNumStress + c];
+          h[0] = w->h.data() + w->h_pad + w->h_offset[d * kNumStress + c];
           h[1] = h[0] + hs * n + kRxCacheShift[1];
         }
         FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, band,
