@@ -34,6 +34,7 @@ constexpr double kFoldSecondsPerCell = 0.22e-9;
 
 typedef float v16f __attribute__((vector_size(64)));
 typedef double v8d __attribute__((vector_size(64)));
+typedef double v16d __attribute__((vector_size(128)));
 
 inline __attribute__((always_inline)) v16f Load16(const float* p) {
   v16f v;
@@ -88,11 +89,12 @@ inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* co
   }
   if (!any) return;
   for (int c = 0; c < NC; ++c) {
+    // Widened as one 16-lane vector, then split: GCC 12 converts an 8-float
+    // half 4 lanes at a time (two converts and two shuffles more per half).
+    const v16d x = __builtin_convertvector(f[c], v16d);
     v8d* d = reinterpret_cast<v8d*>(s.d[c]);
-    d[0] += __builtin_convertvector(__builtin_shufflevector(f[c], f[c], 0, 1, 2, 3, 4, 5, 6, 7),
-                                    v8d);
-    d[1] += __builtin_convertvector(
-        __builtin_shufflevector(f[c], f[c], 8, 9, 10, 11, 12, 13, 14, 15), v8d);
+    d[0] += __builtin_shufflevector(x, x, 0, 1, 2, 3, 4, 5, 6, 7);
+    d[1] += __builtin_shufflevector(x, x, 8, 9, 10, 11, 12, 13, 14, 15);
   }
 }
 
@@ -203,6 +205,15 @@ inline __attribute__((always_inline)) void FoldRowHCells(const float* h, const f
       });
 }
 
+// FoldScratch::h's layout: quadrant rows RxCacheStride(n) floats apart from a
+// 64-byte boundary, the -rx quadrant's cells shifted by 15. The +rx one is
+// read forwards (dx >= 0: cells x .. x + 15) and the -rx one backwards
+// (dx < 0: cells x - 15 .. x), x = |dx| = 0 mod 16 (sp sx = +1 for dx >= 0,
+// -1 for dx < 0, every component), so no fold load of them splits a cache
+// line (a replica of slide_grating's stage: ~2% of it).
+constexpr int kRxCacheShift[2] = {0, kFoldLanes - 1};
+inline int RxCacheStride(int n) { return (n + 2 * kFoldLanes - 1) / kFoldLanes * kFoldLanes; }
+
 // One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
 // the tables' rows at |dy| and columns |dx| only (KernelTables::
 // mirror_symmetric): the signs of the reflections folded into the ratios,
@@ -245,7 +256,7 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
     }
     const float a = sp * sx * rx, b = sp * sy * ry;
     if (shear && h) {  // kp + a kx from the quadrant of a = +rx or -rx
-      const float* hrow = h[sp * sx < 0] + static_cast<size_t>(ady) * n;
+      const float* hrow = h[sp * sx < 0] + static_cast<size_t>(ady) * RxCacheStride(n);
       if (side == 0)
         FoldRowHCells<false>(hrow + lo, Ky + lo, b, sp, hi - lo + 1, e + (lo - x0));
       else
@@ -295,18 +306,25 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
     w->h_valid = false;
     return;
   }
+  // A copied scratch (mj_copyData) holds the cache at another alignment:
+  // laid out again (the layout is by index from h_pad, so it reads right
+  // either way; only the loads' alignment is lost).
+  if (w->h_valid && AlignUp64(w->h.data()) != w->h.data() + w->h_pad) w->h_valid = false;
   if (w->h_valid || ++w->h_calls < 2) return;
   const int n = kt.n, L = 2 * n - 1;
   const int D = static_cast<int>(kt.depths_m.size());
   w->h_offset.assign(static_cast<size_t>(D) * kNumStress, -1);
+  const size_t hs = RxCacheStride(n);
   size_t size = 0;
   for (int d = 0; d < D; ++d)
     for (int c = 0; c < kNumStress; ++c)
       if (w->window[d].comps[c]) {
         w->h_offset[d * kNumStress + c] = static_cast<long>(size);
-        size += 2 * static_cast<size_t>(n) * n;
+        size += 2 * hs * n;
       }
-  w->h.resize(size);
+  w->h.resize(size + 16);
+  w->h_pad = AlignUp64(w->h.data()) - w->h.data();
+  float* const h0 = w->h.data() + w->h_pad;
   for (int d = 0; d < D; ++d)
     for (int c = 0; c < kNumStress; ++c) {
       const long off = w->h_offset[d * kNumStress + c];
@@ -314,12 +332,12 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
       const auto comp = static_cast<StressComponent>(c);
       for (int v = 0; v < 2; ++v) {
         const float a = v ? -rx : rx;
-        float* H = w->h.data() + off + static_cast<size_t>(v) * n * n;
+        float* H = h0 + off + v * hs * n + kRxCacheShift[v];
         for (int y = 0; y < n; ++y) {
           const size_t row = static_cast<size_t>(y + n - 1) * L + (n - 1);
           const float* Kp = kt.At(d, kLoadPressure, comp) + row;
           const float* Kx = kt.At(d, kLoadShearX, comp) + row;
-          float* Hy = H + static_cast<size_t>(y) * n;
+          float* Hy = H + y * hs;
           for (int x = 0; x < n; ++x) Hy[x] = Kp[x] + a * Kx[x];
         }
       }
@@ -436,6 +454,15 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     w->row_lo[y + band] = std::min(w->row_lo[y + band], b);
     w->row_hi[y + band] = std::max(w->row_hi[y + band], e);
   }
+  // Each band's cells: band_lo / band_hi[r] over pressure rows r .. r + band - 1
+  // (indices as row_lo's).
+  w->band_lo.assign(rows + band + 1, pw);
+  w->band_hi.assign(rows + band + 1, 0);
+  for (int r = 0; r <= rows + band; ++r)
+    for (int t = 0; t < band; ++t) {
+      w->band_lo[r] = std::min(w->band_lo[r], w->row_lo[r + t]);
+      w->band_hi[r] = std::max(w->band_hi[r], w->row_hi[r + t]);
+    }
   // Sites grouped by depth, each depth's window of table offsets and the
   // sites' states: fixed by the sites, so kept while they are unchanged.
   auto same = [](const StressSite& a, const StressSite& b) {
@@ -488,11 +515,10 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     const auto& win = w->window[d];
     std::vector<float>& buf = w->rowbuf[k];
     // Folded rows of ew cells, 64-byte aligned at dx multiples of 16 (window
-    // column x: dx = win.x0 + x), kSumLanes cells of margin on each side
-    // (the chunks reach 15 cells beyond a site's span); legacy: one cell off
+    // column x: dx = win.x0 + x), room for whole chunks on each side (the
+    // chunks reach 15 cells beyond a site's span); legacy: one cell off
     // (every table load splits a cache line; the same bits).
     const int ew = (win.w + 4 * kSumLanes) / kSumLanes * kSumLanes;
-    const int margin = kSumLanes - 1;
     buf.resize(static_cast<size_t>(kNumStress) * band * ew + 32);
     float* const base = AlignUp64(buf.data()) + kSumLanes + (win.x0 & (kSumLanes - 1)) +
                         (legacy ? 1 : 0);
@@ -500,16 +526,12 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     bool comps[kNumStress] = {};
     for (int q = job.begin; q < job.end; ++q) {
       for (int c = 0; c < fs[q].nc; ++c) comps[fs[q].comp[c]] = true;
-      std::memset(fs[q].d, 0, sizeof(fs[q].d));
+      std::memset(fs[q].d, 0, sizeof(fs[q].d[0]) * fs[q].nc);
     }
     for (int c = 0; c < kNumStress; ++c)
       ebuf[c] = base + static_cast<size_t>(c) * band * ew;
-    int lo_min = pw, hi_max = 0;
-    for (int r = 0; r < rows + 2 * band; ++r)
-      if (w->row_lo[r] < w->row_hi[r]) {
-        lo_min = std::min(lo_min, w->row_lo[r]);
-        hi_max = std::max(hi_max, w->row_hi[r]);
-      }
+    const int* blo = w->band_lo.data();  // a band's pressure rows' cells
+    const int* bhi = w->band_hi.data();
     const int* col = w->site_col.data();  // fs[q].col, contiguous
     int first = job.begin, last = job.begin;
     // Bands on dy multiples of kTableRowsPerBand (window row T: dy = T + y0).
@@ -520,18 +542,25 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       while (last < job.end && fs[last].off < T1) ++last;
       while (first < last && fs[first].off + rows <= T0) ++first;
       // Fold the band over the columns its sites read.
+      // Only the chunks (dx multiples of 16) that the sites' rows in this band
+      // read: whole chunks, so the fold's stores are aligned too.
       int c0 = win.w + kSumLanes, c1 = -kSumLanes;
       for (int q = first; q < last; ++q) {
-        c0 = std::min(c0, col[q] + lo_min - margin);
-        c1 = std::max(c1, col[q] + hi_max + margin);
+        const int r = T0 - fs[q].off + band;
+        if (blo[r] >= bhi[r]) continue;
+        c0 = std::min(c0, col[q] + blo[r]);
+        c1 = std::max(c1, col[q] + bhi[r]);
       }
       if (c0 >= c1) continue;  // no site reads this band
+      c0 = ((win.x0 + c0) & ~(kSumLanes - 1)) - win.x0;
+      c1 = ((win.x0 + c1 + kSumLanes - 1) & ~(kSumLanes - 1)) - win.x0;
       for (int c = 0; c < kNumStress; ++c) {
         if (!comps[c]) continue;
         const float* h[2] = {nullptr, nullptr};
         if (use_h) {
-          h[0] = w->h.data() + w->h_offset[d * kNumStress + c];
-          h[1] = h[0] + static_cast<size_t>(n) * n;
+          const size_t hs = RxCacheStride(n);
+          h[0] = w->h.data() + w->h_pad + w->h_offset[d * kNumStress + c];
+          h[1] = h[0] + hs * n + kRxCacheShift[1];
         }
         FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, band,
                          win.x0 + c0, c1 - c0, rx, ry, shear, use_h ? h : nullptr,

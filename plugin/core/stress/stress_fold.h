@@ -52,6 +52,7 @@ struct alignas(64) FoldSite {
 struct FoldScratch {
   std::vector<float> pressure;       // padded window, rows of `width` cells
   std::vector<int> row_lo, row_hi;   // per pressure row: its active cells
+  std::vector<int> band_lo, band_hi; // per band of pressure rows: the same
   std::vector<int> sites_by_depth;   // site indices grouped by depth
   std::vector<int> depth_begin;      // ranges into sites_by_depth
   struct Window {
@@ -71,8 +72,9 @@ struct FoldScratch {
   const KernelTables* key_tables = nullptr;
   std::array<bool, kNumStress> key_components{};
   std::vector<StressSite> key_sites;
-  // Kp + (+-rx) Kx per wanted (depth, component) quadrant (n x n each, +rx
-  // then -rx; h_offset: start, -1 if none) while the float rx repeats
+  // Kp + (+-rx) Kx per wanted (depth, component) quadrant (n rows each, +rx
+  // then -rx, laid out for aligned loads: stress_fold.cc RxCacheStride;
+  // h_offset: start from h_pad, -1 if none) while the float rx repeats
   // (UpdateRxCache in stress_fold.cc): the fold then reads two tables, not
   // three. A cache of the inputs only: the bits do not depend on it.
   std::vector<float> h;
@@ -82,6 +84,7 @@ struct FoldScratch {
   float h_rx = 0;
   int h_calls = 0;
   bool h_valid = false;
+  long h_pad = 0;  // h's cells from index h_pad (its first 64-byte boundary when built)
   double seconds = 0;  // the last call's fold + sums (diagnostics)
   // The table loads unaligned (every one splits a cache line) and no rx
   // cache (the same bits): for the benchmark's ratio and the tests.
