@@ -66,7 +66,7 @@ def _slide_parser(sub):
     p.add_argument("--grid-shift", action="store_true",
                    help="elastic: also solve on the half-cell shifted grid and average "
                         "(skin attribute grid_shift; cancels the V/pitch grid line that PC "
-                        "rates pick up, ~1.7x the step)")
+                        "rates pick up, ~1.8x the step)")
     p.add_argument("--texture-mesh", metavar="FILE",
                    help="texture from a mesh file's top surface (STL, OBJ, PLY, GLB; trimesh), "
                         "sliding along the mesh's x after placement; overrides --texture")
