@@ -52,20 +52,9 @@ inline __attribute__((always_inline)) void Dft(const T* xr, const T* xi, T* yr, 
     const T r2 = T(0.70710678118654752440);
     T er[4], ei[4], pr[4], pi[4];
     for (int q = 0; q < 2; ++q) {
-      const T a0r = xr[q], a0i = xi[q], a1r = xr[q + 2], a1i = xi[q + 2];
-      const T a2r = xr[q + 4], a2i = xi[q + 4], a3r = xr[q + 6], a3i = xi[q + 6];
-      const T t0r = a0r + a2r, t0i = a0i + a2i, t1r = a0r - a2r, t1i = a0i - a2i;
-      const T t2r = a1r + a3r, t2i = a1i + a3i, t3r = a1r - a3r, t3i = a1i - a3i;
-      T* hr = q == 0 ? er : pr;
-      T* hi = q == 0 ? ei : pi;
-      hr[0] = t0r + t2r;
-      hi[0] = t0i + t2i;
-      hr[2] = t0r - t2r;
-      hi[2] = t0i - t2i;
-      hr[1] = t1r + sg * t3i;
-      hi[1] = t1i - sg * t3r;
-      hr[3] = t1r - sg * t3i;
-      hi[3] = t1i + sg * t3r;
+      const T ar[4] = {xr[q], xr[q + 2], xr[q + 4], xr[q + 6]};
+      const T ai[4] = {xi[q], xi[q + 2], xi[q + 4], xi[q + 6]};
+      Dft<4, kInverse>(ar, ai, q == 0 ? er : pr, q == 0 ? ei : pi);
     }
     const T o1r = (pr[1] + sg * pi[1]) * r2, o1i = (pi[1] - sg * pr[1]) * r2;
     const T o2r = sg * pi[2], o2i = -sg * pr[2];
