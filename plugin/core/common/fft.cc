@@ -385,6 +385,35 @@ FftPlan::FftPlan(int n) : n_(n) {
   }
 }
 
+namespace {
+
+// f(flag) with the flag as a compile-time constant (std::bool_constant), so
+// one call site picks among a kernel's template instances.
+template <typename F>
+inline void WithFlag(bool flag, F&& f) {
+  if (flag) {
+    f(std::true_type{});
+  } else {
+    f(std::false_type{});
+  }
+}
+template <typename F>
+inline void WithFlags(bool a, bool b, F&& f) {
+  WithFlag(a, [&](auto x) { WithFlag(b, [&](auto y) { f(x, y); }); });
+}
+
+// A stage's twiddle table in the transform's precision.
+template <typename T>
+const T* Tables(const std::vector<double>& d, const std::vector<float>& f) {
+  if constexpr (std::is_same_v<T, float>) {
+    return f.data();
+  } else {
+    return d.data();
+  }
+}
+
+}  // namespace
+
 template <typename T>
 void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sre, T* sim,
                         int nonzero, int needed, const T* scale, int scale_stride) const {
@@ -428,89 +457,46 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
     T* orr = in_data && !in_place ? sre : re;
     T* oi = in_data && !in_place ? sim : im;
     const int os = in_data && !in_place ? scratch_stride : stride;
-    const T *twr, *twi, *tw2r, *tw2i;
-    if constexpr (std::is_same_v<T, float>) {
-      twr = s.tw_re_f.data();
-      twi = s.tw_im_f.data();
-      tw2r = s.tw2_re_f.data();
-      tw2i = s.tw2_im_f.data();
-    } else {
-      twr = s.tw_re.data();
-      twi = s.tw_im.data();
-      tw2r = s.tw2_re.data();
-      tw2i = s.tw2_im.data();
-    }
-    if (half_4_8 && &s == &stages_[0]) {
+    const T* twr = Tables<T>(s.tw_re, s.tw_re_f);
+    const T* twi = Tables<T>(s.tw_im, s.tw_im_f);
+    const bool first = &s == &stages_[0];
+    if (half_4_8 && first) {
       const Stage& s8 = stages_[1];
-      const T* t8r = nullptr;
-      const T* t8i = nullptr;
-      if constexpr (std::is_same_v<T, float>) {
-        t8r = s8.tw_re_f.data();
-        t8i = s8.tw_im_f.data();
-      } else {
-        t8r = s8.tw_re.data();
-        t8i = s8.tw_im.data();
-      }
-      if (inverse) {
-        FirstStages4Half8<true>(n_, t8r, t8i, ir, ii, is, orr, oi, os, batch);
-      } else {
-        FirstStages4Half8<false>(n_, t8r, t8i, ir, ii, is, orr, oi, os, batch);
-      }
+      WithFlag(inverse, [&](auto inv) {
+        FirstStages4Half8<inv>(n_, Tables<T>(s8.tw_re, s8.tw_re_f),
+                               Tables<T>(s8.tw_im, s8.tw_im_f), ir, ii, is, orr, oi, os, batch);
+      });
     } else if (s.ra != 0) {
-      const int n = n_, sp = s.span;
-      if (half_input && &s == &stages_[0]) {  // (ra 2: SkipsUpperHalf)
-        if (inverse) {
-          RunFusedStage<true, false, true>(s.ra, n, sp, twr, twi, tw2r, tw2i, ir, ii, is, orr, oi, os, batch);
+      const T* tw2r = Tables<T>(s.tw2_re, s.tw2_re_f);
+      const T* tw2i = Tables<T>(s.tw2_im, s.tw2_im_f);
+      const bool half = half_input && first;  // (ra 2: SkipsUpperHalf)
+      WithFlags(inverse, in_place, [&](auto inv, auto ip) {
+        if (half) {
+          RunFusedStage<inv, false, true>(s.ra, n_, s.span, twr, twi, tw2r, tw2i, ir, ii, is,
+                                          orr, oi, os, batch);
         } else {
-          RunFusedStage<false, false, true>(s.ra, n, sp, twr, twi, tw2r, tw2i, ir, ii, is, orr, oi, os, batch);
+          RunFusedStage<inv, ip, false>(s.ra, n_, s.span, twr, twi, tw2r, tw2i, ir, ii, is, orr,
+                                        oi, os, batch);
         }
-      } else if (in_place) {
-        if (inverse) {
-          RunFusedStage<true, true, false>(s.ra, n, sp, twr, twi, tw2r, tw2i, ir, ii, is, orr, oi, os, batch);
-        } else {
-          RunFusedStage<false, true, false>(s.ra, n, sp, twr, twi, tw2r, tw2i, ir, ii, is, orr, oi, os, batch);
-        }
-      } else if (inverse) {
-        RunFusedStage<true, false, false>(s.ra, n, sp, twr, twi, tw2r, tw2i, ir, ii, is, orr, oi, os, batch);
-      } else {
-        RunFusedStage<false, false, false>(s.ra, n, sp, twr, twi, tw2r, tw2i, ir, ii, is, orr, oi, os, batch);
-      }
+      });
     } else if (last_part && &s == &stages_.back()) {
-      if (in_place) {
-        if (inverse) {
-          RunLastStagePart<true, true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
-        } else {
-          RunLastStagePart<false, true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
-        }
-      } else if (inverse) {
-        RunLastStagePart<true, false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
-      } else {
-        RunLastStagePart<false, false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
-      }
-    } else if (scale_first && &s == &stages_[0]) {
-      if (inverse) {
-        RunFirstStageScaled<true>(s.radix, n_, scale, scale_stride, ir, ii, is, orr, oi, os, batch);
-      } else {
-        RunFirstStageScaled<false>(s.radix, n_, scale, scale_stride, ir, ii, is, orr, oi, os, batch);
-      }
-    } else if (half_input && &s == &stages_[0] && s.radix == 2) {
+      WithFlags(inverse, in_place, [&](auto inv, auto ip) {
+        RunLastStagePart<inv, ip>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      });
+    } else if (scale_first && first) {
+      WithFlag(inverse, [&](auto inv) {
+        RunFirstStageScaled<inv>(s.radix, n_, scale, scale_stride, ir, ii, is, orr, oi, os, batch);
+      });
+    } else if (half_input && first && s.radix == 2) {
       FirstStage2HalfInput(n_, ir, ii, is, orr, oi, os, batch);
-    } else if (half_input && &s == &stages_[0]) {
-      if (inverse) {
-        FirstStage4HalfInput<true>(n_, ir, ii, is, orr, oi, os, batch);
-      } else {
-        FirstStage4HalfInput<false>(n_, ir, ii, is, orr, oi, os, batch);
-      }
-    } else if (in_place) {
-      if (inverse) {
-        RunStage<true, true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
-      } else {
-        RunStage<false, true>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
-      }
-    } else if (inverse) {
-      RunStage<true, false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+    } else if (half_input && first) {
+      WithFlag(inverse, [&](auto inv) {
+        FirstStage4HalfInput<inv>(n_, ir, ii, is, orr, oi, os, batch);
+      });
     } else {
-      RunStage<false, false>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      WithFlags(inverse, in_place, [&](auto inv, auto ip) {
+        RunStage<inv, ip>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      });
     }
     ir = orr;
     ii = oi;
