@@ -204,6 +204,22 @@ class ReceptorStepper {
   double sub_error_skip_[kMaxSubLevels];  // 0.99e-4 of it
   // Membrane exponentials over a whole step, per class and variant.
   MembraneSpan step_span_[kNumClasses][kNumVariants];
+  // Per class and variant, as Advance evaluated them per receptor: the
+  // membrane tau (s), the adaptation jump, the drive gain (RA, PC: of the
+  // filter output; SA1: the variant's gain) and the SA1 heminodes' M_k gain.
+  double tau_[kNumClasses][kNumVariants];
+  double jump_[kNumClasses][kNumVariants];
+  double gain_[kNumClasses][kNumVariants];
+  double sa1_m_[kNumVariants][4];
+  int sa1_nodes_;
+  bool noise_on_[kNumClasses];
+  double zero_rate_;  // 0 / rate_tau_s: the rate's increment in a step without spikes
+  // Advance per class (the class's constants and loop lengths fixed); the
+  // uncommon steps (rectification kinks, RA sub-steps) go through Finish.
+  struct Drive;
+  template <ReceptorClass C>
+  int AdvanceAs(double q_end, unsigned long long stream, double* state, double* voltage) const;
+  int Finish(ReceptorClass cls, const Drive& d, double* state, double* voltage) const;
 };
 
 // The state of a receptor at rest with quantity q (first call): filters at
