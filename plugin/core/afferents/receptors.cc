@@ -1,5 +1,7 @@
 #include "afferents/receptors.h"
 
+#include "afferents/receptor_state.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -95,23 +97,10 @@ double ReceptorQuantity(Quantity q, const double s[6]) {
 // ---------------------------------------------------------------------------
 // Afferent dynamics.
 
+using namespace receptor_state;  // NOLINT: the state slots
+
 namespace {
 
-// Receptor state slots (kReceptorStateSize doubles).
-enum {
-  kU0 = 0, kU1, kU2, kU3,  // membranes over threshold (SA1: one per heminode)
-  kRefractory,             // refractory time left, s
-  kPrevQ,                  // q at the end of the previous step
-  kHasPrev,                // 1 once primed
-  kRate,                   // exponentially smoothed rate, Hz
-  kNoise,                  // Ornstein-Uhlenbeck noise, units of threshold
-  kCount,                  // steps drawn from the noise generator
-  kF0, kF1, kF2, kF3,      // filter states (SA1, RA: 2, PC: 4)
-  kAdapt,                  // adaptation current, threshold units
-  kVariant                 // population variant index
-};
-static_assert(kVariant + 1 == kReceptorStateSize, "receptor state layout");
-constexpr int kMaxNodes = 4;
 constexpr double kTwoPi = 6.283185307179586;
 constexpr double kIdleNoiseSds = 4.5;  // ReceptorStepper::Quiescent with noise
 
@@ -372,16 +361,6 @@ void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
 
 double ReceptorRate(const double* st) { return st[kRate]; }
 
-// The drive of one receptor over a step, before the rectification kinks.
-struct ReceptorStepper::Drive {
-  int nodes;
-  int variant;
-  double l0[kMaxNodes], l1[kMaxNodes];  // drive before rectification at the step ends
-  double x_start[4];                    // filter state at the step start
-  double v;                             // dq/dt over the step
-  double n0, n1;                        // noise at the step ends
-};
-
 namespace {
 // One exact step of an n-pole filter (f.n == N): y0 = c . x, x <- phi x +
 // gamma vel, y1 = c . x; the operations and their order of Filter's
@@ -416,6 +395,43 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
   }
 }
 
+void ReceptorStepper::Noise(int ci, unsigned long long stream, double* st, double* n0,
+                            double* n1) const {
+  *n0 = *n1 = st[kNoise];
+  if (noise_on_[ci]) {  // exact Ornstein-Uhlenbeck update
+    const double count = st[kCount] + 1.0;
+    st[kCount] = count;
+    *n1 = noise_rho_ * *n0 +
+          noise_gain_[ci] * NormalHashed(seed_hash_, stream, static_cast<uint64_t>(count));
+    st[kNoise] = *n1;
+  }
+}
+
+void ReceptorStepper::NoiseRun(int ci, int n, unsigned long long stream, double* state,
+                               double* n0, double* n1) const {
+  double u1[kNoiseRun], u2[kNoiseRun];
+  for (int i = 0; i < n; ++i) {
+    double* st = state + static_cast<size_t>(i) * kReceptorStateSize;
+    n0[i] = n1[i] = st[kNoise];
+    if (!noise_on_[ci]) continue;
+    // NormalHashed's uniforms, the hashes of the run independent of each other
+    const double count = st[kCount] + 1.0;
+    st[kCount] = count;
+    const uint64_t h1 =
+        SplitMix64(SplitMix64(seed_hash_ ^ (stream + i)) ^ static_cast<uint64_t>(count));
+    const uint64_t h2 = SplitMix64(h1);
+    u1[i] = (static_cast<double>(h1 >> 11) + 0.5) * 0x1p-53;
+    u2[i] = static_cast<double>(h2 >> 11) * 0x1p-53;
+  }
+  if (!noise_on_[ci]) return;
+  for (int i = 0; i < n; ++i) u1[i] = std::log(u1[i]);
+  for (int i = 0; i < n; ++i) u2[i] = std::cos(kTwoPi * u2[i]);
+  for (int i = 0; i < n; ++i) {
+    n1[i] = noise_rho_ * n0[i] + noise_gain_[ci] * (std::sqrt(-2.0 * u1[i]) * u2[i]);
+    state[static_cast<size_t>(i) * kReceptorStateSize + kNoise] = n1[i];
+  }
+}
+
 template <ReceptorClass C>
 int ReceptorStepper::AdvanceAs(double q1, unsigned long long stream, double* st,
                                double* voltage) const {
@@ -426,14 +442,7 @@ int ReceptorStepper::AdvanceAs(double q1, unsigned long long stream, double* st,
   const double q0 = st[kPrevQ];
   d.v = (q1 - q0) / dt;  // q linear over the step
   st[kPrevQ] = q1;
-  d.n0 = d.n1 = st[kNoise];
-  if (noise_on_[ci]) {  // exact Ornstein-Uhlenbeck update
-    const double count = st[kCount] + 1.0;
-    st[kCount] = count;
-    d.n1 = noise_rho_ * d.n0 +
-           noise_gain_[ci] * NormalHashed(seed_hash_, stream, static_cast<uint64_t>(count));
-    st[kNoise] = d.n1;
-  }
+  Noise(ci, stream, st, &d.n0, &d.n1);
   d.variant = static_cast<int>(st[kVariant]);
   const int variant = d.variant;
   // Drive before rectification at the step ends (units of threshold).
@@ -467,10 +476,27 @@ int ReceptorStepper::AdvanceAs(double q1, unsigned long long stream, double* st,
     d.l1[0] = gain_[ci][variant] * y1;
   }
 
+  return FromDrive<C>(d, st, voltage);
+}
+
+int ReceptorStepper::FromDriveAs(ReceptorClass cls, const Drive& d, double* st,
+                                 double* voltage) const {
+  switch (cls) {
+    case ReceptorClass::kSA1: return FromDrive<ReceptorClass::kSA1>(d, st, voltage);
+    case ReceptorClass::kRA: return FromDrive<ReceptorClass::kRA>(d, st, voltage);
+    default: return FromDrive<ReceptorClass::kPC>(d, st, voltage);
+  }
+}
+
+template <ReceptorClass C>
+int ReceptorStepper::FromDrive(const Drive& d, double* st, double* voltage) const {
+  constexpr int ci = static_cast<int>(C);
+  const double dt = dt_;
+  const int variant = d.variant;
   // The common step: one segment over the whole step (no RA sub-steps, no
   // rectification kink), as Finish takes it.
   double la[kMaxNodes], lb[kMaxNodes];
-  const int nodes = d.nodes;
+  const int nodes = C == ReceptorClass::kSA1 ? d.nodes : 1;
   if constexpr (C == ReceptorClass::kRA) {
     const double sat = p_.ra.saturation;
     if (sat > 0.0) {

@@ -177,6 +177,14 @@ class ReceptorStepper {
   int Advance(ReceptorClass cls, double q_end, unsigned long long stream, double* state,
               double* voltage) const;
   double dt() const { return dt_; }
+  // Advance for `count` receptors of class cls, their states
+  // kReceptorStateSize doubles apart from `state`: receptor i takes q_end[i]
+  // and stream first_stream + i and leaves its spike count in spikes[i] and
+  // its voltage in voltage[i]. The same bits as Advance receptor by
+  // receptor. Returns the spikes fired.
+  int AdvanceBatch(ReceptorClass cls, int count, const double* q_end,
+                   unsigned long long first_stream, double* state, double* spikes,
+                   double* voltage) const;
   // Whether the receptor, driven by q = 0 from now on, can never fire again
   // (with noise: fires from noise alone at < 3e-3 Hz, its drive bound 4.5
   // membrane noise sds below threshold): refractory over, previous q zero,
@@ -216,10 +224,23 @@ class ReceptorStepper {
   double zero_rate_;  // 0 / rate_tau_s: the rate's increment in a step without spikes
   // Advance per class (the class's constants and loop lengths fixed); the
   // uncommon steps (rectification kinks, RA sub-steps) go through Finish.
-  struct Drive;
+  // AdvanceBatch: groups of 4 receptors of one class in 4-lane vectors, the
+  // steps that are not the common one per receptor through FromDrive.
+  struct Drive;  // afferents/receptor_state.h
   template <ReceptorClass C>
   int AdvanceAs(double q_end, unsigned long long stream, double* state, double* voltage) const;
+  void Noise(int ci, unsigned long long stream, double* state, double* n0, double* n1) const;
+  // Noise for n <= kNoiseRun consecutive receptors (streams stream, stream + 1, ...).
+  static constexpr int kNoiseRun = 32;
+  void NoiseRun(int ci, int n, unsigned long long stream, double* state, double* n0,
+                double* n1) const;
+  template <ReceptorClass C>
+  int FromDrive(const Drive& d, double* state, double* voltage) const;
+  int FromDriveAs(ReceptorClass cls, const Drive& d, double* state, double* voltage) const;
   int Finish(ReceptorClass cls, const Drive& d, double* state, double* voltage) const;
+  template <ReceptorClass C>
+  int Group(const double* q_end, const double* n0, const double* n1, double* state,
+            double* spikes, double* voltage) const;
 };
 
 // The state of a receptor at rest with quantity q (first call): filters at
