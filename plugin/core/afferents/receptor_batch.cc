@@ -37,15 +37,15 @@ V Splat(double x) {
   return r;
 }
 // std::abs (clears the sign bit, as fabs)
-V Abs(V x) {
+V Abs(const V& x) {
   M mask;
   for (int l = 0; l < kLanes; ++l) mask[l] = 0x7fffffffffffffffLL;
   return reinterpret_cast<V>(reinterpret_cast<M>(x) & mask);
 }
 // std::max(0.0, x): x if 0 < x, else +0 (also for -0 and NaN)
-V MaxZero(V x) { return x > 0.0 ? x : Splat(0.0); }
+V MaxZero(const V& x) { return x > 0.0 ? x : Splat(0.0); }
 // std::max(a, x): x if a < x, else a
-V MaxOf(V a, V x) { return a < x ? x : a; }
+V MaxOf(const V& a, const V& x) { return a < x ? x : a; }
 V Load(double* const* st, int slot) {
   V r;
   for (int l = 0; l < kLanes; ++l) r[l] = st[l][slot];
@@ -56,7 +56,7 @@ V FromArray(const double* x) {
   std::memcpy(&r, x, sizeof r);
   return r;
 }
-void Store(double* const* st, int slot, V x) {
+void Store(double* const* st, int slot, const V& x) {
   for (int l = 0; l < kLanes; ++l) st[l][slot] = x[l];
 }
 
@@ -86,7 +86,7 @@ MJTOUCH_TARGET_CLONES int ReceptorStepper::Group(const double* q1_in, const doub
   const Filter& f = C == ReceptorClass::kSA1 ? sa1_ : C == ReceptorClass::kRA ? ra_ : pc_;
   V x[nf], nx[nf];
   for (int i = 0; i < nf; ++i) x[i] = Load(st, kF0 + i);
-  auto filter = [&](V vel, V* y0, V* y1) {  // FilterStep<nf>
+  auto filter = [&](const V& vel, V* y0, V* y1) {  // FilterStep<nf>
     V a0 = Splat(0.0), a1 = Splat(0.0);
     for (int i = 0; i < nf; ++i) a0 += f.c[i] * x[i];
     for (int i = 0; i < nf; ++i) {
