@@ -3,7 +3,8 @@
 // receptor by receptor: over random scenarios (parameters, step sizes,
 // quantities that make the receptors fire, kink, sub-step, rest, refractory
 // and adapt), every step's spike counts, voltages and the whole receptor
-// state must be the same bits. ~2 s.
+// state must be the same bits. ReceptorQuantities (the quantities of many
+// receptors at once) against ReceptorQuantity likewise. ~2 s.
 //   ./test_receptor_batch   # PASS/FAIL lines, exit status 1 on failure
 #include <cmath>
 #include <cstdio>
@@ -90,6 +91,33 @@ int main() {
   if (kinds[0] == 0 || kinds[1] == 0 || kinds[2] == 0) {
     std::printf("FAIL: a class never fired\n");
     ++bad;
+  }
+  {  // ReceptorQuantities against ReceptorQuantity: random tensors over ten
+     // decades, some diagonal, some with round-off shears, some isotropic
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> U(-1.0, 1.0);
+    const int n = 4003;
+    std::vector<double> stress(6 * n), batch(n);
+    for (int i = 0; i < n; ++i) {
+      double* s = &stress[6 * i];
+      const double scale = std::pow(10.0, 5.0 * (U(rng) + 1.0));  // Pa
+      for (int j = 0; j < 3; ++j) s[j] = scale * (U(rng) - 0.8);
+      const int kind = i % 8;
+      for (int j = 3; j < 6; ++j)
+        s[j] = kind == 0 ? 0.0 : kind == 1 ? 1e-17 * scale * U(rng) : 0.3 * scale * U(rng);
+      if (kind == 2) s[1] = s[2] = s[0];
+    }
+    int bad_q = 0;
+    for (int quantity = 0; quantity < 4; ++quantity) {  // szz, maxcomp, vonmises, maxshear
+      const Quantity q = static_cast<Quantity>(quantity);
+      ReceptorQuantities(q, n, stress.data(), batch.data());
+      for (int i = 0; i < n; ++i)
+        if (!SameBits(batch[i], ReceptorQuantity(q, &stress[6 * i])) && ++bad_q <= 5)
+          std::printf("FAIL: %s of tensor %d: %.17g, ReceptorQuantity %.17g\n", QuantityName(q),
+                      i, batch[i], ReceptorQuantity(q, &stress[6 * i]));
+    }
+    std::printf("ReceptorQuantities: %d tensors x 4 quantities, %d differ\n", n, bad_q);
+    bad += bad_q;
   }
   std::printf("%s: %d failure(s)\n", bad ? "FAIL" : "PASS", bad);
   return bad ? 1 : 0;

@@ -5,7 +5,8 @@
 // same bits on every ISA). A lane whose step is not the common one (a
 // rectification kink, RA sub-steps, refractory time, a node that may reach
 // threshold) continues through FromDrive from the drive computed here, as
-// Advance would; the noise (libm log and cos) stays scalar.
+// Advance would; the noise (libm log and cos) stays scalar. Also
+// ReceptorQuantities, the stress-based quantities of many receptors.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -24,10 +25,10 @@ using namespace receptor_state;  // NOLINT: the state slots
 
 namespace {
 
-#ifndef MJTOUCH_RECEPTOR_LANES
-#define MJTOUCH_RECEPTOR_LANES 4
-#endif
-constexpr int kLanes = MJTOUCH_RECEPTOR_LANES;
+// Four lanes: one AVX2 vector (the clone used on x86 machines that have it),
+// two SSE2 / NEON ones elsewhere (eight lanes were no faster with AVX-512,
+// two slower with AVX2).
+constexpr int kLanes = 4;
 typedef double V __attribute__((vector_size(8 * kLanes)));
 typedef long long M __attribute__((vector_size(8 * kLanes)));  // lane masks (0 / -1)
 
@@ -63,8 +64,9 @@ void Store(double* const* st, int slot, const V& x) {
 }  // namespace
 
 template <ReceptorClass C>
-MJTOUCH_TARGET_CLONES int ReceptorStepper::Group(const double* q1_in, const double* n0s, const double* n1s,
-                           double* state, double* spikes, double* voltage) const {
+MJTOUCH_TARGET_CLONES int ReceptorStepper::Group(const double* q1_in, const double* n0s,
+                                                 const double* n1s, double* state,
+                                                 double* spikes, double* voltage) const {
   constexpr int ci = static_cast<int>(C);
   double* st[kLanes];
   for (int l = 0; l < kLanes; ++l) st[l] = state + static_cast<size_t>(l) * kReceptorStateSize;
@@ -268,6 +270,47 @@ int ReceptorStepper::AdvanceBatch(ReceptorClass cls, int count, const double* q_
     total += k;
   }
   return total;
+}
+
+void ReceptorQuantities(Quantity q, int count, const double* stress, double* out) {
+  int i = 0;
+  if (q == Quantity::kMaxCompressive) {
+    // Principal's smallest eigenvalue (Smith 1961) up to the acos in lanes,
+    // then acos and cos per receptor; a lane with an (almost) diagonal
+    // tensor takes ReceptorQuantity.
+    for (; i + kLanes <= count; i += kLanes) {
+      const double* s = stress + static_cast<size_t>(i) * 6;
+      V c[6];
+      for (int j = 0; j < 6; ++j)
+        for (int l = 0; l < kLanes; ++l) c[j][l] = s[l * 6 + j];
+      const V xx = c[0], yy = c[1], zz = c[2], xy = c[3], xz = c[4], yz = c[5];
+      const V p1 = xy * xy + xz * xz + yz * yz;
+      const V mean = (xx + yy + zz) / 3.0;
+      const M diagonal = p1 <= 1e-30 * (xx * xx + yy * yy + zz * zz + 1e-300);
+      const V p2 = (xx - mean) * (xx - mean) + (yy - mean) * (yy - mean) +
+                   (zz - mean) * (zz - mean) + 2 * p1;
+      const V p6 = p2 / 6.0;
+      V p;
+      for (int l = 0; l < kLanes; ++l) p[l] = std::sqrt(p6[l]);
+      const V b00 = (xx - mean) / p, b11 = (yy - mean) / p, b22 = (zz - mean) / p;
+      const V b01 = xy / p, b02 = xz / p, b12 = yz / p;
+      const V det = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
+                    b02 * (b01 * b12 - b11 * b02);
+      const V half = det / 2.0;  // std::clamp(half, -1, 1)
+      const V r = half < -1.0 ? Splat(-1.0) : 1.0 < half ? Splat(1.0) : half;
+      double phi[kLanes];
+      for (int l = 0; l < kLanes; ++l) phi[l] = diagonal[l] ? 0.0 : std::acos(r[l]) / 3.0;
+      for (int l = 0; l < kLanes; ++l) {
+        if (diagonal[l]) {
+          out[i + l] = ReceptorQuantity(q, s + l * 6);
+          continue;
+        }
+        const double e1 = mean[l] + 2 * p[l] * std::cos(phi[l] + 2.0943951023931957);
+        out[i + l] = std::max(0.0, -e1);
+      }
+    }
+  }
+  for (; i < count; ++i) out[i] = ReceptorQuantity(q, stress + static_cast<size_t>(i) * 6);
 }
 
 }  // namespace mjtouch

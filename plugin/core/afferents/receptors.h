@@ -27,6 +27,10 @@ const char* QuantityName(Quantity q);
 bool ParseQuantity(const std::string& s, Quantity* q);
 // Compressive-positive receptor quantity from a stress tensor (Voigt, Pa).
 double ReceptorQuantity(Quantity q, const double stress[6]);
+// ReceptorQuantity of `count` tensors 6 doubles apart, into out[0 ..
+// count - 1]: the same bits (kMaxCompressive: four at a time up to the acos,
+// receptor_batch.cc).
+void ReceptorQuantities(Quantity q, int count, const double* stress, double* out);
 
 // SA1 (Merkel), after Wang et al. 2016 and Lesniak et al. 2014. Heminode k
 // of the branching afferent collects I_k = M_k (k0 q + k1 r) + I0 (negative
