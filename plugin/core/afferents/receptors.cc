@@ -113,6 +113,8 @@ uint64_t SplitMix64(uint64_t x) {
 
 // Standard normal deviate, a pure function of (seed, stream, count);
 // NormalHashed takes SplitMix64(seed) (ReceptorStepper: hashed once).
+// ReceptorStepper::NoiseRun evaluates the same expressions for several
+// receptors at once: change both together.
 double NormalHashed(uint64_t seed_hash, uint64_t stream, uint64_t count) {
   const uint64_t h1 = SplitMix64(SplitMix64(seed_hash ^ stream) ^ count);
   const uint64_t h2 = SplitMix64(h1);

@@ -234,7 +234,8 @@ class ReceptorStepper {
   template <ReceptorClass C>
   int AdvanceAs(double q_end, unsigned long long stream, double* state, double* voltage) const;
   void Noise(int ci, unsigned long long stream, double* state, double* n0, double* n1) const;
-  // Noise for n <= kNoiseRun consecutive receptors (streams stream, stream + 1, ...).
+  // Noise for n <= kNoiseRun consecutive receptors (streams stream, stream + 1,
+  // ...): Noise's bits, the hashes, logs and cosines each in a loop of their own.
   static constexpr int kNoiseRun = 32;
   void NoiseRun(int ci, int n, unsigned long long stream, double* state, double* n0,
                 double* n1) const;
