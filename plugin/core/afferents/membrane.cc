@@ -48,20 +48,6 @@ double AdaptResponse(double c, double tau, double tau_a, double s, const Membran
   return -c * tau_a / (tau_a - tau) * std::exp(-xa) * -std::expm1(xa - x);
 }
 
-// Under a falling drive (b < 0: b tau Phi2 <= 0) the membrane stays below
-// u0 + (a - u0) Phi1(t / tau), monotone in t: below max(u0, a), and over
-// the whole span (`pre`) below max(u0, its value at the span's end). Whether
-// that is under 1 by far more than the round-off of Membrane: then no point
-// of the interval can evaluate to >= 1, and FirstCrossing's search would
-// return +inf too (this skips its log and exponentials).
-bool FallingStaysBelow(double u0, double a, double b, double tau, double span,
-                       const MembraneSpan* pre) {
-  const double margin = 1e-9 * (1.0 + std::abs(u0) + std::abs(a) + std::abs(b) * (tau + span));
-  const double bound = pre && span == pre->span ? std::max(u0, u0 * pre->decay + a * pre->phi1)
-                                                : std::max(u0, a);
-  return bound < 1.0 - margin;
-}
-
 // First time in (0, span] at which the membrane reaches 1, or +inf. With
 // c = u0 - a + b tau the membrane is a + b (t - tau) + c exp(-t / tau):
 // convex for c >= 0 (one crossing at most, from below), concave for c < 0
@@ -209,32 +195,10 @@ int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, doubl
     if (w != 0.0) w *= pre && s == pre->span ? pre->adapt_decay : std::exp(-s / tau_a);
   };
   // The common step: the whole interval of `pre`, no refractory time, no
-  // spike. Decided node by node as the loop below decides it at t = 0
-  // (FirstCrossing's no-crossing exits; FirstCrossingAdapted starts with
-  // FirstCrossing), each node's end membrane computed once for both.
-  if (pre && span == pre->span && !(*refractory_left > 0.0) && nodes <= kMaxNodes) {
-    double end[kMaxNodes];
-    bool quiet = true;
-    const double adapt_end = AdaptResponse(w, tau, tau_a, span, pre);
-    for (int k = 0; k < nodes && quiet; ++k) {
-      const double u0 = u[k], bk = b[k], ak = a[k] + bk * t;  // t = 0, as the loop takes it
-      const double m = Membrane(u0, ak, bk, tau, span, pre);
-      if (u0 >= 1.0) {
-        quiet = false;
-      } else if (u0 - ak + bk * tau < 0.0 && bk < 0.0) {
-        quiet = FallingStaysBelow(u0, ak, bk, tau, span, pre);
-      } else {
-        quiet = m < 1.0;
-      }
-      end[k] = m + adapt_end;
-      quiet = quiet && !(end[k] >= 1.0);
-    }
-    if (quiet) {
-      for (int k = 0; k < nodes; ++k) u[k] = end[k];
-      decay(span);
-      return 0;
-    }
-  }
+  // spike (membrane.h).
+  if (pre && span == pre->span && !(*refractory_left > 0.0) &&
+      QuietWholeSpan(nodes, u, a, b, *pre, adapt_current))
+    return 0;
   while (t < span) {
     if (*refractory_left > 0.0) {  // membranes held at reset
       const double used = std::min(*refractory_left, span - t);

@@ -6,6 +6,9 @@
 #ifndef MJTOUCH_AFFERENTS_MEMBRANE_H_
 #define MJTOUCH_AFFERENTS_MEMBRANE_H_
 
+#include <algorithm>
+#include <cmath>
+
 namespace mjtouch {
 
 // Spike-triggered adaptation: each spike adds `jump` (threshold units of
@@ -40,6 +43,55 @@ MembraneSpan PrecomputeSpan(double span, double tau, const Adaptation& adapt);
 // on_spike(t, ctx). Returns the spike count. `pre` (optional): exponentials
 // precomputed for intervals of its span (used where an interval has exactly
 // that length and tau and the adaptation's tau_a match; ignored otherwise).
+// Under a falling drive (b < 0: b tau Phi2 <= 0) the membrane stays below
+// u0 + (a - u0) Phi1(t / tau), monotone in t: below max(u0, a), and over
+// the whole span (`pre`) below max(u0, its value at the span's end). Whether
+// that is under 1 by far more than the round-off of the membrane's closed
+// form: then no point of the interval can evaluate to >= 1, and the crossing
+// search would return +inf too (this skips its log and exponentials).
+inline bool FallingStaysBelow(double u0, double a, double b, double tau, double span,
+                              const MembraneSpan* pre) {
+  const double margin = 1e-9 * (1.0 + std::abs(u0) + std::abs(a) + std::abs(b) * (tau + span));
+  const double bound = pre && span == pre->span ? std::max(u0, u0 * pre->decay + a * pre->phi1)
+                                                : std::max(u0, a);
+  return bound < 1.0 - margin;
+}
+
+// LinearDriveLIF's common step, inline for ReceptorStepper's per-class
+// loops: an interval of exactly pre.span (tau and tau_a those of `pre`), no
+// refractory time left. When no node can reach threshold in it (decided as
+// LinearDriveLIF decides it at t = 0: FirstCrossing's no-crossing exits, and
+// FirstCrossingAdapted starts with FirstCrossing), sets the end membranes
+// and the decayed adaptation current as LinearDriveLIF would and returns
+// true; otherwise changes nothing and returns false (LinearDriveLIF then
+// takes the interval). Bit for bit LinearDriveLIF's results.
+inline bool QuietWholeSpan(int nodes, double* u, const double* a, const double* b,
+                           const MembraneSpan& pre, double* adapt_current) {
+  constexpr int kMaxQuietNodes = 4;
+  if (nodes > kMaxQuietNodes) return false;
+  const double tau = pre.tau, tau_a = pre.tau_a, span = pre.span;
+  const double w = *adapt_current;
+  // AdaptResponse(w, tau, tau_a, span, &pre): the same for every node
+  const double adapt_end =
+      w == 0.0 ? 0.0 : -w * tau_a / (tau_a - tau) * pre.adapt_decay * pre.adapt_rise;
+  double end[kMaxQuietNodes];
+  for (int k = 0; k < nodes; ++k) {
+    const double u0 = u[k], bk = b[k], ak = a[k] + bk * 0.0;  // t = 0, as the loop takes it
+    if (u0 >= 1.0) return false;
+    const double m = u0 * pre.decay + ak * pre.phi1 + bk * tau * pre.phi2;  // Membrane
+    if (u0 - ak + bk * tau < 0.0 && bk < 0.0) {
+      if (!FallingStaysBelow(u0, ak, bk, tau, span, &pre)) return false;
+    } else if (!(m < 1.0)) {
+      return false;
+    }
+    end[k] = m + adapt_end;
+    if (end[k] >= 1.0) return false;
+  }
+  for (int k = 0; k < nodes; ++k) u[k] = end[k];
+  if (w != 0.0) *adapt_current = w * pre.adapt_decay;
+  return true;
+}
+
 int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, double span,
                    double tau, double refractory, double* refractory_left,
                    const Adaptation& adapt, double* adapt_current,

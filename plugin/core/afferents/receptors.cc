@@ -1,5 +1,7 @@
 #include "afferents/receptors.h"
 
+#include "afferents/receptor_state.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -95,23 +97,10 @@ double ReceptorQuantity(Quantity q, const double s[6]) {
 // ---------------------------------------------------------------------------
 // Afferent dynamics.
 
+using namespace receptor_state;  // NOLINT: the state slots
+
 namespace {
 
-// Receptor state slots (kReceptorStateSize doubles).
-enum {
-  kU0 = 0, kU1, kU2, kU3,  // membranes over threshold (SA1: one per heminode)
-  kRefractory,             // refractory time left, s
-  kPrevQ,                  // q at the end of the previous step
-  kHasPrev,                // 1 once primed
-  kRate,                   // exponentially smoothed rate, Hz
-  kNoise,                  // Ornstein-Uhlenbeck noise, units of threshold
-  kCount,                  // steps drawn from the noise generator
-  kF0, kF1, kF2, kF3,      // filter states (SA1, RA: 2, PC: 4)
-  kAdapt,                  // adaptation current, threshold units
-  kVariant                 // population variant index
-};
-static_assert(kVariant + 1 == kReceptorStateSize, "receptor state layout");
-constexpr int kMaxNodes = 4;
 constexpr double kTwoPi = 6.283185307179586;
 constexpr double kIdleNoiseSds = 4.5;  // ReceptorStepper::Quiescent with noise
 
@@ -124,6 +113,8 @@ uint64_t SplitMix64(uint64_t x) {
 
 // Standard normal deviate, a pure function of (seed, stream, count);
 // NormalHashed takes SplitMix64(seed) (ReceptorStepper: hashed once).
+// ReceptorStepper::NoiseRun evaluates the same expressions for several
+// receptors at once: change both together.
 double NormalHashed(uint64_t seed_hash, uint64_t stream, uint64_t count) {
   const uint64_t h1 = SplitMix64(SplitMix64(seed_hash ^ stream) ^ count);
   const uint64_t h2 = SplitMix64(h1);
@@ -337,12 +328,27 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
     sub_error_den_[level] = 4.0 * p.ra.saturation * std::ldexp(1.0, 2 * level);
     sub_error_skip_[level] = 0.99e-4 * sub_error_den_[level];
   }
+  static_assert(kMaxNodes == 4, "sa1_m_ holds kMaxNodes heminodes");
+  sa1_nodes_ = static_cast<int>(std::min<size_t>(p.sa1.merkel_cells.size(), kMaxNodes));
+  zero_rate_ = 0.0 / p.rate_tau_s;
   for (int c = 0; c < kNumClasses; ++c) {
     const ReceptorClass cls = static_cast<ReceptorClass>(c);
-    for (int v = 0; v < kNumVariants; ++v)
-      step_span_[c][v] =
-          PrecomputeSpan(dt_s, MembraneTau(p, cls, ReceptorVariant(cls, v)), p.adapt[c]);
+    noise_on_[c] = NoiseSd(p, cls) > 0.0;
+    for (int v = 0; v < kNumVariants; ++v) {
+      const VariantScale& var = ReceptorVariant(cls, v);
+      tau_[c][v] = MembraneTau(p, cls, var);
+      step_span_[c][v] = PrecomputeSpan(dt_s, tau_[c][v], p.adapt[c]);
+      jump_[c][v] = p.adapt[c].jump * var.adapt;
+      gain_[c][v] = cls == ReceptorClass::kSA1  ? var.gain
+                    : cls == ReceptorClass::kRA ? p.ra.gain_s_per_pa * var.gain
+                                                : p.pc.gain_s2_per_pa * var.gain;
+    }
   }
+  if (p.sa1.model == SA1Model::kWang2016)
+    for (int v = 0; v < kNumVariants; ++v) jump_[0][v] = 0.0;
+  for (int v = 0; v < kNumVariants; ++v)
+    for (int k = 0; k < sa1_nodes_; ++k)
+      sa1_m_[v][k] = p.sa1.merkel_cells[k] * ReceptorVariant(ReceptorClass::kSA1, v).gain;
 }
 
 void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
@@ -357,89 +363,213 @@ void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
 
 double ReceptorRate(const double* st) { return st[kRate]; }
 
+namespace {
+// One exact step of an n-pole filter (f.n == N): y0 = c . x, x <- phi x +
+// gamma vel, y1 = c . x; the operations and their order of Filter's
+// runtime-length loops.
+template <int N>
+void FilterStep(const double* phi, const double* gamma, const double* c, double vel, double* x,
+                double* x_start, double* y0, double* y1) {
+  double s[N], nx[N];
+  for (int i = 0; i < N; ++i) s[i] = x_start[i] = x[i];
+  double a0 = 0.0, a1 = 0.0;
+  for (int i = 0; i < N; ++i) a0 += c[i] * s[i];
+  for (int i = 0; i < N; ++i) {
+    double acc = gamma[i] * vel;
+    for (int j = 0; j < N; ++j) acc += phi[i * N + j] * s[j];
+    nx[i] = acc;
+  }
+  for (int i = 0; i < N; ++i) {
+    x[i] = nx[i];
+    a1 += c[i] * nx[i];
+  }
+  *y0 = a0;
+  *y1 = a1;
+}
+}  // namespace
+
 int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long stream,
                              double* st, double* voltage) const {
-  if (st[kHasPrev] <= 0.0) PrimeReceptor(p_, cls, q1, stream, st);
-  const double dt = dt_;
-  const double q0 = st[kPrevQ];
-  const double v = (q1 - q0) / dt;  // q linear over the step
-  st[kPrevQ] = q1;
-  const int ci = static_cast<int>(cls);
-  const double n0 = st[kNoise];
-  double n1 = n0;
-  if (NoiseSd(p_, cls) > 0.0) {  // exact Ornstein-Uhlenbeck update
+  switch (cls) {
+    case ReceptorClass::kSA1: return AdvanceAs<ReceptorClass::kSA1>(q1, stream, st, voltage);
+    case ReceptorClass::kRA: return AdvanceAs<ReceptorClass::kRA>(q1, stream, st, voltage);
+    default: return AdvanceAs<ReceptorClass::kPC>(q1, stream, st, voltage);
+  }
+}
+
+void ReceptorStepper::Noise(int ci, unsigned long long stream, double* st, double* n0,
+                            double* n1) const {
+  *n0 = *n1 = st[kNoise];
+  if (noise_on_[ci]) {  // exact Ornstein-Uhlenbeck update
     const double count = st[kCount] + 1.0;
     st[kCount] = count;
-    n1 = noise_rho_ * n0 + noise_gain_[ci] * NormalHashed(seed_hash_, stream,
-                                                          static_cast<uint64_t>(count));
-    st[kNoise] = n1;
+    *n1 = noise_rho_ * *n0 +
+          noise_gain_[ci] * NormalHashed(seed_hash_, stream, static_cast<uint64_t>(count));
+    st[kNoise] = *n1;
+  }
+}
+
+void ReceptorStepper::NoiseRun(int ci, int n, unsigned long long stream, double* state,
+                               double* n0, double* n1) const {
+  double u1[kNoiseRun], u2[kNoiseRun];
+  for (int i = 0; i < n; ++i) {
+    double* st = state + static_cast<size_t>(i) * kReceptorStateSize;
+    n0[i] = n1[i] = st[kNoise];
+    if (!noise_on_[ci]) continue;
+    // NormalHashed's uniforms, the hashes of the run independent of each other
+    const double count = st[kCount] + 1.0;
+    st[kCount] = count;
+    const uint64_t h1 =
+        SplitMix64(SplitMix64(seed_hash_ ^ (stream + i)) ^ static_cast<uint64_t>(count));
+    const uint64_t h2 = SplitMix64(h1);
+    u1[i] = (static_cast<double>(h1 >> 11) + 0.5) * 0x1p-53;
+    u2[i] = static_cast<double>(h2 >> 11) * 0x1p-53;
+  }
+  if (!noise_on_[ci]) return;
+  for (int i = 0; i < n; ++i) u1[i] = std::log(u1[i]);
+  for (int i = 0; i < n; ++i) u2[i] = std::cos(kTwoPi * u2[i]);
+  for (int i = 0; i < n; ++i) {
+    n1[i] = noise_rho_ * n0[i] + noise_gain_[ci] * (std::sqrt(-2.0 * u1[i]) * u2[i]);
+    state[static_cast<size_t>(i) * kReceptorStateSize + kNoise] = n1[i];
+  }
+}
+
+template <ReceptorClass C>
+int ReceptorStepper::AdvanceAs(double q1, unsigned long long stream, double* st,
+                               double* voltage) const {
+  constexpr int ci = static_cast<int>(C);
+  if (st[kHasPrev] <= 0.0) PrimeReceptor(p_, C, q1, stream, st);
+  const double dt = dt_;
+  Drive d;
+  const double q0 = st[kPrevQ];
+  d.v = (q1 - q0) / dt;  // q linear over the step
+  st[kPrevQ] = q1;
+  Noise(ci, stream, st, &d.n0, &d.n1);
+  d.variant = static_cast<int>(st[kVariant]);
+  const int variant = d.variant;
+  // Drive before rectification at the step ends (units of threshold).
+  double y0, y1;
+  if constexpr (C == ReceptorClass::kSA1) {
+    const SA1Params& s = p_.sa1;
+    d.nodes = sa1_nodes_;
+    const double scale = sa1_scale_;  // A -> threshold units
+    // saturated input (kFiltered), taken linear over the step like q
+    const double qs0 = SaturateSA1(s, q0), qs1 = SaturateSA1(s, q1);
+    double r0, r1;  // the rate term at the step ends
+    if (s.model == SA1Model::kWang2016) {
+      r0 = r1 = std::abs(d.v);
+    } else {
+      const double vs = (qs1 - qs0) / dt;
+      FilterStep<2>(sa1_.phi, sa1_.gamma, sa1_.c, vs, st + kF0, d.x_start, &y0, &y1);
+      r0 = 1.0 * y0;
+      r1 = 1.0 * y1;
+    }
+    const double* m = sa1_m_[variant];
+    for (int k = 0; k < d.nodes; ++k) {
+      d.l0[k] = scale * (m[k] * (s.k0_a_per_pa * qs0 + s.k1_a_s_per_pa * r0) + s.i0_a);
+      d.l1[k] = scale * (m[k] * (s.k0_a_per_pa * qs1 + s.k1_a_s_per_pa * r1) + s.i0_a);
+    }
+  } else {
+    const Filter& f = C == ReceptorClass::kRA ? ra_ : pc_;
+    constexpr int n = C == ReceptorClass::kRA ? 2 : 4;
+    FilterStep<n>(f.phi, f.gamma, f.c, d.v, st + kF0, d.x_start, &y0, &y1);
+    d.nodes = 1;
+    d.l0[0] = gain_[ci][variant] * y0;
+    d.l1[0] = gain_[ci][variant] * y1;
   }
 
-  // Drive before rectification at the step ends (units of threshold).
-  int nodes = 1;
-  double l0[kMaxNodes] = {0}, l1[kMaxNodes] = {0};
-  bool full_wave = false;
-  double tau = 1.0, refractory = 1e-3;
-  double x_start[4] = {0, 0, 0, 0};  // filter state at the step start
-  auto filter = [&](const Filter& f, double gain, double vel) {
-    double x[4], y0 = 0.0, y1 = 0.0;
-    for (int i = 0; i < f.n; ++i) x_start[i] = st[kF0 + i];
-    for (int i = 0; i < f.n; ++i) y0 += f.c[i] * st[kF0 + i];
-    for (int i = 0; i < f.n; ++i) {
-      double acc = f.gamma[i] * vel;
-      for (int j = 0; j < f.n; ++j) acc += f.phi[i * f.n + j] * st[kF0 + j];
-      x[i] = acc;
-    }
-    for (int i = 0; i < f.n; ++i) {
-      st[kF0 + i] = x[i];
-      y1 += f.c[i] * x[i];
-    }
-    l0[0] = gain * y0;
-    l1[0] = gain * y1;
-  };
-  const int variant = static_cast<int>(st[kVariant]);
-  const VariantScale& var = ReceptorVariant(cls, variant);
-  Adaptation adapt = p_.adapt[ci];
-  adapt.jump *= var.adapt;
+  return FromDrive<C>(d, st, voltage);
+}
+
+int ReceptorStepper::FromDriveAs(ReceptorClass cls, const Drive& d, double* st,
+                                 double* voltage) const {
   switch (cls) {
-    case ReceptorClass::kSA1: {
-      const SA1Params& s = p_.sa1;
-      nodes = static_cast<int>(std::min<size_t>(s.merkel_cells.size(), kMaxNodes));
-      const double scale = sa1_scale_;  // A -> threshold units
-      // saturated input (kFiltered), taken linear over the step like q
-      const double qs0 = SaturateSA1(s, q0), qs1 = SaturateSA1(s, q1);
-      const double vs = (qs1 - qs0) / dt;
-      double r0, r1;  // the rate term at the step ends
-      if (s.model == SA1Model::kWang2016) {
-        r0 = r1 = std::abs(v);
-        adapt.jump = 0.0;
-      } else {
-        filter(sa1_, 1.0, vs);
-        r0 = l0[0];
-        r1 = l1[0];
-      }
-      const double g = var.gain;
-      for (int k = 0; k < nodes; ++k) {
-        const double m = s.merkel_cells[k] * g;
-        l0[k] = scale * (m * (s.k0_a_per_pa * qs0 + s.k1_a_s_per_pa * r0) + s.i0_a);
-        l1[k] = scale * (m * (s.k0_a_per_pa * qs1 + s.k1_a_s_per_pa * r1) + s.i0_a);
-      }
-      tau = MembraneTau(p_, cls, var);
-      refractory = s.refractory_s;
-      break;
-    }
-    case ReceptorClass::kRA:
-      filter(ra_, p_.ra.gain_s_per_pa * var.gain, v);
-      full_wave = true;
-      tau = MembraneTau(p_, cls, var);
-      refractory = p_.ra.refractory_s;
-      break;
-    case ReceptorClass::kPC:
-      filter(pc_, p_.pc.gain_s2_per_pa * var.gain, v);
-      tau = MembraneTau(p_, cls, var);
-      refractory = p_.pc.refractory_s;
-      break;
+    case ReceptorClass::kSA1: return FromDrive<ReceptorClass::kSA1>(d, st, voltage);
+    case ReceptorClass::kRA: return FromDrive<ReceptorClass::kRA>(d, st, voltage);
+    default: return FromDrive<ReceptorClass::kPC>(d, st, voltage);
   }
+}
+
+template <ReceptorClass C>
+int ReceptorStepper::FromDrive(const Drive& d, double* st, double* voltage) const {
+  constexpr int ci = static_cast<int>(C);
+  const double dt = dt_;
+  const int variant = d.variant;
+  // The common step: one segment over the whole step (no RA sub-steps, no
+  // rectification kink), as Finish takes it.
+  double la[kMaxNodes], lb[kMaxNodes];
+  const int nodes = C == ReceptorClass::kSA1 ? d.nodes : 1;
+  if constexpr (C == ReceptorClass::kRA) {
+    const double sat = p_.ra.saturation;
+    if (sat > 0.0) {
+      const double dd = d.l1[0] - d.l0[0];
+      if (!(dd * dd <= sub_error_skip_[0]) && dd * dd / sub_error_den_[0] > 1e-4)
+        return Finish(C, d, st, voltage);  // sub-steps
+      la[0] = d.l0[0] * sat / (sat + std::abs(d.l0[0]));
+      lb[0] = d.l1[0] * sat / (sat + std::abs(d.l1[0]));
+    } else {
+      la[0] = d.l0[0];
+      lb[0] = d.l1[0];
+    }
+  } else {
+    for (int k = 0; k < nodes; ++k) {
+      la[k] = d.l0[k];
+      lb[k] = d.l1[k];
+    }
+  }
+  bool kink = false;
+  for (int k = 0; k < nodes; ++k)
+    kink = kink | ((la[k] < 0.0) & (lb[k] > 0.0)) | ((la[k] > 0.0) & (lb[k] < 0.0));
+  if (kink) return Finish(C, d, st, voltage);
+  const double span = dt - 0.0;
+  double a[kMaxNodes], b[kMaxNodes];
+  for (int k = 0; k < nodes; ++k) {
+    // Finish's drive at t = 0 and t = dt
+    const double ea = la[k] + (lb[k] - la[k]) * 0.0, eb = la[k] + (lb[k] - la[k]) * 1.0;
+    const double ra = C == ReceptorClass::kRA ? std::abs(ea) : std::max(0.0, ea);
+    const double rb = C == ReceptorClass::kRA ? std::abs(eb) : std::max(0.0, eb);
+    a[k] = ra + d.n0 + (d.n1 - d.n0) * 0.0;
+    b[k] = (rb + d.n0 + (d.n1 - d.n0) * 1.0 - a[k]) / span;
+  }
+  const MembraneSpan& pre = step_span_[ci][variant];
+  int spikes = 0;
+  double rate_add = zero_rate_;
+  if (!(st[kRefractory] > 0.0) && QuietWholeSpan(nodes, st + kU0, a, b, pre, st + kAdapt)) {
+    // no spike
+  } else {
+    const double refractory = C == ReceptorClass::kSA1  ? p_.sa1.refractory_s
+                              : C == ReceptorClass::kRA ? p_.ra.refractory_s
+                                                        : p_.pc.refractory_s;
+    Adaptation adapt = p_.adapt[ci];
+    adapt.jump = jump_[ci][variant];
+    SpikeSink sink{0.0, dt, p_.rate_tau_s, 0.0};
+    spikes = LinearDriveLIF(nodes, st + kU0, a, b, span, tau_[ci][variant], refractory,
+                            st + kRefractory, adapt, st + kAdapt, OnSpike, &sink, &pre);
+    rate_add = sink.rate_sum / p_.rate_tau_s;
+  }
+  st[kRate] = st[kRate] * rate_decay_ + rate_add;
+  double vmax = st[kU0];
+  for (int k = 1; k < nodes; ++k) vmax = std::max(vmax, st[kU0 + k]);
+  *voltage = vmax;
+  return spikes;
+}
+
+int ReceptorStepper::Finish(ReceptorClass cls, const Drive& d, double* st,
+                            double* voltage) const {
+  const double dt = dt_;
+  const int ci = static_cast<int>(cls);
+  const int variant = d.variant;
+  const int nodes = d.nodes;
+  const double n0 = d.n0, n1 = d.n1, v = d.v;
+  const double* l0 = d.l0;
+  const double* l1 = d.l1;
+  const bool full_wave = cls == ReceptorClass::kRA;
+  const double tau = tau_[ci][variant];
+  const double refractory = cls == ReceptorClass::kSA1  ? p_.sa1.refractory_s
+                            : cls == ReceptorClass::kRA ? p_.ra.refractory_s
+                                                        : p_.pc.refractory_s;
+  Adaptation adapt = p_.adapt[ci];
+  adapt.jump = jump_[ci][variant];
 
   // Saturation of the RA drive, d s / (s + |d|) (TouchSim's input
   // saturation, Saal et al. 2017; an odd monotone map keeps the zero
@@ -453,20 +583,20 @@ int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long st
   int nsub = 1;
   double knots[(1 << kMaxSubLevels) + 1];  // node 0's drive at the sub-step ends
   if (sat > 0.0) {
-    const double d = l1[0] - l0[0];
+    const double dl = l1[0] - l0[0];
     int level = 0;
     // d^2 at most 0.99e-4 den fails the test without the division
-    while (level < kMaxSubLevels && !(d * d <= sub_error_skip_[level]) &&
-           d * d / sub_error_den_[level] > 1e-4)
+    while (level < kMaxSubLevels && !(dl * dl <= sub_error_skip_[level]) &&
+           dl * dl / sub_error_den_[level] > 1e-4)
       ++level;
     nsub = 1 << level;
     knots[0] = saturate(l0[0]);
     knots[nsub] = saturate(l1[0]);
     if (nsub > 1) {
       const Filter& f = ra_sub_[level - 1];
-      const double gain = p_.ra.gain_s_per_pa * var.gain;
+      const double gain = gain_[ci][variant];
       double x[4], nx[4];
-      std::copy(x_start, x_start + 4, x);
+      std::copy(d.x_start, d.x_start + 4, x);
       for (int j = 1; j < nsub; ++j) {
         double y = 0.0;
         for (int i = 0; i < f.n; ++i) {

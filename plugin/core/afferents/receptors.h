@@ -27,6 +27,10 @@ const char* QuantityName(Quantity q);
 bool ParseQuantity(const std::string& s, Quantity* q);
 // Compressive-positive receptor quantity from a stress tensor (Voigt, Pa).
 double ReceptorQuantity(Quantity q, const double stress[6]);
+// ReceptorQuantity of `count` tensors 6 doubles apart, into out[0 ..
+// count - 1]: the same bits (kMaxCompressive: four at a time up to the acos,
+// receptor_batch.cc).
+void ReceptorQuantities(Quantity q, int count, const double* stress, double* out);
 
 // SA1 (Merkel), after Wang et al. 2016 and Lesniak et al. 2014. Heminode k
 // of the branching afferent collects I_k = M_k (k0 q + k1 r) + I0 (negative
@@ -177,6 +181,14 @@ class ReceptorStepper {
   int Advance(ReceptorClass cls, double q_end, unsigned long long stream, double* state,
               double* voltage) const;
   double dt() const { return dt_; }
+  // Advance for `count` receptors of class cls, their states
+  // kReceptorStateSize doubles apart from `state`: receptor i takes q_end[i]
+  // and stream first_stream + i and leaves its spike count in spikes[i] and
+  // its voltage in voltage[i]. The same bits as Advance receptor by
+  // receptor. Returns the spikes fired.
+  int AdvanceBatch(ReceptorClass cls, int count, const double* q_end,
+                   unsigned long long first_stream, double* state, double* spikes,
+                   double* voltage) const;
   // Whether the receptor, driven by q = 0 from now on, can never fire again
   // (with noise: fires from noise alone at < 3e-3 Hz, its drive bound 4.5
   // membrane noise sds below threshold): refractory over, previous q zero,
@@ -204,6 +216,36 @@ class ReceptorStepper {
   double sub_error_skip_[kMaxSubLevels];  // 0.99e-4 of it
   // Membrane exponentials over a whole step, per class and variant.
   MembraneSpan step_span_[kNumClasses][kNumVariants];
+  // Per class and variant, as Advance evaluated them per receptor: the
+  // membrane tau (s), the adaptation jump, the drive gain (RA, PC: of the
+  // filter output; SA1: the variant's gain) and the SA1 heminodes' M_k gain.
+  double tau_[kNumClasses][kNumVariants];
+  double jump_[kNumClasses][kNumVariants];
+  double gain_[kNumClasses][kNumVariants];
+  double sa1_m_[kNumVariants][4];
+  int sa1_nodes_;
+  bool noise_on_[kNumClasses];
+  double zero_rate_;  // 0 / rate_tau_s: the rate's increment in a step without spikes
+  // Advance per class (the class's constants and loop lengths fixed); the
+  // uncommon steps (rectification kinks, RA sub-steps) go through Finish.
+  // AdvanceBatch: groups of 4 receptors of one class in 4-lane vectors, the
+  // steps that are not the common one per receptor through FromDrive.
+  struct Drive;  // afferents/receptor_state.h
+  template <ReceptorClass C>
+  int AdvanceAs(double q_end, unsigned long long stream, double* state, double* voltage) const;
+  void Noise(int ci, unsigned long long stream, double* state, double* n0, double* n1) const;
+  // Noise for n <= kNoiseRun consecutive receptors (streams stream, stream + 1,
+  // ...): Noise's bits, the hashes, logs and cosines each in a loop of their own.
+  static constexpr int kNoiseRun = 32;
+  void NoiseRun(int ci, int n, unsigned long long stream, double* state, double* n0,
+                double* n1) const;
+  template <ReceptorClass C>
+  int FromDrive(const Drive& d, double* state, double* voltage) const;
+  int FromDriveAs(ReceptorClass cls, const Drive& d, double* state, double* voltage) const;
+  int Finish(ReceptorClass cls, const Drive& d, double* state, double* voltage) const;
+  template <ReceptorClass C>
+  int Group(const double* q_end, const double* n0, const double* n1, double* state,
+            double* spikes, double* voltage) const;
 };
 
 // The state of a receptor at rest with quantity q (first call): filters at

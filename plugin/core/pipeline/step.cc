@@ -77,9 +77,19 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
         tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
         cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data(),
         StressOptions{tf.uniform_slip, tf.slip_x, tf.slip_y, true, cfg.threads});
-    for (int r = 0; r < nrec; ++r) {
+    // per run of one class's receptors; stress-based quantities at once
+    static_assert(sizeof(Stress6) == 6 * sizeof(double), "stress tensors 6 doubles apart");
+    for (int r = 0; r < nrec;) {
       const int c = static_cast<int>(sites[r].cls);
-      ws->quantity[r] = QuantityAt(cfg.classes[c].quantity, ws->stress[r], model.material(c));
+      int end = r + 1;
+      while (end < nrec && sites[end].cls == sites[r].cls) ++end;
+      const Quantity q = cfg.classes[c].quantity;
+      if (q == Quantity::kStrainEnergy || q == Quantity::kCompressiveStrain) {
+        for (; r < end; ++r) ws->quantity[r] = QuantityAt(q, ws->stress[r], model.material(c));
+      } else {
+        ReceptorQuantities(q, end - r, ws->stress[r].data(), ws->quantity.data() + r);
+        r = end;
+      }
     }
   }
   // Stage 4: receptors advance every step (membranes relax without contact).
@@ -99,16 +109,19 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
     const double step_s =
         nominal_s > 0.0 && std::abs(elapsed - nominal_s) <= 1e-9 * nominal_s ? nominal_s : elapsed;
     const ReceptorStepper& stepper = StepperFor(cfg.receptor, step_s, ws);
-    bool quiescent = !touching && !cfg.outputs[kOutVoltage] && !cfg.outputs[kOutRate];
-    for (int r = 0; r < nrec; ++r) {
-      double* st = layout.receptor(state, r);
-      double v;
-      const int k = stepper.Advance(sites[r].cls, ws->quantity[r], r, st, &v);
-      last_spikes[r] = k;
-      last_voltage[r] = v;
-      *fired += k;
-      quiescent = quiescent && k == 0 && stepper.Quiescent(sites[r].cls, st);
+    // each run of one class's receptors at once (their states are consecutive)
+    for (int r = 0; r < nrec;) {
+      int end = r + 1;
+      while (end < nrec && sites[end].cls == sites[r].cls) ++end;
+      *fired += stepper.AdvanceBatch(sites[r].cls, end - r, ws->quantity.data() + r, r,
+                                     layout.receptor(state, r), last_spikes + r,
+                                     last_voltage + r);
+      r = end;
     }
+    bool quiescent = !touching && !cfg.outputs[kOutVoltage] && !cfg.outputs[kOutRate];
+    for (int r = 0; r < nrec && quiescent; ++r)
+      quiescent =
+          last_spikes[r] == 0.0 && stepper.Quiescent(sites[r].cls, layout.receptor(state, r));
     if (quiescent) {
       state[kStReceptorsIdle] = 1.0;
       state[kStReceptorsTime] = time_s;
