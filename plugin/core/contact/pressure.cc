@@ -43,9 +43,10 @@ void ForBox(const TaxelGrid& grid, const CellBox& box, F&& f) {
 void ClearTraction(const TaxelGrid& grid, TractionField* f) {
   const size_t N = grid.Size();
   if (TractionSized(grid, *f) && f->support_in_runs) {
+    const unsigned held = HeldArrays(*f);  // (the lazy arrays are zero)
     for (size_t r = 0; r < f->runs.row.size(); ++r) {
       const size_t row = static_cast<size_t>(f->runs.row[r]) * grid.n;
-      ZeroCells(f, row + f->runs.begin[r], row + f->runs.end[r]);
+      ZeroCells(f, row + f->runs.begin[r], row + f->runs.end[r], held);
     }
   } else {
     for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa}) {
@@ -58,6 +59,7 @@ void ClearTraction(const TaxelGrid& grid, TractionField* f) {
     }
   }
   f->support_in_runs = false;
+  f->lazy_pressure_pa = f->lazy_shear = false;
   f->box = CellBox{};
   f->runs.Clear();
   f->active_cells = 0;

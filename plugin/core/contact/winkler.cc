@@ -184,17 +184,44 @@ double NewtonSums(const double* gap, const double* cov, int n, const ActiveRuns&
   return ((f[0] + f[1]) + (f[2] + f[3])) + f0;
 }
 
-// One run of touching cells: pressure = load x scale, shear = ratio x
-// pressure and the float copies, as NormalizeLoad then SlipRun leave them;
-// a zero pressure (underflow) gets the zero shear ClearTraction leaves, not
-// rx * 0 (-0 for rx < 0). Returns whether some pressure is zero.
+// One run of touching cells: pressure = load x scale and its float copy
+// (pressure_pa too if kDouble), as NormalizeLoad then SlipRun leave them.
+// Returns whether some pressure is zero (underflow).
+template <bool kDouble>
 MJTOUCH_TARGET_CLONES
-bool ScaledSlipRun(const double* __restrict load, double scale, double rx, double ry, int len,
-                   double* __restrict p, double* __restrict sx, double* __restrict sy,
-                   float* __restrict fp, float* __restrict fx, float* __restrict fy) {
+bool ScaledPressureRun(const double* __restrict load, double scale, int len,
+                       double* __restrict p, float* __restrict fp) {
+  const v4d sv = {scale, scale, scale, scale}, zero = {0, 0, 0, 0};
+  v4l zeros = {0, 0, 0, 0};
+  int k = 0;
+  for (; k + 4 <= len; k += 4) {
+    v4d lv;
+    std::memcpy(&lv, load + k, sizeof(lv));
+    const v4d pk = lv * sv;
+    if (kDouble) std::memcpy(p + k, &pk, sizeof(pk));
+    const v4f fpk = __builtin_convertvector(pk, v4f);
+    std::memcpy(fp + k, &fpk, sizeof(fpk));
+    zeros |= pk == zero;
+  }
+  bool zero_seen = (zeros[0] | zeros[1] | zeros[2] | zeros[3]) != 0;
+  for (; k < len; ++k) {
+    const double pk = load[k] * scale;
+    if (kDouble) p[k] = pk;
+    fp[k] = static_cast<float>(pk);
+    zero_seen |= pk == 0.0;
+  }
+  return zero_seen;
+}
+
+// The shear of one run (double and float), ratio x pressure with pressure =
+// load x scale, as SlipRun leaves it; a zero pressure (underflow) gets the
+// zero shear ClearTraction leaves, not rx * 0 (-0 for rx < 0).
+MJTOUCH_TARGET_CLONES
+void ScaledShearRun(const double* __restrict load, double scale, double rx, double ry, int len,
+                    double* __restrict sx, double* __restrict sy, float* __restrict fx,
+                    float* __restrict fy) {
   const v4d sv = {scale, scale, scale, scale}, xv = {rx, rx, rx, rx}, yv = {ry, ry, ry, ry};
   const v4d zero = {0, 0, 0, 0};
-  v4l zeros = {0, 0, 0, 0};
   int k = 0;
   for (; k + 4 <= len; k += 4) {
     v4d lv;
@@ -203,30 +230,21 @@ bool ScaledSlipRun(const double* __restrict load, double scale, double rx, doubl
     const v4l on = pk != zero;
     const v4d qx = reinterpret_cast<v4d>(reinterpret_cast<v4l>(xv * pk) & on);
     const v4d qy = reinterpret_cast<v4d>(reinterpret_cast<v4l>(yv * pk) & on);
-    std::memcpy(p + k, &pk, sizeof(pk));
     std::memcpy(sx + k, &qx, sizeof(qx));
     std::memcpy(sy + k, &qy, sizeof(qy));
-    const v4f fpk = __builtin_convertvector(pk, v4f), fqx = __builtin_convertvector(qx, v4f),
-              fqy = __builtin_convertvector(qy, v4f);
-    std::memcpy(fp + k, &fpk, sizeof(fpk));
+    const v4f fqx = __builtin_convertvector(qx, v4f), fqy = __builtin_convertvector(qy, v4f);
     std::memcpy(fx + k, &fqx, sizeof(fqx));
     std::memcpy(fy + k, &fqy, sizeof(fqy));
-    zeros |= ~on;
   }
-  bool zero_seen = (zeros[0] | zeros[1] | zeros[2] | zeros[3]) != 0;
   for (; k < len; ++k) {
     const double pk = load[k] * scale;
     const bool on = pk != 0.0;
     const double qx = on ? rx * pk : 0.0, qy = on ? ry * pk : 0.0;
-    p[k] = pk;
     sx[k] = qx;
     sy[k] = qy;
-    fp[k] = static_cast<float>(pk);
     fx[k] = static_cast<float>(qx);
     fy[k] = static_cast<float>(qy);
-    zero_seen |= !on;
   }
-  return zero_seen;
 }
 
 }  // namespace
@@ -317,21 +335,19 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   }
   // The touching cells (runs, in box order), their loads cov (c - g) and
   // NormalizeLoad's sum of them (the other cells add exact zeros).
-  const size_t cells = spans.Count();
-  if (out->scratch_load.size() < cells) out->scratch_load.resize(cells);
-  double* load = out->scratch_load.data();
+  if (out->scratch_load.size() != grid.Size()) out->scratch_load.resize(grid.Size());
   double total = 0.0;
-  size_t t = 0;
   for (size_t r = 0; r < spans.row.size(); ++r) {
     const int j = spans.row[r];
     const double* g = gap + static_cast<size_t>(j) * n;
     const double* w = cov + static_cast<size_t>(j) * n;
+    double* load = out->scratch_load.data() + static_cast<size_t>(j) * n;
     int start = -1;
     for (int i = spans.begin[r]; i < spans.end[r]; ++i) {
       const double d = c - g[i];
       if (Candidate(g[i], w[i]) && d > 0.0) {
         const double pi = w[i] * d;
-        load[t++] = pi;
+        load[i] = pi;
         total += pi;
         if (start < 0) start = i;
       } else if (start >= 0) {
@@ -357,16 +373,17 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
   // NormalizeLoad's scaling of the loads (the same product p * scale).
   const double scale = force / (grid.Area() * out->solved_total);
   const ActiveRuns& runs = out->solved_runs;
-  const double* load = out->scratch_load.data();
   for (size_t r = 0; r < runs.row.size(); ++r) {
-    double* p = out->pressure_pa.data() + static_cast<size_t>(runs.row[r]) * grid.n;
-    for (int i = runs.begin[r]; i < runs.end[r]; ++i) p[i] = *load++ * scale;
+    const size_t row = static_cast<size_t>(runs.row[r]) * grid.n;
+    const double* load = out->scratch_load.data() + row;
+    double* p = out->pressure_pa.data() + row;
+    for (int i = runs.begin[r]; i < runs.end[r]; ++i) p[i] = load[i] * scale;
   }
   return true;
 }
 
 bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double c, double fn,
-                              double fx, double fy, TractionField* out) {
+                              double fx, double fy, bool write_pressure_pa, TractionField* out) {
   const int n = grid.n;
   const double total = out->solved_total;
   if (!(total > 0.0)) {  // nothing solved: the cleared field
@@ -386,7 +403,12 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
   }
   const double scale = fn / (grid.Area() * total);
   SetUniformSlip(fn, fx, fy, out);
-  const double rx = out->slip_x, ry = out->slip_y;
+  // The arrays written now (the rest is left lazy, zero): those of them the
+  // last field held are cleared outside the new runs, the other arrays it
+  // held on all of its support.
+  const unsigned held = HeldArrays(*out);
+  const unsigned written = kPressureF | (write_pressure_pa ? kPressureD : 0u);
+  const unsigned dropped = held & ~written, kept = held & written;
   out->runs = out->solved_runs;
   const ActiveRuns& now = out->runs;
   const double* load = out->scratch_load.data();
@@ -395,32 +417,36 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
   for (size_t r = 0; r < now.row.size(); ++r) {
     const size_t a = static_cast<size_t>(now.row[r]) * n + now.begin[r];
     const int len = now.end[r] - now.begin[r];
-    zero |= ScaledSlipRun(load, scale, rx, ry, len, out->pressure_pa.data() + a,
-                          out->shear_x_pa.data() + a, out->shear_y_pa.data() + a,
-                          out->pressure.data() + a, out->shear_x.data() + a,
-                          out->shear_y.data() + a);
-    load += len;
+    zero |= write_pressure_pa
+                ? ScaledPressureRun<true>(load + a, scale, len, out->pressure_pa.data() + a,
+                                          out->pressure.data() + a)
+                : ScaledPressureRun<false>(load + a, scale, len, nullptr,
+                                           out->pressure.data() + a);
     active += len;
+  }
+  for (size_t r = 0; r < last.row.size() && dropped; ++r) {
+    const size_t row = static_cast<size_t>(last.row[r]) * n;
+    ZeroCells(out, row + last.begin[r], row + last.end[r], dropped);
   }
   // Clear the last support outside the cells just written.
   size_t q = 0;
-  for (size_t r = 0; r < last.row.size(); ++r) {
+  for (size_t r = 0; r < last.row.size() && kept; ++r) {
     const int j = last.row[r];
     const size_t row = static_cast<size_t>(j) * n;
     while (q < now.row.size() && now.row[q] < j) ++q;
     int x = last.begin[r];
     for (size_t s = q; s < now.row.size() && now.row[s] == j && x < last.end[r]; ++s) {
-      ZeroCells(out, row + x, row + std::min(last.end[r], std::max(x, now.begin[s])));
+      ZeroCells(out, row + x, row + std::min(last.end[r], std::max(x, now.begin[s])), kept);
       x = std::max(x, now.end[s]);
     }
-    ZeroCells(out, row + x, row + std::max(x, last.end[r]));
+    ZeroCells(out, row + x, row + std::max(x, last.end[r]), kept);
   }
   if (zero) {  // (underflow) the runs of nonzero pressure only, as FinishUniformSlipTraction
     ActiveRuns split;
     active = 0;
     for (size_t r = 0; r < now.row.size(); ++r) {
-      const double* p = out->pressure_pa.data() + static_cast<size_t>(now.row[r]) * n;
-      ForEachRun(now.begin[r], now.end[r], [&](int i) { return p[i] != 0.0; },
+      const double* l = load + static_cast<size_t>(now.row[r]) * n;
+      ForEachRun(now.begin[r], now.end[r], [&](int i) { return l[i] * scale != 0.0; },
                  [&](int begin, int end) {
                    split.Add(now.row[r], begin, end);
                    active += end - begin;
@@ -429,11 +455,35 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
     // the zero-pressure cells hold zeros in every field already
     std::swap(out->runs, split);
   }
+  out->lazy_pressure_pa = !write_pressure_pa;
+  out->lazy_shear = true;
+  out->lazy_scale = scale;
   out->box = box;
   out->approach_m = c;
   out->support_in_runs = true;
   out->active_cells = active;
   return true;
+}
+
+void MaterializeTraction(const TaxelGrid& grid, bool pressure_pa, bool shear,
+                         TractionField* f) {
+  pressure_pa = pressure_pa && f->lazy_pressure_pa;
+  shear = shear && f->lazy_shear;
+  if (!pressure_pa && !shear) return;
+  const ActiveRuns& runs = f->runs;
+  const double* load = f->scratch_load.data();
+  const double scale = f->lazy_scale;
+  for (size_t r = 0; r < runs.row.size(); ++r) {
+    const size_t a = static_cast<size_t>(runs.row[r]) * grid.n + runs.begin[r];
+    const int len = runs.end[r] - runs.begin[r];
+    if (pressure_pa)
+      for (int k = 0; k < len; ++k) f->pressure_pa[a + k] = load[a + k] * scale;
+    if (shear)
+      ScaledShearRun(load + a, scale, f->slip_x, f->slip_y, len, f->shear_x_pa.data() + a,
+                     f->shear_y_pa.data() + a, f->shear_x.data() + a, f->shear_y.data() + a);
+  }
+  if (pressure_pa) f->lazy_pressure_pa = false;
+  if (shear) f->lazy_shear = false;
 }
 
 }  // namespace mjtouch

@@ -174,8 +174,11 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     if (winkler_slip) {
       // the solve's field, or (no contact) the cleared one
       if (touching) {
+        // pressure_pa for the `pressure` output; the rest on demand
+        // (MaterializeTraction: the stress stage, the Python stage readers)
         touching = WriteWinklerSlipTraction(grid, box, solved_approach, in.normal_force_n,
-                                            in.shear_x_n, in.shear_y_n, &tf);
+                                            in.shear_x_n, in.shear_y_n,
+                                            cfg.outputs[kOutPressure], &tf);
         finished = true;
       } else {
         ClearTraction(grid, &tf);

@@ -72,11 +72,27 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
   if (touching && kt) {
     // Stage 3: stress at the receptors (direct, FFT or tree).
     ws->stress.resize(nrec);
+    const StressOptions opt{tf.uniform_slip, tf.slip_x, tf.slip_y, true, cfg.threads};
+    // The method ComputeStresses would pick, resolved here: the folded
+    // direct sum reads the pressure alone (shear = slip x pressure), so the
+    // shear arrays the Winkler fast path left lazy are written only for the
+    // other paths.
+    StressMethod method = cfg.stress_method;
+    if (method == StressMethod::kTree && !model.tree()) method = StressMethod::kAuto;
+    const bool folded = UsesFoldedPath(*kt, cfg.shear, opt);
+    if (method == StressMethod::kAuto && model.spectra()) {
+      const StressCost c =
+          EstimateStressCost(*kt, model.stress_sites(), tf.runs.Count(), cfg.shear, folded);
+      method = c.fft_s < c.direct_s ? StressMethod::kFft : StressMethod::kDirect;
+    }
+    if (method == StressMethod::kAuto || (method == StressMethod::kFft && !model.spectra()))
+      method = StressMethod::kDirect;
+    if (cfg.shear && !(method == StressMethod::kDirect && folded))
+      MaterializeTraction(cfg.grid, false, true, &ws->traction);
     ws->last_stress_method = ComputeStresses(
-        *kt, model.spectra(), model.tree(), cfg.stress_method, model.stress_sites(), tf.runs,
+        *kt, model.spectra(), model.tree(), method, model.stress_sites(), tf.runs,
         tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
-        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data(),
-        StressOptions{tf.uniform_slip, tf.slip_x, tf.slip_y, true, cfg.threads});
+        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data(), opt);
     for (int r = 0; r < nrec; ++r) {
       const int c = static_cast<int>(sites[r].cls);
       ws->quantity[r] = QuantityAt(cfg.classes[c].quantity, ws->stress[r], model.material(c));
