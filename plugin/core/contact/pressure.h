@@ -55,6 +55,7 @@ struct TractionField {
   // (WriteWinklerSlipTraction).
   std::vector<double> scratch_gap, scratch_cov, scratch_load;
   ActiveRuns scratch_spans, solved_runs, scratch_runs;
+  std::vector<int> scratch_counts;  // SolveWinkler: nonzero loads per span
   double solved_total = 0;
   double scan_gmin = 0, scan_covmax = 0;  // ScanWinklerCandidates
 };
@@ -122,12 +123,21 @@ void MaterializeTraction(const TaxelGrid& grid, bool pressure_pa, bool shear,
                          TractionField* field);
 
 // The same solve without the fast path's shortcuts (every pass over every
-// candidate, then NormalizeLoad): the reference WinklerPressure is tested
-// and benchmarked against; the results are bit-identical.
+// candidate, then NormalizeLoad's scaling): the reference WinklerPressure is
+// tested and benchmarked against; the results are bit-identical. The closed
+// form's sums and the load's sum are taken in four lanes (WinklerLaneSum).
 bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& gap_m,
                               const std::vector<double>& coverage, const CellBox& box,
                               double stiffness_pa_per_m, double normal_force_n,
                               double approach_guess_m, TractionField* out);
+
+// The Winkler solve's sums (closed form, load) in four lanes: lane k adds
+// the terms of the cells in columns i = k mod 4 in box order (row by row);
+// the sum is (lane 0 + lane 1) + (lane 2 + lane 3). Four independent chains
+// let the fast path vectorise them.
+inline double WinklerLaneSum(const double lane[4]) {
+  return (lane[0] + lane[1]) + (lane[2] + lane[3]);
+}
 
 // Full-slip Coulomb shear: q = p * (F_t / F_n) along the direction of
 // MuJoCo's friction force (for a rigid pad in gross slip the local slip

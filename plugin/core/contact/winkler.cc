@@ -140,48 +140,130 @@ void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
   }
 }
 
-// f(c) + target and its slope: sum over the candidates below c of cov (c - g)
-// and of cov, in four interleaved partial sums (not one latency-bound
-// chain), branch-free (a candidate not below c adds +0 to sums that are
-// >= +0: no change) so that it vectorises; the same bits from either clone
-// (no FMA contraction). Their round-off only moves Newton's iterate within
-// round-off of the root: the approach is then fixed by the closed form over
-// the converged contact set, summed in the reference's order.
+// The closed form's and the load's sums run in four lanes, lane k over the
+// cells of columns i = k mod 4 in box order, added ((0 + 1) + (2 + 3)) at
+// the end (WinklerLaneSum, which the reference uses too): four independent
+// chains instead of one latency-bound one, the same bits from either clone.
+// Cells outside the contact set add +0 to a lane, which changes no sum (a
+// lane starts at +0, so it is never -0).
+inline double LaneTotal(v4d v) {
+  const double lane[4] = {v[0], v[1], v[2], v[3]};
+  return WinklerLaneSum(lane);
+}
+
+// Per row span [a, e): cells a .. up to the next multiple of 4 one by one,
+// then vectors of four (column k of a vector is lane k), then the tail.
+template <typename Cell, typename Quad>
+inline void ForLanes(int a, int e, Cell&& cell, Quad&& quad) {
+  int i = a;
+  for (const int head = std::min(e, (a + 3) & ~3); i < head; ++i) cell(i);
+  for (; i + 4 <= e; i += 4) quad(i);
+  for (; i < e; ++i) cell(i);
+}
+
+// The sums over the contact set at c, the candidates below c (c - g > 0):
+// f(c) + target = sum cov (c - g) and its slope sum cov (Newton), sum cov g
+// (with the slope, the closed form's sums, in WinklerLaneSum's order); the
+// largest gap in the set and the smallest gap of the other candidates
+// (exact, order-free). Branch-free in the vector body, so that it
+// vectorises; the same bits from either clone (no FMA contraction).
+struct SetSums {
+  double f = 0, slope = 0, cov_g = 0, in_max = -kInf, out_min = kInf;
+};
+
 MJTOUCH_TARGET_CLONES
-double NewtonSums(const double* gap, const double* cov, int n, const ActiveRuns& spans, double c,
-                  double* slope, double* in_max) {
-  v4d f = {0, 0, 0, 0}, s = {0, 0, 0, 0};
-  double f0 = 0.0, s0 = 0.0, m0 = -kInf;  // the rows' tails (lane 0, added last)
-  const v4d cv = {c, c, c, c}, zero = {0, 0, 0, 0}, ninf = {-kInf, -kInf, -kInf, -kInf};
-  v4d m = ninf;
+SetSums ContactSetSums(const double* gap, const double* cov, int n, const ActiveRuns& spans,
+                       double c) {
+  const v4d zero = {0, 0, 0, 0}, inf = {kInf, kInf, kInf, kInf}, ninf = -inf;
+  const v4d cv = {c, c, c, c};
+  const v4l abs_mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
+                        0x7fffffffffffffffLL};
+  v4d f = zero, sw = zero, swg = zero, hi = ninf, lo = inf;
   for (size_t r = 0; r < spans.row.size(); ++r) {
     const double* g = gap + static_cast<size_t>(spans.row[r]) * n;
     const double* w = cov + static_cast<size_t>(spans.row[r]) * n;
-    int i = spans.begin[r];
-    const int e = spans.end[r];
-    for (; i + 4 <= e; i += 4) {
-      v4d gv, wv;
-      std::memcpy(&gv, g + i, sizeof(gv));
-      std::memcpy(&wv, w + i, sizeof(wv));
-      const v4d d = cv - gv;
-      const v4l in = (d > zero) & (wv > zero) & (gv > ninf);
-      f += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv * d) & in);
-      s += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv) & in);
-      const v4d gin = in ? gv : ninf;
-      m = gin > m ? gin : m;
-    }
-    for (; i < e; ++i) {
-      const double d = c - g[i];
-      if ((d > 0.0) & (w[i] > 0.0) & (g[i] > -kInf)) {
-        f0 += w[i] * d;
-        s0 += w[i];
-        m0 = std::max(m0, g[i]);
-      }
-    }
+    ForLanes(
+        spans.begin[r], spans.end[r],
+        [&](int i) {
+          if (!Candidate(g[i], w[i])) return;
+          const int l = i & 3;
+          const double d = c - g[i];
+          if (d > 0.0) {
+            f[l] += w[i] * d;
+            sw[l] += w[i];
+            swg[l] += w[i] * g[i];
+            hi[l] = std::max(hi[l], g[i]);
+          } else {
+            lo[l] = std::min(lo[l], g[i]);
+          }
+        },
+        [&](int i) {
+          v4d gv, wv;
+          std::memcpy(&gv, g + i, sizeof(gv));
+          std::memcpy(&wv, w + i, sizeof(wv));
+          const v4l cand = (wv > zero) & (reinterpret_cast<v4d>(reinterpret_cast<v4l>(gv) &
+                                                                abs_mask) < inf);
+          const v4d d = cv - gv;
+          const v4l below = d > zero;
+          const v4l in = cand & below, out = cand & ~below;
+          f += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv * d) & in);
+          sw += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv) & in);
+          swg += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv * gv) & in);
+          const v4d gin = in ? gv : ninf, gout = out ? gv : inf;
+          hi = gin > hi ? gin : hi;
+          lo = gout < lo ? gout : lo;
+        });
   }
-  *in_max = std::max(std::max(std::max(m[0], m[1]), std::max(m[2], m[3])), m0);
-  *slope = ((s[0] + s[1]) + (s[2] + s[3])) + s0;
-  return ((f[0] + f[1]) + (f[2] + f[3])) + f0;
+  SetSums out;
+  out.f = LaneTotal(f);
+  out.slope = LaneTotal(sw);
+  out.cov_g = LaneTotal(swg);
+  out.in_max = std::max(std::max(hi[0], hi[1]), std::max(hi[2], hi[3]));
+  out.out_min = std::min(std::min(lo[0], lo[1]), std::min(lo[2], lo[3]));
+  return out;
+}
+
+// The loads cov (c - g) of the candidates below c (0 on the other cells of
+// the spans) into load (by cell), their sum, and per span how many are
+// nonzero.
+MJTOUCH_TARGET_CLONES
+double WinklerLoads(const double* gap, const double* cov, int n, const ActiveRuns& spans,
+                    double c, double* load, int* nonzero) {
+  const v4d zero = {0, 0, 0, 0}, inf = {kInf, kInf, kInf, kInf};
+  const v4d cv = {c, c, c, c};
+  const v4l abs_mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
+                        0x7fffffffffffffffLL};
+  v4d total = zero;
+  for (size_t r = 0; r < spans.row.size(); ++r) {
+    const size_t row = static_cast<size_t>(spans.row[r]) * n;
+    const double* g = gap + row;
+    const double* w = cov + row;
+    double* l = load + row;
+    v4l count = {0, 0, 0, 0};
+    ForLanes(
+        spans.begin[r], spans.end[r],
+        [&](int i) {
+          const double d = c - g[i];
+          const double li = Candidate(g[i], w[i]) && d > 0.0 ? w[i] * d : 0.0;
+          l[i] = li;
+          total[i & 3] += li;
+          count[0] += li != 0.0;
+        },
+        [&](int i) {
+          v4d gv, wv;
+          std::memcpy(&gv, g + i, sizeof(gv));
+          std::memcpy(&wv, w + i, sizeof(wv));
+          const v4d d = cv - gv;
+          const v4l in = (wv > zero) & (d > zero) &
+                         (reinterpret_cast<v4d>(reinterpret_cast<v4l>(gv) & abs_mask) < inf);
+          const v4d li = reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv * d) & in);
+          std::memcpy(l + i, &li, sizeof(li));
+          total += li;
+          count -= li != zero;
+        });
+    nonzero[r] = static_cast<int>((count[0] + count[1]) + (count[2] + count[3]));
+  }
+  return LaneTotal(total);
 }
 
 // One run of touching cells: pressure = load x scale and its float copy
@@ -265,7 +347,7 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   // warm start right of the root (or one step from its left); a
   // closed-form pass whose contact set did not change would repeat the last
   // one exactly, so it is skipped. The closed form and the load sum keep
-  // the reference's order (box order over the candidates), so the values
+  // the reference's order (WinklerLaneSum's lanes), so the values
   // are its values.
   ActiveRuns& spans = out->scratch_spans;
   ActiveRuns& runs = out->solved_runs;
@@ -280,82 +362,90 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   if (!std::isfinite(gmin) || !(force > 0.0)) return false;
   const bool warm = std::isfinite(guess);
   double c = gmin + target / std::max(covmax, 1e-12);
-  double s = 0.0, in_max = 0.0;
-  double f = warm ? NewtonSums(gap, cov, n, spans, guess, &s, &in_max) - target : 0.0;
+  // The last evaluation of the sums and its c: the closed form's first pass
+  // reuses them when its contact set is the same.
+  SetSums sums;
+  double sums_c = std::nan("");
+  auto eval = [&](double at) {
+    sums = ContactSetSums(gap, cov, n, spans, at);
+    sums_c = at;
+    return sums.f - target;
+  };
+  double f = warm ? eval(guess) : 0.0;
   if (warm && guess > gmin && f >= 0.0) {
     c = guess;  // to the right of the root: Newton from there
   } else {
     // Left of the root (the load grew): f is convex, so one Newton step
     // from there lands right of the root, much nearer than the cold start
     // (the load on one cell), which needs many more steps.
-    if (warm && guess > gmin && s > 0.0) {
-      const double right = guess - f / s;
+    if (warm && guess > gmin && sums.slope > 0.0) {
+      const double right = guess - f / sums.slope;
       if (right > guess && right < c) c = right;
     }
-    f = NewtonSums(gap, cov, n, spans, c, &s, &in_max) - target;
+    f = eval(c);
   }
   for (int it = 0; it < 200; ++it) {
-    if (f <= 0.0 || s <= 0.0) break;
-    const double next = c - f / s;
+    if (f <= 0.0 || sums.slope <= 0.0) break;
+    const double next = c - f / sums.slope;
     if (!(next < c)) break;
     c = next;
     // The contact set {g < c} did not change (every gap in it is below the
     // new c): the next step would be over the same set, at its root up to
     // round-off. The closed form below starts from that set either way.
-    if (in_max < c) break;
-    if (it + 1 < 200) f = NewtonSums(gap, cov, n, spans, c, &s, &in_max) - target;
+    if (sums.in_max < c) break;
+    if (it + 1 < 200) f = eval(c);
   }
   // Closed form from the converged contact set, as the reference. A pass
   // whose contact set {g < c} equals the last pass's would repeat its sums
   // and give next == c: it is skipped. The sets are compared through the
   // largest gap in the set and the smallest candidate outside it (c - g > 0
-  // holds exactly when g < c), taken in the same loop, off its critical path.
+  // holds exactly when g < c). The first pass's set is the last Newton
+  // evaluation's when c is at or below it and above all of that set's gaps
+  // (the other candidates are at or above that evaluation's c): its sums
+  // are taken from there, not from another pass.
   bool same_set = false;
   for (int pass = 0; pass < 4 && !same_set; ++pass) {
-    double sum_cov = 0.0, sum_cov_g = 0.0, in_max = -kInf, out_min = kInf;
-    for (size_t r = 0; r < spans.row.size(); ++r) {
-      const double* g = gap + static_cast<size_t>(spans.row[r]) * n;
-      const double* w = cov + static_cast<size_t>(spans.row[r]) * n;
-      for (int i = spans.begin[r]; i < spans.end[r]; ++i) {
-        if (!Candidate(g[i], w[i])) continue;
-        if (c - g[i] > 0.0) {
-          sum_cov += w[i];
-          sum_cov_g += w[i] * g[i];
-          in_max = std::max(in_max, g[i]);
-        } else {
-          out_min = std::min(out_min, g[i]);
-        }
-      }
+    if (!(pass == 0 && sums.in_max < c && c <= sums_c)) {
+      sums = ContactSetSums(gap, cov, n, spans, c);
+      sums_c = c;
     }
-    if (!(sum_cov > 0.0)) break;
-    const double next = (target + sum_cov_g) / sum_cov;
+    if (!(sums.slope > 0.0)) break;
+    const double next = (target + sums.cov_g) / sums.slope;
     if (next == c) break;
-    same_set = in_max < next && next <= out_min;
+    same_set = sums.in_max < next && next <= sums.out_min;
     c = next;
   }
-  // The touching cells (runs, in box order), their loads cov (c - g) and
-  // NormalizeLoad's sum of them (the other cells add exact zeros).
+  // The loads cov (c - g) (by cell; zero on the spans' other cells) and
+  // their sum as the reference's WinklerLaneSum takes it; the touching cells
+  // as runs of nonzero load (a load that underflows to zero would give a
+  // zero pressure, which the field leaves out of its runs either way).
   if (out->scratch_load.size() != grid.Size()) out->scratch_load.resize(grid.Size());
-  double total = 0.0;
+  double* load = out->scratch_load.data();
+  std::vector<int>& nonzero = out->scratch_counts;
+  nonzero.resize(spans.row.size());
+  const double total = WinklerLoads(gap, cov, n, spans, c, load, nonzero.data());
   for (size_t r = 0; r < spans.row.size(); ++r) {
     const int j = spans.row[r];
-    const double* g = gap + static_cast<size_t>(j) * n;
-    const double* w = cov + static_cast<size_t>(j) * n;
-    double* load = out->scratch_load.data() + static_cast<size_t>(j) * n;
-    int start = -1;
-    for (int i = spans.begin[r]; i < spans.end[r]; ++i) {
-      const double d = c - g[i];
-      if (Candidate(g[i], w[i]) && d > 0.0) {
-        const double pi = w[i] * d;
-        load[i] = pi;
-        total += pi;
-        if (start < 0) start = i;
-      } else if (start >= 0) {
-        runs.Add(j, start, i);
-        start = -1;
-      }
+    const double* l = load + static_cast<size_t>(j) * n;
+    int b = spans.begin[r], e = spans.end[r];
+    // (usually one run: the nonzero loads between the first and the last)
+    while (b < e && l[b] == 0.0) ++b;
+    while (e > b && l[e - 1] == 0.0) --e;
+    if (b == e) continue;
+    if (e - b == nonzero[r]) {
+      runs.Add(j, b, e);
+      continue;
     }
-    if (start >= 0) runs.Add(j, start, spans.end[r]);
+    for (int i = b; i < e;) {
+      while (i < e && l[i] == 0.0) ++i;
+      if (i == e) break;
+      const int start = i;
+      while (i + 4 <= e && (l[i] != 0.0) & (l[i + 1] != 0.0) & (l[i + 2] != 0.0) &
+                               (l[i + 3] != 0.0))
+        i += 4;
+      while (i < e && l[i] != 0.0) ++i;
+      runs.Add(j, start, i);
+    }
   }
   out->solved_total = total;
   *approach_m = c;
