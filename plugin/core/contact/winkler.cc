@@ -151,13 +151,19 @@ inline double LaneTotal(v4d v) {
   return WinklerLaneSum(lane);
 }
 
-// Per row span [a, e): cells a .. up to the next multiple of 4 one by one,
-// then vectors of four (column k of a vector is lane k), then the tail.
+// Per row span [a, e) of the box's columns [lo, hi): vectors of four cells
+// at columns 4m .. 4m + 3 (column k of a vector is lane k), the span's
+// ends widened to them where they stay in the box (the box's other cells
+// of a span's row are no candidates: they add nothing), else cell by cell.
 template <typename Cell, typename Quad>
-inline void ForLanes(int a, int e, Cell&& cell, Quad&& quad) {
-  int i = a;
-  for (const int head = std::min(e, (a + 3) & ~3); i < head; ++i) cell(i);
-  for (; i + 4 <= e; i += 4) quad(i);
+inline void ForLanes(int a, int e, int lo, int hi, Cell&& cell, Quad&& quad) {
+  int i = a & ~3;
+  if (i < lo) {
+    i = a;
+    for (const int head = std::min(e, (a + 3) & ~3); i < head; ++i) cell(i);
+  }
+  const int end = ((e + 3) & ~3) <= hi ? (e + 3) & ~3 : e;
+  for (; i + 4 <= end; i += 4) quad(i);
   for (; i < e; ++i) cell(i);
 }
 
@@ -173,7 +179,7 @@ struct SetSums {
 
 MJTOUCH_TARGET_CLONES
 SetSums ContactSetSums(const double* gap, const double* cov, int n, const ActiveRuns& spans,
-                       double c) {
+                       const CellBox& box, double c) {
   const v4d zero = {0, 0, 0, 0}, inf = {kInf, kInf, kInf, kInf}, ninf = -inf;
   const v4d cv = {c, c, c, c};
   const v4l abs_mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
@@ -183,7 +189,7 @@ SetSums ContactSetSums(const double* gap, const double* cov, int n, const Active
     const double* g = gap + static_cast<size_t>(spans.row[r]) * n;
     const double* w = cov + static_cast<size_t>(spans.row[r]) * n;
     ForLanes(
-        spans.begin[r], spans.end[r],
+        spans.begin[r], spans.end[r], box.i0, box.i0 + box.nx,
         [&](int i) {
           if (!Candidate(g[i], w[i])) return;
           const int l = i & 3;
@@ -228,7 +234,7 @@ SetSums ContactSetSums(const double* gap, const double* cov, int n, const Active
 // nonzero.
 MJTOUCH_TARGET_CLONES
 double WinklerLoads(const double* gap, const double* cov, int n, const ActiveRuns& spans,
-                    double c, double* load, int* nonzero) {
+                    const CellBox& box, double c, double* load, int* nonzero) {
   const v4d zero = {0, 0, 0, 0}, inf = {kInf, kInf, kInf, kInf};
   const v4d cv = {c, c, c, c};
   const v4l abs_mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
@@ -241,7 +247,7 @@ double WinklerLoads(const double* gap, const double* cov, int n, const ActiveRun
     double* l = load + row;
     v4l count = {0, 0, 0, 0};
     ForLanes(
-        spans.begin[r], spans.end[r],
+        spans.begin[r], spans.end[r], box.i0, box.i0 + box.nx,
         [&](int i) {
           const double d = c - g[i];
           const double li = Candidate(g[i], w[i]) && d > 0.0 ? w[i] * d : 0.0;
@@ -367,7 +373,7 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   SetSums sums;
   double sums_c = std::nan("");
   auto eval = [&](double at) {
-    sums = ContactSetSums(gap, cov, n, spans, at);
+    sums = ContactSetSums(gap, cov, n, spans, box, at);
     sums_c = at;
     return sums.f - target;
   };
@@ -406,7 +412,7 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   bool same_set = false;
   for (int pass = 0; pass < 4 && !same_set; ++pass) {
     if (!(pass == 0 && sums.in_max < c && c <= sums_c)) {
-      sums = ContactSetSums(gap, cov, n, spans, c);
+      sums = ContactSetSums(gap, cov, n, spans, box, c);
       sums_c = c;
     }
     if (!(sums.slope > 0.0)) break;
@@ -423,7 +429,7 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   double* load = out->scratch_load.data();
   std::vector<int>& nonzero = out->scratch_counts;
   nonzero.resize(spans.row.size());
-  const double total = WinklerLoads(gap, cov, n, spans, c, load, nonzero.data());
+  const double total = WinklerLoads(gap, cov, n, spans, box, c, load, nonzero.data());
   for (size_t r = 0; r < spans.row.size(); ++r) {
     const int j = spans.row[r];
     const double* l = load + static_cast<size_t>(j) * n;
