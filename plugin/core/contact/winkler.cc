@@ -2,7 +2,8 @@
 // WriteWinklerSlipTraction): WinklerPressureReference's result bit for bit,
 // in a few passes over the rows of the rendered box, without packing the
 // candidates (three stores per cell, which bound a packing pass) and, for
-// the plugin's step, without clearing the last field first.
+// the plugin's step, without clearing the last field first and writing only
+// the arrays the step reads (MaterializeTraction writes the others on demand).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -146,7 +147,7 @@ void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
 // chains instead of one latency-bound one, the same bits from either clone.
 // Cells outside the contact set add +0 to a lane, which changes no sum (a
 // lane starts at +0, so it is never -0).
-inline double LaneTotal(v4d v) {
+inline double LaneTotal(const v4d& v) {
   const double lane[4] = {v[0], v[1], v[2], v[3]};
   return WinklerLaneSum(lane);
 }
