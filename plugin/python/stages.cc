@@ -243,6 +243,7 @@ std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
     render_s[t] = render;
     approach[t] = touching ? ws.traction.approach_m : std::nan("");
     if (touching) {
+      MaterializeTraction(cfg.grid, true, fields, &ws.traction);  // (lazy arrays)
       const TractionField& tf = ws.traction;
       double* out = pressure.data() + t * planes * N;
       std::copy(tf.pressure_pa.begin(), tf.pressure_pa.end(), out);

@@ -43,9 +43,10 @@ void ForBox(const TaxelGrid& grid, const CellBox& box, F&& f) {
 void ClearTraction(const TaxelGrid& grid, TractionField* f) {
   const size_t N = grid.Size();
   if (TractionSized(grid, *f) && f->support_in_runs) {
+    const unsigned held = HeldArrays(*f);  // (the lazy arrays are zero)
     for (size_t r = 0; r < f->runs.row.size(); ++r) {
       const size_t row = static_cast<size_t>(f->runs.row[r]) * grid.n;
-      ZeroCells(f, row + f->runs.begin[r], row + f->runs.end[r]);
+      ZeroCells(f, row + f->runs.begin[r], row + f->runs.end[r], held);
     }
   } else {
     for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa}) {
@@ -58,6 +59,7 @@ void ClearTraction(const TaxelGrid& grid, TractionField* f) {
     }
   }
   f->support_in_runs = false;
+  f->lazy_pressure_pa = f->lazy_shear = false;
   f->box = CellBox{};
   f->runs.Clear();
   f->active_cells = 0;
@@ -240,14 +242,19 @@ bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& 
   // Recompute c in closed form from the converged contact set, in a fixed
   // order, so the result does not depend on the warm start (bit-identical
   // outputs whatever the history): c = (target + sum cov g) / sum cov.
+  // The sums in four lanes, lane k over the cells of columns i = k mod 4 in
+  // box order (WinklerLaneSum), as the fast path vectorises them.
+  const int n = grid.n;
   for (int pass = 0; pass < 4; ++pass) {
-    double sum_cov = 0.0, sum_cov_g = 0.0;
+    double lane_cov[4] = {0, 0, 0, 0}, lane_cov_g[4] = {0, 0, 0, 0};
     for (size_t i = 0; i < M; ++i) {
       if (c - cg[i] > 0.0) {
-        sum_cov += cc[i];
-        sum_cov_g += cc[i] * cg[i];
+        const size_t l = (ci[i] % n) & 3;
+        lane_cov[l] += cc[i];
+        lane_cov_g[l] += cc[i] * cg[i];
       }
     }
+    const double sum_cov = WinklerLaneSum(lane_cov), sum_cov_g = WinklerLaneSum(lane_cov_g);
     if (!(sum_cov > 0.0)) break;
     const double next = (target + sum_cov_g) / sum_cov;
     if (next == c) break;
@@ -260,7 +267,17 @@ bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& 
     if (d > 0.0) out->pressure_pa[ci[i]] = cc[i] * d;
   }
   out->approach_m = c;
-  return NormalizeLoad(grid, force, out);
+  // NormalizeLoad with the load summed in the lanes above.
+  double lane_load[4] = {0, 0, 0, 0};
+  ForBox(grid, box, [&](size_t k) { lane_load[(k % n) & 3] += out->pressure_pa[k]; });
+  const double total = WinklerLaneSum(lane_load);
+  if (!(total > 0.0)) {
+    ForBox(grid, box, [&](size_t k) { out->pressure_pa[k] = 0.0; });
+    return false;
+  }
+  const double scale = force / (A * total);
+  ForBox(grid, box, [&](size_t k) { out->pressure_pa[k] *= scale; });
+  return true;
 }
 
 void UniformSlipShear(const TaxelGrid& grid, double fn, double fx, double fy,

@@ -42,12 +42,20 @@ struct TractionField {
   // Every array is zero outside `runs` (FinishUniformSlipTraction), so
   // ClearTraction clears the runs alone, not the whole box.
   bool support_in_runs = false;
+  // Arrays WriteWinklerSlipTraction left unwritten (the step's consumers
+  // did not need them): zero everywhere until MaterializeTraction derives
+  // them from the solve's loads (scratch_load x lazy_scale on `runs`).
+  bool lazy_pressure_pa = false;
+  bool lazy_shear = false;  // shear_x_pa, shear_y_pa, shear_x, shear_y
+  double lazy_scale = 0;
   // Solver scratch (no meaning between calls): the reference's packed
   // candidates; SolveWinkler's candidate spans per row, touching cells
-  // (runs, box order), their loads cov (c - gap) and the loads' sum; the
-  // last support's runs (WriteWinklerSlipTraction).
+  // (runs, box order), their loads cov (c - gap) (n*n, by cell, written on
+  // the touching cells only) and the loads' sum; the last support's runs
+  // (WriteWinklerSlipTraction).
   std::vector<double> scratch_gap, scratch_cov, scratch_load;
   ActiveRuns scratch_spans, solved_runs, scratch_runs;
+  std::vector<int> scratch_counts;  // SolveWinkler: nonzero loads per span
   double solved_total = 0;
   double scan_gmin = 0, scan_covmax = 0;  // ScanWinklerCandidates
 };
@@ -101,18 +109,35 @@ double ScanWinklerCandidates(const TaxelGrid& grid, const std::vector<double>& g
 // bit for bit, in two passes over the touching cells, and without
 // ClearTraction: `out` may hold the last step's field (zero outside its
 // support), of which only the cells outside the new runs are cleared.
+// Writes the float pressure, and pressure_pa if `write_pressure_pa`; the
+// other arrays are left lazy (zero) for MaterializeTraction.
 // False (and the field cleared) if the load is not positive.
 bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double approach_m,
                               double normal_force_n, double ft_x_n, double ft_y_n,
-                              TractionField* out);
+                              bool write_pressure_pa, TractionField* out);
+
+// Writes the arrays WriteWinklerSlipTraction left lazy, of those asked for
+// (pressure_pa; the shear arrays, double and float), with the values it
+// would have written; nothing for arrays already written.
+void MaterializeTraction(const TaxelGrid& grid, bool pressure_pa, bool shear,
+                         TractionField* field);
 
 // The same solve without the fast path's shortcuts (every pass over every
-// candidate, then NormalizeLoad): the reference WinklerPressure is tested
-// and benchmarked against; the results are bit-identical.
+// candidate, then NormalizeLoad's scaling): the reference WinklerPressure is
+// tested and benchmarked against; the results are bit-identical. The closed
+// form's sums and the load's sum are taken in four lanes (WinklerLaneSum).
 bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& gap_m,
                               const std::vector<double>& coverage, const CellBox& box,
                               double stiffness_pa_per_m, double normal_force_n,
                               double approach_guess_m, TractionField* out);
+
+// The Winkler solve's sums (closed form, load) in four lanes: lane k adds
+// the terms of the cells in columns i = k mod 4 in box order (row by row);
+// the sum is (lane 0 + lane 1) + (lane 2 + lane 3). Four independent chains
+// let the fast path vectorise them.
+inline double WinklerLaneSum(const double lane[4]) {
+  return (lane[0] + lane[1]) + (lane[2] + lane[3]);
+}
 
 // Full-slip Coulomb shear: q = p * (F_t / F_n) along the direction of
 // MuJoCo's friction force (for a rigid pad in gross slip the local slip

@@ -18,13 +18,31 @@ inline bool TractionSized(const TaxelGrid& grid, const TractionField& f) {
          f.pressure.size() == N && f.shear_x.size() == N && f.shear_y.size() == N;
 }
 
-// Zero every array of f on the cells [a, b) (flat indices; none if a >= b).
-inline void ZeroCells(TractionField* f, size_t a, size_t b) {
+// Groups of a TractionField's arrays (bit masks for ZeroCells).
+enum : unsigned {
+  kPressureD = 1,  // pressure_pa
+  kPressureF = 2,  // pressure (float)
+  kShearD = 4,     // shear_x_pa, shear_y_pa
+  kShearF = 8,     // shear_x, shear_y (float)
+  kAllArrays = 15
+};
+
+// The arrays of f that may hold nonzero values (not left lazily zero).
+inline unsigned HeldArrays(const TractionField& f) {
+  return kPressureF | (f.lazy_pressure_pa ? 0u : kPressureD) |
+         (f.lazy_shear ? 0u : kShearD | kShearF);
+}
+
+// Zero the arrays of f in `arrays` on the cells [a, b) (flat indices; none if
+// a >= b).
+inline void ZeroCells(TractionField* f, size_t a, size_t b, unsigned arrays = kAllArrays) {
   if (a >= b) return;
-  for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa})
-    std::fill(v->begin() + a, v->begin() + b, 0.0);
-  for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y})
-    std::fill(v->begin() + a, v->begin() + b, 0.0f);
+  if (arrays & kPressureD) std::fill(f->pressure_pa.begin() + a, f->pressure_pa.begin() + b, 0.0);
+  if (arrays & kPressureF) std::fill(f->pressure.begin() + a, f->pressure.begin() + b, 0.0f);
+  if (arrays & kShearD)
+    for (auto* v : {&f->shear_x_pa, &f->shear_y_pa}) std::fill(v->begin() + a, v->begin() + b, 0.0);
+  if (arrays & kShearF)
+    for (auto* v : {&f->shear_x, &f->shear_y}) std::fill(v->begin() + a, v->begin() + b, 0.0f);
 }
 
 // Marks f's shear as full slip (shear = ratio x pressure, ratio = tangential

@@ -2,7 +2,8 @@
 // WriteWinklerSlipTraction): WinklerPressureReference's result bit for bit,
 // in a few passes over the rows of the rendered box, without packing the
 // candidates (three stores per cell, which bound a packing pass) and, for
-// the plugin's step, without clearing the last field first.
+// the plugin's step, without clearing the last field first and writing only
+// the arrays the step reads (MaterializeTraction writes the others on demand).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -140,61 +141,176 @@ void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
   }
 }
 
-// f(c) + target and its slope: sum over the candidates below c of cov (c - g)
-// and of cov, in four interleaved partial sums (not one latency-bound
-// chain), branch-free (a candidate not below c adds +0 to sums that are
-// >= +0: no change) so that it vectorises; the same bits from either clone
-// (no FMA contraction). Their round-off only moves Newton's iterate within
-// round-off of the root: the approach is then fixed by the closed form over
-// the converged contact set, summed in the reference's order.
+// The closed form's and the load's sums run in four lanes, lane k over the
+// cells of columns i = k mod 4 in box order, added ((0 + 1) + (2 + 3)) at
+// the end (WinklerLaneSum, which the reference uses too): four independent
+// chains instead of one latency-bound one, the same bits from either clone.
+// Cells outside the contact set add +0 to a lane, which changes no sum (a
+// lane starts at +0, so it is never -0).
+inline double LaneTotal(const v4d& v) {
+  const double lane[4] = {v[0], v[1], v[2], v[3]};
+  return WinklerLaneSum(lane);
+}
+
+// Per row span [a, e) of the box's columns [lo, hi): vectors of four cells
+// at columns 4m .. 4m + 3 (column k of a vector is lane k), the span's
+// ends widened to them where they stay in the box (the box's other cells
+// of a span's row are no candidates: they add nothing), else cell by cell.
+template <typename Cell, typename Quad>
+inline void ForLanes(int a, int e, int lo, int hi, Cell&& cell, Quad&& quad) {
+  int i = a & ~3;
+  if (i < lo) {
+    i = a;
+    for (const int head = std::min(e, (a + 3) & ~3); i < head; ++i) cell(i);
+  }
+  const int end = ((e + 3) & ~3) <= hi ? (e + 3) & ~3 : e;
+  for (; i + 4 <= end; i += 4) quad(i);
+  for (; i < e; ++i) cell(i);
+}
+
+// The sums over the contact set at c, the candidates below c (c - g > 0):
+// f(c) + target = sum cov (c - g) and its slope sum cov (Newton), sum cov g
+// (with the slope, the closed form's sums, in WinklerLaneSum's order); the
+// largest gap in the set and the smallest gap of the other candidates
+// (exact, order-free). Branch-free in the vector body, so that it
+// vectorises; the same bits from either clone (no FMA contraction).
+struct SetSums {
+  double f = 0, slope = 0, cov_g = 0, in_max = -kInf, out_min = kInf;
+};
+
 MJTOUCH_TARGET_CLONES
-double NewtonSums(const double* gap, const double* cov, int n, const ActiveRuns& spans, double c,
-                  double* slope, double* in_max) {
-  v4d f = {0, 0, 0, 0}, s = {0, 0, 0, 0};
-  double f0 = 0.0, s0 = 0.0, m0 = -kInf;  // the rows' tails (lane 0, added last)
-  const v4d cv = {c, c, c, c}, zero = {0, 0, 0, 0}, ninf = {-kInf, -kInf, -kInf, -kInf};
-  v4d m = ninf;
+SetSums ContactSetSums(const double* gap, const double* cov, int n, const ActiveRuns& spans,
+                       const CellBox& box, double c) {
+  const v4d zero = {0, 0, 0, 0}, inf = {kInf, kInf, kInf, kInf}, ninf = -inf;
+  const v4d cv = {c, c, c, c};
+  const v4l abs_mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
+                        0x7fffffffffffffffLL};
+  v4d f = zero, sw = zero, swg = zero, hi = ninf, lo = inf;
   for (size_t r = 0; r < spans.row.size(); ++r) {
     const double* g = gap + static_cast<size_t>(spans.row[r]) * n;
     const double* w = cov + static_cast<size_t>(spans.row[r]) * n;
-    int i = spans.begin[r];
-    const int e = spans.end[r];
-    for (; i + 4 <= e; i += 4) {
-      v4d gv, wv;
-      std::memcpy(&gv, g + i, sizeof(gv));
-      std::memcpy(&wv, w + i, sizeof(wv));
-      const v4d d = cv - gv;
-      const v4l in = (d > zero) & (wv > zero) & (gv > ninf);
-      f += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv * d) & in);
-      s += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv) & in);
-      const v4d gin = in ? gv : ninf;
-      m = gin > m ? gin : m;
-    }
-    for (; i < e; ++i) {
-      const double d = c - g[i];
-      if ((d > 0.0) & (w[i] > 0.0) & (g[i] > -kInf)) {
-        f0 += w[i] * d;
-        s0 += w[i];
-        m0 = std::max(m0, g[i]);
-      }
-    }
+    ForLanes(
+        spans.begin[r], spans.end[r], box.i0, box.i0 + box.nx,
+        [&](int i) {
+          if (!Candidate(g[i], w[i])) return;
+          const int l = i & 3;
+          const double d = c - g[i];
+          if (d > 0.0) {
+            f[l] += w[i] * d;
+            sw[l] += w[i];
+            swg[l] += w[i] * g[i];
+            hi[l] = std::max(hi[l], g[i]);
+          } else {
+            lo[l] = std::min(lo[l], g[i]);
+          }
+        },
+        [&](int i) {
+          v4d gv, wv;
+          std::memcpy(&gv, g + i, sizeof(gv));
+          std::memcpy(&wv, w + i, sizeof(wv));
+          const v4l cand = (wv > zero) & (reinterpret_cast<v4d>(reinterpret_cast<v4l>(gv) &
+                                                                abs_mask) < inf);
+          const v4d d = cv - gv;
+          const v4l below = d > zero;
+          const v4l in = cand & below, out = cand & ~below;
+          f += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv * d) & in);
+          sw += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv) & in);
+          swg += reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv * gv) & in);
+          const v4d gin = in ? gv : ninf, gout = out ? gv : inf;
+          hi = gin > hi ? gin : hi;
+          lo = gout < lo ? gout : lo;
+        });
   }
-  *in_max = std::max(std::max(std::max(m[0], m[1]), std::max(m[2], m[3])), m0);
-  *slope = ((s[0] + s[1]) + (s[2] + s[3])) + s0;
-  return ((f[0] + f[1]) + (f[2] + f[3])) + f0;
+  SetSums out;
+  out.f = LaneTotal(f);
+  out.slope = LaneTotal(sw);
+  out.cov_g = LaneTotal(swg);
+  out.in_max = std::max(std::max(hi[0], hi[1]), std::max(hi[2], hi[3]));
+  out.out_min = std::min(std::min(lo[0], lo[1]), std::min(lo[2], lo[3]));
+  return out;
 }
 
-// One run of touching cells: pressure = load x scale, shear = ratio x
-// pressure and the float copies, as NormalizeLoad then SlipRun leave them;
-// a zero pressure (underflow) gets the zero shear ClearTraction leaves, not
-// rx * 0 (-0 for rx < 0). Returns whether some pressure is zero.
+// The loads cov (c - g) of the candidates below c (0 on the other cells of
+// the spans) into load (by cell), their sum, and per span how many are
+// nonzero.
 MJTOUCH_TARGET_CLONES
-bool ScaledSlipRun(const double* __restrict load, double scale, double rx, double ry, int len,
-                   double* __restrict p, double* __restrict sx, double* __restrict sy,
-                   float* __restrict fp, float* __restrict fx, float* __restrict fy) {
+double WinklerLoads(const double* gap, const double* cov, int n, const ActiveRuns& spans,
+                    const CellBox& box, double c, double* load, int* nonzero) {
+  const v4d zero = {0, 0, 0, 0}, inf = {kInf, kInf, kInf, kInf};
+  const v4d cv = {c, c, c, c};
+  const v4l abs_mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
+                        0x7fffffffffffffffLL};
+  v4d total = zero;
+  for (size_t r = 0; r < spans.row.size(); ++r) {
+    const size_t row = static_cast<size_t>(spans.row[r]) * n;
+    const double* g = gap + row;
+    const double* w = cov + row;
+    double* l = load + row;
+    v4l count = {0, 0, 0, 0};
+    ForLanes(
+        spans.begin[r], spans.end[r], box.i0, box.i0 + box.nx,
+        [&](int i) {
+          const double d = c - g[i];
+          const double li = Candidate(g[i], w[i]) && d > 0.0 ? w[i] * d : 0.0;
+          l[i] = li;
+          total[i & 3] += li;
+          count[0] += li != 0.0;
+        },
+        [&](int i) {
+          v4d gv, wv;
+          std::memcpy(&gv, g + i, sizeof(gv));
+          std::memcpy(&wv, w + i, sizeof(wv));
+          const v4d d = cv - gv;
+          const v4l in = (wv > zero) & (d > zero) &
+                         (reinterpret_cast<v4d>(reinterpret_cast<v4l>(gv) & abs_mask) < inf);
+          const v4d li = reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv * d) & in);
+          std::memcpy(l + i, &li, sizeof(li));
+          total += li;
+          count -= li != zero;
+        });
+    nonzero[r] = static_cast<int>((count[0] + count[1]) + (count[2] + count[3]));
+  }
+  return LaneTotal(total);
+}
+
+// One run of touching cells: pressure = load x scale and its float copy
+// (pressure_pa too if kDouble), as NormalizeLoad then SlipRun leave them.
+// Returns whether some pressure is zero (underflow).
+template <bool kDouble>
+MJTOUCH_TARGET_CLONES
+bool ScaledPressureRun(const double* __restrict load, double scale, int len,
+                       double* __restrict p, float* __restrict fp) {
+  const v4d sv = {scale, scale, scale, scale}, zero = {0, 0, 0, 0};
+  v4l zeros = {0, 0, 0, 0};
+  int k = 0;
+  for (; k + 4 <= len; k += 4) {
+    v4d lv;
+    std::memcpy(&lv, load + k, sizeof(lv));
+    const v4d pk = lv * sv;
+    if (kDouble) std::memcpy(p + k, &pk, sizeof(pk));
+    const v4f fpk = __builtin_convertvector(pk, v4f);
+    std::memcpy(fp + k, &fpk, sizeof(fpk));
+    zeros |= pk == zero;
+  }
+  bool zero_seen = (zeros[0] | zeros[1] | zeros[2] | zeros[3]) != 0;
+  for (; k < len; ++k) {
+    const double pk = load[k] * scale;
+    if (kDouble) p[k] = pk;
+    fp[k] = static_cast<float>(pk);
+    zero_seen |= pk == 0.0;
+  }
+  return zero_seen;
+}
+
+// The shear of one run (double and float), ratio x pressure with pressure =
+// load x scale, as SlipRun leaves it; a zero pressure (underflow) gets the
+// zero shear ClearTraction leaves, not rx * 0 (-0 for rx < 0).
+MJTOUCH_TARGET_CLONES
+void ScaledShearRun(const double* __restrict load, double scale, double rx, double ry, int len,
+                    double* __restrict sx, double* __restrict sy, float* __restrict fx,
+                    float* __restrict fy) {
   const v4d sv = {scale, scale, scale, scale}, xv = {rx, rx, rx, rx}, yv = {ry, ry, ry, ry};
   const v4d zero = {0, 0, 0, 0};
-  v4l zeros = {0, 0, 0, 0};
   int k = 0;
   for (; k + 4 <= len; k += 4) {
     v4d lv;
@@ -203,30 +319,21 @@ bool ScaledSlipRun(const double* __restrict load, double scale, double rx, doubl
     const v4l on = pk != zero;
     const v4d qx = reinterpret_cast<v4d>(reinterpret_cast<v4l>(xv * pk) & on);
     const v4d qy = reinterpret_cast<v4d>(reinterpret_cast<v4l>(yv * pk) & on);
-    std::memcpy(p + k, &pk, sizeof(pk));
     std::memcpy(sx + k, &qx, sizeof(qx));
     std::memcpy(sy + k, &qy, sizeof(qy));
-    const v4f fpk = __builtin_convertvector(pk, v4f), fqx = __builtin_convertvector(qx, v4f),
-              fqy = __builtin_convertvector(qy, v4f);
-    std::memcpy(fp + k, &fpk, sizeof(fpk));
+    const v4f fqx = __builtin_convertvector(qx, v4f), fqy = __builtin_convertvector(qy, v4f);
     std::memcpy(fx + k, &fqx, sizeof(fqx));
     std::memcpy(fy + k, &fqy, sizeof(fqy));
-    zeros |= ~on;
   }
-  bool zero_seen = (zeros[0] | zeros[1] | zeros[2] | zeros[3]) != 0;
   for (; k < len; ++k) {
     const double pk = load[k] * scale;
     const bool on = pk != 0.0;
     const double qx = on ? rx * pk : 0.0, qy = on ? ry * pk : 0.0;
-    p[k] = pk;
     sx[k] = qx;
     sy[k] = qy;
-    fp[k] = static_cast<float>(pk);
     fx[k] = static_cast<float>(qx);
     fy[k] = static_cast<float>(qy);
-    zero_seen |= !on;
   }
-  return zero_seen;
 }
 
 }  // namespace
@@ -247,7 +354,7 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   // warm start right of the root (or one step from its left); a
   // closed-form pass whose contact set did not change would repeat the last
   // one exactly, so it is skipped. The closed form and the load sum keep
-  // the reference's order (box order over the candidates), so the values
+  // the reference's order (WinklerLaneSum's lanes), so the values
   // are its values.
   ActiveRuns& spans = out->scratch_spans;
   ActiveRuns& runs = out->solved_runs;
@@ -262,84 +369,90 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
   if (!std::isfinite(gmin) || !(force > 0.0)) return false;
   const bool warm = std::isfinite(guess);
   double c = gmin + target / std::max(covmax, 1e-12);
-  double s = 0.0, in_max = 0.0;
-  double f = warm ? NewtonSums(gap, cov, n, spans, guess, &s, &in_max) - target : 0.0;
+  // The last evaluation of the sums and its c: the closed form's first pass
+  // reuses them when its contact set is the same.
+  SetSums sums;
+  double sums_c = std::nan("");
+  auto eval = [&](double at) {
+    sums = ContactSetSums(gap, cov, n, spans, box, at);
+    sums_c = at;
+    return sums.f - target;
+  };
+  double f = warm ? eval(guess) : 0.0;
   if (warm && guess > gmin && f >= 0.0) {
     c = guess;  // to the right of the root: Newton from there
   } else {
     // Left of the root (the load grew): f is convex, so one Newton step
     // from there lands right of the root, much nearer than the cold start
     // (the load on one cell), which needs many more steps.
-    if (warm && guess > gmin && s > 0.0) {
-      const double right = guess - f / s;
+    if (warm && guess > gmin && sums.slope > 0.0) {
+      const double right = guess - f / sums.slope;
       if (right > guess && right < c) c = right;
     }
-    f = NewtonSums(gap, cov, n, spans, c, &s, &in_max) - target;
+    f = eval(c);
   }
   for (int it = 0; it < 200; ++it) {
-    if (f <= 0.0 || s <= 0.0) break;
-    const double next = c - f / s;
+    if (f <= 0.0 || sums.slope <= 0.0) break;
+    const double next = c - f / sums.slope;
     if (!(next < c)) break;
     c = next;
     // The contact set {g < c} did not change (every gap in it is below the
     // new c): the next step would be over the same set, at its root up to
     // round-off. The closed form below starts from that set either way.
-    if (in_max < c) break;
-    if (it + 1 < 200) f = NewtonSums(gap, cov, n, spans, c, &s, &in_max) - target;
+    if (sums.in_max < c) break;
+    if (it + 1 < 200) f = eval(c);
   }
   // Closed form from the converged contact set, as the reference. A pass
   // whose contact set {g < c} equals the last pass's would repeat its sums
   // and give next == c: it is skipped. The sets are compared through the
   // largest gap in the set and the smallest candidate outside it (c - g > 0
-  // holds exactly when g < c), taken in the same loop, off its critical path.
+  // holds exactly when g < c). The first pass's set is the last Newton
+  // evaluation's when c is at or below it and above all of that set's gaps
+  // (the other candidates are at or above that evaluation's c): its sums
+  // are taken from there, not from another pass.
   bool same_set = false;
   for (int pass = 0; pass < 4 && !same_set; ++pass) {
-    double sum_cov = 0.0, sum_cov_g = 0.0, in_max = -kInf, out_min = kInf;
-    for (size_t r = 0; r < spans.row.size(); ++r) {
-      const double* g = gap + static_cast<size_t>(spans.row[r]) * n;
-      const double* w = cov + static_cast<size_t>(spans.row[r]) * n;
-      for (int i = spans.begin[r]; i < spans.end[r]; ++i) {
-        if (!Candidate(g[i], w[i])) continue;
-        if (c - g[i] > 0.0) {
-          sum_cov += w[i];
-          sum_cov_g += w[i] * g[i];
-          in_max = std::max(in_max, g[i]);
-        } else {
-          out_min = std::min(out_min, g[i]);
-        }
-      }
+    if (!(pass == 0 && sums.in_max < c && c <= sums_c)) {
+      sums = ContactSetSums(gap, cov, n, spans, box, c);
+      sums_c = c;
     }
-    if (!(sum_cov > 0.0)) break;
-    const double next = (target + sum_cov_g) / sum_cov;
+    if (!(sums.slope > 0.0)) break;
+    const double next = (target + sums.cov_g) / sums.slope;
     if (next == c) break;
-    same_set = in_max < next && next <= out_min;
+    same_set = sums.in_max < next && next <= sums.out_min;
     c = next;
   }
-  // The touching cells (runs, in box order), their loads cov (c - g) and
-  // NormalizeLoad's sum of them (the other cells add exact zeros).
-  const size_t cells = spans.Count();
-  if (out->scratch_load.size() < cells) out->scratch_load.resize(cells);
+  // The loads cov (c - g) (by cell; zero on the spans' other cells) and
+  // their sum as the reference's WinklerLaneSum takes it; the touching cells
+  // as runs of nonzero load (a load that underflows to zero would give a
+  // zero pressure, which the field leaves out of its runs either way).
+  if (out->scratch_load.size() != grid.Size()) out->scratch_load.resize(grid.Size());
   double* load = out->scratch_load.data();
-  double total = 0.0;
-  size_t t = 0;
+  std::vector<int>& nonzero = out->scratch_counts;
+  nonzero.resize(spans.row.size());
+  const double total = WinklerLoads(gap, cov, n, spans, box, c, load, nonzero.data());
   for (size_t r = 0; r < spans.row.size(); ++r) {
     const int j = spans.row[r];
-    const double* g = gap + static_cast<size_t>(j) * n;
-    const double* w = cov + static_cast<size_t>(j) * n;
-    int start = -1;
-    for (int i = spans.begin[r]; i < spans.end[r]; ++i) {
-      const double d = c - g[i];
-      if (Candidate(g[i], w[i]) && d > 0.0) {
-        const double pi = w[i] * d;
-        load[t++] = pi;
-        total += pi;
-        if (start < 0) start = i;
-      } else if (start >= 0) {
-        runs.Add(j, start, i);
-        start = -1;
-      }
+    const double* l = load + static_cast<size_t>(j) * n;
+    int b = spans.begin[r], e = spans.end[r];
+    // (usually one run: the nonzero loads between the first and the last)
+    while (b < e && l[b] == 0.0) ++b;
+    while (e > b && l[e - 1] == 0.0) --e;
+    if (b == e) continue;
+    if (e - b == nonzero[r]) {
+      runs.Add(j, b, e);
+      continue;
     }
-    if (start >= 0) runs.Add(j, start, spans.end[r]);
+    for (int i = b; i < e;) {
+      while (i < e && l[i] == 0.0) ++i;
+      if (i == e) break;
+      const int start = i;
+      while (i + 4 <= e && (l[i] != 0.0) & (l[i + 1] != 0.0) & (l[i + 2] != 0.0) &
+                               (l[i + 3] != 0.0))
+        i += 4;
+      while (i < e && l[i] != 0.0) ++i;
+      runs.Add(j, start, i);
+    }
   }
   out->solved_total = total;
   *approach_m = c;
@@ -357,16 +470,17 @@ bool WinklerPressure(const TaxelGrid& grid, const std::vector<double>& gap,
   // NormalizeLoad's scaling of the loads (the same product p * scale).
   const double scale = force / (grid.Area() * out->solved_total);
   const ActiveRuns& runs = out->solved_runs;
-  const double* load = out->scratch_load.data();
   for (size_t r = 0; r < runs.row.size(); ++r) {
-    double* p = out->pressure_pa.data() + static_cast<size_t>(runs.row[r]) * grid.n;
-    for (int i = runs.begin[r]; i < runs.end[r]; ++i) p[i] = *load++ * scale;
+    const size_t row = static_cast<size_t>(runs.row[r]) * grid.n;
+    const double* load = out->scratch_load.data() + row;
+    double* p = out->pressure_pa.data() + row;
+    for (int i = runs.begin[r]; i < runs.end[r]; ++i) p[i] = load[i] * scale;
   }
   return true;
 }
 
 bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double c, double fn,
-                              double fx, double fy, TractionField* out) {
+                              double fx, double fy, bool write_pressure_pa, TractionField* out) {
   const int n = grid.n;
   const double total = out->solved_total;
   if (!(total > 0.0)) {  // nothing solved: the cleared field
@@ -386,7 +500,12 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
   }
   const double scale = fn / (grid.Area() * total);
   SetUniformSlip(fn, fx, fy, out);
-  const double rx = out->slip_x, ry = out->slip_y;
+  // The arrays written now (the rest is left lazy, zero): those of them the
+  // last field held are cleared outside the new runs, the other arrays it
+  // held on all of its support.
+  const unsigned held = HeldArrays(*out);
+  const unsigned written = kPressureF | (write_pressure_pa ? kPressureD : 0u);
+  const unsigned dropped = held & ~written, kept = held & written;
   out->runs = out->solved_runs;
   const ActiveRuns& now = out->runs;
   const double* load = out->scratch_load.data();
@@ -395,32 +514,36 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
   for (size_t r = 0; r < now.row.size(); ++r) {
     const size_t a = static_cast<size_t>(now.row[r]) * n + now.begin[r];
     const int len = now.end[r] - now.begin[r];
-    zero |= ScaledSlipRun(load, scale, rx, ry, len, out->pressure_pa.data() + a,
-                          out->shear_x_pa.data() + a, out->shear_y_pa.data() + a,
-                          out->pressure.data() + a, out->shear_x.data() + a,
-                          out->shear_y.data() + a);
-    load += len;
+    zero |= write_pressure_pa
+                ? ScaledPressureRun<true>(load + a, scale, len, out->pressure_pa.data() + a,
+                                          out->pressure.data() + a)
+                : ScaledPressureRun<false>(load + a, scale, len, nullptr,
+                                           out->pressure.data() + a);
     active += len;
+  }
+  for (size_t r = 0; r < last.row.size() && dropped; ++r) {
+    const size_t row = static_cast<size_t>(last.row[r]) * n;
+    ZeroCells(out, row + last.begin[r], row + last.end[r], dropped);
   }
   // Clear the last support outside the cells just written.
   size_t q = 0;
-  for (size_t r = 0; r < last.row.size(); ++r) {
+  for (size_t r = 0; r < last.row.size() && kept; ++r) {
     const int j = last.row[r];
     const size_t row = static_cast<size_t>(j) * n;
     while (q < now.row.size() && now.row[q] < j) ++q;
     int x = last.begin[r];
     for (size_t s = q; s < now.row.size() && now.row[s] == j && x < last.end[r]; ++s) {
-      ZeroCells(out, row + x, row + std::min(last.end[r], std::max(x, now.begin[s])));
+      ZeroCells(out, row + x, row + std::min(last.end[r], std::max(x, now.begin[s])), kept);
       x = std::max(x, now.end[s]);
     }
-    ZeroCells(out, row + x, row + std::max(x, last.end[r]));
+    ZeroCells(out, row + x, row + std::max(x, last.end[r]), kept);
   }
   if (zero) {  // (underflow) the runs of nonzero pressure only, as FinishUniformSlipTraction
     ActiveRuns split;
     active = 0;
     for (size_t r = 0; r < now.row.size(); ++r) {
-      const double* p = out->pressure_pa.data() + static_cast<size_t>(now.row[r]) * n;
-      ForEachRun(now.begin[r], now.end[r], [&](int i) { return p[i] != 0.0; },
+      const double* l = load + static_cast<size_t>(now.row[r]) * n;
+      ForEachRun(now.begin[r], now.end[r], [&](int i) { return l[i] * scale != 0.0; },
                  [&](int begin, int end) {
                    split.Add(now.row[r], begin, end);
                    active += end - begin;
@@ -429,11 +552,35 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
     // the zero-pressure cells hold zeros in every field already
     std::swap(out->runs, split);
   }
+  out->lazy_pressure_pa = !write_pressure_pa;
+  out->lazy_shear = true;
+  out->lazy_scale = scale;
   out->box = box;
   out->approach_m = c;
   out->support_in_runs = true;
   out->active_cells = active;
   return true;
+}
+
+void MaterializeTraction(const TaxelGrid& grid, bool pressure_pa, bool shear,
+                         TractionField* f) {
+  pressure_pa = pressure_pa && f->lazy_pressure_pa;
+  shear = shear && f->lazy_shear;
+  if (!pressure_pa && !shear) return;
+  const ActiveRuns& runs = f->runs;
+  const double* load = f->scratch_load.data();
+  const double scale = f->lazy_scale;
+  for (size_t r = 0; r < runs.row.size(); ++r) {
+    const size_t a = static_cast<size_t>(runs.row[r]) * grid.n + runs.begin[r];
+    const int len = runs.end[r] - runs.begin[r];
+    if (pressure_pa)
+      for (int k = 0; k < len; ++k) f->pressure_pa[a + k] = load[a + k] * scale;
+    if (shear)
+      ScaledShearRun(load + a, scale, f->slip_x, f->slip_y, len, f->shear_x_pa.data() + a,
+                     f->shear_y_pa.data() + a, f->shear_x.data() + a, f->shear_y.data() + a);
+  }
+  if (pressure_pa) f->lazy_pressure_pa = false;
+  if (shear) f->lazy_shear = false;
 }
 
 }  // namespace mjtouch

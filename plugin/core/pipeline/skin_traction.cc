@@ -22,7 +22,7 @@ constexpr int kElasticMaxIterations = 500;
 // last step's indentation depths plus a margin (the other models: 1.5 and
 // 20 um). Any level gives the same result (a level the approach reaches
 // renders again without culling); a tight one renders and scans fewer cells.
-constexpr double kWinklerCullDepths = 1.15, kWinklerCullM = 5e-6;
+constexpr double kWinklerCullDepths = 1.1, kWinklerCullM = 3e-6;
 
 // CPU time of the calling thread (benchmarks: Workspace::render_time_s).
 double ThreadCpuSeconds() {
@@ -174,8 +174,11 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     if (winkler_slip) {
       // the solve's field, or (no contact) the cleared one
       if (touching) {
+        // pressure_pa for the `pressure` output; the rest on demand
+        // (MaterializeTraction: the stress stage, the Python stage readers)
         touching = WriteWinklerSlipTraction(grid, box, solved_approach, in.normal_force_n,
-                                            in.shear_x_n, in.shear_y_n, &tf);
+                                            in.shear_x_n, in.shear_y_n,
+                                            cfg.outputs[kOutPressure], &tf);
         finished = true;
       } else {
         ClearTraction(grid, &tf);

@@ -72,11 +72,19 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
   if (touching && kt) {
     // Stage 3: stress at the receptors (direct, FFT or tree).
     ws->stress.resize(nrec);
+    const StressOptions opt{tf.uniform_slip, tf.slip_x, tf.slip_y, true, cfg.threads};
+    // The path resolved first: the folded direct sum reads the pressure alone
+    // (shear = slip x pressure), so the shear arrays the Winkler fast path
+    // left lazy are written only for the other paths.
+    const StressMethod method =
+        ResolveStressMethod(*kt, model.spectra(), model.tree(), cfg.stress_method,
+                            model.stress_sites(), tf.runs.Count(), cfg.shear, opt);
+    if (PathReadsShear(*kt, method, cfg.shear, opt))
+      MaterializeTraction(cfg.grid, false, true, &ws->traction);
     ws->last_stress_method = ComputeStresses(
-        *kt, model.spectra(), model.tree(), cfg.stress_method, model.stress_sites(), tf.runs,
+        *kt, model.spectra(), model.tree(), method, model.stress_sites(), tf.runs,
         tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
-        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data(),
-        StressOptions{tf.uniform_slip, tf.slip_x, tf.slip_y, true, cfg.threads});
+        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data(), opt);
     // per run of one class's receptors; stress-based quantities at once
     static_assert(sizeof(Stress6) == 6 * sizeof(double), "stress tensors 6 doubles apart");
     for (int r = 0; r < nrec;) {

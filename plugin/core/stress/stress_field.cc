@@ -258,6 +258,24 @@ void FftStresses(const KernelTables& kt, const KernelSpectra& sp,
 
 }  // namespace
 
+StressMethod ResolveStressMethod(const KernelTables& kt, const KernelSpectra* spectra,
+                                 const StressTree* tree, StressMethod method,
+                                 const std::vector<StressSite>& sites, int active_cells,
+                                 bool shear, const StressOptions& opt) {
+  if (method == StressMethod::kTree) {
+    if (tree) return method;
+    method = StressMethod::kAuto;
+  }
+  if (method == StressMethod::kAuto) {
+    if (!spectra) return StressMethod::kDirect;
+    const StressCost c =
+        EstimateStressCost(kt, sites, active_cells, shear, UsesFoldedPath(kt, shear, opt));
+    return c.fft_s < c.direct_s ? StressMethod::kFft : StressMethod::kDirect;
+  }
+  if (method == StressMethod::kFft && !spectra) return StressMethod::kDirect;
+  return method;
+}
+
 StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectra,
                              const StressTree* tree, StressMethod method,
                              const std::vector<StressSite>& sites, const ActiveRuns& runs,
@@ -265,23 +283,12 @@ StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectr
                              StressScratch* scratch, Stress6* out, const StressOptions& opt) {
   const bool shear = shear_x && shear_y;
   const bool folded = UsesFoldedPath(kt, shear, opt);
+  method = ResolveStressMethod(kt, spectra, tree, method, sites, runs.Count(), shear, opt);
   if (method == StressMethod::kTree) {
-    if (tree) {
-      tree->Compute(runs, pressure, shear ? shear_x : nullptr, shear ? shear_y : nullptr,
-                    &scratch->tree, out);
-      return method;
-    }
-    method = StressMethod::kAuto;
+    tree->Compute(runs, pressure, shear ? shear_x : nullptr, shear ? shear_y : nullptr,
+                  &scratch->tree, out);
+    return method;
   }
-  if (method == StressMethod::kAuto) {
-    if (spectra) {
-      const StressCost c = EstimateStressCost(kt, sites, runs.Count(), shear, folded);
-      method = c.fft_s < c.direct_s ? StressMethod::kFft : StressMethod::kDirect;
-    } else {
-      method = StressMethod::kDirect;
-    }
-  }
-  if (method == StressMethod::kFft && !spectra) method = StressMethod::kDirect;
   if (method == StressMethod::kFft) {
     for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
     FftStresses(kt, *spectra, sites, pressure, shear ? shear_x : nullptr,

@@ -90,6 +90,21 @@ inline bool UsesFoldedPath(const KernelTables& kt, bool shear, const StressOptio
   return opt.fold && (!shear || opt.uniform_slip) && kt.mirror_symmetric;
 }
 
+// The path ComputeStresses takes for `method`: kAuto picks direct or FFT by
+// cost (direct without spectra), kFft falls back to direct without spectra,
+// kTree to kAuto without a tree. Callers that must know it first (which
+// arrays the path reads) resolve it here and pass the result in.
+StressMethod ResolveStressMethod(const KernelTables& kt, const KernelSpectra* spectra,
+                                 const StressTree* tree, StressMethod method,
+                                 const std::vector<StressSite>& sites, int active_cells,
+                                 bool shear, const StressOptions& opt);
+// Whether that path reads the shear arrays (all but the folded direct sum,
+// which takes shear = slip x pressure).
+inline bool PathReadsShear(const KernelTables& kt, StressMethod resolved, bool shear,
+                           const StressOptions& opt) {
+  return shear && !(resolved == StressMethod::kDirect && UsesFoldedPath(kt, shear, opt));
+}
+
 // Stress (Pa) at every site into out[site]. pressure / shear arrays: n*n,
 // row-major (j * n + i); shear may be null (both or neither). runs: the
 // cells with nonzero traction. kAuto picks direct or FFT by cost; kFft falls

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 
@@ -18,7 +19,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // One row segment [i0, i1) of an aligned face. Branch-free (bitwise &,
 // selects, the taken flags in `took`) so that the compiler vectorises it.
 struct RowSpan {
-  double tz, r6, r7v, r8;  // qz = t_z + R[6] u + R[7] v + R[8] z, in that order
+  double r7v, r8;  // qz = (t_z + R[6] u) + R[7] v + R[8] z, in that order
   double top, cull, oy, area;
 };
 
@@ -26,12 +27,12 @@ struct RowSpan {
 // after a clear (RenderGap's exclusive surface).
 template <bool kPlane, bool kOverwrite>
 MJTOUCH_TARGET_CLONES
-void AlignedRow(const RowSpan& r, int i0, int i1, const double* z, const double* u,
+void AlignedRow(const RowSpan& r, int i0, int i1, const double* z, const double* qz0,
                 const double* ox, const double* mean, double* __restrict gp,
                 double* __restrict cp, double* __restrict took) {
   for (int i = i0; i < i1; ++i) {
     const double zi = z[i];
-    const double qz = r.tz + r.r6 * u[i] + r.r7v + r.r8 * zi;
+    const double qz = qz0[i] + r.r7v + r.r8 * zi;  // qz0 = t_z + R[6] u per column
     const double cov = kPlane ? 1.0 : ox[i] * r.oy / r.area;  // area > 0 (IsAlignedFace)
     const bool reach = (std::abs(zi) < kInf) & !(qz - r.top > r.cull) & (cov > 0.0);
     const double gap = qz - mean[i];  // NaN (per-cell mean) never takes
@@ -109,15 +110,33 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
   // height field with equal rows) the texture's mean over the footprint,
   // NaN where it must be computed per cell. Per row: the same in y.
   thread_local std::vector<double> cols, rows;
-  cols.resize(static_cast<size_t>(6) * n);
+  cols.resize(static_cast<size_t>(7) * n);
   rows.resize(static_cast<size_t>(3) * n);
   double *ox = cols.data(), *x0 = ox + n, *x1 = x0 + n, *mean = x1 + n, *u = mean + n;
   double* took = u + n;
+  double* qz0 = took + n;  // per column: t_z + R[6] u (qz's first terms)
   double *oy = rows.data(), *y0 = oy + n, *y1 = y0 + n;
   const bool row_means = hfield && s.rows_identical && s.row_prefix;
   const double scx = hfield ? (s.ncol - 1) / (2.0 * s.half_x_m) : 0.0;
   bool per_cell = false, negative = false;
-  for (int i = c0; i < c1; ++i) {
+  // The columns of this face were computed by the last call (RenderGap's
+  // covers_only test, then the render, in one RenderGap call): the same
+  // inputs, so the same values, not computed again.
+  struct ColumnKey {
+    uint64_t call = 0;
+    const CounterSurface* s = nullptr;
+    int c0 = 0, c1 = 0;
+    bool per_cell = false, negative = false;
+  };
+  thread_local ColumnKey last_columns;
+  const bool same_columns = f.render_call != 0 && last_columns.call == f.render_call &&
+                            last_columns.s == &s && last_columns.c0 == c0 &&
+                            last_columns.c1 == c1;
+  if (same_columns) {
+    per_cell = last_columns.per_cell;
+    negative = last_columns.negative;
+  }
+  for (int i = c0; i < c1 && !same_columns; ++i) {
     u[i] = grid.Centre(i);
     const double qx = f.t[0] + R[0] * u[i];
     ox[i] = Overlap1D(qx - f.hx, qx + f.hx, -s.half_x_m, s.half_x_m);
@@ -134,6 +153,7 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
     per_cell |= mean[i] != mean[i] && ox[i] > 0.0;
     negative |= mean[i] < 0.0;
   }
+  last_columns = ColumnKey{f.render_call, &s, c0, c1, per_cell, negative};
   if (covers_only) return !per_cell && !negative;
   if (overwrite) *overwrite = CellBox{c0, r0, c1 - c0, r1 - r0};
   for (int j = r0; j < r1; ++j) {
@@ -144,6 +164,7 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
   }
   const double tz = f.t[2], r6 = R[6], r7 = R[7], r8 = R[8], top = s.max_height_m;
   const double cull = f.cull;
+  for (int i = c0; i < c1; ++i) qz0[i] = tz + r6 * u[i];
   for (int j = r0; j < r1; ++j) {
     const double v = grid.Centre(j), oyj = oy[j];
     const int bj = j / B;
@@ -167,13 +188,13 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
       const double* z = skin_z.data() + base;
       double* gp = gap_m + base;
       double* cp = coverage + base;
-      const RowSpan row{tz, r6, r7 * v, r8, top, cull, oyj, area};
+      const RowSpan row{r7 * v, r8, top, cull, oyj, area};
       if (overwrite) {
-        if (plane) AlignedRow<true, true>(row, i0, i1, z, u, ox, mean, gp, cp, took);
-        else AlignedRow<false, true>(row, i0, i1, z, u, ox, mean, gp, cp, took);
+        if (plane) AlignedRow<true, true>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
+        else AlignedRow<false, true>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
       } else {
-        if (plane) AlignedRow<true, false>(row, i0, i1, z, u, ox, mean, gp, cp, took);
-        else AlignedRow<false, false>(row, i0, i1, z, u, ox, mean, gp, cp, took);
+        if (plane) AlignedRow<true, false>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
+        else AlignedRow<false, false>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
       }
       int a = i0, b = i1 - 1;
       while (a <= b && took[a] == 0.0) ++a;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 
@@ -354,6 +355,8 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
                  CellBox* rendered, bool fast_paths, CellBox* written,
                  RenderSummary* summary) {
   const size_t N = grid.Size();
+  thread_local uint64_t render_calls = 0;
+  const uint64_t call = ++render_calls;  // (RenderAlignedFace's column reuse)
   Extrema extrema;
   int writers = 0, aligned_writers = 0;  // surfaces that wrote cells (RenderSummary)
   if (summary) {
@@ -513,7 +516,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
       // face would change no cell's result.
       const Frame& T = frames[k + 1];
       Extent none;
-      if (RenderAlignedFace(grid, skin_z, AlignedFace{surfaces[k + 1], T.R, T.t, T.hx, T.hy, cull},
+      if (RenderAlignedFace(grid, skin_z, AlignedFace{surfaces[k + 1], T.R, T.t, T.hx, T.hy, cull, call},
                             *blocks, &block_lb[(k + 1) * nb * nb], nullptr, nullptr, &none,
                             true))
         continue;
@@ -537,7 +540,7 @@ double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
       Extent ext{cells};
       CellBox rect;
       const bool own = static_cast<int>(k) == exclusive;
-      RenderAlignedFace(grid, skin_z, AlignedFace{s, R, F.t, F.hx, F.hy, cull}, *blocks,
+      RenderAlignedFace(grid, skin_z, AlignedFace{s, R, F.t, F.hx, F.hy, cull, call}, *blocks,
                         &block_lb[k * nb * nb], gap_m->data(), coverage->data(), &ext, false,
                         summary && aligned_writers == 0 ? &extrema : nullptr,
                         summary ? &summary->spans : nullptr, own ? &rect : nullptr);
