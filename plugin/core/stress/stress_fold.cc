@@ -186,16 +186,18 @@ inline __attribute__((always_inline)) void FoldRowCells(const float* kp, const f
 }
 
 // FoldScratch::h's layout, per wanted (depth, component) and quadrant row
-// |dy| = 0 .. n - 1: the row's cells at dx = -half .. half - 1 (half =
-// RxCacheHalf(n), dx = 0 on a chunk boundary) in chunks of 16, each chunk of
-// h = kp + (sp sx rx) kx (the quadrant of +rx at dx >= 0, of -rx at dx < 0:
-// KernelTables MirrorSign, a shear x odd under x and even under y) followed
-// by the same cells of ky: one 64-byte aligned stream per row, read forwards
-// on both sides (no reversing shuffles, no split loads, no per-side calls).
-// Cells beyond the tables (|dx| > n - 1) hold +0, so they fold to +-0 (an
-// exact no-op in the sums, stress_fold.h).
+// |dy| = 0 .. n - 1, from a 64-byte boundary: h = kp + (sp sx rx) kx at dx =
+// -half .. half - 1 (half = RxCacheHalf(n); the quadrant of +rx at dx >= 0,
+// of -rx at dx < 0: KernelTables MirrorSign, a shear x odd under x and even
+// under y), then ky at |dx| = 0 .. half + 15. A chunk of 16 at dx = 0 mod 16
+// reads h forwards and aligned on both sides, and ky so for dx >= 0; for dx
+// < 0 it reads ky's cells |dx| backwards from the lines the dx >= 0 side has
+// just brought in: a row's three tables read once (fewer lines per step
+// than both sides of ky stored, which the fold is bound by when the step's
+// other stages have evicted them). Cells beyond the tables (|dx| > n - 1)
+// hold +0, so they fold to +-0 (an exact no-op in the sums, stress_fold.h).
 inline int RxCacheHalf(int n) { return (n + kFoldLanes - 1) / kFoldLanes * kFoldLanes; }
-inline size_t RxCacheStride(int n) { return static_cast<size_t>(4) * RxCacheHalf(n); }
+inline size_t RxCacheStride(int n) { return static_cast<size_t>(3) * RxCacheHalf(n) + kFoldLanes; }
 
 // Folded rows dy0 .. dy0 + rows - 1 (rows ew apart) at dx = x0 .. x0 + w - 1
 // (x0, w multiples of 16; e 64-byte aligned) from the rx cache h of one
@@ -221,9 +223,9 @@ void FoldCachedRows(const float* h, int n, StressComponent comp, int dy0, int ro
     }
     if (a > 0) std::fill(et, et + a, 0.0f);
     if (z < w) std::fill(et + z, et + w, 0.0f);
-    // The chunk at dx starts at hr + 2 (dx - x0).
-    const float* hr = h + static_cast<size_t>(ady) * stride + 2 * (x0 + half);
-    for (int side = 0; side < 2; ++side) {  // dx < 0, then dx >= 0
+    const float* hr = h + static_cast<size_t>(ady) * stride + (x0 + half);  // at column 0
+    const float* ky = h + static_cast<size_t>(ady) * stride + 2 * half;      // at |dx| = 0
+    for (int side = 1; side >= 0; --side) {  // dx >= 0 (its ky lines then in L1), dx < 0
       float sp = 1, sy = 1;
       if (side == 0) {
         sp *= mp0;
@@ -235,12 +237,25 @@ void FoldCachedRows(const float* h, int n, StressComponent comp, int dy0, int ro
       }
       const float b = sp * sy * ry;
       const int lo = side ? m : a, hi = side ? z : m;
-      if (sp > 0) {
-        for (int x = lo; x < hi; x += kFoldLanes)
-          Store(et + x, Load16(hr + 2 * x) + b * Load16(hr + 2 * x + kFoldLanes));
+      if (side == 1) {
+        const float* k = ky + x0;
+        if (sp > 0) {
+          for (int x = lo; x < hi; x += kFoldLanes)
+            Store(et + x, Load16(hr + x) + b * Load16(k + x));
+        } else {
+          for (int x = lo; x < hi; x += kFoldLanes)
+            Store(et + x, -(Load16(hr + x) + b * Load16(k + x)));
+        }
       } else {
-        for (int x = lo; x < hi; x += kFoldLanes)
-          Store(et + x, -(Load16(hr + 2 * x) + b * Load16(hr + 2 * x + kFoldLanes)));
+        // cells dx = x0 + x + j (j = 0 .. 15): ky at |dx| = -(x0 + x) - j
+        const float* k = ky - x0;
+        if (sp > 0) {
+          for (int x = lo; x < hi; x += kFoldLanes)
+            Store(et + x, Load16(hr + x) + b * Cells<true>(k, x));
+        } else {
+          for (int x = lo; x < hi; x += kFoldLanes)
+            Store(et + x, -(Load16(hr + x) + b * Cells<true>(k, x)));
+        }
       }
     }
   }
@@ -363,9 +378,8 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
           const int x = dx < 0 ? -dx : dx;
           const float a = dx < 0 ? -rx : rx;
           const int i = dx + half;
-          float* chunk = Hy + 2 * (i - i % kFoldLanes) + i % kFoldLanes;
-          chunk[0] = Kp[x] + a * Kx[x];
-          chunk[kFoldLanes] = Ky[x];
+          Hy[i] = Kp[x] + a * Kx[x];
+          if (dx >= 0) Hy[2 * half + x] = Ky[x];
         }
       }
     }
