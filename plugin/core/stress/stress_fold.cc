@@ -185,45 +185,91 @@ inline __attribute__((always_inline)) void FoldRowCells(const float* kp, const f
   }
 }
 
-// e[x] = sign (h[x] + ry ky[x]) with h = kp + rx kx precomputed (the same
-// float as FoldRow's inner sum, so the same bits), or from a mirrored source
-// read backwards (h[-x], ky[-x]): two table reads per cell instead of three.
-template <bool kReversed>
-inline __attribute__((always_inline)) void FoldRowHCells(const float* h, const float* ky,
-                                                         float ry, float sign, int len,
-                                                         float* e) {
-  const int d = kReversed ? -1 : 1;
-  FoldCells(
-      len, e,
-      [&](int x) {
-        const v16f v = Cells<kReversed>(h, x) + ry * Cells<kReversed>(ky, x);
-        return sign > 0 ? v : -v;
-      },
-      [&](int x) {
-        const float v = h[d * x] + ry * ky[d * x];
-        return sign > 0 ? v : -v;
-      });
-}
+// FoldScratch::h's layout, per wanted (depth, component) and quadrant row
+// |dy| = 0 .. n - 1, from a 64-byte boundary: h = kp + (sp sx rx) kx at dx =
+// -half .. half - 1 (half = RxCacheHalf(n); the quadrant of +rx at dx >= 0,
+// of -rx at dx < 0: KernelTables MirrorSign, a shear x odd under x and even
+// under y), then ky at |dx| = 0 .. half + 15. A chunk of 16 at dx = 0 mod 16
+// reads h forwards and aligned on both sides, and ky so for dx >= 0; for dx
+// < 0 it reads ky's cells |dx| backwards from the lines the dx >= 0 side has
+// just brought in: a row's three tables read once (fewer lines per step
+// than both sides of ky stored, which the fold is bound by when the step's
+// other stages have evicted them). Cells beyond the tables (|dx| > n - 1)
+// hold +0, so they fold to +-0 (an exact no-op in the sums, stress_fold.h).
+inline int RxCacheHalf(int n) { return (n + kFoldLanes - 1) / kFoldLanes * kFoldLanes; }
+inline size_t RxCacheStride(int n) { return static_cast<size_t>(3) * RxCacheHalf(n) + kFoldLanes; }
 
-// FoldScratch::h's layout: quadrant rows RxCacheStride(n) floats apart from a
-// 64-byte boundary, the -rx quadrant's cells shifted by 15. The +rx one is
-// read forwards (dx >= 0: cells x .. x + 15) and the -rx one backwards
-// (dx < 0: cells x - 15 .. x), x = |dx| = 0 mod 16 (sp sx = +1 for dx >= 0,
-// -1 for dx < 0, every component), so no fold load of them splits a cache
-// line (a replica of slide_grating's stage: ~2% of it).
-constexpr int kRxCacheShift[2] = {0, kFoldLanes - 1};
-inline int RxCacheStride(int n) { return (n + 2 * kFoldLanes - 1) / kFoldLanes * kFoldLanes; }
+// Folded rows dy0 .. dy0 + rows - 1 (rows ew apart) at dx = x0 .. x0 + w - 1
+// (x0, w multiples of 16; e 64-byte aligned) from the rx cache h of one
+// (depth, component): e = sp (h + (sp sy ry) ky), the same float operations
+// as FoldRowCells' ((kp + a kx) + b ky) on the same h, so the same bits.
+MJTOUCH_TARGET_CLONES_AVX512
+void FoldCachedRows(const float* h, int n, StressComponent comp, int dy0, int rows, int x0, int w,
+                    float ry, float* e, int ew) {
+  const int half = RxCacheHalf(n);
+  const size_t stride = RxCacheStride(n);
+  // Chunk ranges [0, a): below the cache (zero), [a, m): dx < 0, [m, z): dx
+  // >= 0, [z, w): above (zero); the same for every row of the band.
+  const int a = std::clamp(-half - x0, 0, w), m = std::clamp(-x0, a, w),
+            z = std::clamp(half - x0, m, w);
+  const float mp0 = MirrorSign(0, kLoadPressure, comp), mp1 = MirrorSign(1, kLoadPressure, comp);
+  const float my0 = MirrorSign(0, kLoadShearY, comp), my1 = MirrorSign(1, kLoadShearY, comp);
+  for (int t = 0; t < rows; ++t) {
+    float* et = e + static_cast<size_t>(t) * ew;
+    const int dy = dy0 + t, ady = dy < 0 ? -dy : dy;
+    if (ady > n - 1) {
+      std::fill(et, et + w, 0.0f);
+      continue;
+    }
+    if (a > 0) std::fill(et, et + a, 0.0f);
+    if (z < w) std::fill(et + z, et + w, 0.0f);
+    const float* hr = h + static_cast<size_t>(ady) * stride + (x0 + half);  // at column 0
+    const float* ky = h + static_cast<size_t>(ady) * stride + 2 * half;      // at |dx| = 0
+    for (int side = 1; side >= 0; --side) {  // dx >= 0 (its ky lines then in L1), dx < 0
+      float sp = 1, sy = 1;
+      if (side == 0) {
+        sp *= mp0;
+        sy *= my0;
+      }
+      if (dy < 0) {
+        sp *= mp1;
+        sy *= my1;
+      }
+      const float b = sp * sy * ry;
+      const int lo = side ? m : a, hi = side ? z : m;
+      if (side == 1) {
+        const float* k = ky + x0;
+        if (sp > 0) {
+          for (int x = lo; x < hi; x += kFoldLanes)
+            Store(et + x, Load16(hr + x) + b * Load16(k + x));
+        } else {
+          for (int x = lo; x < hi; x += kFoldLanes)
+            Store(et + x, -(Load16(hr + x) + b * Load16(k + x)));
+        }
+      } else {
+        // cells dx = x0 + x + j (j = 0 .. 15): ky at |dx| = -(x0 + x) - j
+        const float* k = ky - x0;
+        if (sp > 0) {
+          for (int x = lo; x < hi; x += kFoldLanes)
+            Store(et + x, Load16(hr + x) + b * Cells<true>(k, x));
+        } else {
+          for (int x = lo; x < hi; x += kFoldLanes)
+            Store(et + x, -(Load16(hr + x) + b * Cells<true>(k, x)));
+        }
+      }
+    }
+  }
+}
 
 // One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
 // the tables' rows at |dy| and columns |dx| only (KernelTables::
 // mirror_symmetric): the signs of the reflections folded into the ratios,
 // E = sp (Kp + (sp sx rx) Kx + (sp sy ry) Ky), exactly the value the full
 // tables give when they are mirror images.
-// h (or null): the FoldScratch::h quadrants of (d, comp) for +rx and -rx.
 inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& kt, int d,
                                                            StressComponent comp, int dy, int x0,
                                                            int w, float rx, float ry, bool shear,
-                                                           const float* const* h, float* e) {
+                                                           float* e) {
   const int n = kt.n, L = 2 * n - 1;
   const int ady = dy < 0 ? -dy : dy;
   if (ady > n - 1) {
@@ -255,14 +301,6 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
       sy *= MirrorSign(1, kLoadShearY, comp);
     }
     const float a = sp * sx * rx, b = sp * sy * ry;
-    if (shear && h) {  // kp + a kx from the quadrant of a = +rx or -rx
-      const float* hrow = h[sp * sx < 0] + static_cast<size_t>(ady) * RxCacheStride(n);
-      if (side == 0)
-        FoldRowHCells<false>(hrow + lo, Ky + lo, b, sp, hi - lo + 1, e + (lo - x0));
-      else
-        FoldRowHCells<true>(hrow - lo, Ky - lo, b, sp, hi - lo + 1, e + (lo - x0));
-      continue;
-    }
     if (side == 0) {
       FoldRowCells<false>(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1,
                           e + (lo - x0));
@@ -278,10 +316,9 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
 // dispatch per band, not two per row side.
 MJTOUCH_TARGET_CLONES_AVX512
 void FoldMirroredRows(const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
-                      int x0, int w, float rx, float ry, bool shear, const float* const* h,
-                      float* e, int ew) {
+                      int x0, int w, float rx, float ry, bool shear, float* e, int ew) {
   for (int t = 0; t < rows; ++t)
-    FoldMirroredRow(kt, d, comp, dy0 + t, x0, w, rx, ry, shear, h,
+    FoldMirroredRow(kt, d, comp, dy0 + t, x0, w, rx, ry, shear,
                     e + static_cast<size_t>(t) * ew);
 }
 
@@ -315,14 +352,15 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
   const int D = static_cast<int>(kt.depths_m.size());
   w->h_offset.assign(static_cast<size_t>(D) * kNumStress, -1);
   const size_t hs = RxCacheStride(n);
+  const int half = RxCacheHalf(n);
   size_t size = 0;
   for (int d = 0; d < D; ++d)
     for (int c = 0; c < kNumStress; ++c)
       if (w->window[d].comps[c]) {
         w->h_offset[d * kNumStress + c] = static_cast<long>(size);
-        size += 2 * hs * n;
+        size += hs * n;
       }
-  w->h.resize(size + 16);
+  w->h.assign(size + 16, 0.0f);
   w->h_pad = AlignUp64(w->h.data()) - w->h.data();
   float* const h0 = w->h.data() + w->h_pad;
   for (int d = 0; d < D; ++d)
@@ -330,15 +368,18 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
       const long off = w->h_offset[d * kNumStress + c];
       if (off < 0) continue;
       const auto comp = static_cast<StressComponent>(c);
-      for (int v = 0; v < 2; ++v) {
-        const float a = v ? -rx : rx;
-        float* H = h0 + off + v * hs * n + kRxCacheShift[v];
-        for (int y = 0; y < n; ++y) {
-          const size_t row = static_cast<size_t>(y + n - 1) * L + (n - 1);
-          const float* Kp = kt.At(d, kLoadPressure, comp) + row;
-          const float* Kx = kt.At(d, kLoadShearX, comp) + row;
-          float* Hy = H + y * hs;
-          for (int x = 0; x < n; ++x) Hy[x] = Kp[x] + a * Kx[x];
+      for (int y = 0; y < n; ++y) {
+        const size_t row = static_cast<size_t>(y + n - 1) * L + (n - 1);
+        const float* Kp = kt.At(d, kLoadPressure, comp) + row;
+        const float* Kx = kt.At(d, kLoadShearX, comp) + row;
+        const float* Ky = kt.At(d, kLoadShearY, comp) + row;
+        float* Hy = h0 + off + y * hs;
+        for (int dx = -(n - 1); dx < n; ++dx) {  // the rest stays +0
+          const int x = dx < 0 ? -dx : dx;
+          const float a = dx < 0 ? -rx : rx;
+          const int i = dx + half;
+          Hy[i] = Kp[x] + a * Kx[x];
+          if (dx >= 0) Hy[2 * half + x] = Ky[x];
         }
       }
     }
@@ -556,15 +597,13 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       c1 = ((win.x0 + c1 + kSumLanes - 1) & ~(kSumLanes - 1)) - win.x0;
       for (int c = 0; c < kNumStress; ++c) {
         if (!comps[c]) continue;
-        const float* h[2] = {nullptr, nullptr};
-        if (use_h) {
-          const size_t hs = RxCacheStride(n);
-          h[0] = w->h.data() + w->h_pad + w->h_offset[d * kNumStress + c];
-          h[1] = h[0] + hs * n + kRxCacheShift[1];
-        }
-        FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, band,
-                         win.x0 + c0, c1 - c0, rx, ry, shear, use_h ? h : nullptr,
-                         ebuf[c] + c0, ew);
+        if (use_h)
+          FoldCachedRows(w->h.data() + w->h_pad + w->h_offset[d * kNumStress + c], n,
+                         static_cast<StressComponent>(c), T0 + win.y0, band, win.x0 + c0,
+                         c1 - c0, ry, ebuf[c] + c0, ew);
+        else
+          FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, band,
+                           win.x0 + c0, c1 - c0, rx, ry, shear, ebuf[c] + c0, ew);
       }
       SumBand(fs, first, last, ebuf, ew, T0, P0, ps, w->row_lo.data(), w->row_hi.data(),
               win.x0);

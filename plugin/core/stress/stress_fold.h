@@ -72,11 +72,12 @@ struct FoldScratch {
   const KernelTables* key_tables = nullptr;
   std::array<bool, kNumStress> key_components{};
   std::vector<StressSite> key_sites;
-  // Kp + (+-rx) Kx per wanted (depth, component) quadrant (n rows each, +rx
-  // then -rx, laid out for aligned loads: stress_fold.cc RxCacheStride;
-  // h_offset: start from h_pad, -1 if none) while the float rx repeats
-  // (UpdateRxCache in stress_fold.cc): the fold then reads two tables, not
-  // three. A cache of the inputs only: the bits do not depend on it.
+  // Kp + (+-rx) Kx (both signs of dx) and Ky per wanted (depth, component),
+  // n quadrant rows each, a row in one aligned stream (stress_fold.cc
+  // RxCacheHalf; h_offset: start from h_pad, -1 if none)
+  // while the float rx repeats (UpdateRxCache in stress_fold.cc): the fold
+  // then reads two tables, not three, each row once. A cache
+  // of the inputs only: the bits do not depend on it.
   std::vector<float> h;
   std::vector<long> h_offset;
   const KernelTables* h_tables = nullptr;
