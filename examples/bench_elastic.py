@@ -18,8 +18,9 @@ and a lead-in simulated without the plugin). Prints per configuration:
 - us/step (process CPU time) of stages 1-2 (outputs="force") and of the full
   pipeline (default outputs), min and median over interleaved rounds, and the pk / pcg ratios;
   the winkler model in the same rounds as a yardstick of the machine's load;
-- pcg float with `threads` 1 and --threads (default 2): process CPU and wall
-  time per step, min and median, the wall ratio, and a yardstick of the
+- pcg float (stages 1-2, full) and the Winkler full step with `threads` 1
+  and --threads (default 2): process CPU and wall time per step, min and
+  median, the wall ratio, and a yardstick of the
   cores free meanwhile (two numpy loops on two threads against one after
   the other: 2.0 on an idle 2-core machine, ~1.0 when another process holds
   a core; the `threads` speedup can reach at most that).
@@ -164,11 +165,14 @@ def free_cores_yardstick(n: int = 2, size: int = 4_000_000) -> float:
 
 
 def thread_timing(name: str, start, steps: int, rounds: int, threads: int) -> dict:
-    """pcg float with threads 1 and `threads`: (cpu, wall) us/step lists per
-    (threads, stage), and the free-cores yardstick per round."""
+    """pcg float (and the Winkler full step) with threads 1 and `threads`:
+    (cpu, wall) us/step lists per (threads, stage), and the free-cores
+    yardstick per round."""
     runs = {(t, stage): make_run(name, start, steps, **SOLVERS["pcg float"], threads=str(t),
                                  **({"outputs": "force"} if stage == "stages 1-2" else {}))
             for t in (1, threads) for stage in ("stages 1-2", "full")}
+    runs.update({(t, "winkler"): make_run(name, start, steps, pressure="winkler", threads=str(t))
+                 for t in (1, threads)})
     out = {k: [] for k in runs}
     yard = []
     for _ in range(rounds):
@@ -215,7 +219,7 @@ def main() -> None:
         tt, yard = thread_timing(name, start, args.steps, args.rounds, args.threads)
         print(f"  pcg float, threads 1 / {args.threads} (free-cores yardstick min "
               f"{min(yard):.2f} median {np.median(yard):.2f} max {max(yard):.2f})")
-        for stage in ("stages 1-2", "full"):
+        for stage in ("stages 1-2", "full", "winkler"):
             for t in (1, args.threads):
                 c = [a for a, _ in tt[t, stage]]
                 w = [b for _, b in tt[t, stage]]

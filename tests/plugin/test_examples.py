@@ -136,6 +136,10 @@ def test_bench_elastic_compares_the_solvers_against_the_reference():
     t = ex["timing"]("slide_grating", start, 2, 1)
     assert set(t) == {(s, st) for s in (*solvers, "winkler") for st in ("stages 1-2", "full")}
     assert all(np.isfinite(v).all() and min(v) > 0 for v in t.values()), t
+    tt, yard = ex["thread_timing"]("slide_grating", start, 2, 1, 2)
+    assert set(tt) == {(n, st) for n in (1, 2) for st in ("stages 1-2", "full", "winkler")}
+    assert all(c > 0 and w > 0 for v in tt.values() for c, w in v), tt
+    assert len(yard) == 1 and yard[0] > 0
 
 
 @pytest.mark.parametrize("yaw", ["0", "20"])
