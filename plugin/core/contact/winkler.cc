@@ -46,6 +46,13 @@ inline v2d Abs(v2d x) {
 
 // A candidate cell: coverage > 0 and a finite gap (the reference's test).
 inline bool Candidate(double g, double w) { return (w > 0.0) & (std::abs(g) < kInf); }
+// The same in four lanes (0 / -1 masks; |g| by clearing the sign bit).
+inline v4l Candidates(const v4d& g, const v4d& w) {
+  const v4l abs_mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
+                        0x7fffffffffffffffLL};
+  const v4d zero = {0, 0, 0, 0}, inf = {kInf, kInf, kInf, kInf};
+  return (w > zero) & (reinterpret_cast<v4d>(reinterpret_cast<v4l>(g) & abs_mask) < inf);
+}
 
 // The smallest gap and the largest coverage of the box's candidates, and
 // per row of the box the span [begin, end) that holds its candidates (rows
@@ -183,8 +190,6 @@ SetSums ContactSetSums(const double* gap, const double* cov, int n, const Active
                        const CellBox& box, double c) {
   const v4d zero = {0, 0, 0, 0}, inf = {kInf, kInf, kInf, kInf}, ninf = -inf;
   const v4d cv = {c, c, c, c};
-  const v4l abs_mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
-                        0x7fffffffffffffffLL};
   v4d f = zero, sw = zero, swg = zero, hi = ninf, lo = inf;
   for (size_t r = 0; r < spans.row.size(); ++r) {
     const double* g = gap + static_cast<size_t>(spans.row[r]) * n;
@@ -208,8 +213,7 @@ SetSums ContactSetSums(const double* gap, const double* cov, int n, const Active
           v4d gv, wv;
           std::memcpy(&gv, g + i, sizeof(gv));
           std::memcpy(&wv, w + i, sizeof(wv));
-          const v4l cand = (wv > zero) & (reinterpret_cast<v4d>(reinterpret_cast<v4l>(gv) &
-                                                                abs_mask) < inf);
+          const v4l cand = Candidates(gv, wv);
           const v4d d = cv - gv;
           const v4l below = d > zero;
           const v4l in = cand & below, out = cand & ~below;
@@ -236,10 +240,8 @@ SetSums ContactSetSums(const double* gap, const double* cov, int n, const Active
 MJTOUCH_TARGET_CLONES
 double WinklerLoads(const double* gap, const double* cov, int n, const ActiveRuns& spans,
                     const CellBox& box, double c, double* load, int* nonzero) {
-  const v4d zero = {0, 0, 0, 0}, inf = {kInf, kInf, kInf, kInf};
+  const v4d zero = {0, 0, 0, 0};
   const v4d cv = {c, c, c, c};
-  const v4l abs_mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
-                        0x7fffffffffffffffLL};
   v4d total = zero;
   for (size_t r = 0; r < spans.row.size(); ++r) {
     const size_t row = static_cast<size_t>(spans.row[r]) * n;
@@ -261,8 +263,7 @@ double WinklerLoads(const double* gap, const double* cov, int n, const ActiveRun
           std::memcpy(&gv, g + i, sizeof(gv));
           std::memcpy(&wv, w + i, sizeof(wv));
           const v4d d = cv - gv;
-          const v4l in = (wv > zero) & (d > zero) &
-                         (reinterpret_cast<v4d>(reinterpret_cast<v4l>(gv) & abs_mask) < inf);
+          const v4l in = Candidates(gv, wv) & (d > zero);
           const v4d li = reinterpret_cast<v4d>(reinterpret_cast<v4l>(wv * d) & in);
           std::memcpy(l + i, &li, sizeof(li));
           total += li;
