@@ -20,6 +20,25 @@ using fft_detail::Dft;
 using fft_detail::FusedButterflies;
 using fft_detail::Twiddle;
 
+// The butterfly groups of a Stockham stage of radix R (span = Ns): group j
+// reads elements j + r n/R (in_step apart) and writes (j / Ns) Ns R +
+// (j mod Ns) + r Ns (out_step apart), with the twiddles of row j mod Ns.
+// f(jm, in offset, out offset, in_step, out_step), inlined (into each
+// target_clones clone of the stage).
+template <int R, typename F>
+inline __attribute__((always_inline)) void ForEachGroup(int n, int span, int in_stride,
+                                                        int out_stride, F&& f) {
+  const int m = n / R;
+  const size_t in_step = static_cast<size_t>(m) * in_stride;
+  const size_t out_step = static_cast<size_t>(span) * out_stride;
+  for (int j = 0; j < m; ++j) {
+    const int jm = j % span;
+    const int dst = (j / span) * span * R + jm;
+    f(jm, static_cast<size_t>(j) * in_stride, static_cast<size_t>(dst) * out_stride, in_step,
+      out_step);
+  }
+}
+
 // One Stockham stage (Govindaraju et al. 2008, mixed radix): reads element
 // j + r n/R, twiddles by exp(-+2 pi i r (j mod Ns) / (Ns R)), does a radix-R
 // DFT and writes element (j / Ns) Ns R + (j mod Ns) + r Ns. Output is in
@@ -34,19 +53,14 @@ template <int R, bool kInverse, typename T, int kOut = R, bool kInPlace = false>
 MJTOUCH_TARGET_CLONES
 void Stage(int n, int span, const T* tw_re, const T* tw_im, const T* in_re, const T* in_im,
            int in_stride, T* out_re, T* out_im, int out_stride, int batch) {
-  const int m = n / R;
-  const size_t in_step = static_cast<size_t>(m) * in_stride;
-  const size_t out_step = static_cast<size_t>(span) * out_stride;
-  for (int j = 0; j < m; ++j) {
-    const int jm = j % span;
-    const int dst = (j / span) * span * R + jm;
+  ForEachGroup<R>(n, span, in_stride, out_stride, [&](int jm, size_t io, size_t oo,
+                                                      size_t in_step, size_t out_step)
+                                                      __attribute__((always_inline)) {
     T wr[R], wi[R];
     for (int r = 0; r < R; ++r) {
       wr[r] = tw_re[jm * R + r];
       wi[r] = kInverse ? -tw_im[jm * R + r] : tw_im[jm * R + r];
     }
-    const size_t io = static_cast<size_t>(j) * in_stride;
-    const size_t oo = static_cast<size_t>(dst) * out_stride;
     const T* ir = kInPlace ? nullptr : in_re + io;
     const T* ii = kInPlace ? nullptr : in_im + io;
     if (jm != 0) {
@@ -56,7 +70,7 @@ void Stage(int n, int span, const T* tw_re, const T* tw_im, const T* in_re, cons
       Butterflies<R, kInverse, false, T, kOut, kInPlace>(ir, ii, in_step, out_re + oo,
                                                          out_im + oo, out_step, wr, wi, batch);
     }
-  }
+  });
 }
 
 // A fused stage (FusedButterflies): twa / twb, stages A's and B's tables.
@@ -65,13 +79,9 @@ MJTOUCH_TARGET_CLONES
 void FusedStage(int n, int span, const T* twa_re, const T* twa_im, const T* twb_re,
                 const T* twb_im, const T* in_re, const T* in_im, int in_stride, T* out_re,
                 T* out_im, int out_stride, int batch) {
-  constexpr int R = Ra * Rb;
-  const int m = n / R;
-  const size_t in_step = static_cast<size_t>(m) * in_stride;
-  const size_t out_step = static_cast<size_t>(span) * out_stride;
-  for (int j = 0; j < m; ++j) {
-    const int jm = j % span;
-    const int dst = (j / span) * span * R + jm;
+  ForEachGroup<Ra * Rb>(n, span, in_stride, out_stride, [&](int jm, size_t io, size_t oo,
+                                                            size_t in_step, size_t out_step)
+                                                            __attribute__((always_inline)) {
     T wa_r[Ra], wa_i[Ra], wb_r[Ra][Rb], wb_i[Ra][Rb];
     for (int r = 0; r < Ra; ++r) {
       wa_r[r] = twa_re[jm * Ra + r];
@@ -82,8 +92,6 @@ void FusedStage(int n, int span, const T* twa_re, const T* twa_im, const T* twb_
         wb_i[r][q] = kInverse ? -twb_im[e] : twb_im[e];
       }
     }
-    const size_t io = static_cast<size_t>(j) * in_stride;
-    const size_t oo = static_cast<size_t>(dst) * out_stride;
     const T* ir = kInPlace ? nullptr : in_re + io;
     const T* ii = kInPlace ? nullptr : in_im + io;
     if (jm != 0) {
@@ -94,7 +102,7 @@ void FusedStage(int n, int span, const T* twa_re, const T* twa_im, const T* twb_
       FusedButterflies<Ra, Rb, kInverse, true, kHalfA, kInPlace>(
           ir, ii, in_step, out_re + oo, out_im + oo, out_step, wa_r, wa_i, wb_r, wb_i, batch);
     }
-  }
+  });
 }
 
 // The fused pairs FftPlan makes: (2, 3) and (3, 3).
