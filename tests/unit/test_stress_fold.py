@@ -41,13 +41,9 @@ def sliding_contact():
     return tip, p, (f[1] / f[0], f[2] / f[0])
 
 
-@pytest.fixture(scope="module")
-def engine(sliding_contact):
-    """The plugin's stress stage for the default skin: SA1 (all six
-    components) and RA (s_zz) at 0.75 mm, PC (s_zz) at 2 mm, on a spiral of
-    sites over the contact and beyond."""
-    tip, _, _ = sliding_contact
-    n, h = tip.nx, tip.pitch_m
+def _spiral_sites(n, h):
+    """(cells, classes) of 120 sites on a spiral over the contact and beyond;
+    class 0: SA1 (six components), 1: RA, 2: PC (s_zz)."""
     golden = math.pi * (3 - math.sqrt(5))
     ij, cls = [], []
     for s in range(120):
@@ -55,11 +51,23 @@ def engine(sliding_contact):
         ij.append((int(np.clip(round(r * math.cos(s * golden) / h + n / 2), 0, n - 1)),
                    int(np.clip(round(r * math.sin(s * golden) / h + n / 2), 0, n - 1))))
         cls.append(s % 3)
-    cls = np.array(cls)
+    return ij, np.array(cls)
+
+
+def _stage_engine(n, h, ij, cls):
     comps = [range(6) if c == 0 else (2,) for c in cls]
     return core.StressEngine(core.LayeredSkin(), n, h, [0.75e-3, 2e-3], ij,
                              depth_index=np.where(cls == 2, 1, 0), components=comps,
                              method="direct")
+
+
+@pytest.fixture(scope="module")
+def engine(sliding_contact):
+    """The plugin's stress stage for the default skin: SA1 (all six
+    components) and RA (s_zz) at 0.75 mm, PC (s_zz) at 2 mm, on a spiral of
+    sites over the contact and beyond."""
+    tip, _, _ = sliding_contact
+    return _stage_engine(tip.nx, tip.pitch_m, *_spiral_sites(tip.nx, tip.pitch_m))
 
 
 def test_folded_matches_reference_on_sliding_contact(sliding_contact, engine):
@@ -111,6 +119,43 @@ def test_stress_bit_identical_for_any_thread_count(sliding_contact, engine, fold
     for threads in (2, 3, 8):
         assert np.array_equal(engine.stress(p, slip=ratio, method="direct", fold=fold,
                                             threads=threads), one)
+
+
+# The stage in a fresh process (MJTOUCH_SUM_LANES is read once per process).
+_STAGE_SCRIPT = """
+import sys
+import numpy as np
+sys.path.insert(0, sys.argv[3])
+from test_stress_fold import _spiral_sites, _stage_engine
+d = np.load(sys.argv[1])
+n, h = int(d["n"]), float(d["h"])
+e = _stage_engine(n, h, *_spiral_sites(n, h))
+np.save(sys.argv[2], e.stress(d["p"], slip=tuple(d["ratio"]), method="direct", fold=True))
+"""
+
+
+@pytest.mark.parametrize("lanes", ["8", "4"])
+def test_every_vector_width_gives_the_same_bits(sliding_contact, engine, lanes, tmp_path):
+    # The sums run in the widest vectors the CPU has (AVX-512: 16 floats,
+    # AVX2: 8, else SSE2 / NEON: 4; stress_fold.cc SumBand); a 16-lane chunk
+    # is 16 / width vectors doing the same elementwise operations, so every
+    # width gives the same bits. MJTOUCH_SUM_LANES runs a narrower copy on
+    # this CPU (8 where it has AVX2).
+    import os
+    import pathlib
+    import subprocess
+    import sys
+
+    tip, p, ratio = sliding_contact
+    np.savez(tmp_path / "in.npz", n=tip.nx, h=tip.pitch_m, p=p, ratio=np.array(ratio))
+    widest = engine.stress(p, slip=ratio, method="direct", fold=True)
+    env = {**os.environ, "MJTOUCH_SUM_LANES": lanes}
+    subprocess.run([sys.executable, "-c", _STAGE_SCRIPT, str(tmp_path / "in.npz"),
+                    str(tmp_path / "out.npy"), str(pathlib.Path(__file__).parent)],
+                   env=env, check=True, timeout=300)
+    narrow = np.load(tmp_path / "out.npy")
+    assert np.abs(widest).max() > 1e3, "the contact must load the sites"
+    assert np.array_equal(narrow, widest)
 
 
 def test_aligned_sums_and_rx_cache_are_the_legacy_bits(sliding_contact, engine):

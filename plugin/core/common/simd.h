@@ -25,7 +25,10 @@
 // MJTOUCH_TARGET_CLONES_AVX512: also an AVX-512 copy, for loops written in
 // 16-float GCC vectors (one 512-bit register per vector; two AVX2 ones, four
 // SSE2 / NEON ones elsewhere: the same elementwise operations, so the same
-// bits on every ISA). Where there are no clones: the one baseline copy.
+// bits on every ISA). Where there are no clones: the one baseline copy. Only
+// for straight-line vector code: a 16-float vector kept across a loop on a
+// narrower ISA is lowered through the stack (stress_fold.cc's sums, 3.7x
+// slower on AVX2, hold native-width vectors in a copy per width instead).
 #if MJTOUCH_X86_SIMD && defined(__ELF__) && defined(__GNUC__) && !defined(__clang__)
 #define MJTOUCH_TARGET_CLONES_AVX512 \
   __attribute__((target_clones("avx512f", "avx2", "default")))

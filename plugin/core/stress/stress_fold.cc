@@ -53,17 +53,34 @@ inline __attribute__((always_inline)) v16f Load16(const float* p) {
 // zero cells or rows a chunk range adds does not change a bit (a float lane
 // that starts at +0 never holds -0, and x + (+-0) = x), so the sum is the
 // same sequence of operations on the nonzero products for any R, layout or
-// thread split; and every ISA does the same elementwise operations (GCC
-// vector lanes: one 512-bit register, two AVX2 ones, four SSE2 / NEON ones).
-template <int NC, int R>
+// thread split. A chunk's 16 lanes are held as 16 / W vectors of the
+// machine's width W (one AVX-512 register, two AVX2 ones, four SSE2 / NEON
+// ones): every ISA does the same elementwise operations, so the same bits.
+// (One 16-float GCC vector on a narrower ISA is lowered through the stack:
+// the AVX2 copy ran 3.7x slower than the AVX-512 one.)
+template <int W>
+struct Native {
+  typedef float vf __attribute__((vector_size(W * sizeof(float))));
+  static constexpr int kParts = kSumLanes / W;
+  static inline __attribute__((always_inline)) vf Load(const float* p) {
+    vf v;
+    std::memcpy(&v, p, sizeof(v));
+    return v;
+  }
+};
+
+template <int W, int NC, int R>
 inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* const* ebuf, int ew,
                                                     const float* P, int ps, const int* rlo,
                                                     const int* rhi, int g) {
   static_assert(kTableRowsPerBand % R == 0, "rows at once must divide the band");
+  typedef typename Native<W>::vf vf;
+  constexpr int J = Native<W>::kParts;
   const float* erow[NC];
   for (int c = 0; c < NC; ++c) erow[c] = ebuf[s.comp[c]] + s.col;
-  v16f f[NC];
-  for (int c = 0; c < NC; ++c) f[c] = v16f{};
+  vf f[NC][J];
+  for (int c = 0; c < NC; ++c)
+    for (int j = 0; j < J; ++j) f[c][j] = vf{};
   bool any = false;
 #pragma GCC unroll 8
   for (int t = 0; t < kTableRowsPerBand; t += R) {
@@ -75,26 +92,45 @@ inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* co
     if (lo >= hi) continue;  // zero rows: no-ops
     any = true;
     const int x = lo - ((g + lo) & (kSumLanes - 1));
-    v16f r[R][NC];
+    vf r[R][NC][J];
+#pragma GCC unroll 8
     for (int u = 0; u < R; ++u)
-      for (int c = 0; c < NC; ++c) r[u][c] = v16f{};
+#pragma GCC unroll 6
+      for (int c = 0; c < NC; ++c)
+#pragma GCC unroll 4
+        for (int j = 0; j < J; ++j) r[u][c][j] = vf{};
     for (int k = x; k < hi; k += kSumLanes)
-      for (int u = 0; u < R; ++u) {
-        const v16f p = Load16(P + static_cast<ptrdiff_t>(t + u) * ps + k);
-        for (int c = 0; c < NC; ++c)
-          r[u][c] += Load16(erow[c] + static_cast<ptrdiff_t>(t + u) * ew + k) * p;
-      }
+#pragma GCC unroll 8
+      for (int u = 0; u < R; ++u)
+#pragma GCC unroll 4
+        for (int j = 0; j < J; ++j) {
+          const vf p = Native<W>::Load(P + static_cast<ptrdiff_t>(t + u) * ps + k + j * W);
+#pragma GCC unroll 6
+          for (int c = 0; c < NC; ++c)
+            r[u][c][j] +=
+                Native<W>::Load(erow[c] + static_cast<ptrdiff_t>(t + u) * ew + k + j * W) * p;
+        }
+#pragma GCC unroll 8
     for (int u = 0; u < R; ++u)
-      for (int c = 0; c < NC; ++c) f[c] += r[u][c];
+#pragma GCC unroll 6
+      for (int c = 0; c < NC; ++c)
+#pragma GCC unroll 4
+        for (int j = 0; j < J; ++j) f[c][j] += r[u][c][j];
   }
   if (!any) return;
   for (int c = 0; c < NC; ++c) {
-    // Widened as one 16-lane vector, then split: GCC 12 converts an 8-float
-    // half 4 lanes at a time (two converts and two shuffles more per half).
-    const v16d x = __builtin_convertvector(f[c], v16d);
-    v8d* d = reinterpret_cast<v8d*>(s.d[c]);
-    d[0] += __builtin_shufflevector(x, x, 0, 1, 2, 3, 4, 5, 6, 7);
-    d[1] += __builtin_shufflevector(x, x, 8, 9, 10, 11, 12, 13, 14, 15);
+    if constexpr (W == kSumLanes) {
+      // Widened as one 16-lane vector, then split: GCC 12 converts an 8-float
+      // half 4 lanes at a time (two converts and two shuffles more per half).
+      const v16d x = __builtin_convertvector(f[c][0], v16d);
+      v8d* d = reinterpret_cast<v8d*>(s.d[c]);
+      d[0] += __builtin_shufflevector(x, x, 0, 1, 2, 3, 4, 5, 6, 7);
+      d[1] += __builtin_shufflevector(x, x, 8, 9, 10, 11, 12, 13, 14, 15);
+    } else {
+      float lanes[kSumLanes];
+      std::memcpy(lanes, f[c], sizeof(lanes));
+      for (int l = 0; l < kSumLanes; ++l) s.d[c][l] += static_cast<double>(lanes[l]);
+    }
   }
 }
 
@@ -102,9 +138,11 @@ inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* co
 // dy block) into the sums of the sites [first, last) that read it: site q's
 // pressure rows T0 - off .. (rlo / rhi: each pressure row's cells, from row
 // -kTableRowsPerBand; none outside the contact).
-MJTOUCH_TARGET_CLONES_AVX512
-void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
-             const float* P, int ps, const int* rlo, const int* rhi, int x0) {
+template <int W>
+inline __attribute__((always_inline)) void SumBandBody(FoldSite* sites, int first, int last,
+                                                       const float* const* ebuf, int ew, int T0,
+                                                       const float* P, int ps, const int* rlo,
+                                                       const int* rhi, int x0) {
   for (int q = first; q < last; ++q) {
     FoldSite& s = sites[q];
     const int r0 = T0 - s.off;
@@ -113,14 +151,53 @@ void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int
     const int* hi = rhi + r0 + kTableRowsPerBand;
     const int g = x0 + s.col;
     switch (s.nc) {
-      case 1: SiteBand<1, 4>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
-      case 2: SiteBand<2, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
-      case 3: SiteBand<3, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
-      case 4: SiteBand<4, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
-      case 5: SiteBand<5, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
-      default: SiteBand<6, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 1: SiteBand<W, 1, 4>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 2: SiteBand<W, 2, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 3: SiteBand<W, 3, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 4: SiteBand<W, 4, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 5: SiteBand<W, 5, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      default: SiteBand<W, 6, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
     }
   }
+}
+
+// SumBand in the widest vectors the CPU has, picked once at run time
+// (target_clones cannot give each copy its own width): AVX-512, AVX2, else
+// the baseline (SSE2; NEON on aarch64).
+typedef void (*SumBandFn)(FoldSite*, int, int, const float* const*, int, int, const float*, int,
+                          const int*, const int*, int);
+#define MJTOUCH_SUM_BAND_COPY(name, attr, width)                                         \
+  attr void name(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, \
+                 int T0, const float* P, int ps, const int* rlo, const int* rhi, int x0) {  \
+    SumBandBody<width>(sites, first, last, ebuf, ew, T0, P, ps, rlo, rhi, x0);             \
+  }
+MJTOUCH_SUM_BAND_COPY(SumBand4, , 4)
+#if MJTOUCH_X86_SIMD && defined(__GNUC__)
+MJTOUCH_SUM_BAND_COPY(SumBand8, __attribute__((target("avx2"))), 8)
+MJTOUCH_SUM_BAND_COPY(SumBand16, __attribute__((target("avx512f"))), 16)
+#endif
+#undef MJTOUCH_SUM_BAND_COPY
+
+SumBandFn PickSumBand() {
+  if (const char* w = std::getenv("MJTOUCH_SUM_LANES")) {  // tests: every copy on this CPU
+    if (std::strcmp(w, "4") == 0) return SumBand4;
+#if MJTOUCH_X86_SIMD && defined(__GNUC__)
+    __builtin_cpu_init();
+    if (std::strcmp(w, "8") == 0 && __builtin_cpu_supports("avx2")) return SumBand8;
+#endif
+  }
+#if MJTOUCH_X86_SIMD && defined(__GNUC__)
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx512f")) return SumBand16;
+  if (__builtin_cpu_supports("avx2")) return SumBand8;
+#endif
+  return SumBand4;
+}
+
+void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
+             const float* P, int ps, const int* rlo, const int* rhi, int x0) {
+  static const SumBandFn copy = PickSumBand();
+  copy(sites, first, last, ebuf, ew, T0, P, ps, rlo, rhi, x0);
 }
 
 inline __attribute__((always_inline)) void Store(float* p, v16f v) {

@@ -19,7 +19,9 @@
 // (a lane that starts at +0 never holds -0), so the chunk ranges (padding,
 // rows summed together) do not change a bit. The same order runs as one
 // AVX-512 register, two AVX2 ones or four SSE2 / NEON ones (GCC vector
-// lanes are elementwise; -ffp-contract=off). Same result as the reference
+// lanes are elementwise; -ffp-contract=off): the sums in a copy per width,
+// the widest the CPU has picked at run time (MJTOUCH_SUM_LANES=8 or 4 in the
+// environment picks a narrower one, for tests). Same result as the reference
 // path (StressAtReceptor) to float rounding (tests/unit/test_stress_fold.py:
 // rel. RMS <= 1e-5); the alignment and the cache do not change a bit (same
 // file: against fold_legacy).
