@@ -42,6 +42,76 @@ inline __attribute__((always_inline)) v16f Load16(const float* p) {
   return v;
 }
 
+// a * b + c with one rounding (IEEE fma) in every lane: the sums' and the
+// fold's one operation per term, exactly specified, so every copy below
+// gives the same bits. kFma: the copy is compiled for an FMA unit with
+// contraction on (GCC: MJTOUCH_CONTRACT), so a * b + c is one vector fma;
+// otherwise (and with Clang, whose contraction is fixed where the code is
+// parsed) fmaf lane by lane, which the compiler vectorises where it can and
+// calls where the CPU has no FMA (x86 before 2013: correct bits, slow).
+template <bool kFma, typename V>
+inline __attribute__((always_inline)) V MulAdd(V a, V b, V c) {
+#if defined(__GNUC__) && !defined(__clang__)
+  if constexpr (kFma) return a * b + c;
+#endif
+  V r;
+  for (int l = 0; l < static_cast<int>(sizeof(V) / sizeof(float)); ++l)
+    r[l] = __builtin_fmaf(a[l], b[l], c[l]);
+  return r;
+}
+
+template <bool kFma>
+inline __attribute__((always_inline)) v16f MulAdd(float a, v16f b, v16f c) {
+  return MulAdd<kFma>(v16f{} + a, b, c);
+}
+
+// The copies of the hot functions (SumBand, the fold), one per ISA, picked
+// once at run time: AVX-512 (16-float vectors), AVX2 + FMA (8), the baseline
+// (4: SSE2, NEON). target_clones cannot give each copy its own vector width
+// and contraction, and GCC's "avx2" target has no FMA.
+#if defined(__GNUC__) && !defined(__clang__)
+#define MJTOUCH_CONTRACT __attribute__((optimize("fp-contract=fast")))
+#else
+#define MJTOUCH_CONTRACT
+#endif
+#if defined(__aarch64__)
+constexpr bool kBaselineFma = true;  // every aarch64 CPU has FMA
+#define MJTOUCH_BASELINE_CONTRACT MJTOUCH_CONTRACT
+#else
+constexpr bool kBaselineFma = false;
+#define MJTOUCH_BASELINE_CONTRACT
+#endif
+#if MJTOUCH_X86_SIMD && defined(__GNUC__)
+#define MJTOUCH_X86_COPIES 1
+#define MJTOUCH_COPY_AVX512 __attribute__((target("avx512f"))) MJTOUCH_CONTRACT
+#define MJTOUCH_COPY_AVX2_FMA __attribute__((target("avx2,fma"))) MJTOUCH_CONTRACT
+#else
+#define MJTOUCH_X86_COPIES 0
+#endif
+
+enum class Isa { kBaseline, kAvx2Fma, kAvx512 };
+
+// MJTOUCH_SUM_LANES=8 or 4 in the environment picks a narrower copy (tests:
+// every copy on one CPU).
+Isa PickIsa() {
+#if MJTOUCH_X86_COPIES
+  __builtin_cpu_init();
+  const bool avx512 = __builtin_cpu_supports("avx512f");
+  const bool avx2_fma = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+  const bool avx512 = false, avx2_fma = false;
+#endif
+  const char* lanes = std::getenv("MJTOUCH_SUM_LANES");
+  if (lanes && std::strcmp(lanes, "4") == 0) return Isa::kBaseline;
+  if (lanes && std::strcmp(lanes, "8") == 0) return avx2_fma ? Isa::kAvx2Fma : Isa::kBaseline;
+  return avx512 ? Isa::kAvx512 : avx2_fma ? Isa::kAvx2Fma : Isa::kBaseline;
+}
+
+Isa ChosenIsa() {
+  static const Isa isa = PickIsa();
+  return isa;
+}
+
 // One band of a site (stress_fold.h: the canonical sum): the kTableRowsPerBand
 // pressure rows P + t ps (t = 0 ..; cells rlo[t] .. rhi[t], none: lo >= hi)
 // against the folded rows ebuf[comp] + t ew at the same cells, in chunks of
@@ -55,7 +125,7 @@ inline __attribute__((always_inline)) v16f Load16(const float* p) {
 // same sequence of operations on the nonzero products for any R, layout or
 // thread split. A chunk's 16 lanes are held as 16 / W vectors of the
 // machine's width W (one AVX-512 register, two AVX2 ones, four SSE2 / NEON
-// ones): every ISA does the same elementwise operations, so the same bits.
+// ones), each term one fma (MulAdd): the same bits on every ISA.
 // (One 16-float GCC vector on a narrower ISA is lowered through the stack:
 // the AVX2 copy ran 3.7x slower than the AVX-512 one.)
 template <int W>
@@ -69,7 +139,7 @@ struct Native {
   }
 };
 
-template <int W, int NC, int R>
+template <int W, bool kFma, int NC, int R>
 inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* const* ebuf, int ew,
                                                     const float* P, int ps, const int* rlo,
                                                     const int* rhi, int g) {
@@ -107,8 +177,9 @@ inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* co
           const vf p = Native<W>::Load(P + static_cast<ptrdiff_t>(t + u) * ps + k + j * W);
 #pragma GCC unroll 6
           for (int c = 0; c < NC; ++c)
-            r[u][c][j] +=
-                Native<W>::Load(erow[c] + static_cast<ptrdiff_t>(t + u) * ew + k + j * W) * p;
+            r[u][c][j] = MulAdd<kFma>(
+                Native<W>::Load(erow[c] + static_cast<ptrdiff_t>(t + u) * ew + k + j * W), p,
+                r[u][c][j]);
         }
 #pragma GCC unroll 8
     for (int u = 0; u < R; ++u)
@@ -138,7 +209,7 @@ inline __attribute__((always_inline)) void SiteBand(FoldSite& s, const float* co
 // dy block) into the sums of the sites [first, last) that read it: site q's
 // pressure rows T0 - off .. (rlo / rhi: each pressure row's cells, from row
 // -kTableRowsPerBand; none outside the contact).
-template <int W>
+template <int W, bool kFma>
 inline __attribute__((always_inline)) void SumBandBody(FoldSite* sites, int first, int last,
                                                        const float* const* ebuf, int ew, int T0,
                                                        const float* P, int ps, const int* rlo,
@@ -151,54 +222,44 @@ inline __attribute__((always_inline)) void SumBandBody(FoldSite* sites, int firs
     const int* hi = rhi + r0 + kTableRowsPerBand;
     const int g = x0 + s.col;
     switch (s.nc) {
-      case 1: SiteBand<W, 1, 4>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
-      case 2: SiteBand<W, 2, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
-      case 3: SiteBand<W, 3, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
-      case 4: SiteBand<W, 4, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
-      case 5: SiteBand<W, 5, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
-      default: SiteBand<W, 6, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 1: SiteBand<W, kFma, 1, 4>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 2: SiteBand<W, kFma, 2, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 3: SiteBand<W, kFma, 3, 2>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 4: SiteBand<W, kFma, 4, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      case 5: SiteBand<W, kFma, 5, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
+      default: SiteBand<W, kFma, 6, 1>(s, ebuf, ew, Pr, ps, lo, hi, g); break;
     }
   }
 }
 
-// SumBand in the widest vectors the CPU has, picked once at run time
-// (target_clones cannot give each copy its own width): AVX-512, AVX2, else
-// the baseline (SSE2; NEON on aarch64).
-typedef void (*SumBandFn)(FoldSite*, int, int, const float* const*, int, int, const float*, int,
-                          const int*, const int*, int);
-#define MJTOUCH_SUM_BAND_COPY(name, attr, width)                                         \
-  attr void name(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, \
-                 int T0, const float* P, int ps, const int* rlo, const int* rhi, int x0) {  \
-    SumBandBody<width>(sites, first, last, ebuf, ew, T0, P, ps, rlo, rhi, x0);             \
-  }
-MJTOUCH_SUM_BAND_COPY(SumBand4, , 4)
-#if MJTOUCH_X86_SIMD && defined(__GNUC__)
-MJTOUCH_SUM_BAND_COPY(SumBand8, __attribute__((target("avx2"))), 8)
-MJTOUCH_SUM_BAND_COPY(SumBand16, __attribute__((target("avx512f"))), 16)
-#endif
-#undef MJTOUCH_SUM_BAND_COPY
-
-SumBandFn PickSumBand() {
-  if (const char* w = std::getenv("MJTOUCH_SUM_LANES")) {  // tests: every copy on this CPU
-    if (std::strcmp(w, "4") == 0) return SumBand4;
-#if MJTOUCH_X86_SIMD && defined(__GNUC__)
-    __builtin_cpu_init();
-    if (std::strcmp(w, "8") == 0 && __builtin_cpu_supports("avx2")) return SumBand8;
-#endif
-  }
-#if MJTOUCH_X86_SIMD && defined(__GNUC__)
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("avx512f")) return SumBand16;
-  if (__builtin_cpu_supports("avx2")) return SumBand8;
-#endif
-  return SumBand4;
+#define MJTOUCH_SUM_BAND_ARGS sites, first, last, ebuf, ew, T0, P, ps, rlo, rhi, x0
+#define MJTOUCH_SUM_BAND_PARAMS                                                              \
+  FoldSite *sites, int first, int last, const float *const *ebuf, int ew, int T0, \
+      const float *P, int ps, const int *rlo, const int *rhi, int x0
+MJTOUCH_BASELINE_CONTRACT void SumBand4(MJTOUCH_SUM_BAND_PARAMS) {
+  SumBandBody<4, kBaselineFma>(MJTOUCH_SUM_BAND_ARGS);
 }
-
-void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int ew, int T0,
-             const float* P, int ps, const int* rlo, const int* rhi, int x0) {
-  static const SumBandFn copy = PickSumBand();
-  copy(sites, first, last, ebuf, ew, T0, P, ps, rlo, rhi, x0);
+#if MJTOUCH_X86_COPIES
+MJTOUCH_COPY_AVX2_FMA void SumBand8(MJTOUCH_SUM_BAND_PARAMS) {
+  SumBandBody<8, true>(MJTOUCH_SUM_BAND_ARGS);
 }
+MJTOUCH_COPY_AVX512 void SumBand16(MJTOUCH_SUM_BAND_PARAMS) {
+  SumBandBody<16, true>(MJTOUCH_SUM_BAND_ARGS);
+}
+#endif
+
+void SumBand(MJTOUCH_SUM_BAND_PARAMS) {
+#if MJTOUCH_X86_COPIES
+  switch (ChosenIsa()) {
+    case Isa::kAvx512: return SumBand16(MJTOUCH_SUM_BAND_ARGS);
+    case Isa::kAvx2Fma: return SumBand8(MJTOUCH_SUM_BAND_ARGS);
+    case Isa::kBaseline: break;
+  }
+#endif
+  SumBand4(MJTOUCH_SUM_BAND_ARGS);
+}
+#undef MJTOUCH_SUM_BAND_ARGS
+#undef MJTOUCH_SUM_BAND_PARAMS
 
 inline __attribute__((always_inline)) void Store(float* p, v16f v) {
   std::memcpy(p, &v, sizeof(v));
@@ -236,10 +297,10 @@ inline __attribute__((always_inline)) void FoldCells(int len, float* e, Chunk ch
   if (x < len) Store(e + len - kFoldLanes, chunk(len - kFoldLanes));
 }
 
-// e[x] = sign ((kp[x] + rx kx[x]) + ry ky[x]) (float; sign +-1, exact), or
+// e[x] = sign fma(ry, ky[x], fma(rx, kx[x], kp[x])) (float; sign +-1, exact), or
 // sign kp[x] without shear; kReversed: from a mirrored source read backwards
 // (k[-x]), a table row at negative offsets from its row at positive ones.
-template <bool kReversed>
+template <bool kFma, bool kReversed>
 inline __attribute__((always_inline)) void FoldRowCells(const float* kp, const float* kx,
                                                         const float* ky, float rx, float ry,
                                                         float sign, bool shear, int len,
@@ -249,10 +310,13 @@ inline __attribute__((always_inline)) void FoldRowCells(const float* kp, const f
     FoldCells(
         len, e,
         [&](int x) {
-          return sign * ((Cells<kReversed>(kp, x) + rx * Cells<kReversed>(kx, x)) +
-                         ry * Cells<kReversed>(ky, x));
+          return sign * MulAdd<kFma>(ry, Cells<kReversed>(ky, x),
+                                     MulAdd<kFma>(rx, Cells<kReversed>(kx, x),
+                                                  Cells<kReversed>(kp, x)));
         },
-        [&](int x) { return sign * ((kp[d * x] + rx * kx[d * x]) + ry * ky[d * x]); });
+        [&](int x) {
+          return sign * __builtin_fmaf(ry, ky[d * x], __builtin_fmaf(rx, kx[d * x], kp[d * x]));
+        });
   } else if (!kReversed && sign > 0) {
     std::memcpy(e, kp, sizeof(float) * len);
   } else {
@@ -278,11 +342,13 @@ inline size_t RxCacheStride(int n) { return static_cast<size_t>(3) * RxCacheHalf
 
 // Folded rows dy0 .. dy0 + rows - 1 (rows ew apart) at dx = x0 .. x0 + w - 1
 // (x0, w multiples of 16; e 64-byte aligned) from the rx cache h of one
-// (depth, component): e = sp (h + (sp sy ry) ky), the same float operations
-// as FoldRowCells' ((kp + a kx) + b ky) on the same h, so the same bits.
-MJTOUCH_TARGET_CLONES_AVX512
-void FoldCachedRows(const float* h, int n, StressComponent comp, int dy0, int rows, int x0, int w,
-                    float ry, float* e, int ew) {
+// (depth, component): e = sp fma(sp sy ry, ky, h), the same float operations
+// as FoldRowCells' fma(b, ky, fma(a, kx, kp)) on the same h, so the same bits.
+template <bool kFma>
+inline __attribute__((always_inline)) void FoldCachedRowsBody(const float* h, int n,
+                                                              StressComponent comp, int dy0,
+                                                              int rows, int x0, int w, float ry,
+                                                              float* e, int ew) {
   const int half = RxCacheHalf(n);
   const size_t stride = RxCacheStride(n);
   // Chunk ranges [0, a): below the cache (zero), [a, m): dx < 0, [m, z): dx
@@ -318,31 +384,61 @@ void FoldCachedRows(const float* h, int n, StressComponent comp, int dy0, int ro
         const float* k = ky + x0;
         if (sp > 0) {
           for (int x = lo; x < hi; x += kFoldLanes)
-            Store(et + x, Load16(hr + x) + b * Load16(k + x));
+            Store(et + x, MulAdd<kFma>(b, Load16(k + x), Load16(hr + x)));
         } else {
           for (int x = lo; x < hi; x += kFoldLanes)
-            Store(et + x, -(Load16(hr + x) + b * Load16(k + x)));
+            Store(et + x, -MulAdd<kFma>(b, Load16(k + x), Load16(hr + x)));
         }
       } else {
         // cells dx = x0 + x + j (j = 0 .. 15): ky at |dx| = -(x0 + x) - j
         const float* k = ky - x0;
         if (sp > 0) {
           for (int x = lo; x < hi; x += kFoldLanes)
-            Store(et + x, Load16(hr + x) + b * Cells<true>(k, x));
+            Store(et + x, MulAdd<kFma>(b, Cells<true>(k, x), Load16(hr + x)));
         } else {
           for (int x = lo; x < hi; x += kFoldLanes)
-            Store(et + x, -(Load16(hr + x) + b * Cells<true>(k, x)));
+            Store(et + x, -MulAdd<kFma>(b, Cells<true>(k, x), Load16(hr + x)));
         }
       }
     }
   }
 }
 
+#define MJTOUCH_FOLD_CACHED_PARAMS                                                            \
+  const float *h, int n, StressComponent comp, int dy0, int rows, int x0, int w, float ry, \
+      float *e, int ew
+#define MJTOUCH_FOLD_CACHED_ARGS h, n, comp, dy0, rows, x0, w, ry, e, ew
+MJTOUCH_BASELINE_CONTRACT void FoldCachedRowsBaseline(MJTOUCH_FOLD_CACHED_PARAMS) {
+  FoldCachedRowsBody<kBaselineFma>(MJTOUCH_FOLD_CACHED_ARGS);
+}
+#if MJTOUCH_X86_COPIES
+MJTOUCH_COPY_AVX2_FMA void FoldCachedRowsAvx2Fma(MJTOUCH_FOLD_CACHED_PARAMS) {
+  FoldCachedRowsBody<true>(MJTOUCH_FOLD_CACHED_ARGS);
+}
+MJTOUCH_COPY_AVX512 void FoldCachedRowsAvx512(MJTOUCH_FOLD_CACHED_PARAMS) {
+  FoldCachedRowsBody<true>(MJTOUCH_FOLD_CACHED_ARGS);
+}
+#endif
+
+void FoldCachedRows(MJTOUCH_FOLD_CACHED_PARAMS) {
+#if MJTOUCH_X86_COPIES
+  switch (ChosenIsa()) {
+    case Isa::kAvx512: return FoldCachedRowsAvx512(MJTOUCH_FOLD_CACHED_ARGS);
+    case Isa::kAvx2Fma: return FoldCachedRowsAvx2Fma(MJTOUCH_FOLD_CACHED_ARGS);
+    case Isa::kBaseline: break;
+  }
+#endif
+  FoldCachedRowsBaseline(MJTOUCH_FOLD_CACHED_ARGS);
+}
+#undef MJTOUCH_FOLD_CACHED_PARAMS
+#undef MJTOUCH_FOLD_CACHED_ARGS
+
 // One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
 // the tables' rows at |dy| and columns |dx| only (KernelTables::
 // mirror_symmetric): the signs of the reflections folded into the ratios,
 // E = sp (Kp + (sp sx rx) Kx + (sp sy ry) Ky), exactly the value the full
 // tables give when they are mirror images.
+template <bool kFma>
 inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& kt, int d,
                                                            StressComponent comp, int dy, int x0,
                                                            int w, float rx, float ry, bool shear,
@@ -379,25 +475,55 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
     }
     const float a = sp * sx * rx, b = sp * sy * ry;
     if (side == 0) {
-      FoldRowCells<false>(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1,
+      FoldRowCells<kFma, false>(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1,
                           e + (lo - x0));
     } else {
       // e at dx = lo .. hi reads the positive-offset row at -lo .. -hi.
-      FoldRowCells<true>(Kp - lo, Kx - lo, Ky - lo, a, b, sp, shear, hi - lo + 1,
+      FoldRowCells<kFma, true>(Kp - lo, Kx - lo, Ky - lo, a, b, sp, shear, hi - lo + 1,
                          e + (lo - x0));
     }
   }
 }
 
+template <bool kFma>
+inline __attribute__((always_inline)) void FoldMirroredRowsBody(
+    const KernelTables& kt, int d, StressComponent comp, int dy0, int rows, int x0, int w,
+    float rx, float ry, bool shear, float* e, int ew) {
+  for (int t = 0; t < rows; ++t)
+    FoldMirroredRow<kFma>(kt, d, comp, dy0 + t, x0, w, rx, ry, shear,
+                          e + static_cast<size_t>(t) * ew);
+}
+
+#define MJTOUCH_FOLD_MIRRORED_PARAMS                                                          \
+  const KernelTables &kt, int d, StressComponent comp, int dy0, int rows, int x0, int w, \
+      float rx, float ry, bool shear, float *e, int ew
+#define MJTOUCH_FOLD_MIRRORED_ARGS kt, d, comp, dy0, rows, x0, w, rx, ry, shear, e, ew
+MJTOUCH_BASELINE_CONTRACT void FoldMirroredRowsBaseline(MJTOUCH_FOLD_MIRRORED_PARAMS) {
+  FoldMirroredRowsBody<kBaselineFma>(MJTOUCH_FOLD_MIRRORED_ARGS);
+}
+#if MJTOUCH_X86_COPIES
+MJTOUCH_COPY_AVX2_FMA void FoldMirroredRowsAvx2Fma(MJTOUCH_FOLD_MIRRORED_PARAMS) {
+  FoldMirroredRowsBody<true>(MJTOUCH_FOLD_MIRRORED_ARGS);
+}
+MJTOUCH_COPY_AVX512 void FoldMirroredRowsAvx512(MJTOUCH_FOLD_MIRRORED_PARAMS) {
+  FoldMirroredRowsBody<true>(MJTOUCH_FOLD_MIRRORED_ARGS);
+}
+#endif
+
 // Rows dy0 .. dy0 + rows - 1 of a folded window into e (rows ew apart): one
 // dispatch per band, not two per row side.
-MJTOUCH_TARGET_CLONES_AVX512
-void FoldMirroredRows(const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
-                      int x0, int w, float rx, float ry, bool shear, float* e, int ew) {
-  for (int t = 0; t < rows; ++t)
-    FoldMirroredRow(kt, d, comp, dy0 + t, x0, w, rx, ry, shear,
-                    e + static_cast<size_t>(t) * ew);
+void FoldMirroredRows(MJTOUCH_FOLD_MIRRORED_PARAMS) {
+#if MJTOUCH_X86_COPIES
+  switch (ChosenIsa()) {
+    case Isa::kAvx512: return FoldMirroredRowsAvx512(MJTOUCH_FOLD_MIRRORED_ARGS);
+    case Isa::kAvx2Fma: return FoldMirroredRowsAvx2Fma(MJTOUCH_FOLD_MIRRORED_ARGS);
+    case Isa::kBaseline: break;
+  }
+#endif
+  FoldMirroredRowsBaseline(MJTOUCH_FOLD_MIRRORED_ARGS);
 }
+#undef MJTOUCH_FOLD_MIRRORED_PARAMS
+#undef MJTOUCH_FOLD_MIRRORED_ARGS
 
 // The first 64-byte aligned float at or after p (buffers allocate 16 more).
 float* AlignUp64(float* p) {
@@ -455,7 +581,7 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
           const int x = dx < 0 ? -dx : dx;
           const float a = dx < 0 ? -rx : rx;
           const int i = dx + half;
-          Hy[i] = Kp[x] + a * Kx[x];
+          Hy[i] = __builtin_fmaf(a, Kx[x], Kp[x]);  // as FoldRowCells
           if (dx >= 0) Hy[2 * half + x] = Ky[x];
         }
       }

@@ -12,16 +12,19 @@
 // The canonical sum (one sequence of float operations, whatever the ISA,
 // layout or thread split): a site's cells in blocks of 8 rows on multiples
 // of 8 of dy = cell row - site row (the bands), each row's products E_c * p
-// summed in 16 float lanes (lane l: the cells at dx = l mod 16) over its
-// chunks of 16 in increasing dx, the block's 8 row sums added in row order,
+// accumulated by fused multiply-add (one rounding per term) in 16 float lanes
+// (lane l: the cells at dx = l mod 16) over its chunks of 16 in increasing
+// dx, the block's 8 row sums added in row order,
 // then widened and added to 16 double lanes (blocks in increasing dy); the 16
 // lanes reduced in a fixed order at the end. Zero cells are exact no-ops
 // (a lane that starts at +0 never holds -0), so the chunk ranges (padding,
-// rows summed together) do not change a bit. The same order runs as one
-// AVX-512 register, two AVX2 ones or four SSE2 / NEON ones (GCC vector
-// lanes are elementwise; -ffp-contract=off): the sums in a copy per width,
-// the widest the CPU has picked at run time (MJTOUCH_SUM_LANES=8 or 4 in the
-// environment picks a narrower one, for tests). Same result as the reference
+// rows summed together) do not change a bit. The fold is fused too: E =
+// fma(r_y, K_y, fma(r_x, K_x, K_p)). The same operations run as one AVX-512
+// register, two AVX2 + FMA ones or four SSE2 / NEON ones (vector lanes are
+// elementwise and fma is exact: the same bits), in a copy per ISA, the
+// widest the CPU has picked at run time (MJTOUCH_SUM_LANES=8 or 4 in the
+// environment picks a narrower one, for tests; x86 without FMA calls fmaf,
+// slow). Same result as the reference
 // path (StressAtReceptor) to float rounding (tests/unit/test_stress_fold.py:
 // rel. RMS <= 1e-5); the alignment and the cache do not change a bit (same
 // file: against fold_legacy).
