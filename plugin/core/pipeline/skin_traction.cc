@@ -41,7 +41,6 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   // `elastic`: the last step's contact from the pressure history, so a
   // repeated evaluation at the same time starts where the first one did.
   const StateLayout& lay = model.state_layout();
-  const size_t ncell = grid.Size();
   const bool history = lay.history_block > 0;
   // this time, the last step, the one before: the taxel grid's and the shifted grid's
   HistoryBlock taxel[3]{}, shifted[3]{};
