@@ -112,6 +112,33 @@ Isa ChosenIsa() {
   return isa;
 }
 
+// MJTOUCH_ISA_COPIES(name, params, args): name##Body<W, kFma> args compiled
+// once per ISA (name##Baseline, name##Avx2Fma, name##Avx512; W: floats per
+// vector) and `void name params`, which calls the chosen copy.
+#if MJTOUCH_X86_COPIES
+#define MJTOUCH_X86_ISA_COPIES(name, params, args)                                 \
+  MJTOUCH_COPY_AVX2_FMA void name##Avx2Fma params { name##Body<8, true> args; } \
+  MJTOUCH_COPY_AVX512 void name##Avx512 params { name##Body<16, true> args; }
+#define MJTOUCH_X86_ISA_SWITCH(name, args)          \
+  switch (ChosenIsa()) {                            \
+    case Isa::kAvx512: return name##Avx512 args;   \
+    case Isa::kAvx2Fma: return name##Avx2Fma args; \
+    case Isa::kBaseline: break;                     \
+  }
+#else
+#define MJTOUCH_X86_ISA_COPIES(name, params, args)
+#define MJTOUCH_X86_ISA_SWITCH(name, args)
+#endif
+#define MJTOUCH_ISA_COPIES(name, params, args)                       \
+  MJTOUCH_BASELINE_CONTRACT void name##Baseline params {             \
+    name##Body<4, kBaselineFma> args;                                \
+  }                                                                  \
+  MJTOUCH_X86_ISA_COPIES(name, params, args)                         \
+  void name params {                                                 \
+    MJTOUCH_X86_ISA_SWITCH(name, args)                               \
+    name##Baseline args;                                             \
+  }
+
 // One band of a site (stress_fold.h: the canonical sum): the kTableRowsPerBand
 // pressure rows P + t ps (t = 0 ..; cells rlo[t] .. rhi[t], none: lo >= hi)
 // against the folded rows ebuf[comp] + t ew at the same cells, in chunks of
@@ -232,34 +259,10 @@ inline __attribute__((always_inline)) void SumBandBody(FoldSite* sites, int firs
   }
 }
 
-#define MJTOUCH_SUM_BAND_ARGS sites, first, last, ebuf, ew, T0, P, ps, rlo, rhi, x0
-#define MJTOUCH_SUM_BAND_PARAMS                                                              \
-  FoldSite *sites, int first, int last, const float *const *ebuf, int ew, int T0, \
-      const float *P, int ps, const int *rlo, const int *rhi, int x0
-MJTOUCH_BASELINE_CONTRACT void SumBand4(MJTOUCH_SUM_BAND_PARAMS) {
-  SumBandBody<4, kBaselineFma>(MJTOUCH_SUM_BAND_ARGS);
-}
-#if MJTOUCH_X86_COPIES
-MJTOUCH_COPY_AVX2_FMA void SumBand8(MJTOUCH_SUM_BAND_PARAMS) {
-  SumBandBody<8, true>(MJTOUCH_SUM_BAND_ARGS);
-}
-MJTOUCH_COPY_AVX512 void SumBand16(MJTOUCH_SUM_BAND_PARAMS) {
-  SumBandBody<16, true>(MJTOUCH_SUM_BAND_ARGS);
-}
-#endif
-
-void SumBand(MJTOUCH_SUM_BAND_PARAMS) {
-#if MJTOUCH_X86_COPIES
-  switch (ChosenIsa()) {
-    case Isa::kAvx512: return SumBand16(MJTOUCH_SUM_BAND_ARGS);
-    case Isa::kAvx2Fma: return SumBand8(MJTOUCH_SUM_BAND_ARGS);
-    case Isa::kBaseline: break;
-  }
-#endif
-  SumBand4(MJTOUCH_SUM_BAND_ARGS);
-}
-#undef MJTOUCH_SUM_BAND_ARGS
-#undef MJTOUCH_SUM_BAND_PARAMS
+MJTOUCH_ISA_COPIES(SumBand,
+                   (FoldSite* sites, int first, int last, const float* const* ebuf, int ew,
+                    int T0, const float* P, int ps, const int* rlo, const int* rhi, int x0),
+                   (sites, first, last, ebuf, ew, T0, P, ps, rlo, rhi, x0))
 
 inline __attribute__((always_inline)) void Store(float* p, v16f v) {
   std::memcpy(p, &v, sizeof(v));
@@ -344,7 +347,7 @@ inline size_t RxCacheStride(int n) { return static_cast<size_t>(3) * RxCacheHalf
 // (x0, w multiples of 16; e 64-byte aligned) from the rx cache h of one
 // (depth, component): e = sp fma(sp sy ry, ky, h), the same float operations
 // as FoldRowCells' fma(b, ky, fma(a, kx, kp)) on the same h, so the same bits.
-template <bool kFma>
+template <int, bool kFma>  // (the fold's chunks are 16 floats on every ISA)
 inline __attribute__((always_inline)) void FoldCachedRowsBody(const float* h, int n,
                                                               StressComponent comp, int dy0,
                                                               int rows, int x0, int w, float ry,
@@ -404,34 +407,10 @@ inline __attribute__((always_inline)) void FoldCachedRowsBody(const float* h, in
   }
 }
 
-#define MJTOUCH_FOLD_CACHED_PARAMS                                                            \
-  const float *h, int n, StressComponent comp, int dy0, int rows, int x0, int w, float ry, \
-      float *e, int ew
-#define MJTOUCH_FOLD_CACHED_ARGS h, n, comp, dy0, rows, x0, w, ry, e, ew
-MJTOUCH_BASELINE_CONTRACT void FoldCachedRowsBaseline(MJTOUCH_FOLD_CACHED_PARAMS) {
-  FoldCachedRowsBody<kBaselineFma>(MJTOUCH_FOLD_CACHED_ARGS);
-}
-#if MJTOUCH_X86_COPIES
-MJTOUCH_COPY_AVX2_FMA void FoldCachedRowsAvx2Fma(MJTOUCH_FOLD_CACHED_PARAMS) {
-  FoldCachedRowsBody<true>(MJTOUCH_FOLD_CACHED_ARGS);
-}
-MJTOUCH_COPY_AVX512 void FoldCachedRowsAvx512(MJTOUCH_FOLD_CACHED_PARAMS) {
-  FoldCachedRowsBody<true>(MJTOUCH_FOLD_CACHED_ARGS);
-}
-#endif
-
-void FoldCachedRows(MJTOUCH_FOLD_CACHED_PARAMS) {
-#if MJTOUCH_X86_COPIES
-  switch (ChosenIsa()) {
-    case Isa::kAvx512: return FoldCachedRowsAvx512(MJTOUCH_FOLD_CACHED_ARGS);
-    case Isa::kAvx2Fma: return FoldCachedRowsAvx2Fma(MJTOUCH_FOLD_CACHED_ARGS);
-    case Isa::kBaseline: break;
-  }
-#endif
-  FoldCachedRowsBaseline(MJTOUCH_FOLD_CACHED_ARGS);
-}
-#undef MJTOUCH_FOLD_CACHED_PARAMS
-#undef MJTOUCH_FOLD_CACHED_ARGS
+MJTOUCH_ISA_COPIES(FoldCachedRows,
+                   (const float* h, int n, StressComponent comp, int dy0, int rows, int x0,
+                    int w, float ry, float* e, int ew),
+                   (h, n, comp, dy0, rows, x0, w, ry, e, ew))
 
 // One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
 // the tables' rows at |dy| and columns |dx| only (KernelTables::
@@ -485,7 +464,7 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
   }
 }
 
-template <bool kFma>
+template <int, bool kFma>
 inline __attribute__((always_inline)) void FoldMirroredRowsBody(
     const KernelTables& kt, int d, StressComponent comp, int dy0, int rows, int x0, int w,
     float rx, float ry, bool shear, float* e, int ew) {
@@ -494,36 +473,12 @@ inline __attribute__((always_inline)) void FoldMirroredRowsBody(
                           e + static_cast<size_t>(t) * ew);
 }
 
-#define MJTOUCH_FOLD_MIRRORED_PARAMS                                                          \
-  const KernelTables &kt, int d, StressComponent comp, int dy0, int rows, int x0, int w, \
-      float rx, float ry, bool shear, float *e, int ew
-#define MJTOUCH_FOLD_MIRRORED_ARGS kt, d, comp, dy0, rows, x0, w, rx, ry, shear, e, ew
-MJTOUCH_BASELINE_CONTRACT void FoldMirroredRowsBaseline(MJTOUCH_FOLD_MIRRORED_PARAMS) {
-  FoldMirroredRowsBody<kBaselineFma>(MJTOUCH_FOLD_MIRRORED_ARGS);
-}
-#if MJTOUCH_X86_COPIES
-MJTOUCH_COPY_AVX2_FMA void FoldMirroredRowsAvx2Fma(MJTOUCH_FOLD_MIRRORED_PARAMS) {
-  FoldMirroredRowsBody<true>(MJTOUCH_FOLD_MIRRORED_ARGS);
-}
-MJTOUCH_COPY_AVX512 void FoldMirroredRowsAvx512(MJTOUCH_FOLD_MIRRORED_PARAMS) {
-  FoldMirroredRowsBody<true>(MJTOUCH_FOLD_MIRRORED_ARGS);
-}
-#endif
-
 // Rows dy0 .. dy0 + rows - 1 of a folded window into e (rows ew apart): one
 // dispatch per band, not two per row side.
-void FoldMirroredRows(MJTOUCH_FOLD_MIRRORED_PARAMS) {
-#if MJTOUCH_X86_COPIES
-  switch (ChosenIsa()) {
-    case Isa::kAvx512: return FoldMirroredRowsAvx512(MJTOUCH_FOLD_MIRRORED_ARGS);
-    case Isa::kAvx2Fma: return FoldMirroredRowsAvx2Fma(MJTOUCH_FOLD_MIRRORED_ARGS);
-    case Isa::kBaseline: break;
-  }
-#endif
-  FoldMirroredRowsBaseline(MJTOUCH_FOLD_MIRRORED_ARGS);
-}
-#undef MJTOUCH_FOLD_MIRRORED_PARAMS
-#undef MJTOUCH_FOLD_MIRRORED_ARGS
+MJTOUCH_ISA_COPIES(FoldMirroredRows,
+                   (const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
+                    int x0, int w, float rx, float ry, bool shear, float* e, int ew),
+                   (kt, d, comp, dy0, rows, x0, w, rx, ry, shear, e, ew))
 
 // The first 64-byte aligned float at or after p (buffers allocate 16 more).
 float* AlignUp64(float* p) {
