@@ -503,9 +503,10 @@ def test_cpp_layered_checks(tmp_path):
     # the elastic solve's convolution, the same bits for threads 1-4 and equal
     # to a direct sum; test_fft_radix: the FFT's fused radix-6 / radix-9
     # stages against a naive DFT; test_receptor_batch: the receptors' four-lane
-    # path (AdvanceBatch) the same bits as Advance receptor by receptor
+    # path (AdvanceBatch) the same bits as Advance receptor by receptor;
+    # test_exact_fma: the stress sums' fma without an FMA unit against std::fma
     for exe in ("test_layered", "test_membrane", "test_fft_threads", "test_fft_radix",
-                "test_receptor_batch"):
+                "test_receptor_batch", "test_exact_fma"):
         run = subprocess.run([str(build_dir / "tests" / "cpp" / exe)],
                              capture_output=True, text=True, timeout=300)
         assert run.returncode == 0, exe + ":\n" + run.stdout[-4000:]

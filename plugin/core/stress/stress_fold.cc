@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "common/exact_fma.h"
 #include "common/simd.h"
 #include "common/thread_pool.h"
 
@@ -44,20 +45,30 @@ inline __attribute__((always_inline)) v16f Load16(const float* p) {
 
 // a * b + c with one rounding (IEEE fma) in every lane: the sums' and the
 // fold's one operation per term, exactly specified, so every copy below
-// gives the same bits. kFma: the copy is compiled for an FMA unit with
-// contraction on (GCC: MJTOUCH_CONTRACT), so a * b + c is one vector fma;
-// otherwise (and with Clang, whose contraction is fixed where the code is
-// parsed) fmaf lane by lane, which the compiler vectorises where it can and
-// calls where the CPU has no FMA (x86 before 2013: correct bits, slow).
+// gives the same bits. kFma: the copy is compiled for an FMA unit; GCC
+// contracts a * b + c into one vector fma there (MJTOUCH_CONTRACT), Clang
+// (whose contraction is fixed where the code is parsed) vectorises fmaf
+// lane by lane. Without FMA: FmaFromDouble in double vectors (the stress
+// stage ~35x the AVX-512 time; fmaf, a call per lane, ~58x).
 template <bool kFma, typename V>
 inline __attribute__((always_inline)) V MulAdd(V a, V b, V c) {
-#if defined(__GNUC__) && !defined(__clang__)
-  if constexpr (kFma) return a * b + c;
-#endif
+  constexpr int n = static_cast<int>(sizeof(V) / sizeof(float));
   V r;
-  for (int l = 0; l < static_cast<int>(sizeof(V) / sizeof(float)); ++l)
-    r[l] = __builtin_fmaf(a[l], b[l], c[l]);
+  if constexpr (kFma) {
+#if defined(__GNUC__) && !defined(__clang__)
+    return a * b + c;
+#endif
+    for (int l = 0; l < n; ++l) r[l] = __builtin_fmaf(a[l], b[l], c[l]);
+  } else {
+    return FmaFromDouble(a, b, c);
+  }
   return r;
+}
+
+template <bool kFma>
+inline __attribute__((always_inline)) float MulAdd(float a, float b, float c) {
+  if constexpr (kFma) return __builtin_fmaf(a, b, c);
+  return FmaFromDouble(a, b, c);
 }
 
 template <bool kFma>
@@ -318,7 +329,7 @@ inline __attribute__((always_inline)) void FoldRowCells(const float* kp, const f
                                                   Cells<kReversed>(kp, x)));
         },
         [&](int x) {
-          return sign * __builtin_fmaf(ry, ky[d * x], __builtin_fmaf(rx, kx[d * x], kp[d * x]));
+          return sign * MulAdd<kFma>(ry, ky[d * x], MulAdd<kFma>(rx, kx[d * x], kp[d * x]));
         });
   } else if (!kReversed && sign > 0) {
     std::memcpy(e, kp, sizeof(float) * len);
@@ -536,7 +547,7 @@ void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
           const int x = dx < 0 ? -dx : dx;
           const float a = dx < 0 ? -rx : rx;
           const int i = dx + half;
-          Hy[i] = __builtin_fmaf(a, Kx[x], Kp[x]);  // as FoldRowCells
+          Hy[i] = FmaFromDouble(a, Kx[x], Kp[x]);  // the fold's fma (FoldRowCells)
           if (dx >= 0) Hy[2 * half + x] = Ky[x];
         }
       }
