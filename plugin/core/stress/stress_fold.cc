@@ -49,26 +49,30 @@ inline __attribute__((always_inline)) v16f Load16(const float* p) {
 // contracts a * b + c into one vector fma there (MJTOUCH_CONTRACT), Clang
 // (whose contraction is fixed where the code is parsed) vectorises fmaf
 // lane by lane. Without FMA: FmaFromDouble in double vectors (the stress
-// stage ~35x the AVX-512 time; fmaf, a call per lane, ~58x).
+// stage ~50x the AVX-512 time; fmaf, a call per lane, ~58x).
 template <bool kFma, typename V>
 inline __attribute__((always_inline)) V MulAdd(V a, V b, V c) {
-  constexpr int n = static_cast<int>(sizeof(V) / sizeof(float));
-  V r;
-  if constexpr (kFma) {
+  if constexpr (!kFma) {
+    return FmaFromDouble(a, b, c);
+  } else {
 #if defined(__GNUC__) && !defined(__clang__)
     return a * b + c;
+#else
+    V r;
+    for (int l = 0; l < static_cast<int>(sizeof(V) / sizeof(float)); ++l)
+      r[l] = __builtin_fmaf(a[l], b[l], c[l]);
+    return r;
 #endif
-    for (int l = 0; l < n; ++l) r[l] = __builtin_fmaf(a[l], b[l], c[l]);
-  } else {
-    return FmaFromDouble(a, b, c);
   }
-  return r;
 }
 
 template <bool kFma>
 inline __attribute__((always_inline)) float MulAdd(float a, float b, float c) {
-  if constexpr (kFma) return __builtin_fmaf(a, b, c);
-  return FmaFromDouble(a, b, c);
+  if constexpr (kFma) {
+    return __builtin_fmaf(a, b, c);
+  } else {
+    return FmaFromDouble(a, b, c);
+  }
 }
 
 template <bool kFma>
@@ -76,79 +80,8 @@ inline __attribute__((always_inline)) v16f MulAdd(float a, v16f b, v16f c) {
   return MulAdd<kFma>(v16f{} + a, b, c);
 }
 
-// The copies of the hot functions (SumBand, the fold), one per ISA, picked
-// once at run time: AVX-512 (16-float vectors), AVX2 + FMA (8), the baseline
-// (4: SSE2, NEON). target_clones cannot give each copy its own vector width
-// and contraction, and GCC's "avx2" target has no FMA.
-#if defined(__GNUC__) && !defined(__clang__)
-#define MJTOUCH_CONTRACT __attribute__((optimize("fp-contract=fast")))
-#else
-#define MJTOUCH_CONTRACT
-#endif
-#if defined(__aarch64__)
-constexpr bool kBaselineFma = true;  // every aarch64 CPU has FMA
-#define MJTOUCH_BASELINE_CONTRACT MJTOUCH_CONTRACT
-#else
-constexpr bool kBaselineFma = false;
-#define MJTOUCH_BASELINE_CONTRACT
-#endif
-#if MJTOUCH_X86_SIMD && defined(__GNUC__)
-#define MJTOUCH_X86_COPIES 1
-#define MJTOUCH_COPY_AVX512 __attribute__((target("avx512f"))) MJTOUCH_CONTRACT
-#define MJTOUCH_COPY_AVX2_FMA __attribute__((target("avx2,fma"))) MJTOUCH_CONTRACT
-#else
-#define MJTOUCH_X86_COPIES 0
-#endif
-
-enum class Isa { kBaseline, kAvx2Fma, kAvx512 };
-
-// MJTOUCH_SUM_LANES=8 or 4 in the environment picks a narrower copy (tests:
-// every copy on one CPU).
-Isa PickIsa() {
-#if MJTOUCH_X86_COPIES
-  __builtin_cpu_init();
-  const bool avx512 = __builtin_cpu_supports("avx512f");
-  const bool avx2_fma = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-#else
-  const bool avx512 = false, avx2_fma = false;
-#endif
-  const char* lanes = std::getenv("MJTOUCH_SUM_LANES");
-  if (lanes && std::strcmp(lanes, "4") == 0) return Isa::kBaseline;
-  if (lanes && std::strcmp(lanes, "8") == 0) return avx2_fma ? Isa::kAvx2Fma : Isa::kBaseline;
-  return avx512 ? Isa::kAvx512 : avx2_fma ? Isa::kAvx2Fma : Isa::kBaseline;
-}
-
-Isa ChosenIsa() {
-  static const Isa isa = PickIsa();
-  return isa;
-}
-
-// MJTOUCH_ISA_COPIES(name, params, args): name##Body<W, kFma> args compiled
-// once per ISA (name##Baseline, name##Avx2Fma, name##Avx512; W: floats per
-// vector) and `void name params`, which calls the chosen copy.
-#if MJTOUCH_X86_COPIES
-#define MJTOUCH_X86_ISA_COPIES(name, params, args)                                 \
-  MJTOUCH_COPY_AVX2_FMA void name##Avx2Fma params { name##Body<8, true> args; } \
-  MJTOUCH_COPY_AVX512 void name##Avx512 params { name##Body<16, true> args; }
-#define MJTOUCH_X86_ISA_SWITCH(name, args)          \
-  switch (ChosenIsa()) {                            \
-    case Isa::kAvx512: return name##Avx512 args;   \
-    case Isa::kAvx2Fma: return name##Avx2Fma args; \
-    case Isa::kBaseline: break;                     \
-  }
-#else
-#define MJTOUCH_X86_ISA_COPIES(name, params, args)
-#define MJTOUCH_X86_ISA_SWITCH(name, args)
-#endif
-#define MJTOUCH_ISA_COPIES(name, params, args)                       \
-  MJTOUCH_BASELINE_CONTRACT void name##Baseline params {             \
-    name##Body<4, kBaselineFma> args;                                \
-  }                                                                  \
-  MJTOUCH_X86_ISA_COPIES(name, params, args)                         \
-  void name params {                                                 \
-    MJTOUCH_X86_ISA_SWITCH(name, args)                               \
-    name##Baseline args;                                             \
-  }
+// The hot functions (SumBand, the fold) in a copy per ISA: simd.h
+// MJTOUCH_ISA_COPIES.
 
 // One band of a site (stress_fold.h: the canonical sum): the kTableRowsPerBand
 // pressure rows P + t ps (t = 0 ..; cells rlo[t] .. rhi[t], none: lo >= hi)
