@@ -20,6 +20,15 @@ const ReceptorStepper& StepperFor(const ReceptorParams& p, double dt_s, Workspac
   return *ws->stepper;
 }
 
+// The end of the run of one class's receptors that starts at r (receptors
+// are grouped by class; their states are consecutive).
+template <typename Sites>
+int ClassRunEnd(const Sites& sites, int r, int nrec) {
+  int end = r + 1;
+  while (end < nrec && sites[end].cls == sites[r].cls) ++end;
+  return end;
+}
+
 // Receptor quantity from the stress; strain and SED from the material at the
 // receptor (the layer's E and nu).
 double QuantityAt(Quantity q, const Stress6& stress, const Material& m) {
@@ -89,8 +98,7 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
     static_assert(sizeof(Stress6) == 6 * sizeof(double), "stress tensors 6 doubles apart");
     for (int r = 0; r < nrec;) {
       const int c = static_cast<int>(sites[r].cls);
-      int end = r + 1;
-      while (end < nrec && sites[end].cls == sites[r].cls) ++end;
+      const int end = ClassRunEnd(sites, r, nrec);
       const Quantity q = cfg.classes[c].quantity;
       if (q == Quantity::kStrainEnergy || q == Quantity::kCompressiveStrain) {
         for (; r < end; ++r) ws->quantity[r] = QuantityAt(q, ws->stress[r], model.material(c));
@@ -119,8 +127,7 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
     const ReceptorStepper& stepper = StepperFor(cfg.receptor, step_s, ws);
     // each run of one class's receptors at once (their states are consecutive)
     for (int r = 0; r < nrec;) {
-      int end = r + 1;
-      while (end < nrec && sites[end].cls == sites[r].cls) ++end;
+      const int end = ClassRunEnd(sites, r, nrec);
       *fired += stepper.AdvanceBatch(sites[r].cls, end - r, ws->quantity.data() + r, r,
                                      layout.receptor(state, r), last_spikes + r,
                                      last_voltage + r);
