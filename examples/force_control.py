@@ -19,7 +19,8 @@ import json
 import mujoco
 import numpy as np
 
-from mjtouch import scenes, stimuli
+from mjtouch.experiments import stimuli
+from mjtouch.scene import scenes
 
 
 def motor_force(bare: mujoco.MjModel, target_n: np.ndarray) -> np.ndarray:

@@ -25,7 +25,9 @@ import tempfile
 
 import numpy as np
 
-from mjtouch import analysis, meshes, rollout, scenes, textures
+from mjtouch import analysis
+from mjtouch.experiments import rollout
+from mjtouch.scene import meshes, scenes, textures
 
 LENGTH_M, WIDTH_M = 0.04, 0.016  # plate: the slide and the pad both fit
 MESH_GRID_M = 5e-5  # the exported meshes' vertex spacing

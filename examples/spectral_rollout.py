@@ -34,7 +34,8 @@ from __future__ import annotations
 import argparse
 import json
 
-from mjtouch import scenes, testing
+from mjtouch.analysis import testing
+from mjtouch.scene import scenes
 
 
 def run(speed_m_s: float = 0.04, period_m: float = 1e-3, duration_s: float = 0.3,

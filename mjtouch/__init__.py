@@ -15,7 +15,8 @@ uses it loads with ``mujoco.MjModel.from_xml_path``. Submodules:
 import importlib.metadata as _metadata
 import pathlib as _pathlib
 
-from mjtouch._loader import PluginNotBuiltError, library_path, load as _load
+from mjtouch._loader import PluginNotBuiltError, library_path
+from mjtouch._loader import load as _load
 
 
 def _compiled_dirs() -> list[str]:
@@ -40,7 +41,7 @@ MUJOCO_VERSION = "4.0.0"  # the plugin is compiled against exactly this release
 
 _load()
 
-from mjtouch.robot import attach, layouts  # noqa: E402  (after the plugin loads)
+from mjtouch.scene.robot import attach, layouts  # noqa: E402  (after the plugin loads)
 
 __all__ = ["PluginNotBuiltError", "attach", "layouts", "library_path", "MUJOCO_VERSION",
            "__version__"]

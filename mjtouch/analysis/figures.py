@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mjtouch import analysis
+from mjtouch.analysis import signals
 
 CLASS_COLOURS = {"SA1": "tab:blue", "RA": "tab:green", "PC": "tab:purple"}
 
@@ -36,7 +36,7 @@ def plot_raster(spikes: np.ndarray, dt_s: float, classes=None, t0_s: float = 0.0
     its step middle; rows coloured by class if classes is given."""
     _matplotlib_figure()
     ax = _axes(ax)
-    trains = analysis.raster(spikes, dt_s, t0_s)
+    trains = signals.raster(spikes, dt_s, t0_s)
     if classes is not None and len(classes) != len(trains):
         raise ValueError(f"classes has {len(classes)} entries for {len(trains)} receptors")
     colours = [CLASS_COLOURS.get(str(c), "k") for c in classes] if classes is not None else "k"
@@ -51,7 +51,7 @@ def plot_psth(spikes: np.ndarray, dt_s: float, bin_s: float, t0_s: float = 0.0, 
     """PSTH (mean rate per receptor, Hz) as a step plot over bins of bin_s."""
     _matplotlib_figure()
     ax = _axes(ax)
-    starts, rate = analysis.psth(spikes, dt_s, bin_s, t0_s)
+    starts, rate = signals.psth(spikes, dt_s, bin_s, t0_s)
     edges = np.append(starts, starts[-1] + bin_s)
     ax.stairs(rate, edges, label=label)
     ax.set_xlabel("time (s)")
@@ -91,7 +91,7 @@ def plot_phase_histogram(times_s: np.ndarray, freq_hz: float, nbins: int = 24, a
     ax = _axes(ax)
     phase = np.mod(np.asarray(times_s, dtype=np.float64) * freq_hz, 1.0)
     ax.hist(phase, bins=nbins, range=(0.0, 1.0))
-    vs = analysis.vector_strength(times_s, freq_hz)
+    vs = signals.vector_strength(times_s, freq_hz)
     ax.set_title(f"vector strength {vs.vs:.3f} (n = {vs.n})")
     ax.set_xlabel("phase (cycles)")
     ax.set_ylabel("spikes")

@@ -1,6 +1,6 @@
 """Spectral-peak rollouts in a few lines of pytest.
 
-    from mjtouch import testing
+    from mjtouch.analysis import testing
 
     def test_grating_line():
         spec = testing.slide_spectrum(texture=testing.grating(period_m=1e-3), speed_m_s=0.04)
@@ -30,7 +30,9 @@ import dataclasses
 
 import numpy as np
 
-from mjtouch import analysis, rollout, scenes
+from mjtouch.analysis import signals
+from mjtouch.experiments import rollout
+from mjtouch.scene import scenes
 
 
 @dataclasses.dataclass
@@ -46,10 +48,10 @@ class Spectrum:
         return float(self.freqs_hz[1] - self.freqs_hz[0])
 
     def peaks(self, n: int = 6, fmin_hz: float = 5.0) -> list[float]:
-        return analysis.spectral_peaks(self.freqs_hz, self.power, n=n, fmin_hz=fmin_hz)
+        return signals.spectral_peaks(self.freqs_hz, self.power, n=n, fmin_hz=fmin_hz)
 
     def power_at(self, f_hz: float, bins: int = 1) -> float:
-        return analysis.power_at(self.freqs_hz, self.power, f_hz, bins)
+        return signals.power_at(self.freqs_hz, self.power, f_hz, bins)
 
 
 def grating(period_m: float = 1e-3, **kw) -> scenes.Texture:
@@ -84,7 +86,7 @@ def slide_spectrum(texture: scenes.Texture | None = None, speed_m_s: float = 0.0
     stress = res.stress[w]
     if site != "all":
         stress = stress[:, res.layout.mask(site)]
-    f, p = analysis.stress_spectrum(stress, res.dt)
+    f, p = signals.stress_spectrum(stress, res.dt)
     return Spectrum(f, p, speed_m_s, site, res)
 
 

@@ -8,8 +8,7 @@ import math
 
 import numpy as np
 
-from mjtouch import scenes
-
+from mjtouch.scene import scenes
 
 EXTENT_M = 12.8e-3  # skin grid side kept by the pitch sweep (default: 128 x 0.1 mm)
 SITE_SPACING_M = 0.6e-3  # multiple of every swept pitch: 200, 150, 120, 100, 75, 60, 50, 37.5 um

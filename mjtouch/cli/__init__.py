@@ -100,7 +100,7 @@ def _slide_skin(args) -> dict:
 
 def slide_with_result(args):
     """slide(args) and the run's rollout.SlideResult (spikes, stress, force)."""
-    from mjtouch import scenes
+    from mjtouch.scene import scenes
 
     tip = scenes.Fingertip(ridges=args.ridges, ridge_pitch_m=args.ridge_pitch, nx=args.nx,
                            pitch_m=args.pitch, skin=_slide_skin(args))
@@ -123,7 +123,7 @@ def slide_with_result(args):
 
 
 def _mesh_texture(args):
-    from mjtouch import textures
+    from mjtouch.scene import textures
     need = 2 * (args.speed * args.duration) + 0.02
     mt = textures.from_mesh(args.texture_mesh, scale=args.mesh_scale, up=args.mesh_up,
                             rotate_deg=args.mesh_rotate, resolution_m=args.mesh_resolution)
@@ -141,7 +141,10 @@ MIN_DURATION_S = 0.15
 
 
 def _slide_run(args, tip, texture, periodic, kind):
-    from mjtouch import analysis, progress, rollout, scenes
+    from mjtouch import progress
+    from mjtouch.analysis import signals
+    from mjtouch.experiments import rollout
+    from mjtouch.scene import scenes
     # rates and spectra leave out the first SETTLE_S of sliding (SlideResult.window)
     if args.duration < MIN_DURATION_S:
         raise ValueError(f"--duration {args.duration:g} s: must be at least "
@@ -159,15 +162,15 @@ def _slide_run(args, tip, texture, periodic, kind):
     wall = time.perf_counter() - t0
     w = res.window()
     dt = res.dt
-    rates = analysis.rates_hz(res.spikes[w], dt, res.layout.classes)
-    f, p = analysis.stress_spectrum(res.stress[w], dt)
-    peaks = analysis.spectral_peaks(f, p, n=6, fmin_hz=5.0, fmax_hz=min(1000.0, 0.5 / dt))
+    rates = signals.rates_hz(res.spikes[w], dt, res.layout.classes)
+    f, p = signals.stress_spectrum(res.stress[w], dt)
+    peaks = signals.spectral_peaks(f, p, n=6, fmin_hz=5.0, fmax_hz=min(1000.0, 0.5 / dt))
     expected = {"texture": args.speed / periodic if periodic else None,
                 "ridges": args.speed / args.ridge_pitch if args.ridges else None}
-    power_expected = {k: (analysis.power_at(f, p, v) if v else None) for k, v in expected.items()}
+    power_expected = {k: (signals.power_at(f, p, v) if v else None) for k, v in expected.items()}
     # at V/lambda of the configured ridge pitch for smooth skin too, so ridged
     # and smooth runs compare from the CLI
-    power_expected["ridges"] = analysis.power_at(f, p, args.speed / args.ridge_pitch)
+    power_expected["ridges"] = signals.power_at(f, p, args.speed / args.ridge_pitch)
     # A periodic texture's stress repeats every D/V: its lines are V/D
     # harmonics whatever the ridges do, so a V/lambda line is expected only
     # on aperiodic (broadband) textures, which the ridges band-pass.
@@ -326,7 +329,7 @@ def _bench_parser(sub):
 
 
 def _sweep_parser(sub):
-    from mjtouch import sweep
+    from mjtouch.experiments import sweep
     p = sub.add_parser("sweep", help="slide over the product of several values of its options, "
                                      "on Ray (or --serial); one Parquet row per run",
                        description=sweep.__doc__.split("\n\n")[1])
@@ -384,7 +387,8 @@ def _probe_parser(sub):
 
 
 def probe(args) -> dict:
-    from mjtouch import scenes, stimuli
+    from mjtouch.experiments import stimuli
+    from mjtouch.scene import scenes
     if args.waveform == "ramp":
         w = stimuli.ramp_and_hold(args.depth, ramp_s=args.ramp, hold_s=args.hold)
     elif args.waveform == "sine":
@@ -445,7 +449,7 @@ def _tuning_parser(sub):
 
 
 def tuning_main(args) -> dict:
-    from mjtouch import tuning
+    from mjtouch.experiments import tuning
     cfg = tuning.TuningConfig.quick() if args.quick else tuning.TuningConfig()
     if args.freqs:
         cfg.freqs_hz = tuple(args.freqs)
@@ -494,7 +498,7 @@ def main(argv: list[str] | None = None) -> int:
     _tuning_parser(sub)
     args = parser.parse_args(argv)
     if args.command == "sweep":
-        from mjtouch import sweep
+        from mjtouch.experiments import sweep
         return sweep.main(args)
     if args.command in ("probe", "tuning"):
         try:

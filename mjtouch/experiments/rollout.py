@@ -9,8 +9,8 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 
-from mjtouch import scenes
-from mjtouch.sensor import SkinLayout
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 # Sliding left out of SlideResult.window() while the contact settles (s).
 SETTLE_S = 0.1

@@ -31,26 +31,13 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 
-from mjtouch import analysis, scenes
-from mjtouch.rollout import chunked_rollout
-from mjtouch.sensor import SkinLayout
+from mjtouch._validate import in_range
+from mjtouch.analysis import signals
+from mjtouch.experiments.rollout import chunked_rollout
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 # --- waveforms -----------------------------------------------------------------------------
-
-
-def _check(name: str, value, lo: float, hi: float, units: str, lo_open=False) -> float:
-    """value as float, or a ValueError naming it, its value and its range."""
-    if isinstance(value, np.generic):
-        value = value.item()
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} = {value!r} must be a number in "
-                         f"{'(' if lo_open else '['}{lo:g}, {hi:g}] {units}") from None
-    if not (math.isfinite(v) and (v > lo if lo_open else v >= lo) and v <= hi):
-        raise ValueError(f"{name} = {value!r} is out of range; valid range "
-                         f"{'(' if lo_open else '['}{lo:g}, {hi:g}] {units}")
-    return v
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,7 +54,7 @@ class Waveform:
 
     def sample(self, dt_s: float) -> np.ndarray:
         """Values at t = k dt, k = 0 .. round(duration / dt) - 1 (one per step)."""
-        _check("dt_s", dt_s, 0, 5e-3, "s", lo_open=True)
+        in_range("dt_s", dt_s, 0, 5e-3, "s", lo_open=True)
         n = int(round(self.duration_s / dt_s))
         return np.asarray(self.fn(np.arange(n) * dt_s), dtype=float)
 
@@ -87,10 +74,10 @@ def ramp_and_hold(depth_m: float, ramp_s: float = 0.05, hold_s: float = 0.5,
                   release: bool = True, rest_s: float = 0.05) -> Waveform:
     """Linear ramp to depth_m over ramp_s, hold, then (release) ramp back to 0
     and rest_s at 0."""
-    depth = _check("depth_m", depth_m, 0, 5e-3, "m", lo_open=True)
-    ramp = _check("ramp_s", ramp_s, 1e-4, 10, "s")
-    hold = _check("hold_s", hold_s, 0, 60, "s")
-    rest = _check("rest_s", rest_s, 0, 60, "s")
+    depth = in_range("depth_m", depth_m, 0, 5e-3, "m", lo_open=True)
+    ramp = in_range("ramp_s", ramp_s, 1e-4, 10, "s")
+    hold = in_range("hold_s", hold_s, 0, 60, "s")
+    rest = in_range("rest_s", rest_s, 0, 60, "s")
     knots = [0, ramp, ramp + hold] + ([2 * ramp + hold] if release else [])
     values = [0, depth, depth] + ([0] if release else [])
     dur = knots[-1] + (rest if release else 0.0)
@@ -121,11 +108,11 @@ def sum_of_sines(amplitudes_m: Sequence[float], freqs_hz: Sequence[float],
     if phases.shape != freqs.shape:
         raise ValueError(f"phases_rad has shape {phases.shape}; expected {freqs.shape}")
     for a in amps:
-        _check("amplitude_m", a, 0, 2e-3, "m")
+        in_range("amplitude_m", a, 0, 2e-3, "m")
     for f in freqs:
-        _check("freq_hz", f, 0, 2000, "Hz", lo_open=True)
-    dur = _check("duration_s", duration_s, 1e-3, 60, "s")
-    ramp = _check("ramp_s", ramp_s, 0, dur / 2, "s")
+        in_range("freq_hz", f, 0, 2000, "Hz", lo_open=True)
+    dur = in_range("duration_s", duration_s, 1e-3, 60, "s")
+    ramp = in_range("ramp_s", ramp_s, 0, dur / 2, "s")
     w = 2 * np.pi * freqs
 
     def fn(t):
@@ -149,12 +136,12 @@ def noise(rms_m: float, band_hz: tuple[float, float] = (10.0, 500.0), duration_s
     the sum of many random-phase sines is close to Gaussian), scaled to
     rms_m over the steady part. A function of continuous time, so it does not
     depend on the timestep."""
-    rms = _check("rms_m", rms_m, 0, 1e-3, "m", lo_open=True)
-    dur = _check("duration_s", duration_s, 1e-2, 60, "s")
+    rms = in_range("rms_m", rms_m, 0, 1e-3, "m", lo_open=True)
+    dur = in_range("duration_s", duration_s, 1e-2, 60, "s")
     if len(band_hz) != 2:
         raise ValueError(f"band_hz = {band_hz!r} must be (low, high) in Hz")
-    lo = _check("band_hz[0]", band_hz[0], 0, 2000, "Hz")
-    hi = _check("band_hz[1]", band_hz[1], lo, 2000, "Hz", lo_open=True)
+    lo = in_range("band_hz[0]", band_hz[0], 0, 2000, "Hz")
+    hi = in_range("band_hz[1]", band_hz[1], lo, 2000, "Hz", lo_open=True)
     if not (isinstance(seed, (int, np.integer)) and seed >= 0):
         raise ValueError(f"seed = {seed!r} must be a non-negative integer")
     freqs = np.arange(math.ceil(lo * dur), math.floor(hi * dur) + 1) / dur
@@ -164,7 +151,7 @@ def noise(rms_m: float, band_hz: tuple[float, float] = (10.0, 500.0), duration_s
                          f"{1 / dur:g} Hz; widen the band or lengthen the stimulus")
     phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, freqs.size)
     a = rms * math.sqrt(2.0 / freqs.size)  # each sine carries a^2/2 of the power
-    w = sum_of_sines(np.full(freqs.size, a), freqs, dur, _check(
+    w = sum_of_sines(np.full(freqs.size, a), freqs, dur, in_range(
         "ramp_s", ramp_s, 0, dur / 2, "s"), phases, kind="noise")
     return dataclasses.replace(w, params=dict(rms_m=rms, band_hz=[lo, hi], duration_s=dur,
                                               seed=int(seed), ramp_s=ramp_s,
@@ -180,7 +167,7 @@ def trace(values_m: Sequence[float], dt_s: float) -> Waveform:
                          f"{v.shape}")
     if np.abs(v).max() > 5e-3:
         raise ValueError(f"values_m reaches {np.abs(v).max():g} m; valid range [-5e-3, 5e-3] m")
-    dt = _check("dt_s", dt_s, 0, 1, "s", lo_open=True)
+    dt = in_range("dt_s", dt_s, 0, 1, "s", lo_open=True)
     tk = np.arange(v.size) * dt
     return Waveform("trace", float(tk[-1]), lambda t: np.interp(t, tk, v),
                     dict(samples=int(v.size), dt_s=dt), (0.0, float(tk[-1])))
@@ -324,13 +311,13 @@ class Probe:
     def validate(self, tip: scenes.Fingertip) -> None:
         if self.shape not in ("pin", "sphere", "geom"):
             raise ValueError(f"probe shape = {self.shape!r} is not one of 'pin', 'sphere', 'geom'")
-        _check("radius_m", self.radius_m, 0, 5e-3, "m", lo_open=True)
+        in_range("radius_m", self.radius_m, 0, 5e-3, "m", lo_open=True)
         if self.shape == "geom":
             if self.geom_type not in _GEOM_TYPES:
                 raise ValueError(f"geom_type = {self.geom_type!r} is not one of "
                                  f"{sorted(_GEOM_TYPES)}")
             for s in self.geom_size:
-                _check("geom_size", s, 0, 0.02, "m", lo_open=True)
+                in_range("geom_size", s, 0, 0.02, "m", lo_open=True)
         a, b, _ = tip.semi_axes_m
         if (self.x_m / a) ** 2 + (self.y_m / b) ** 2 > 0.25:
             raise ValueError(f"probe at (x_m, y_m) = ({self.x_m:g}, {self.y_m:g}) m is outside "
@@ -383,7 +370,7 @@ def probe_spec(probe: Probe | None = None, tip: scenes.Fingertip | None = None,
     probe = probe or Probe()
     tip = _skin(tip or PROBE_TIP, skin)
     probe.validate(tip)
-    protocol = scenes.Protocol(timestep_s=_check("timestep_s", timestep_s, 1e-6, 1e-3, "s"))
+    protocol = scenes.Protocol(timestep_s=in_range("timestep_s", timestep_s, 1e-6, 1e-3, "s"))
     spec = mujoco.MjSpec()
     spec.modelname = "mjtouch_probe"
     scenes.set_options(spec, protocol)
@@ -427,13 +414,13 @@ def plate_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-4,
     plate on a mocap body (mocap_pos = the plate's offset, m), which vibrates."""
     tip = _skin(tip or PROBE_TIP, skin)
     texture = scenes.Texture(kind="flat")
-    protocol = scenes.Protocol(timestep_s=_check("timestep_s", timestep_s, 1e-6, 1e-3, "s"))
+    protocol = scenes.Protocol(timestep_s=in_range("timestep_s", timestep_s, 1e-6, 1e-3, "s"))
     spec = mujoco.MjSpec()
     spec.modelname = "mjtouch_vibrating_plate"
     scenes.set_options(spec, protocol)
     # the plate proxy and the rendered texture ride on one mocap body
     scenes.add_plate(spec, texture, parent=spec.worldbody.add_body(name="plate_body", mocap=True))
-    scenes.add_fingertip(spec, tip, scenes._start_x(texture.length_m), texture.length_m)
+    scenes.add_fingertip(spec, tip, scenes.start_x(texture.length_m), texture.length_m)
     scenes.add_pad_plate_contact(spec, tip, protocol)
     return spec
 
@@ -490,7 +477,7 @@ class StimulusResult:
         sp = self.spikes[w]
         dur = max(sp.shape[0], 1) * self.dt_s
         per = sp.sum(axis=0) / dur
-        mean = analysis.rates_hz(sp, self.dt_s, self.layout.classes)
+        mean = signals.rates_hz(sp, self.dt_s, self.layout.classes)
         cen = self.centred_units()
         out = {}
         for c in cen:
@@ -554,7 +541,7 @@ class _Scene:
         ws = [waveforms] if single else list(waveforms)
         if not ws or not all(isinstance(w, Waveform) for w in ws):
             raise ValueError("waveforms must be a Waveform or a non-empty list of them")
-        nthread = int(_check("threads", threads, 1, 64, "threads"))
+        nthread = int(in_range("threads", threads, 1, 64, "threads"))
         samples = [w.sample(self.dt_s) for w in ws]
         ctrls = []
         for s in samples:
@@ -607,8 +594,8 @@ class ProbeScene(_Scene):
                  skin: dict | None = None):
         self.probe = probe or Probe()
         self.tip = tip or PROBE_TIP
-        self.preindent_m = _check("preindent_m", preindent_m, 0, 3e-3, "m")
-        settle = _check("settle_s", settle_s, 0, 10, "s")
+        self.preindent_m = in_range("preindent_m", preindent_m, 0, 3e-3, "m")
+        settle = in_range("settle_s", settle_s, 0, 10, "s")
         self.spec = probe_spec(self.probe, self.tip, timestep_s, skin)
         self.z_contact = float(next(b for b in self.spec.bodies if b.name == "probe").pos[2])
         self.centre_m = (self.probe.x_m, self.probe.y_m)
@@ -639,8 +626,8 @@ class PlateScene(_Scene):
 
     def __init__(self, press_n: float = 0.5, tip: scenes.Fingertip | None = None,
                  settle_s: float = 0.1, timestep_s: float = 1e-4, skin: dict | None = None):
-        self.press_n = _check("press_n", press_n, 0, 20, "N", lo_open=True)
-        settle = _check("settle_s", settle_s, 0.02, 10, "s")
+        self.press_n = in_range("press_n", press_n, 0, 20, "N", lo_open=True)
+        settle = in_range("settle_s", settle_s, 0.02, 10, "s")
         self.tip = tip or PROBE_TIP
         self.spec = plate_spec(self.tip, timestep_s, skin)
         self.centre_m = (0.0, 0.0)

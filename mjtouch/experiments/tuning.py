@@ -57,7 +57,11 @@ from typing import Sequence
 
 import numpy as np
 
-from mjtouch import analysis, core, scenes, stimuli
+from mjtouch import core
+from mjtouch._validate import in_range
+from mjtouch.analysis import signals
+from mjtouch.experiments import stimuli
+from mjtouch.scene import scenes
 
 ABSOLUTE_SPIKES_PER_CYCLE = 0.1
 LOCK_P = 0.01  # Rayleigh test: phases locked to the sine
@@ -150,18 +154,18 @@ class TuningConfig:
         if not len(self.freqs_hz):
             raise ValueError("freqs_hz must hold at least one frequency")
         for f in self.freqs_hz:
-            stimuli._check("freqs_hz", f, 0, 0.25 / self.timestep_s, "Hz (a quarter of the "
+            in_range("freqs_hz", f, 0, 0.25 / self.timestep_s, "Hz (a quarter of the "
                            "sampling rate)", lo_open=True)
         lo, hi = self.amp_range_m
-        stimuli._check("amp_range_m[0]", lo, 0, 1e-3, "m", lo_open=True)
-        stimuli._check("amp_range_m[1]", hi, lo, min(1e-3, self.preindent_m), "m (at most the "
+        in_range("amp_range_m[0]", lo, 0, 1e-3, "m", lo_open=True)
+        in_range("amp_range_m[1]", hi, lo, min(1e-3, self.preindent_m), "m (at most the "
                        "pre-indentation, so the pin stays in contact)", lo_open=True)
-        stimuli._check("grid_points", self.grid_points, 2, 100, "")
-        stimuli._check("refine", self.refine, 0, 30, "")
+        in_range("grid_points", self.grid_points, 2, 100, "")
+        in_range("refine", self.refine, 0, 30, "")
         # >= 5: a Rayleigh p < 0.01 needs >= 4-5 locked spikes
-        stimuli._check("min_cycles", self.min_cycles, 5, 1000, "cycles")
+        in_range("min_cycles", self.min_cycles, 5, 1000, "cycles")
         for d in self.depths_m:
-            stimuli._check("depths_m", d, 0, 3e-3, "m", lo_open=True)
+            in_range("depths_m", d, 0, 3e-3, "m", lo_open=True)
 
 
 def _responses(result: stimuli.StimulusResult, freq_hz: float, cycles: float,
@@ -173,7 +177,7 @@ def _responses(result: stimuli.StimulusResult, freq_hz: float, cycles: float,
     extra = count - base
     # locked at f or at 2f: a unit driven by rectified velocity fires on both
     # half-cycles, and its phases then cancel at f
-    locked = np.array([count[r] > 0 and min(analysis.vector_strength_counts(
+    locked = np.array([count[r] > 0 and min(signals.vector_strength_counts(
         sp[:, r], result.dt_s, h * freq_hz).p_value for h in (1, 2)) < LOCK_P
         for r in range(sp.shape[1])])
     least = ABSOLUTE_SPIKES_PER_CYCLE * cycles

@@ -26,12 +26,14 @@ import pathlib
 
 import numpy as np
 
+from mjtouch.scene.textures import Texture
+
 UP_AXES = ("+z", "-z", "+x", "-x", "+y", "-y")
 # The skin's scale: a fingertip pad is ~20 mm across and feels reliefs from
 # ~1 um (Skedung 2013) to a few mm.
 FOOTPRINT_RANGE_M = (2e-3, 0.5)
 RELIEF_RANGE_M = (1e-7, 5e-3)
-MAX_SAMPLES = 8_000_000  # as scenes.Texture
+MAX_SAMPLES = 8_000_000  # as textures.Texture
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,16 +58,15 @@ class MeshTexture:
         return self.heights.shape[0] == 2
 
     def texture(self, width_m: float | None = None):
-        """A :class:`mjtouch.scenes.Texture` of kind "mesh" over a flat proxy.
+        """A :class:`mjtouch.scene.textures.Texture` of kind "mesh" over a flat proxy.
         ``width_m`` widens a profile (its rows are all equal) to any plate
         width, so a narrow crop of a long grating serves a whole pad."""
-        from mjtouch import scenes
         if width_m is not None and not self.is_profile:
             raise ValueError(f"width_m = {width_m}: only a profile (a surface that does not "
                              "vary along y) can be widened; crop the mesh instead")
-        return scenes.Texture(kind="mesh", mesh=self, length_m=self.length_m,
-                              width_m=width_m or self.width_m, resolution_m=self.resolution_m,
-                              height_m=self.relief_m)
+        return Texture(kind="mesh", mesh=self, length_m=self.length_m,
+                       width_m=width_m or self.width_m, resolution_m=self.resolution_m,
+                       height_m=self.relief_m)
 
 
 def _up_rotation(up: str) -> np.ndarray:

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import mujoco
 
-from mjtouch import scenes
-from mjtouch.sensor import SkinLayout
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 PAD_TYPES = {mujoco.mjtGeom.mjGEOM_SPHERE: "sphere", mujoco.mjtGeom.mjGEOM_ELLIPSOID: "ellipsoid",
              mujoco.mjtGeom.mjGEOM_CAPSULE: "capsule", mujoco.mjtGeom.mjGEOM_BOX: "box"}
@@ -26,7 +26,7 @@ def _value(key: str, v) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, (int, float)):
-        return scenes._fmt(v)
+        return scenes.fmt_number(v)
     if isinstance(v, (list, tuple)):
         return " ".join(_value(key, x) for x in v)
     if isinstance(v, str):

@@ -29,9 +29,8 @@ from typing import Literal
 import mujoco
 import numpy as np
 
-from mjtouch import textures
-
-TextureKind = Literal["grating", "random", "dots", "flat", "mesh"]
+from mjtouch._validate import positive
+from mjtouch.scene.textures import Texture
 
 
 @dataclasses.dataclass
@@ -51,119 +50,15 @@ class Fingertip:
     skin: dict[str, str] = dataclasses.field(default_factory=dict)
 
     def validate(self) -> None:
-        _positive("semi_axes_m", *self.semi_axes_m)
-        _positive("mass_kg", self.mass_kg)
-        _positive("ridge_pitch_m", self.ridge_pitch_m)
-        _positive("ridge_height_m", self.ridge_height_m)
-        _positive("pitch_m", self.pitch_m)
+        positive("semi_axes_m", *self.semi_axes_m)
+        positive("mass_kg", self.mass_kg)
+        positive("ridge_pitch_m", self.ridge_pitch_m)
+        positive("ridge_height_m", self.ridge_height_m)
+        positive("pitch_m", self.pitch_m)
         if not (4 <= int(self.nx) <= 512):
             raise ValueError(f"nx = {self.nx} is out of range; valid range [4, 512]")
         if not 0 <= self.friction <= 10:
             raise ValueError(f"friction = {self.friction} is out of range; valid range [0, 10]")
-
-
-@dataclasses.dataclass
-class Texture:
-    """A plate texture (see :mod:`mjtouch.textures`).
-
-    - ``grating``: raised plateaux of width ``plateau_m`` every ``period_m``
-      along x, ``height_m`` tall, edges rounded over ``edge_m``;
-    - ``random``: isotropic Gaussian roughness of RMS height ``rms_m`` and
-      Gaussian correlation length ``corr_length_m`` (seeded by ``seed``);
-    - ``dots``: hexagonal array of spherical-cap dots (``dot_spacing_m``,
-      ``dot_radius_m``, ``height_m``);
-    - ``flat``: no texture;
-    - ``mesh``: the top surface of a mesh file, ``mesh`` (a
-      :class:`mjtouch.meshes.MeshTexture`, from :func:`mjtouch.textures.from_mesh`).
-    Gratings are 1D (a 2-row height field); random and dot textures are 2D
-    height fields."""
-
-    kind: TextureKind = "grating"
-    period_m: float = 1.0e-3
-    plateau_m: float | None = None  # default: half the period
-    height_m: float = 0.1e-3
-    edge_m: float = 0.05e-3
-    length_m: float = 0.08
-    width_m: float = 0.03
-    resolution_m: float = 2e-5  # height-field sample spacing
-    rms_m: float = 20e-6
-    corr_length_m: float = 100e-6
-    dot_spacing_m: float = 2.5e-3
-    dot_radius_m: float = 0.6e-3
-    seed: int = 0
-    mesh: "object | None" = None  # kind "mesh": a meshes.MeshTexture
-
-    def validate(self) -> None:
-        if self.kind not in ("grating", "flat", "random", "dots", "mesh"):
-            raise ValueError(f"texture kind {self.kind!r} is not one of "
-                             "'grating', 'random', 'dots', 'flat', 'mesh'")
-        if self.kind == "mesh" and self.mesh is None:
-            raise ValueError("texture kind 'mesh' needs `mesh` (mjtouch.textures.from_mesh)")
-        _positive("height_m", self.height_m)
-        _positive("length_m", self.length_m)
-        _positive("width_m", self.width_m)
-        _positive("resolution_m", self.resolution_m)
-        if self.kind == "grating":
-            _positive("period_m", self.period_m)
-            plateau = self.plateau
-            if not 0 < plateau < self.period_m:
-                raise ValueError(f"plateau_m = {plateau} is out of range; valid range "
-                                 f"(0, period_m = {self.period_m})")
-            if not 0 <= self.edge_m <= min(plateau, self.period_m - plateau) / 2:
-                raise ValueError(f"edge_m = {self.edge_m} is out of range; valid range "
-                                 f"[0, {min(plateau, self.period_m - plateau) / 2}]")
-            if self.period_m < 4 * self.resolution_m:
-                raise ValueError(f"period_m = {self.period_m} needs at least 4 height-field "
-                                 f"samples; lower resolution_m (now {self.resolution_m})")
-        if self.kind == "random":
-            _positive("rms_m", self.rms_m)
-            _positive("corr_length_m", self.corr_length_m)
-        if self.kind == "dots":
-            _positive("dot_spacing_m", self.dot_spacing_m)
-            _positive("dot_radius_m", self.dot_radius_m)
-        if self.kind != "flat" and self.nrow * self.ncol > 8_000_000:
-            raise ValueError(f"texture needs {self.nrow} x {self.ncol} height-field samples; "
-                             "valid up to 8e6 (shrink the plate or coarsen resolution_m)")
-
-    @property
-    def plateau(self) -> float:
-        return self.period_m / 2 if self.plateau_m is None else self.plateau_m
-
-    @property
-    def ncol(self) -> int:
-        if self.kind == "mesh":
-            return self.mesh.heights.shape[1]
-        return int(round(self.length_m / self.resolution_m)) + 1
-
-    @property
-    def nrow(self) -> int:
-        if self.kind == "mesh":
-            return self.mesh.heights.shape[0]
-        if self.kind in ("grating", "flat"):
-            return 2
-        return int(round(self.width_m / self.resolution_m)) + 1
-
-    def profile(self, x_m: np.ndarray) -> np.ndarray:
-        """Height (m) along x of a grating: plateaux centred on x = k * period."""
-        if self.kind == "flat":
-            return np.zeros_like(x_m)
-        if self.kind != "grating":
-            raise ValueError("profile() is for gratings; use heights()")
-        return textures.grating(x_m, self.period_m, self.plateau, self.height_m, self.edge_m)
-
-    def heights(self) -> np.ndarray:
-        """Height map (m), nrow x ncol, MuJoCo height-field order."""
-        if self.kind == "mesh":
-            return self.mesh.heights
-        x = np.linspace(-self.length_m / 2, self.length_m / 2, self.ncol)
-        if self.kind in ("grating", "flat"):
-            return np.tile(self.profile(x), (2, 1))
-        if self.kind == "random":
-            h = textures.random_rough(self.nrow, self.ncol, self.resolution_m, self.rms_m,
-                                      corr_length_m=self.corr_length_m, seed=self.seed)
-            return h - h.min()
-        y = np.linspace(-self.width_m / 2, self.width_m / 2, self.nrow)
-        return textures.dots(x, y, self.dot_spacing_m, self.dot_radius_m, self.height_m)
 
 
 @dataclasses.dataclass
@@ -197,13 +92,8 @@ class Protocol:
             raise ValueError(f"press_s = {self.press_s} is out of range; valid [0.02, 10] s")
 
 
-def _positive(name: str, *values: float) -> None:
-    for v in values:
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise ValueError(f"{name} = {v!r} must be a positive finite number")
-
-
-def _fmt(x: float) -> str:
+def fmt_number(x: float) -> str:
+    """x as MJCF attribute text: 9 significant digits."""
     return f"{x:.9g}"
 
 
@@ -239,30 +129,31 @@ TEXTURE_GROUP = 3
 def skin_config(tip: Fingertip) -> dict[str, str]:
     cfg = {
         "nx": str(int(tip.nx)),
-        "pitch": _fmt(tip.pitch_m),
+        "pitch": fmt_number(tip.pitch_m),
         "ridges": "true" if tip.ridges else "false",
-        "ridge_pitch": _fmt(tip.ridge_pitch_m),
-        "ridge_height": _fmt(tip.ridge_height_m),
-        "ridge_angle": _fmt(tip.ridge_angle_deg),
+        "ridge_pitch": fmt_number(tip.ridge_pitch_m),
+        "ridge_height": fmt_number(tip.ridge_height_m),
+        "ridge_angle": fmt_number(tip.ridge_angle_deg),
     }
     cfg["texture_group"] = str(TEXTURE_GROUP)
     cfg.update(tip.skin)
     return cfg
 
 
-def _q(x: float) -> float:
+def quantize(x: float) -> float:
     """x as the 9 significant digits MJCF files carry, so a model built from
     the spec and one read from its XML are the same bit for bit."""
-    return float(_fmt(x))
+    return float(fmt_number(x))
 
 
-def _qv(*xs: float) -> list[float]:
-    return [_q(x) for x in xs]
+def quantize_all(*xs: float) -> list[float]:
+    """Each x through :func:`quantize`."""
+    return [quantize(x) for x in xs]
 
 
-# Where the fingertip starts: above the plate's left quarter, so a slide of up
-# to half the plate's length stays on the texture.
-def _start_x(texture_length_m: float) -> float:
+def start_x(texture_length_m: float) -> float:
+    """Where the fingertip starts (m): above the plate's left quarter, so a
+    slide of up to half the plate's length stays on the texture."""
     return -texture_length_m / 4
 
 
@@ -336,23 +227,23 @@ def add_fingertip(spec: mujoco.MjSpec, tip: Fingertip, start_x_m: float = -0.02,
         raise ValueError(f"control = {control!r} is not one of 'force', 'displacement'")
     a, b, c = tip.semi_axes_m
     z0 = c + PAD_CLEARANCE_M
-    finger = spec.worldbody.add_body(name="finger", pos=_qv(start_x_m, 0, z0), gravcomp=1)
+    finger = spec.worldbody.add_body(name="finger", pos=quantize_all(start_x_m, 0, z0), gravcomp=1)
     finger.add_joint(name="slide_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
-                     damping=_q(2 * math.sqrt(SLIDE_KP * tip.mass_kg)))
+                     damping=quantize(2 * math.sqrt(SLIDE_KP * tip.mass_kg)))
     finger.add_joint(name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], damping=2)
-    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, size=_qv(a, b, c),
-                    mass=_q(tip.mass_kg), friction=[_q(tip.friction), 0.005, 0.0001],
+    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, size=quantize_all(a, b, c),
+                    mass=quantize(tip.mass_kg), friction=[quantize(tip.friction), 0.005, 0.0001],
                     solref=CONTACT_SOLREF, solimp=CONTACT_SOLIMP, rgba=[0.93, 0.72, 0.62, 1])
     # intvelocity: ctrl is the sliding speed (m/s), integrated into a
     # position setpoint, so the mean speed is exact despite friction;
     # stiff and critically damped (joint damping) so it does not ring.
     slide = spec.add_actuator(name="slide", target="slide_x", trntype=mujoco.mjtTrn.mjTRN_JOINT)
     slide.set_to_intvelocity(kp=SLIDE_KP)
-    slide.actrange = _qv(-travel_m, travel_m)
+    slide.actrange = quantize_all(-travel_m, travel_m)
     slide.ctrlrange = [-2, 2]
     press = spec.add_actuator(name="press", target="press_z", trntype=mujoco.mjtTrn.mjTRN_JOINT)
     if control == "displacement":
-        press.set_to_position(kp=PRESS_KP, kv=_q(2 * math.sqrt(PRESS_KP * tip.mass_kg)))
+        press.set_to_position(kp=PRESS_KP, kv=quantize(2 * math.sqrt(PRESS_KP * tip.mass_kg)))
         press.ctrlrange = [-0.01, 0.01]
     else:
         press.set_to_motor()
@@ -370,7 +261,7 @@ def add_grating_hfield(spec: mujoco.MjSpec, name: str, texture: Texture, half_wi
         x_m = np.linspace(-texture.length_m / 2, texture.length_m / 2, texture.ncol)
     row = texture.profile(x_m) / texture.height_m
     return spec.add_hfield(name=name, nrow=2, ncol=len(x_m),
-                           size=_qv(texture.length_m / 2, half_width_m, texture.height_m, 0.001),
+                           size=quantize_all(texture.length_m / 2, half_width_m, texture.height_m, 0.001),
                            userdata=[float(f"{v:.4g}") for v in np.concatenate([row, row])])
 
 
@@ -383,24 +274,24 @@ def add_plate(spec: mujoco.MjSpec, texture: Texture,
     L, W = texture.length_m, texture.width_m
     # 1 cm thick: a hard press (50 N) sinks ~3 mm into MuJoCo's soft contact
     world = parent or spec.worldbody
-    world.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=_qv(L / 2, W / 2, 0.01),
+    world.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=quantize_all(L / 2, W / 2, 0.01),
                    pos=[0, 0, -0.01], friction=[0.5, 0.005, 0.0001], rgba=[0.55, 0.6, 0.65, 1])
     hidden = dict(contype=0, conaffinity=0, group=TEXTURE_GROUP)
     if texture.kind == "flat":
         world.add_geom(name="texture", type=mujoco.mjtGeom.mjGEOM_BOX,
-                       size=_qv(L / 2, W / 2, 0.01), pos=[0, 0, -0.01], rgba=[0, 0, 0, 0], **hidden)
+                       size=quantize_all(L / 2, W / 2, 0.01), pos=[0, 0, -0.01], rgba=[0, 0, 0, 0], **hidden)
         return
     if texture.kind == "mesh":  # exact cell means of the mesh (meshes.from_mesh)
         h = texture.heights()
         spec.add_hfield(name="texture", nrow=texture.nrow, ncol=texture.ncol,
-                        size=_qv(L / 2, W / 2, _relief(texture), 0.001),
+                        size=quantize_all(L / 2, W / 2, _relief(texture), 0.001),
                         userdata=(h.ravel() / (h.max() - h.min())).tolist())
     elif texture.nrow == 2:
         add_grating_hfield(spec, "texture", texture, W / 2)
     else:  # a million samples: exact values, no 4-digit rounding
         h = texture.heights()
         spec.add_hfield(name="texture", nrow=texture.nrow, ncol=texture.ncol,
-                        size=_qv(L / 2, W / 2, _relief(texture), 0.001),
+                        size=quantize_all(L / 2, W / 2, _relief(texture), 0.001),
                         userdata=(h.ravel() / (h.max() - h.min())).tolist())
     world.add_geom(name="texture", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="texture",
                    rgba=[0.45, 0.5, 0.55, 1], **hidden)
@@ -416,14 +307,14 @@ def _relief(texture: Texture) -> float:
 
 def add_pad_plate_contact(spec: mujoco.MjSpec, tip: Fingertip, protocol: Protocol) -> None:
     """The pad-plate contact pair, its friction tuned to the protocol."""
-    mu = _q(tip.friction)
+    mu = quantize(tip.friction)
     spec.add_pair(geomname1="pad", geomname2="plate", condim=3,
                   friction=[mu, mu, 0.005, 0.0001, 0.0001], solref=CONTACT_SOLREF,
-                  solimp=PAIR_SOLIMP, solreffriction=[_q(friction_timeconst(tip, protocol)), 1])
+                  solimp=PAIR_SOLIMP, solreffriction=[quantize(friction_timeconst(tip, protocol)), 1])
 
 
 def set_options(spec: mujoco.MjSpec, protocol: Protocol) -> None:
-    spec.option.timestep = _q(protocol.timestep_s)
+    spec.option.timestep = quantize(protocol.timestep_s)
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
 
@@ -463,7 +354,7 @@ def scene_spec(tip: Fingertip | None = None, texture: Texture | None = None,
     spec.modelname = model_name
     set_options(spec, protocol)
     add_plate(spec, texture)
-    add_fingertip(spec, tip, _start_x(texture.length_m), texture.length_m, protocol.control,
+    add_fingertip(spec, tip, start_x(texture.length_m), texture.length_m, protocol.control,
                   skin=skin)
     add_light(spec)
     add_pad_plate_contact(spec, tip, protocol)
@@ -502,16 +393,16 @@ def sphere_press_spec(radius_m: float, skin: dict[str, str],
     """A rigid-plate oracle scene: a sphere pad (the skin) on a slide joint,
     pushed down onto a flat box plate by the motor `press` (ctrl = force, N),
     no gravity. The Hertz set-up of mjtouch.oracles."""
-    _positive("radius_m", radius_m)
+    positive("radius_m", radius_m)
     spec = mujoco.MjSpec()
     spec.modelname = "sphere_press"
-    spec.option.timestep = _q(timestep_s)
+    spec.option.timestep = quantize(timestep_s)
     spec.option.gravity = [0, 0, 0]
     spec.worldbody.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX,
                             size=[0.05, 0.05, 0.002], pos=[0, 0, -0.002])
-    finger = spec.worldbody.add_body(name="finger", pos=[0, 0, _q(radius_m)])
+    finger = spec.worldbody.add_body(name="finger", pos=[0, 0, quantize(radius_m)])
     finger.add_joint(name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], damping=5)
-    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[_q(radius_m), 0, 0],
+    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[quantize(radius_m), 0, 0],
                     mass=0.01, solref=[0.01, 1])
     press = spec.add_actuator(name="press", target="press_z", trntype=mujoco.mjtTrn.mjTRN_JOINT)
     press.set_to_motor()
@@ -531,7 +422,7 @@ def write_models(directory: str | pathlib.Path) -> list[pathlib.Path]:
     d = pathlib.Path(directory)
     d.mkdir(parents=True, exist_ok=True)
     texture = Texture()
-    x0 = _start_x(texture.length_m)
+    x0 = start_x(texture.length_m)
     specs = {
         "fingertip.xml": fingertip_spec(Fingertip(), x0, texture.length_m, "fingertip"),
         "fingertip_smooth.xml": fingertip_spec(Fingertip(ridges=False), x0, texture.length_m,

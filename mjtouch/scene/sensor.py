@@ -15,8 +15,8 @@ import json
 import mujoco
 import numpy as np
 
-from mjtouch import _loader
-from mjtouch.core import _core
+import mjtouch.core  # noqa: F401  (first: a clear error when the compiled module is missing)
+from mjtouch import _core, _loader
 
 CLASSES = ("SA1", "RA", "PC")
 

@@ -1,7 +1,5 @@
 """Plugin registration, the committed models, and the sensordata layout."""
 
-import os
-import pathlib
 import subprocess
 import sys
 import tempfile
@@ -9,12 +7,11 @@ import tempfile
 import mujoco
 import numpy as np
 import pytest
+from conftest import MODELS, assert_no_warnings, pad_scene
 
 import mjtouch
-from mjtouch import scenes
-from mjtouch.sensor import SkinLayout
-
-from conftest import MODELS, REPO, assert_no_warnings, pad_scene
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 SCENES = sorted(p.name for p in MODELS.glob("slide_*.xml"))
 ALL_MODELS = sorted(p.name for p in MODELS.glob("*.xml"))

@@ -12,7 +12,7 @@ import sys
 import numpy as np
 import pytest
 
-from mjtouch import sweep
+from mjtouch.experiments import sweep
 
 EXAMPLES = pathlib.Path(__file__).resolve().parents[2] / "examples"
 # tiny runs: 24 x 24 taxels, 0.5 ms steps, 0.15 s of sliding (~0.3 s each)

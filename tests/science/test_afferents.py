@@ -15,10 +15,10 @@ import mujoco.rollout
 import numpy as np
 import pytest
 
-from mjtouch import _core, analysis, core, scenes, stimuli
-from mjtouch.sensor import SkinLayout
-
-from test_receptors import SA1, lif_rate
+from mjtouch import _core, analysis, core
+from mjtouch.experiments import stimuli
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 FULLPHYSICS = mujoco.mjtState.mjSTATE_FULLPHYSICS
 

@@ -7,7 +7,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtouch import analysis, scenes, stimuli
+from mjtouch import analysis
+from mjtouch.experiments import stimuli
+from mjtouch.scene import scenes
 
 DT = 1e-4
 
@@ -125,7 +127,7 @@ def _replayed_force(spec, press):
     """Replay the press controls in the skinned model; the skin's own normal
     force (its force block) per step."""
     m = spec.compile()
-    from mjtouch.sensor import SkinLayout
+    from mjtouch.scene.sensor import SkinLayout
     layout = SkinLayout.from_model(m)
     d = mujoco.MjData(m)
     s0 = np.empty(mujoco.mj_stateSize(m, stimuli._FULL))

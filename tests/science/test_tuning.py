@@ -12,7 +12,8 @@ import types
 import numpy as np
 import pytest
 
-from mjtouch import cli, tuning
+from mjtouch import cli
+from mjtouch.experiments import tuning
 
 
 def run_cli(*args):

@@ -249,7 +249,7 @@ SA1_RATE_1P5MM_HZ = (0.8 * 50, 1.2 * 89)
 
 @pytest.fixture(scope="module")
 def pin_sa1_rates():
-    from mjtouch import stimuli
+    from mjtouch.experiments import stimuli
     scene = stimuli.ProbeScene(stimuli.Probe("pin", radius_m=0.5e-3), preindent_m=0.0,
                                settle_s=0.0, timestep_s=1e-4)
     hold_s, ramp_s = 0.3, 0.05

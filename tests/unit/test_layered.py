@@ -8,20 +8,19 @@ from __future__ import annotations
 
 import math
 import os
-import pathlib
 import shutil
 import subprocess
 import sys
 
+import layered_oracle as oracle
 import mujoco
 import numpy as np
 import pytest
+from conftest import REPO, pad_scene
 from numpy.testing import assert_allclose
 
-import layered_oracle as oracle
-from conftest import REPO, pad_scene
 from mjtouch import core
-from mjtouch.sensor import SkinLayout
+from mjtouch.scene.sensor import SkinLayout
 
 XX, YY, ZZ, XY, XZ, YZ = range(6)
 SHAO = [(0.7e-3, 80e3, 0.48), (0.8e-3, 50e3, 0.48), (2.5e-3, 24e3, 0.4)]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from mjtouch import meshes, textures
+from mjtouch.scene import meshes, textures
 
 D, W_PLATEAU, H = 1e-3, 0.5e-3, 1e-4  # a square-wave grating
 
@@ -84,7 +84,7 @@ def test_placement_scale_up_axis_and_rotation(grating_stl, tmp_path):
 
 
 def test_mesh_texture_in_a_scene_compiles_with_its_heights(grating_stl):
-    from mjtouch import scenes
+    from mjtouch.scene import scenes
     mt = meshes.from_mesh(grating_stl, resolution_m=4e-5, width_m=0.002)
     tex = mt.texture(width_m=0.02)
     model = scenes.plate_spec(tex).compile()
