@@ -1,11 +1,12 @@
 """Sweeps of ``slide`` runs on Ray: ``python -m mjtouch sweep`` and :func:`run`.
 
-A sweep takes ``slide``'s options, each with one or several values, lists or
-inclusive ranges ``START:STOP:STEP`` (on the command line, in a TOML file or
-a dict), and runs their product. Every run is ``mjtouch slide`` with those
-options (:func:`mjtouch.cli.slide_with_result`), so a sweep row and a slide
-with the same options agree, and new slide options are swept without a change
-here (their columns keep the option's name).
+A sweep takes the fields of :class:`mjtouch.experiments.slide.SlideParams`,
+each with one or several values, lists or inclusive ranges ``START:STOP:STEP``
+(on the command line, in a TOML file or a dict), and runs their product. Every
+run is :func:`mjtouch.experiments.slide.run` of those parameters, so a sweep
+row and a slide with the same parameters agree, and new SlideParams fields are
+swept without a change here; the table's parameter columns are the field
+names.
 
 Execution: on Ray by default, a local cluster started on this machine's
 cores (``num_cpus``), or an existing cluster (``address``, as printed by
@@ -34,7 +35,6 @@ list of lists; a step with k spikes gives its time k times).
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import dataclasses
 import hashlib
@@ -43,26 +43,18 @@ import json
 import os
 import pathlib
 import socket
-import sys
 import time
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
+from mjtouch.experiments import slide
 from mjtouch.progress import Progress
 
-# slide options that are not run parameters
-NOT_SWEPT = frozenset({"help", "json", "plot", "progress"})
-# slide option (argparse dest) -> table column, units in the name
-COLUMN = {"period": "period_m", "plateau": "plateau_m", "height": "height_m", "rms": "rms_m",
-          "corr_length": "corr_length_m", "dot_spacing": "dot_spacing_m",
-          "dot_radius": "dot_radius_m", "speed": "speed_m_s", "force": "force_n",
-          "ridge_pitch": "ridge_pitch_m", "duration": "duration_s", "dt": "dt_s",
-          "pitch": "pitch_m"}
 TABLE = "sweep.parquet"
 RAY_NICENESS_ENV = "RAY_worker_niceness"
 RUNS = "runs"
-TRUE, FALSE = ("true", "on", "yes", "1"), ("false", "off", "no", "0")
 
 
 def _needs_pyarrow():
@@ -78,63 +70,36 @@ def _needs_pyarrow():
 # --- parameters --------------------------------------------------------------
 
 
-def slide_options() -> list[argparse.Action]:
-    """slide's parameter options, in its order (read from its parser, so
-    options added to slide are swept too)."""
-    from mjtouch import cli
-    p = cli._slide_parser(argparse.ArgumentParser().add_subparsers())
-    return [a for a in p._actions if a.dest not in NOT_SWEPT]
+def parameters() -> tuple[str, ...]:
+    """The swept parameters, in order: the SlideParams field names, which are
+    also the table's parameter columns."""
+    return tuple(f.name for f in slide.fields())
 
 
-def _kind(action: argparse.Action) -> str:
-    """bool, str, int or float: how a sweep parses and stores the option."""
-    flags = (argparse.BooleanOptionalAction, argparse._StoreTrueAction,
-             argparse._StoreFalseAction)
-    if isinstance(action, flags):
-        return "bool"
-    if action.choices is not None or action.type in (None, str):
-        return "str"
-    # slide's float options parse with checking closures (cli._positive_float)
-    return "int" if action.type is int else "float"
-
-
-def _aliases(actions) -> dict[str, argparse.Action]:
-    """Every spelling of a parameter: dest, column, option without dashes."""
+def _aliases() -> dict[str, str]:
+    """Every spelling of a parameter -> its field: the field (``ridge_pitch_m``),
+    the option without dashes (``ridge-pitch``) or with underscores (``ridge_pitch``)."""
     out = {}
-    for a in actions:
-        for name in (a.dest, COLUMN.get(a.dest, a.dest), a.option_strings[0].lstrip("-")):
-            out[name] = a
+    for f in slide.fields():
+        option = slide.flag(f)[2:]
+        for name in (f.name, option, option.replace("-", "_")):
+            out[name] = f.name
     return out
 
 
-def _convert(action: argparse.Action, token: str, where: str):
-    kind = _kind(action)
-    if kind == "bool":
-        if token.lower() in TRUE:
-            return True
-        if token.lower() in FALSE:
-            return False
-        raise ValueError(f"{where} {token!r} is not a boolean; valid: true/false, on/off")
-    try:
-        value = action.type(token) if action.type else token
-    except (argparse.ArgumentTypeError, ValueError) as e:
-        if action.type is int:
-            raise ValueError(f"{where} {token!r} is not an integer") from None
-        msg = str(e)  # slide's own checks name the option already
-        raise ValueError(msg if msg.startswith(where) else f"{where}: {msg}") from None
-    if action.choices is not None and value not in action.choices:
-        raise ValueError(f"{where} {token!r} is not one of {', '.join(map(str, action.choices))}")
-    return value
+def _kind(name: str) -> str:
+    return slide.field(name).metadata["kind"]
 
 
-def _expand_range(action: argparse.Action, token: str, where: str) -> list:
+def _expand_range(name: str, token: str, where: str) -> list:
     """START:STOP:STEP, both ends included; STOP - START a whole number of STEPs."""
     parts = token.split(":")
-    if len(parts) != 3 or _kind(action) not in ("int", "float"):
+    kind = _kind(name)
+    if len(parts) != 3 or kind not in ("int", "float"):
         raise ValueError(f"{where} {token!r}: a range is START:STOP:STEP of a numeric option")
-    start, stop = (_convert(action, t, where) for t in parts[:2])
+    start, stop = (slide.parse(name, t, where) for t in parts[:2])
     try:
-        step = (int if _kind(action) == "int" else float)(parts[2])
+        step = (int if kind == "int" else float)(parts[2])
     except ValueError:
         raise ValueError(f"{where} {token!r}: STEP {parts[2]!r} is not a number") from None
     if not (np.isfinite(step) and step > 0) or stop < start:
@@ -146,8 +111,8 @@ def _expand_range(action: argparse.Action, token: str, where: str) -> list:
     if k >= 10_000:
         raise ValueError(f"{where} {token!r}: {k + 1} values; valid up to 10000")
     # 12 significant digits: 0.02 + 3 * 0.01 is the parameter 0.05, not 0.05000000000000001
-    return [_convert(action, repr(float(f"{start + i * step:.12g}")) if _kind(action) == "float"
-                     else str(start + i * step), where) for i in range(k + 1)]
+    return [slide.parse(name, repr(float(f"{start + i * step:.12g}")) if kind == "float"
+                        else str(start + i * step), where) for i in range(k + 1)]
 
 
 def _tokens(value) -> list[str]:
@@ -165,26 +130,27 @@ def _tokens(value) -> list[str]:
 
 
 def parse_values(values: Mapping[str, Any], where: str = "") -> dict[str, list]:
-    """{parameter: value(s)} -> {slide dest: [values]}; a parameter is named by
-    its slide option (``ridge-pitch``), dest (``ridge_pitch``) or column
-    (``ridge_pitch_m``); a value is a scalar, a list, a ``START:STOP:STEP``
-    string or a {start, stop, step} table."""
-    actions = slide_options()
-    names = _aliases(actions)
+    """{parameter: value(s)} -> {SlideParams field: [values]}; a parameter is
+    named by its field (``ridge_pitch_m``) or its slide option (``ridge-pitch``,
+    ``ridge_pitch``); a value is a scalar, a list, a ``START:STOP:STEP`` string
+    or a {start, stop, step} table. Each value is checked as SlideParams
+    checks it."""
+    names = _aliases()
     out = {}
     for key, value in values.items():
         if key not in names:
-            valid = ", ".join(COLUMN.get(a.dest, a.dest) for a in actions)
-            raise ValueError(f"{where}unknown sweep parameter {key!r}; valid: {valid}")
-        action = names[key]
-        label = f"{where}{key}" if where else action.option_strings[0]
+            raise ValueError(f"{where}unknown sweep parameter {key!r}; valid: "
+                             f"{', '.join(parameters())}")
+        name = names[key]
+        label = f"{where}{key}" if where else slide.flag(name)
         tokens = _tokens(value)
         if not tokens:
             raise ValueError(f"{label}: no values")
         vals = []
         for t in tokens:
-            vals += _expand_range(action, t, label) if ":" in t else [_convert(action, t, label)]
-        out[action.dest] = list(dict.fromkeys(vals))  # repeated values run once
+            vals += (_expand_range(name, t, label) if ":" in t
+                     else [slide.parse(name, t, label)])
+        out[name] = list(dict.fromkeys(vals))  # repeated values run once
     return out
 
 
@@ -201,25 +167,17 @@ def read_config(path: str | os.PathLike) -> dict[str, list]:
 
 
 def expand(values: Mapping[str, list]) -> list[dict]:
-    """The product of the values ({slide dest: [values]}, others at slide's
-    defaults), in slide's option order: a list of {dest: value}."""
-    actions = slide_options()
-    axes = [values.get(a.dest, [a.default]) for a in actions]
-    runs = [dict(zip((a.dest for a in actions), combo)) for combo in itertools.product(*axes)]
-    for r in runs:  # as slide's command line checks it, before any run starts
-        if "nx" in r and not 4 <= r["nx"] <= 512:
-            raise ValueError(f"--nx {r['nx']} is out of range; valid range [4, 512]")
-    return runs
-
-
-def columns(params: Mapping[str, Any]) -> dict[str, Any]:
-    return {COLUMN.get(k, k): v for k, v in params.items()}
+    """The product of the values ({field: [values]}, others at SlideParams'
+    defaults), in field order: a list of {field: value}."""
+    fields = slide.fields()
+    axes = [values.get(f.name, [f.default]) for f in fields]
+    return [dict(zip((f.name for f in fields), combo)) for combo in itertools.product(*axes)]
 
 
 def run_id(params: Mapping[str, Any]) -> str:
     """A hash of the run's parameters (float repr round-trips, so equal
     parameters give equal ids on every machine)."""
-    text = json.dumps(columns(params), sort_keys=True)
+    text = json.dumps(dict(params), sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -234,13 +192,12 @@ def spike_trains(spikes: np.ndarray, time_s: np.ndarray) -> list[list[float]]:
 
 
 def run_one(params: Mapping[str, Any]) -> dict:
-    """One slide run with these parameters ({slide dest: value}) -> its row."""
-    from mjtouch import cli
-    args = argparse.Namespace(**params, json=True, plot=None, progress="off")
-    out, res = cli.slide_with_result(args)
+    """One slide run with these parameters ({field: value}) -> its row."""
+    run = slide.run(slide.SlideParams(**params))
+    out, res = run.summary, run.result
     w = res.window()
     classes = res.layout.classes
-    row = {"run_id": run_id(params), **columns(params)}
+    row = {"run_id": run_id(params), **params}
     for c, rate in out["rates_hz"].items():
         key = c.lower()
         row[f"{key}_rate_hz"] = rate
@@ -274,10 +231,10 @@ def _remote_run(params: dict) -> tuple[dict, str]:
 
 
 def _schema(row: dict):
-    """The row's Arrow schema: parameter types from slide's options (a None
+    """The row's Arrow schema: parameter types from SlideParams' fields (a None
     plateau is a float null), list columns typed, results float64 unless int."""
     pa = _needs_pyarrow()
-    kinds = {COLUMN.get(a.dest, a.dest): _kind(a) for a in slide_options()}
+    kinds = {name: _kind(name) for name in parameters()}
     arrow = {"bool": pa.bool_(), "str": pa.string(), "int": pa.int64(), "float": pa.float64()}
     fields = []
     for k, v in row.items():
@@ -325,7 +282,7 @@ class SweepResult:
 
     def summary(self) -> dict:
         return {"runs": self.table.num_rows + len(self.failed), "ran": self.ran,
-                "skipped": self.skipped, "failed": [{"params": columns(p), "error": e}
+                "skipped": self.skipped, "failed": [{"params": dict(p), "error": e}
                                                     for p, e in self.failed],
                 "backend": self.backend, "workers": len(self.workers),
                 "wall_s": self.wall_s, "startup_s": self.startup_s, "table": str(self.path)}
@@ -379,7 +336,7 @@ def run(values: Mapping[str, Any] | None = None, out: str | os.PathLike = "sweep
 
 def _label(p: Mapping[str, Any]) -> str:
     return " ".join(f"{k}={v}" for k, v in p.items()
-                    if k in ("texture", "period", "speed", "force", "seed"))
+                    if k in ("texture", "period_m", "speed_m_s", "force_n", "seed"))
 
 
 def _run_ray(ray, todo, runs_dir, bar, failed, workers) -> None:
@@ -454,69 +411,3 @@ def _check_reachable(address: str, timeout_s: float = 5.0) -> None:
         raise ConnectionError(f"could not join the Ray cluster at --address {address}: nothing "
                               f"answers there ({e}); start one with `ray start --head --port "
                               f"{port}`") from None
-
-
-# --- command line ------------------------------------------------------------
-
-
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    """sweep's options: every slide parameter option taking several values,
-    then where and how to run."""
-    for a in slide_options():
-        kind = _kind(a)
-        metavar = {"bool": "BOOL", "str": "CHOICE", "int": "N"}.get(kind, "X")
-        help_ = (a.help or a.dest) + (f"; choices {', '.join(a.choices)}" if a.choices else "")
-        if kind == "bool":
-            help_ = (a.help or a.dest) + "; true, false or both"
-        p.add_argument(*a.option_strings[:1], dest=a.dest, nargs="+", metavar=metavar,
-                       default=None, help=help_ + ("; values or START:STOP:STEP"
-                                                   if kind in ("int", "float") else ""))
-    p.add_argument("--config", metavar="TOML",
-                   help="a TOML file of parameters (command-line options override its keys)")
-    p.add_argument("--out", required=True, metavar="DIR",
-                   help="output directory: DIR/sweep.parquet and DIR/runs/ (runs already "
-                        "there are skipped)")
-    p.add_argument("--serial", action="store_true", help="run in this process, without Ray")
-    p.add_argument("--address", default=None,
-                   help="join the Ray cluster at this address (e.g. HEAD_IP:6379, as printed by "
-                        "`ray start --head`; or auto); default: start a local one")
-    p.add_argument("--num-cpus", type=int, default=None,
-                   help="CPUs of the local Ray cluster (default: all of this machine's)")
-    p.add_argument("--json", action="store_true", help="print a JSON summary")
-    from mjtouch import progress
-    progress.add_argument(p)
-
-
-def main(args) -> int:
-    from mjtouch import progress
-    given = {a.dest: getattr(args, a.dest) for a in slide_options()
-             if getattr(args, a.dest) is not None}
-    problem = None
-    if args.num_cpus is not None and args.num_cpus < 1:
-        problem = f"--num-cpus {args.num_cpus} must be >= 1"
-    elif args.num_cpus is not None and (args.address or args.serial):
-        problem = "--num-cpus sizes the local Ray cluster; not with --address or --serial"
-    elif args.address and args.serial:
-        problem = "--address joins a Ray cluster; not with --serial"
-    if problem:
-        print(f"mjtouch sweep: error: {problem}", file=sys.stderr)
-        return 2
-    try:
-        result = run(given, args.out, config=args.config, serial=args.serial,
-                     address=args.address, num_cpus=args.num_cpus,
-                     progress=progress.wanted(args.progress, args.json))
-    except (ValueError, ImportError, ConnectionError) as e:
-        print(f"mjtouch sweep: error: {e}", file=sys.stderr)
-        return 2
-    s = result.summary()
-    if args.json:
-        print(json.dumps(s))
-    else:
-        n, w = s["runs"], s["workers"]
-        print(f"mjtouch sweep: {n} run{'s' * (n != 1)} ({s['ran']} ran, {s['skipped']} already "
-              f"in {args.out}, {len(s['failed'])} failed) on {s['backend']} ({w} worker "
-              f"process{'es' * (w != 1)}), wall {s['wall_s']:.1f} s ({s['startup_s']:.1f} s "
-              f"starting) -> {s['table']}")
-    for f in s["failed"]:
-        print(f"mjtouch sweep: run failed: {f['error']}  ({f['params']})", file=sys.stderr)
-    return 1 if s["failed"] else 0
