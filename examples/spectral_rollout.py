@@ -79,7 +79,7 @@ def plot(path: str, r: dict) -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'")
+        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'") from None
     spectra = r["_spectra"]
     fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
     for ax, texture_name, title in (

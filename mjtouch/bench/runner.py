@@ -9,7 +9,7 @@ import math
 import os
 import platform
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import mujoco
 import mujoco.rollout

@@ -25,7 +25,8 @@ from __future__ import annotations
 import concurrent.futures
 import dataclasses
 import math
-from typing import Callable, Literal, Sequence
+from collections.abc import Callable, Sequence
+from typing import Literal
 
 import mujoco
 import mujoco.rollout

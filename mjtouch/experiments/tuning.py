@@ -53,7 +53,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -144,7 +144,7 @@ class TuningConfig:
     threads: int = 2
 
     @classmethod
-    def quick(cls) -> "TuningConfig":
+    def quick(cls) -> TuningConfig:
         """A few seconds: 2 frequencies, a coarse grid, a small skin."""
         return cls(freqs_hz=(40.0, 250.0), grid_points=6, refine=2, steady_s=0.06, min_cycles=5,
                    ramp_s=0.01, depths_m=(0.1e-3, 0.4e-3, 1.0e-3), hold_s=0.1,
@@ -371,7 +371,7 @@ def plot(result: dict, path: str) -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'")
+        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'") from None
     colors = dict(SA1="tab:blue", RA="tab:orange", PC="tab:green")
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.5))
     th = result["thresholds"]

@@ -85,7 +85,7 @@ def _up_rotation(up: str) -> np.ndarray:
     return R
 
 
-def _load(mesh) -> tuple["object", str]:
+def _load(mesh) -> tuple[object, str]:
     import trimesh
     if isinstance(mesh, trimesh.Trimesh):
         return mesh, "trimesh.Trimesh"

@@ -117,7 +117,7 @@ FRICTION_TAU_PER_MV_F = 5.0
 SLIDE_KP = 2e4  # N/m, sliding servo stiffness
 
 
-def friction_timeconst(tip: "Fingertip", protocol: "Protocol") -> float:
+def friction_timeconst(tip: Fingertip, protocol: Protocol) -> float:
     """solreffriction time constant (s) for sliding at protocol speed/force."""
     tau = FRICTION_TAU_PER_MV_F * tip.mass_kg * protocol.speed_m_s / protocol.force_n
     return max(tau, 2 * protocol.timestep_s)

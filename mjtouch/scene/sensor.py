@@ -37,7 +37,7 @@ class SkinLayout:
     oversample: int = 1  # tactile evaluations per physics step (resolved `oversample`)
 
     @classmethod
-    def from_model(cls, model: mujoco.MjModel, instance: int | str | None = None) -> "SkinLayout":
+    def from_model(cls, model: mujoco.MjModel, instance: int | str | None = None) -> SkinLayout:
         """Layout of one mjtouch.skin instance (by index or sensor name)."""
         inst = _find_instance(model, instance)
         info = json.loads(_core.describe_instance(_loader.loaded_path(), model._address, inst))

@@ -173,7 +173,7 @@ class Texture:
     dot_spacing_m: float = 2.5e-3
     dot_radius_m: float = 0.6e-3
     seed: int = 0
-    mesh: "object | None" = None  # kind "mesh": a meshes.MeshTexture
+    mesh: object | None = None  # kind "mesh": a meshes.MeshTexture
 
     def validate(self) -> None:
         if self.kind not in ("grating", "flat", "random", "dots", "mesh"):

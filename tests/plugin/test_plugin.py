@@ -20,8 +20,8 @@ ALL_MODELS = sorted(p.name for p in MODELS.glob("*.xml"))
 def test_plain_import_mujoco_registers_plugin():
     # A fresh interpreter that imports only mujoco: the `mujoco.plugins`
     # entry point must register mjtouch.skin.
-    code = ("import mujoco; m = mujoco.MjModel.from_xml_path(%r); "
-            "print(m.nplugin, m.nsensordata)" % str(MODELS / "slide_flat.xml"))
+    code = (f"import mujoco; m = mujoco.MjModel.from_xml_path({str(MODELS / 'slide_flat.xml')!r}); "
+            "print(m.nplugin, m.nsensordata)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=tempfile.gettempdir(), timeout=120)
     assert out.returncode == 0, out.stderr

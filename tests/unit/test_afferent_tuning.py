@@ -46,7 +46,8 @@ def sine_spikes(cls, f, amp, cfg, stream=0):
 def threshold(cls, f, cfg, per_cycle, stream=0, lo=1e-3, hi=1e7, iters=22):
     """Smallest amplitude (Pa) with >= per_cycle x 20 spikes (per_cycle 1/20:
     any spike)."""
-    ok = lambda a: sine_spikes(cls, f, a, cfg, stream) >= max(1, round(per_cycle * 20))
+    def ok(a):
+        return sine_spikes(cls, f, a, cfg, stream) >= max(1, round(per_cycle * 20))
     if not ok(hi):
         return math.inf
     for _ in range(iters):  # (1e10)^(2^-22): 0.5% relative
