@@ -6,7 +6,7 @@ For each `pressure` model (contacts, winkler, elastic) the skin is a
 homogeneous half-space (E = 80 kPa, nu = 0.48), 96 x 96 taxels at 32 per
 Hertz contact radius; MuJoCo presses the sphere with the set force until it
 settles. Prints the relative errors of peak pressure, contact radius (second
-moment of the pressure) and indentation against mjtouch.oracles.Hertz.
+moment of the pressure) and indentation against mjtouch.analysis.reference_solutions.Hertz.
 """
 
 from __future__ import annotations

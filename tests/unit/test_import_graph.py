@@ -196,7 +196,7 @@ def test_alias_reexports_the_public_names(alias):
     old = importlib.import_module(alias)
     new_name = next(line.split("`")[1] for line in old.__doc__.splitlines() if ":mod:" in line)
     new = importlib.import_module(new_name)
-    public = [n for n in vars(new) if not n.startswith("_")]
+    public = getattr(new, "__all__", [n for n in vars(new) if not n.startswith("_")])
     assert public
     missing = [n for n in public if getattr(old, n, None) is not getattr(new, n)]
     assert not missing, f"{alias} lacks {missing} of {new_name}"

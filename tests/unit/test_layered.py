@@ -1,6 +1,6 @@
 """Stage 3b: the layered elastic skin (plugin/core/substrate/layered.*) and the stress
 stage (plugin/core/stress/stress_field.*), against an independent numpy/scipy
-computation (tests/unit/layered_oracle.py: Navier equations with Lame constants,
+computation (mjtouch.analysis.reference_solutions.layered: Navier equations with Lame constants,
 complex arithmetic, direct inverse 2D Fourier integration), closed forms and
 physical laws; and its wiring into the plugin (attributes, errors, outputs)."""
 
@@ -12,7 +12,6 @@ import shutil
 import subprocess
 import sys
 
-import layered_oracle as oracle
 import mujoco
 import numpy as np
 import pytest
@@ -20,6 +19,7 @@ from conftest import REPO, pad_scene
 from numpy.testing import assert_allclose
 
 from mjtouch import core
+from mjtouch.analysis.reference_solutions import layered as oracle
 from mjtouch.scene.sensor import SkinLayout
 
 XX, YY, ZZ, XY, XZ, YZ = range(6)

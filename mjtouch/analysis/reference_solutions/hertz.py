@@ -1,7 +1,6 @@
-"""Analytic contact-mechanics oracles used by the tests and examples
-(K. L. Johnson, *Contact Mechanics*, 1985): Hertz for a rigid sphere on an
-elastic half-space, and the measures that compare a computed pressure field
-with it."""
+"""Hertz contact of a rigid sphere on an elastic half-space (H. Hertz, J. reine
+angew. Math. 92:156, 1882; K. L. Johnson, *Contact Mechanics*, Cambridge 1985,
+sec. 4.2), and the measures that compare a computed pressure field with it."""
 
 from __future__ import annotations
 
