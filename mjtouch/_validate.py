@@ -31,8 +31,16 @@ def positive_number(name: str, value: Any, units: str = "") -> float:
     return float(value)
 
 
-def in_range(name: str, value: Any, lo: float, hi: float, units: str = "", *,
-             lo_open: bool = False, hi_open: bool = False) -> float:
+def in_range(
+    name: str,
+    value: Any,
+    lo: float,
+    hi: float,
+    units: str = "",
+    *,
+    lo_open: bool = False,
+    hi_open: bool = False,
+) -> float:
     """value as float when lo <= value <= hi (either end open on request)."""
     interval = _interval(lo, hi, lo_open, hi_open)
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
@@ -41,8 +49,9 @@ def in_range(name: str, value: Any, lo: float, hi: float, units: str = "", *,
     above = v > lo if lo_open else v >= lo
     below = v < hi if hi_open else v <= hi
     if not (math.isfinite(v) and above and below):
-        raise ValueError(f"{name} = {value!r} is out of range; valid range {interval} {units}"
-                         .rstrip())
+        raise ValueError(
+            f"{name} = {value!r} is out of range; valid range {interval} {units}".rstrip()
+        )
     return v
 
 

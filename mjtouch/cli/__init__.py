@@ -16,10 +16,14 @@ BENCH_EXAMPLE = """example:
 def _bench_parser(sub) -> argparse.ArgumentParser:
     from mjtouch import bench
 
-    p = sub.add_parser("bench", help="what accuracy costs in time: sweeps each knob of the "
-                                     "default sliding scene against a converged reference",
-                       description=bench.__doc__.split("\n\n")[0], epilog=BENCH_EXAMPLE,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = sub.add_parser(
+        "bench",
+        help="what accuracy costs in time: sweeps each knob of the "
+        "default sliding scene against a converged reference",
+        description=bench.__doc__.split("\n\n")[0],
+        epilog=BENCH_EXAMPLE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     bench.add_arguments(p)
     return p
 

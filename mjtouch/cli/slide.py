@@ -44,9 +44,13 @@ def add_field_options(p: argparse.ArgumentParser) -> None:
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("slide", help="ridged fingertip pressed on a plate and slid; prints "
-                                     "spike rates and stress spectral peaks vs V/D and V/lambda",
-                       epilog=EXAMPLE, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = sub.add_parser(
+        "slide",
+        help="ridged fingertip pressed on a plate and slid; prints "
+        "spike rates and stress spectral peaks vs V/D and V/lambda",
+        epilog=EXAMPLE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     add_field_options(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="write a PNG of the spectrum and raster")
@@ -75,30 +79,48 @@ def main(args: argparse.Namespace) -> int:
 
 def print_human(o: dict) -> None:
     period = f"{o['period_m'] * 1e3:.3g} mm" if o["period_m"] else "-"
-    print(f"mjtouch slide: {o['texture']} texture, D = {period}, "
-          f"V = {o['speed_m_s'] * 1e3:.3g} mm/s, F = {o['force_n']:.3g} N, "
-          f"ridges {'on' if o['ridges'] else 'off'} (lambda = {o['ridge_pitch_m'] * 1e3:.3g} mm), "
-          f"{o['duration_s']:.3g} s sliding (wall {o['wall_s']:.1f} s)")
-    print("firing rates (Hz):  " + "  ".join(f"{k} {v:.1f}" for k, v in o["rates_hz"].items())
-          + "   receptors: " + " ".join(f"{k} {v}" for k, v in o["receptors"].items()))
+    print(
+        f"mjtouch slide: {o['texture']} texture, D = {period}, "
+        f"V = {o['speed_m_s'] * 1e3:.3g} mm/s, F = {o['force_n']:.3g} N, "
+        f"ridges {'on' if o['ridges'] else 'off'} (lambda = {o['ridge_pitch_m'] * 1e3:.3g} mm), "
+        f"{o['duration_s']:.3g} s sliding (wall {o['wall_s']:.1f} s)"
+    )
+    print(
+        "firing rates (Hz):  "
+        + "  ".join(f"{k} {v:.1f}" for k, v in o["rates_hz"].items())
+        + "   receptors: "
+        + " ".join(f"{k} {v}" for k, v in o["receptors"].items())
+    )
     e = o["expected_hz"]
-    print("expected:  V/D = " + (f"{e['texture']:.2f} Hz" if e["texture"] else "-")
-          + "   V/lambda = " + (f"{e['ridges']:.2f} Hz" if e["ridges"] else "-")
-          + f"   (FFT bin {o['fft_bin_hz']:.2f} Hz)")
-    print("stress spectral peaks (Hz, strongest first): "
-          + ", ".join(f"{x:.2f}" for x in o["peaks_hz"]))
+    print(
+        "expected:  V/D = "
+        + (f"{e['texture']:.2f} Hz" if e["texture"] else "-")
+        + "   V/lambda = "
+        + (f"{e['ridges']:.2f} Hz" if e["ridges"] else "-")
+        + f"   (FFT bin {o['fft_bin_hz']:.2f} Hz)"
+    )
+    print(
+        "stress spectral peaks (Hz, strongest first): "
+        + ", ".join(f"{x:.2f}" for x in o["peaks_hz"])
+    )
     near = o["nearest_peak_hz"]
     for key, name in (("texture", "V/D"), ("ridges", "V/lambda")):
         if not e[key]:
             continue
         if key == "ridges" and not o["ridge_line_expected"]:
-            print(f"{name}: no line expected on a periodic texture (its stress repeats every "
-                  "D/V, so its lines are V/D harmonics); ridges band-pass broadband textures: "
-                  "--texture random")
+            print(
+                f"{name}: no line expected on a periodic texture (its stress repeats every "
+                "D/V, so its lines are V/D harmonics); ridges band-pass broadband textures: "
+                "--texture random"
+            )
         elif near[key] is not None:
-            print(f"{name}: nearest peak {near[key]:.2f} Hz "
-                  f"({round(100 * (near[key] / e[key] - 1)) + 0:+d}%)")
+            print(
+                f"{name}: nearest peak {near[key]:.2f} Hz "
+                f"({round(100 * (near[key] / e[key] - 1)) + 0:+d}%)"
+            )
     if o.get("grid_line_hz"):
-        print(f"note: the elastic contact adds a grid line at V/pitch = {o['grid_line_hz']:.0f} Hz "
-              "to the stress; PC rates include it (--grid-shift cancels it; README, "
-              "\"What accuracy costs\")")
+        print(
+            f"note: the elastic contact adds a grid line at V/pitch = {o['grid_line_hz']:.0f} Hz "
+            "to the stress; PC rates include it (--grid-shift cancels it; README, "
+            '"What accuracy costs")'
+        )

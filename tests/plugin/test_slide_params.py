@@ -61,7 +61,7 @@ def test_sweep_row_columns_are_the_fields():
     params = dict(dataclasses.asdict(slide.SlideParams(**SMALL)))
     row = sweep.run_one(params)
     keys = list(row)
-    assert keys[0] == "run_id" and keys[1:1 + len(FIELDS)] == FIELDS
+    assert keys[0] == "run_id" and keys[1 : 1 + len(FIELDS)] == FIELDS
     assert slide.SlideParams(**{k: row[k] for k in FIELDS}) == slide.SlideParams(**SMALL)
     schema = sweep._schema(row)
     arrow = {"bool": "bool", "str": "string", "int": "int64", "float": "double"}
@@ -74,10 +74,25 @@ def test_sweep_row_columns_are_the_fields():
 
 
 def test_cli_is_the_library():
-    argv = ["--duration", "0.2", "--nx", "32", "--pitch", "2e-4", "--dt", "5e-4", "--speed",
-            "0.03", "--json"]
-    r = subprocess.run([sys.executable, "-m", "mjtouch", "slide", *argv], capture_output=True,
-                       text=True, timeout=300)
+    argv = [
+        "--duration",
+        "0.2",
+        "--nx",
+        "32",
+        "--pitch",
+        "2e-4",
+        "--dt",
+        "5e-4",
+        "--speed",
+        "0.03",
+        "--json",
+    ]
+    r = subprocess.run(
+        [sys.executable, "-m", "mjtouch", "slide", *argv],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert r.returncode == 0, r.stderr
     got = json.loads(r.stdout)
     want = json.loads(json.dumps(slide.run(slide.SlideParams(**SMALL)).summary))

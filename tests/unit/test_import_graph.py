@@ -26,9 +26,20 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[2] / "mjtouch"
 # compiled extension modules: leaves with no Python source
 EXTENSIONS = {"mjtouch._core"}
-ALIASES = {"mjtouch.scenes", "mjtouch.textures", "mjtouch.meshes", "mjtouch.sensor",
-           "mjtouch.robot", "mjtouch.rollout", "mjtouch.stimuli", "mjtouch.tuning",
-           "mjtouch.sweep", "mjtouch.figures", "mjtouch.testing", "mjtouch.oracles"}
+ALIASES = {
+    "mjtouch.scenes",
+    "mjtouch.textures",
+    "mjtouch.meshes",
+    "mjtouch.sensor",
+    "mjtouch.robot",
+    "mjtouch.rollout",
+    "mjtouch.stimuli",
+    "mjtouch.tuning",
+    "mjtouch.sweep",
+    "mjtouch.figures",
+    "mjtouch.testing",
+    "mjtouch.oracles",
+}
 
 
 def modules(root: pathlib.Path = ROOT) -> dict[str, pathlib.Path]:
@@ -159,8 +170,11 @@ def test_aliases_are_leaves():
     mods = modules()
     missing = ALIASES - set(mods)
     assert not missing, f"alias modules listed here but absent: {sorted(missing)}"
-    bad = [f"{src} (line {line}) imports {t}" for src, t, _, line in imports(mods)
-           if t in ALIASES and src not in ALIASES]
+    bad = [
+        f"{src} (line {line}) imports {t}"
+        for src, t, _, line in imports(mods)
+        if t in ALIASES and src not in ALIASES
+    ]
     assert not bad, "modules importing a deprecated alias:\n" + "\n".join(bad)
     for alias in ALIASES:
         text = mods[alias].read_text()
@@ -182,9 +196,13 @@ def test_no_private_names_across_modules():
                     if f"{node.module}.{a.name}" in mods:
                         aliases[a.asname or a.name] = f"{node.module}.{a.name}"
         for node in ast.walk(tree):
-            if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
-                    and node.value.id in aliases and node.attr.startswith("_")
-                    and not node.attr.startswith("__")):
+            if (
+                isinstance(node, ast.Attribute)
+                and isinstance(node.value, ast.Name)
+                and node.value.id in aliases
+                and node.attr.startswith("_")
+                and not node.attr.startswith("__")
+            ):
                 bad.append(f"{src}:{node.lineno} uses {aliases[node.value.id]}.{node.attr}")
     assert not bad, "private names used across modules:\n" + "\n".join(bad)
 

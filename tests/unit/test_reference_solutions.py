@@ -88,13 +88,17 @@ def test_layered_layer_on_bone_compliance(nu):
     young, thickness = 50e3, 1.5e-3
     kh = np.array([0.1, 1.0, 5.0, 20.0])
     k3 = 3 - 4 * nu
-    closed = 2 * (1 - nu * nu) / (young * kh / thickness) * (k3 * np.sinh(2 * kh) - 2 * kh) / (
-        k3 * np.cosh(2 * kh) + 2 * kh**2 + 5 - 12 * nu + 8 * nu * nu)
+    closed = (
+        2
+        * (1 - nu * nu)
+        / (young * kh / thickness)
+        * (k3 * np.sinh(2 * kh) - 2 * kh)
+        / (k3 * np.cosh(2 * kh) + 2 * kh**2 + 5 - 12 * nu + 8 * nu * nu)
+    )
     got = layered.surface_compliance(kh / thickness, [(thickness, young, nu)], None)
     assert_allclose(got, closed, rtol=1e-10)
     # thick-layer limit: the half-space's 2 (1 - nu^2) / (E k)
-    deep = layered.surface_compliance(np.array([50.0 / thickness]), [(thickness, young, nu)],
-                                      None)
+    deep = layered.surface_compliance(np.array([50.0 / thickness]), [(thickness, young, nu)], None)
     assert_allclose(deep, 2 * (1 - nu**2) / (young * 50.0 / thickness), rtol=1e-12)
 
 
@@ -106,9 +110,11 @@ def test_layered_self_check_passes(capsys):
 def test_pressure_stress_does_not_depend_on_young_modulus():
     # under prescribed pressure a homogeneous half-space's stress depends on
     # nu only (REFERENCE.md sec. 2): scaling E changes nothing
-    soft = layered.disc_stress("pressure", 0.5e-3, 0.2e-3, 0.7e-3, 1e-3,
-                               [(1e-3, 20e3, 0.45)], (20e3, 0.45))
-    stiff = layered.disc_stress("pressure", 0.5e-3, 0.2e-3, 0.7e-3, 1e-3,
-                                [(1e-3, 2e6, 0.45)], (2e6, 0.45))
+    soft = layered.disc_stress(
+        "pressure", 0.5e-3, 0.2e-3, 0.7e-3, 1e-3, [(1e-3, 20e3, 0.45)], (20e3, 0.45)
+    )
+    stiff = layered.disc_stress(
+        "pressure", 0.5e-3, 0.2e-3, 0.7e-3, 1e-3, [(1e-3, 2e6, 0.45)], (2e6, 0.45)
+    )
     assert_allclose(soft, stiff, rtol=1e-9, atol=1e-12)
     assert math.isfinite(float(np.sum(soft)))
