@@ -409,8 +409,8 @@ def probe_contact_z(spec: mujoco.MjSpec) -> float:
     return z
 
 
-def plate_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-4,
-               skin: dict | None = None) -> mujoco.MjSpec:
+def vibrating_plate_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-4,
+                         skin: dict | None = None) -> mujoco.MjSpec:
     """A fingertip pressed by its `press` motor (ctrl = -force, N) onto a flat
     plate on a mocap body (mocap_pos = the plate's offset, m), which vibrates."""
     tip = _skin(tip or PROBE_TIP, skin)
@@ -620,7 +620,7 @@ class ProbeScene(_Scene):
 
 
 class PlateScene(_Scene):
-    """The vibrating plate (:func:`plate_spec`): the finger lands and is held
+    """The vibrating plate (:func:`vibrating_plate_spec`): the finger lands and is held
     at ``press_n`` by :func:`press_force_controls` over ``settle_s``, then
     keeps its last press control (a constant force) while ``run(waveform)``
     moves the plate up (+) and down by the waveform (m)."""
@@ -630,7 +630,7 @@ class PlateScene(_Scene):
         self.press_n = in_range("press_n", press_n, 0, 20, "N", lo_open=True)
         settle = in_range("settle_s", settle_s, 0.02, 10, "s")
         self.tip = tip or PROBE_TIP
-        self.spec = plate_spec(self.tip, timestep_s, skin)
+        self.spec = vibrating_plate_spec(self.tip, timestep_s, skin)
         self.centre_m = (0.0, 0.0)
         n = int(round(settle / timestep_s))
         self.press = press_force_controls(self.spec, np.full(n, self.press_n))

@@ -32,7 +32,7 @@ def flat_scene(skin=None, timestep_s=1e-4, mocap_plate=False) -> mujoco.MjModel:
     if not mocap_plate:
         return scenes.build_model(tip(skin), texture, protocol)
     # the vibrating plate of mjtouch.stimuli (a mocap body; adds the force output)
-    return stimuli.plate_spec(tip(skin), timestep_s).compile()
+    return stimuli.vibrating_plate_spec(tip(skin), timestep_s).compile()
 
 
 def initial_state(m, d=None):

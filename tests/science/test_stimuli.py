@@ -141,7 +141,7 @@ def _replayed_force(spec, press):
 def test_force_control_tracks_a_50ms_ramp_within_5_percent():
     # preload 0.05 N, then a 50 ms ramp to 0.5 N and a hold (issue 14: the
     # open-loop motor reached 76% at the ramp's end)
-    spec = stimuli.plate_spec(timestep_s=DT, skin={"outputs": "force", "nx": "16"})
+    spec = stimuli.vibrating_plate_spec(timestep_s=DT, skin={"outputs": "force", "nx": "16"})
     t = np.arange(int(0.2 / DT)) * DT
     target = np.interp(t, [0, 0.1, 0.15, 1], [0.05, 0.05, 0.5, 0.5])
     press = stimuli.press_force_controls(spec, target)
@@ -156,7 +156,7 @@ def test_force_control_tracks_a_50ms_ramp_within_5_percent():
 
 @pytest.mark.parametrize("force_n", [0.01, 1.0])
 def test_force_control_lands_the_pad_within_50ms(force_n):
-    spec = stimuli.plate_spec(timestep_s=DT, skin={"outputs": "force", "nx": "16"})
+    spec = stimuli.vibrating_plate_spec(timestep_s=DT, skin={"outputs": "force", "nx": "16"})
     press = stimuli.press_force_controls(spec, np.full(int(0.2 / DT), force_n))
     force = _replayed_force(spec, press)
     # landed: from then on within 5% of the target for the rest of the 0.2 s
@@ -186,8 +186,8 @@ def test_force_control_lands_the_pad_within_50ms(force_n):
     (lambda: stimuli.ProbeScene(stimuli.Probe(x_m=0.01)), r"outside the pad's central half"),
     (lambda: stimuli.ProbeScene(preindent_m=4e-3), r"preindent_m = 0.004 is out of range"),
     (lambda: stimuli.PlateScene(press_n=0), r"press_n = 0 is out of range; valid range \(0, 20\]"),
-    (lambda: stimuli.press_force_controls(stimuli.plate_spec(), [-1.0]), r"valid range \[0, 100\]"),
-    (lambda: stimuli.press_force_controls(stimuli.plate_spec(), [0.1], counter="wall"),
+    (lambda: stimuli.press_force_controls(stimuli.vibrating_plate_spec(), [-1.0]), r"valid range \[0, 100\]"),
+    (lambda: stimuli.press_force_controls(stimuli.vibrating_plate_spec(), [0.1], counter="wall"),
      r"no geom 'wall'"),
 ])
 def test_bad_arguments_are_named_with_their_range(make, match):
