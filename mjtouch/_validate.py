@@ -11,6 +11,14 @@ import numbers
 from collections.abc import Iterable
 from typing import Any
 
+import numpy as np
+
+
+def _plain(value: Any) -> Any:
+    """A numpy scalar as the Python number it holds (so messages read 0.5,
+    not np.float64(0.5)); anything else unchanged."""
+    return value.item() if isinstance(value, np.generic) else value
+
 
 def _interval(lo: float, hi: float, lo_open: bool, hi_open: bool) -> str:
     return f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
@@ -18,13 +26,14 @@ def _interval(lo: float, hi: float, lo_open: bool, hi_open: bool) -> str:
 
 def positive(name: str, *values: Any) -> None:
     """Each value is a finite number > 0."""
-    for v in values:
+    for v in map(_plain, values):
         if not (isinstance(v, numbers.Real) and math.isfinite(v) and v > 0):
             raise ValueError(f"{name} = {v!r} must be a positive finite number")
 
 
 def positive_number(name: str, value: Any, units: str = "") -> float:
     """A finite number > 0, as float; units name what it counts ("seconds")."""
+    value = _plain(value)
     if not (isinstance(value, numbers.Real) and math.isfinite(value) and value > 0):
         of = f" of {units}" if units else ""
         raise ValueError(f"{name} = {value!r} must be a positive finite number{of}")
@@ -43,6 +52,7 @@ def in_range(
 ) -> float:
     """value as float when lo <= value <= hi (either end open on request)."""
     interval = _interval(lo, hi, lo_open, hi_open)
+    value = _plain(value)
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ValueError(f"{name} = {value!r} must be a number in {interval} {units}".rstrip())
     v = float(value)
@@ -57,6 +67,7 @@ def in_range(
 
 def integer_in_range(name: str, value: Any, lo: int, hi: int) -> int:
     """An integer lo <= value <= hi."""
+    value = _plain(value)
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise ValueError(f"{name} = {value!r} must be an integer in [{lo}, {hi}]")
     if not lo <= value <= hi:

@@ -20,7 +20,7 @@ def _matplotlib_figure():
     try:
         import matplotlib.figure
     except ImportError as e:
-        raise ImportError("mjtouch.figures needs matplotlib, the optional `plot` extra: "
+        raise ImportError("mjtouch.analysis.figures needs matplotlib, the optional `plot` extra: "
                           "pip install 'mjtouch[plot]'") from e
     return matplotlib.figure
 

@@ -1,6 +1,6 @@
 """What accuracy costs in time: ``python -m mjtouch bench``.
 
-The default sliding scene (:mod:`mjtouch.scenes`: ridged fingertip pressed
+The default sliding scene (:mod:`mjtouch.scene.scenes`: ridged fingertip pressed
 with 0.5 N on the 1 mm grating, slid at 25 mm/s) is run with one knob changed
 at a time. For every setting the benchmark reports the cost per step and per
 simulated second, and the error against that knob's converged reference,

@@ -1,6 +1,6 @@
 """Tuning of the built afferent models, measured as a physiologist would:
 threshold-frequency curves (absolute and entrainment) and rate-intensity
-curves per class, from a displacement-controlled pin (mjtouch.stimuli), with
+curves per class, from a displacement-controlled pin (mjtouch.experiments.stimuli), with
 published ranges beside ours.
 
 ``python -m mjtouch tuning [--quick] [--json] [--plot FILE]``.

@@ -1,7 +1,7 @@
 """Skin on any robot: :func:`attach` puts an ``mjtouch.skin`` sensor on any
 fingertip geom of a user's ``mujoco.MjSpec`` (several fingertips, each its
 own plugin instance and sensor), and :func:`layouts` reads every skin's
-:class:`~mjtouch.sensor.SkinLayout` by sensor name.
+:class:`~mjtouch.scene.sensor.SkinLayout` by sensor name.
 
 The skin touches the -z side of its geom (sphere, ellipsoid, capsule or
 box; plugin/README.md): turn the geom so its local -z points out of the

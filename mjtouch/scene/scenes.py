@@ -392,7 +392,7 @@ def sphere_press_spec(radius_m: float, skin: dict[str, str],
                       timestep_s: float = 1e-3) -> mujoco.MjSpec:
     """A rigid-plate oracle scene: a sphere pad (the skin) on a slide joint,
     pushed down onto a flat box plate by the motor `press` (ctrl = force, N),
-    no gravity. The Hertz set-up of mjtouch.oracles."""
+    no gravity. The Hertz set-up of mjtouch.analysis.reference_solutions."""
     positive("radius_m", radius_m)
     spec = mujoco.MjSpec()
     spec.modelname = "sphere_press"
