@@ -16,6 +16,7 @@ SCENES = ("slide_flat", "slide_grating", "slide_grating_smooth")
 
 def record(out):
     import mujoco
+
     import mjtouch  # noqa: F401  (registers the plugin)
     models = pathlib.Path(__file__).resolve().parents[1] / "models"
     arrays = {}
@@ -48,6 +49,7 @@ def compare(a, b):
 
 def _block_differences(name, x, y):
     import mujoco
+
     from mjtouch.sensor import SkinLayout
     models = pathlib.Path(__file__).resolve().parents[1] / "models"
     layout = SkinLayout.from_model(mujoco.MjModel.from_xml_path(str(models / f"{name}.xml")))

@@ -36,9 +36,10 @@ import time
 import mujoco
 import numpy as np
 
-from mjtouch import bench, scenes
+from mjtouch import bench
 from mjtouch.bench.configs import LEAD_IN_S
-from mjtouch.sensor import SkinLayout
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 MODELS = pathlib.Path(__file__).resolve().parents[1] / "models"
 SCENES = ("slide_grating", "slide_flat")

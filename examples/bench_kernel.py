@@ -49,9 +49,10 @@ import time
 import mujoco
 import numpy as np
 
-from mjtouch import core, scenes
+from mjtouch import core
 from mjtouch.bench.configs import LEAD_IN_S
-from mjtouch.sensor import SkinLayout
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 ALL = range(6)
 SZZ = (2,)

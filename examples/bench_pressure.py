@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import argparse
 
-from mjtouch import bench, scenes
+from mjtouch import bench
+from mjtouch.scene import scenes
 
 GRIDS = (64, 128, 256)
 MODELS = ("contacts", "winkler", "elastic")

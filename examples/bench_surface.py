@@ -27,7 +27,8 @@ import mujoco
 import numpy as np
 
 import mjtouch  # noqa: F401  (loads the plugin)
-from mjtouch import _core, scenes
+from mjtouch import _core
+from mjtouch.scene import scenes
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 RECTANGLE, HEIGHT_FIELD = 1, 2  # CounterSurface::Type codes (render_gap)

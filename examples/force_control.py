@@ -19,7 +19,8 @@ import json
 import mujoco
 import numpy as np
 
-from mjtouch import scenes, stimuli
+from mjtouch.experiments import stimuli
+from mjtouch.scene import scenes
 
 
 def motor_force(bare: mujoco.MjModel, target_n: np.ndarray) -> np.ndarray:
@@ -47,7 +48,7 @@ def main(argv=None) -> int:
     p.add_argument("--dt", type=float, default=1e-4)
     p.add_argument("--json", action="store_true")
     a = p.parse_args(argv)
-    spec = stimuli.plate_spec(timestep_s=a.dt)
+    spec = stimuli.vibrating_plate_spec(timestep_s=a.dt)
     bare = scenes.remove_skin(spec.copy()).compile()
     landing = []
     for f in a.forces:

@@ -23,7 +23,8 @@ import mujoco.rollout
 import numpy as np
 
 import mjtouch
-from mjtouch import analysis, scenes
+from mjtouch import analysis
+from mjtouch.scene import scenes
 
 PERIODS_M = {"left": 1.0e-3, "right": 1.6e-3}  # the grating on each face of the bar
 BAR_HALF_M = (0.04, 0.005, 0.01)  # the bar: 80 mm long, 10 mm thick, 20 mm tall

@@ -1,6 +1,6 @@
 """Textures from mesh files: a Braille-like dot plate and a diamond knurl are
 built as meshes with trimesh, exported (STL and PLY, as a CAD tool or a
-3D scan would give them), read back with mjtouch.textures.from_mesh and
+3D scan would give them), read back with mjtouch.scene.meshes.from_mesh and
 slid under the fingertip; a figure shows each surface, the receptor stress
 and the spikes.
 
@@ -25,7 +25,9 @@ import tempfile
 
 import numpy as np
 
-from mjtouch import analysis, meshes, rollout, scenes, textures
+from mjtouch import analysis
+from mjtouch.experiments import rollout
+from mjtouch.scene import meshes, scenes
 
 LENGTH_M, WIDTH_M = 0.04, 0.016  # plate: the slide and the pad both fit
 MESH_GRID_M = 5e-5  # the exported meshes' vertex spacing
@@ -86,7 +88,7 @@ def export_meshes(out: pathlib.Path, grid_m: float = MESH_GRID_M) -> dict[str, p
 
 def run(name: str, path: pathlib.Path, duration_s: float, nx: int, pitch_m: float,
         speed_m_s: float, resolution_m: float = 2.5e-5) -> dict:
-    mt = textures.from_mesh(path, scale=1e-3, resolution_m=resolution_m)
+    mt = meshes.from_mesh(path, scale=1e-3, resolution_m=resolution_m)
     tip = scenes.Fingertip(nx=nx, pitch_m=pitch_m)
     protocol = scenes.Protocol(force_n=0.5, speed_m_s=speed_m_s)
     res = rollout.run_slide(tip, mt.texture(), protocol, duration_s=duration_s)

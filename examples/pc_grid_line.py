@@ -15,7 +15,9 @@ import sys
 
 import numpy as np
 
-from mjtouch import analysis, rollout, scenes
+from mjtouch import analysis
+from mjtouch.experiments import rollout
+from mjtouch.scene import scenes
 
 SPEED_M_S = 0.025
 CASES = (("elastic", 1e-4, 128), ("elastic", 5e-5, 256), ("winkler", 1e-4, 128))

@@ -36,7 +36,8 @@ import sys
 
 import numpy as np
 
-from mjtouch import core, textures
+from mjtouch import core
+from mjtouch.scene import textures
 
 FORCE_N = 0.5
 PC_DEPTH_M = 2e-3

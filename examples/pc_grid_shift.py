@@ -26,8 +26,10 @@ import sys
 
 import numpy as np
 
-from mjtouch import analysis, core, rollout, scenes
+from mjtouch import analysis, core
 from mjtouch.bench.configs import lattice_sites
+from mjtouch.experiments import rollout
+from mjtouch.scene import scenes
 
 SPEED_M_S = 0.025
 

@@ -6,7 +6,7 @@ For each `pressure` model (contacts, winkler, elastic) the skin is a
 homogeneous half-space (E = 80 kPa, nu = 0.48), 96 x 96 taxels at 32 per
 Hertz contact radius; MuJoCo presses the sphere with the set force until it
 settles. Prints the relative errors of peak pressure, contact radius (second
-moment of the pressure) and indentation against mjtouch.oracles.Hertz.
+moment of the pressure) and indentation against mjtouch.analysis.reference_solutions.Hertz.
 """
 
 from __future__ import annotations
@@ -15,12 +15,13 @@ import argparse
 
 import mujoco
 
-from mjtouch import oracles, scenes
-from mjtouch.sensor import SkinLayout
+from mjtouch.analysis import reference_solutions
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 
 def ladder(radius_m: float = 0.02, force_n: float = 0.5, steps: int = 1500) -> dict:
-    h = oracles.Hertz(load_n=force_n, radius_m=radius_m, young_pa=80e3, poisson=0.48)
+    h = reference_solutions.Hertz(load_n=force_n, radius_m=radius_m, young_pa=80e3, poisson=0.48)
     pitch, n = h.contact_radius_m / 32, 96
     out = {}
     for model in ("contacts", "winkler", "elastic"):
@@ -36,7 +37,7 @@ def ladder(radius_m: float = 0.02, force_n: float = 0.5, steps: int = 1500) -> d
             mujoco.mj_step(m, d)
         force = layout.block(d.sensordata, "force")
         p = layout.block(d.sensordata, "pressure").reshape(n, n)
-        out[model] = oracles.hertz_errors(h, p, pitch, force[3])
+        out[model] = reference_solutions.hertz_errors(h, p, pitch, force[3])
     return out
 
 

@@ -16,7 +16,9 @@ from __future__ import annotations
 import argparse
 import json
 
-from mjtouch import analysis, rollout, scenes
+from mjtouch import analysis
+from mjtouch.experiments import rollout
+from mjtouch.scene import scenes
 
 
 def run(duration_s: float = 1.0, nx: int = 128, pitch_m: float = 1e-4, dt_s: float = 1e-4,

@@ -29,7 +29,9 @@ import json
 
 import numpy as np
 
-from mjtouch import analysis, rollout, scenes
+from mjtouch import analysis
+from mjtouch.experiments import rollout
+from mjtouch.scene import scenes
 
 SPEED_M_S = 0.025
 SITES = {"Meissner": "RA", "Pacinian": "PC"}

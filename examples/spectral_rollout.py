@@ -34,7 +34,8 @@ from __future__ import annotations
 import argparse
 import json
 
-from mjtouch import scenes, testing
+from mjtouch.analysis import testing
+from mjtouch.scene import scenes
 
 
 def run(speed_m_s: float = 0.04, period_m: float = 1e-3, duration_s: float = 0.3,
@@ -78,7 +79,7 @@ def plot(path: str, r: dict) -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'")
+        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'") from None
     spectra = r["_spectra"]
     fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
     for ax, texture_name, title in (

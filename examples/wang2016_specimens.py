@@ -369,7 +369,7 @@ def plot(r: dict, path: str) -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'")
+        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'") from None
     name = "calibrated" if "calibrated" in r["gain_scale"] else "table1"
     fig, ax = plt.subplots(2, 3, figsize=(15, 8))
     f_mn = np.array(r["forces_n"]) * 1e3

@@ -1,21 +1,32 @@
 """mjtouch: tactile skin for MuJoCo fingertips.
 
 Importing mjtouch registers the ``mjtouch.skin`` sensor plugin, so MJCF that
-uses it loads with ``mujoco.MjModel.from_xml_path``. Submodules:
+uses it loads with ``mujoco.MjModel.from_xml_path``. Subpackages, by concern
+(each imports only those above it in this list; no import cycles):
 
-- :mod:`mjtouch.scenes`   MJCF builders (fingertip, plates, sliding scenes)
-- :mod:`mjtouch.sensor`   reading the plugin's sensordata blocks by name
-- :mod:`mjtouch.rollout`  running scenes and collecting spikes and stress
-- :mod:`mjtouch.analysis` rates and spectra
-- :mod:`mjtouch.core`     the C++ stages called directly (no MuJoCo scene)
-- :mod:`mjtouch.robot`    :func:`attach` a skin to any robot's fingertip geom
-- :mod:`mjtouch.meshes`   textures from mesh files (``textures.from_mesh``)
+- :mod:`mjtouch.core`         the C++ stages called directly (no MuJoCo scene)
+- :mod:`mjtouch.scene`        MJCF builders (``scenes``), ``textures``, ``meshes``,
+  reading sensordata (``sensor.SkinLayout``), ``robot.attach``
+- :mod:`mjtouch.analysis`     rates and spectra (``signals``, re-exported here),
+  ``reference_solutions`` (Hertz, the layered half-space), ``figures``, ``testing``
+- :mod:`mjtouch.experiments`  ``slide`` (``SlideParams``, ``run``), ``rollout``,
+  ``stimuli``, ``tuning``, ``sweep``
+- :mod:`mjtouch.envs`, :mod:`mjtouch.bench`, :mod:`mjtouch.viewer`
+- :mod:`mjtouch.cli`          the ``mjtouch`` command, one module per subcommand
+
+Deprecated aliases, kept for one release: ``mjtouch.scenes``, ``.textures``,
+``.meshes``, ``.sensor``, ``.robot`` (now in ``mjtouch.scene``); ``.rollout``,
+``.stimuli``, ``.tuning``, ``.sweep`` (``mjtouch.experiments``); ``.figures``,
+``.testing`` (``mjtouch.analysis``); ``.oracles``
+(``mjtouch.analysis.reference_solutions``). Each re-exports its new module's
+public names.
 """
 
 import importlib.metadata as _metadata
 import pathlib as _pathlib
 
-from mjtouch._loader import PluginNotBuiltError, library_path, load as _load
+from mjtouch._loader import PluginNotBuiltError, library_path
+from mjtouch._loader import load as _load
 
 
 def _compiled_dirs() -> list[str]:
@@ -40,7 +51,7 @@ MUJOCO_VERSION = "4.0.0"  # the plugin is compiled against exactly this release
 
 _load()
 
-from mjtouch.robot import attach, layouts  # noqa: E402  (after the plugin loads)
+from mjtouch.scene.robot import attach, layouts  # noqa: E402  (after the plugin loads)
 
 __all__ = ["PluginNotBuiltError", "attach", "layouts", "library_path", "MUJOCO_VERSION",
            "__version__"]

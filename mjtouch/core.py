@@ -374,7 +374,7 @@ RIDGE_PROFILES = ("sine", "triangle", "square")
 
 
 def render_gap(skin_z_m: np.ndarray, pitch_m: float, surfaces: list[dict],
-               pad_pos=(0.0, 0.0, 0.0), pad_mat=np.eye(3), hfield: np.ndarray | None = None,
+               pad_pos=(0.0, 0.0, 0.0), pad_mat=None, hfield: np.ndarray | None = None,
                area_average: bool = True, fast_paths: bool = True):
     """Stage 1: gap (m; inf where no surface) and coverage of each taxel cell
     of a skin (skin_z_m: n x n pad-frame heights) at the pad pose, against
@@ -400,7 +400,7 @@ def render_gap(skin_z_m: np.ndarray, pitch_m: float, surfaces: list[dict],
         desc[k, 19] = s.get("elevation", 0.0) * (1.0 if hfield is None else float(np.max(hfield)))
     hf = np.ascontiguousarray(np.zeros((2, 2)) if hfield is None else hfield, dtype=np.float32)
     pos = tuple(float(v) for v in np.ravel(pad_pos))
-    mat = tuple(float(v) for v in np.ravel(pad_mat))
+    mat = tuple(float(v) for v in np.ravel(np.eye(3) if pad_mat is None else pad_mat))
     return _core.render_gap(z, float(pitch_m), desc, pos, mat, hf, bool(area_average),
                             bool(fast_paths))
 

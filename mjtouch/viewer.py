@@ -34,8 +34,9 @@ import time
 import mujoco
 import numpy as np
 
-from mjtouch import analysis, scenes
-from mjtouch.sensor import CLASSES, SkinLayout
+from mjtouch.analysis import signals
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import CLASSES, SkinLayout
 
 # GLFW key codes (MuJoCo's mjKEY_*) that MuJoCo's viewer leaves unbound.
 KEY_HOME, KEY_END, KEY_INSERT, KEY_DELETE, KEY_PAGE_DOWN, KEY_F9 = 268, 269, 260, 261, 267, 298
@@ -240,13 +241,13 @@ class SlideSession:
         _, _, stress = self.window()
         if len(stress) < 8:
             return np.zeros(1), np.zeros(1)
-        return analysis.stress_spectrum(stress.astype(np.float64), self.dt)
+        return signals.stress_spectrum(stress.astype(np.float64), self.dt)
 
     def rates_hz(self) -> dict[str, float]:
         _, spikes, _ = self.window()
         if len(spikes) == 0:
             return {c: 0.0 for c in CLASSES}
-        return analysis.rates_hz(spikes, self.dt, self.layout.classes)
+        return signals.rates_hz(spikes, self.dt, self.layout.classes)
 
     # ----- figures ---------------------------------------------------------
     def raster_figure(self, fig: mujoco.MjvFigure | None = None) -> mujoco.MjvFigure:

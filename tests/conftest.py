@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import mjtouch  # noqa: F401  (registers the plugin)
-from mjtouch import scenes
+from mjtouch.scene import scenes
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 MODELS = REPO / "models"
@@ -131,7 +131,7 @@ def hertz_sphere_press(h, young_pa: float, poisson: float, **skin):
     settled (1500 steps), 32 cells per Hertz contact radius on a 96^2 grid,
     tolerance 1e-8; skin: extra attributes. Returns (force block, pressure
     (96, 96), pitch m)."""
-    from mjtouch.sensor import SkinLayout
+    from mjtouch.scene.sensor import SkinLayout
     pitch, n = h.contact_radius_m / 32, 96
     attrs = dict(nx=n, pitch=pitch, ridges="false", pressure="elastic", skin="halfspace",
                  young=young_pa, poisson=poisson, tolerance=1e-8, outputs="force pressure",

@@ -1,6 +1,6 @@
 """What accuracy costs in time: ``python -m mjtouch bench``.
 
-The default sliding scene (:mod:`mjtouch.scenes`: ridged fingertip pressed
+The default sliding scene (:mod:`mjtouch.scene.scenes`: ridged fingertip pressed
 with 0.5 N on the 1 mm grating, slid at 25 mm/s) is run with one knob changed
 at a time. For every setting the benchmark reports the cost per step and per
 simulated second, and the error against that knob's converged reference,
@@ -48,18 +48,51 @@ interleaved timing rounds, the result), ``report`` (table, figure), ``cli``.
 
 from __future__ import annotations
 
-from mjtouch.bench.accuracy import (Trace, class_means, errors, fit_affine, fit_power_law,
-                                    pareto_front)
+from mjtouch.bench.accuracy import (
+                                    Trace,
+                                    class_means,
+                                    errors,
+                                    fit_affine,
+                                    fit_power_law,
+                                    pareto_front,
+)
 from mjtouch.bench.cli import add_arguments, config_from_args, main
-from mjtouch.bench.configs import (ALL_OUTPUTS, DEFAULT_DENSITY, EXTENT_M, FMAX_HZ, FMIN_HZ,
-                                   LEAD_IN_S, MINIMAL, OVERRIDE_KEYS, PRESETS, SITE_DEPTH_M,
-                                   SITE_RADIUS_M, SITE_SPACING_M, SKIP_S, SPECTRAL_MIN_S,
-                                   BenchConfig, Knob, default_effects, default_knobs, knob,
-                                   lattice_sites, odd_nx, pitch_grid, scene_parts, tree)
+from mjtouch.bench.configs import (
+                                    ALL_OUTPUTS,
+                                    DEFAULT_DENSITY,
+                                    EXTENT_M,
+                                    FMAX_HZ,
+                                    FMIN_HZ,
+                                    LEAD_IN_S,
+                                    MINIMAL,
+                                    OVERRIDE_KEYS,
+                                    PRESETS,
+                                    SITE_DEPTH_M,
+                                    SITE_RADIUS_M,
+                                    SITE_SPACING_M,
+                                    SKIP_S,
+                                    SPECTRAL_MIN_S,
+                                    BenchConfig,
+                                    Knob,
+                                    default_effects,
+                                    default_knobs,
+                                    knob,
+                                    lattice_sites,
+                                    odd_nx,
+                                    pitch_grid,
+                                    scene_parts,
+                                    tree,
+)
 from mjtouch.bench.report import plot, print_report
 from mjtouch.bench.runner import Bench, Progress
-from mjtouch.bench.timing import (Run, States, add_native_tactile, bare_model, slide_ctrl,
-                                  strip_plugin)
+from mjtouch.bench.timing import (
+                                    Run,
+                                    States,
+                                    add_native_tactile,
+                                    bare_model,
+                                    slide_ctrl,
+                                    strip_plugin,
+)
 
 __all__ = [
     "ALL_OUTPUTS", "DEFAULT_DENSITY", "EXTENT_M", "FMAX_HZ", "FMIN_HZ", "LEAD_IN_S", "MINIMAL",

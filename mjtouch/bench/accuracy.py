@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 
-from mjtouch import analysis
+from mjtouch.analysis import signals
 from mjtouch.bench.configs import FMAX_HZ, FMIN_HZ, SKIP_S, SPECTRAL_MIN_S
-from mjtouch.sensor import CLASSES
+from mjtouch.scene.sensor import CLASSES
 
 
 @dataclasses.dataclass
@@ -58,18 +58,18 @@ def errors(row: Trace, ref: Trace, basis: str = "receptor", skip_s: float = SKIP
     ref_win = slice(k0 * m, n * m)
     if window_s >= SPECTRAL_MIN_S - 1e-12:
         fmax = min(FMAX_HZ, 0.5 / row.dt_s)
-        f, p = analysis.stress_spectrum(row.stress[k0:n], row.dt_s)
-        fr, pr = analysis.stress_spectrum(ref.stress[ref_win], ref.dt_s)
-        peak_ref = analysis.spectral_peaks(fr, pr, n=1, fmin_hz=FMIN_HZ, fmax_hz=fmax)
-        peak_row = analysis.spectral_peaks(f, p, n=1, fmin_hz=FMIN_HZ, fmax_hz=fmax)
+        f, p = signals.stress_spectrum(row.stress[k0:n], row.dt_s)
+        fr, pr = signals.stress_spectrum(ref.stress[ref_win], ref.dt_s)
+        peak_ref = signals.spectral_peaks(fr, pr, n=1, fmin_hz=FMIN_HZ, fmax_hz=fmax)
+        peak_row = signals.spectral_peaks(f, p, n=1, fmin_hz=FMIN_HZ, fmax_hz=fmax)
         if peak_ref and peak_row:
-            amp = math.sqrt(analysis.power_at(f, p, peak_ref[0]))
-            amp_ref = math.sqrt(analysis.power_at(fr, pr, peak_ref[0]))
+            amp = math.sqrt(signals.power_at(f, p, peak_ref[0]))
+            amp_ref = math.sqrt(signals.power_at(fr, pr, peak_ref[0]))
             out["ref_peak_hz"] = peak_ref[0]
             out["peak_freq_hz"] = abs(peak_row[0] - peak_ref[0])
             out["peak_amp_rel"] = abs(amp / amp_ref - 1) if amp_ref > 0 else None
-    r = analysis.rates_hz(row.spikes[k0:n], row.dt_s, row.classes)
-    rr = analysis.rates_hz(ref.spikes[ref_win], ref.dt_s, ref.classes)
+    r = signals.rates_hz(row.spikes[k0:n], row.dt_s, row.classes)
+    rr = signals.rates_hz(ref.spikes[ref_win], ref.dt_s, ref.classes)
     total = sum(rr.values())
     dev = sum(abs(r[c] - rr[c]) for c in CLASSES)
     out["spike_rate_rel"] = dev / total if total > 0 else (0.0 if dev == 0 else None)

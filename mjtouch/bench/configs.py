@@ -8,8 +8,7 @@ import math
 
 import numpy as np
 
-from mjtouch import scenes
-
+from mjtouch.scene import scenes
 
 EXTENT_M = 12.8e-3  # skin grid side kept by the pitch sweep (default: 128 x 0.1 mm)
 SITE_SPACING_M = 0.6e-3  # multiple of every swept pitch: 200, 150, 120, 100, 75, 60, 50, 37.5 um
@@ -69,7 +68,7 @@ def knob(name: str, key: str, values, reference, **kw) -> Knob:
     return Knob(name, tuple({key: v} for v in values), {key: reference}, **kw)
 
 
-def default_knobs(cfg: "BenchConfig") -> list[Knob]:
+def default_knobs(cfg: BenchConfig) -> list[Knob]:
     """The swept knobs. Default grid: 128 x 0.1 mm (the default skin); the
     pressure knob runs on 64 x 0.2 mm for the elastic model's sake."""
     grid = {"nx": cfg.nx, "pitch_m": cfg.pitch_m}
@@ -128,7 +127,7 @@ MINIMAL = {"ridges": False, "skin.shear": "false", "skin.skin": "halfspace",
 ALL_OUTPUTS = "spikes stress voltage force pressure rate"
 
 
-def default_effects(cfg: "BenchConfig") -> list[tuple[str, str, dict]]:
+def default_effects(cfg: BenchConfig) -> list[tuple[str, str, dict]]:
     """(group, label, overrides over the default skin): each effect alone
     over the minimal skin, all together (the default), and the default
     without each."""
@@ -185,7 +184,7 @@ class BenchConfig:
     extent_m: float = EXTENT_M
 
     @classmethod
-    def quick_config(cls, **kw) -> "BenchConfig":
+    def quick_config(cls, **kw) -> BenchConfig:
         """A tiny sweep for CI: small grids, short runs (well under a minute)."""
         base = dict(quick=True, duration_s=0.11, time_steps=60, repeats=3, elastic_steps=150,
                     elastic_time_steps=10, cheap_steps=1000, threads_batch=4, nx=48,

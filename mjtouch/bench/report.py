@@ -48,9 +48,12 @@ def print_report(o: dict, stream=None) -> None:
     hdr = (f"  {'knob':13s} {'setting':40s} {'us/step':>9s} {'s/sim s':>8s} {'stress':>8s} "
            f"{'peak Hz':>8s} {'peak amp':>8s} {'rates':>8s} {'nrec':>5s}")
     p(hdr)
+
+    def pct(v):
+        return _fmt(None if v is None else 100 * v, "7.2f") + ("%" if v is not None else " ")
+
     for row in o["rows"]:
         e = row["errors"]
-        pct = lambda v: _fmt(None if v is None else 100 * v, "7.2f") + ("%" if v is not None else " ")
         p(f"{'*' if row['pareto'] else ' '} {row['knob']:13s} "
           f"{(row['setting'] + (' (ref)' if row['reference'] else ''))[:40]:40s} "
           f"{row['us_per_step']:9.1f} {row['wall_s_per_sim_s']:8.2f} {pct(e['stress_rms_rel'])} "
@@ -122,7 +125,7 @@ def plot(o: dict, path: str) -> None:
     try:
         import matplotlib.figure
     except ImportError:
-        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'")
+        raise SystemExit("--plot needs matplotlib: pip install 'mjtouch[plot]'") from None
     fig = matplotlib.figure.Figure(figsize=(16, 5.5))
     a, a2, bx = fig.subplots(1, 3, gridspec_kw={"width_ratios": [1, 1, 0.9]})
     _error_panel(a, o, "stress_rms_rel", "relative RMS stress error at receptors", "pareto")

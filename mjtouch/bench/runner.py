@@ -9,22 +9,31 @@ import math
 import os
 import platform
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import mujoco
 import mujoco.rollout
 import numpy as np
 
-from mjtouch import scenes
 from mjtouch.bench.accuracy import Trace, errors, fit_affine, fit_power_law, pareto_front
-from mjtouch.bench.configs import (LEAD_IN_S, MIN_WINDOW_STEPS, SITE_RADIUS_M, SITE_SPACING_M,
-                                   SKIP_S, SPECTRAL_MIN_S, BenchConfig, Knob, default_effects,
-                                   default_knobs, lattice_sites, scene_parts)
-from mjtouch.bench.timing import (Run, States, add_native_tactile, slide_ctrl,
-                                  strip_plugin)
+from mjtouch.bench.configs import (
+    LEAD_IN_S,
+    MIN_WINDOW_STEPS,
+    SITE_RADIUS_M,
+    SITE_SPACING_M,
+    SKIP_S,
+    SPECTRAL_MIN_S,
+    BenchConfig,
+    Knob,
+    default_effects,
+    default_knobs,
+    lattice_sites,
+    scene_parts,
+)
+from mjtouch.bench.timing import Run, States, add_native_tactile, slide_ctrl, strip_plugin
 from mjtouch.progress import Progress  # the bar every long command shares
-from mjtouch.sensor import SkinLayout
-
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 # --- the benchmark -----------------------------------------------------------
 

@@ -11,8 +11,8 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 
-from mjtouch import scenes
 from mjtouch.bench.configs import LEAD_IN_S
+from mjtouch.scene import scenes
 
 _PHYSICS_SPEC = int(mujoco.mjtState.mjSTATE_FULLPHYSICS) & ~int(mujoco.mjtState.mjSTATE_PLUGIN)
 _FULL_SPEC = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)

@@ -40,14 +40,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any
 
 import gymnasium as gym
 import mujoco
 import mujoco.rollout
 import numpy as np
 
-from mjtouch.sensor import CLASSES, SkinLayout
+from mjtouch._validate import choice
+from mjtouch.scene.sensor import CLASSES, SkinLayout
 
 TOUCH_MODES = ("counts", "rates", "none")
 FULLPHYSICS = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
@@ -82,17 +82,6 @@ def max_spikes_per_receptor(span_s: float, refractory_s: float) -> int:
     return math.ceil(span_s / refractory_s) + 1
 
 
-def check_choice(name: str, value: Any, choices: tuple) -> None:
-    if value not in choices:
-        raise ValueError(f"{name} = {value!r} is not one of {', '.join(map(repr, choices))}")
-
-
-def check_range(name: str, value: float, lo: float, hi: float, units: str = "") -> None:
-    if not (isinstance(value, (int, float)) and math.isfinite(value) and lo <= value <= hi):
-        raise ValueError(f"{name} = {value!r} is out of range; valid range [{lo:g}, {hi:g}] {units}"
-                         .rstrip())
-
-
 class TouchEnv(gym.Env):
     """Base class: a skin scene advanced by ``mujoco.rollout`` per control step."""
 
@@ -102,9 +91,9 @@ class TouchEnv(gym.Env):
                  user_spec: int, render_mode: str | None, render_size: tuple[int, int],
                  max_force_n: float, max_friction: float,
                  refractory_s: float = REFRACTORY_DEFAULT_S):
-        check_choice("touch", touch, TOUCH_MODES)
+        choice("touch", touch, TOUCH_MODES)
         if render_mode is not None:
-            check_choice("render_mode", render_mode, tuple(self.metadata["render_modes"]))
+            choice("render_mode", render_mode, tuple(self.metadata["render_modes"]))
         self.touch = touch
         self.render_mode = render_mode
         self._render_size = render_size

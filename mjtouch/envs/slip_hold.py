@@ -38,9 +38,10 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-from mjtouch import scenes
-from mjtouch.envs.base import ObsBlock, TouchEnv, check_range
+from mjtouch._validate import in_range
+from mjtouch.envs.base import ObsBlock, TouchEnv
 from mjtouch.envs.texture_explore import env_fingertip
+from mjtouch.scene import scenes
 
 BLOCK_HALF_M = (0.01, 0.015, 0.02)  # the held block's half sizes (x: towards the wall)
 BLOCK_MASS_KG = 0.02
@@ -64,7 +65,7 @@ def slip_hold_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3
     """A block between the fingertip pad (pressing along +x) and a wall."""
     tip = tip or env_fingertip()
     tip.validate()
-    q = scenes._qv
+    q = scenes.quantize_all
     a, b, c = tip.semi_axes_m
     bx, by, bz = BLOCK_HALF_M
     length = 2 * bz + 0.02
@@ -72,7 +73,7 @@ def slip_hold_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3
     spec = mujoco.MjSpec()
     spec.modelname = "mjtouch_slip_hold"
     spec.compiler.degree = True
-    spec.option.timestep = scenes._q(timestep_s)
+    spec.option.timestep = scenes.quantize(timestep_s)
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     # stiff friction, so a held block creeps < 0.1 mm/s (MuJoCo's soft
@@ -99,7 +100,7 @@ def slip_hold_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3
     finger.add_joint(name="grip", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, -1],
                      damping=GRIP_DAMPING_N_S_M)
     finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, size=q(a, b, c),
-                    mass=scenes._q(tip.mass_kg), friction=[PAD_FRICTION, 0.005, 0.0001],
+                    mass=scenes.quantize(tip.mass_kg), friction=[PAD_FRICTION, 0.005, 0.0001],
                     solref=scenes.CONTACT_SOLREF, solimp=scenes.CONTACT_SOLIMP,
                     rgba=[0.93, 0.72, 0.62, 1])
     grip = spec.add_actuator(name="grip", target="grip", trntype=mujoco.mjtTrn.mjTRN_JOINT)
@@ -122,8 +123,8 @@ class SlipHoldEnv(TouchEnv):
                  render_mode: str | None = None, render_size=(480, 640)):
         def pair(name, v, lo, hi, units):
             v0, v1 = (float(x) for x in v)
-            check_range(f"{name}[0]", v0, lo, hi, units)
-            check_range(f"{name}[1]", v1, v0, hi, units)
+            in_range(f"{name}[0]", v0, lo, hi, units)
+            in_range(f"{name}[1]", v1, v0, hi, units)
             return v0, v1
         self.force_range_n = pair("force_range_n", force_range_n, 0.0, 5.0, "N")
         self.friction_range = pair("friction_range", friction_range, 2 * PAD_FRICTION, 2.0, "")
@@ -131,13 +132,13 @@ class SlipHoldEnv(TouchEnv):
         self.rise_load_range_n = pair("rise_load_range_n", rise_load_range_n, 0.0, 2.0, "N")
         self.rise_start_range_s = pair("rise_start_range_s", rise_start_range_s, 0.0, 100.0, "s")
         self.rise_time_range_s = pair("rise_time_range_s", rise_time_range_s, 1e-3, 100.0, "s")
-        check_range("timestep_s", timestep_s, 1e-4, 2e-3, "s")
-        check_range("control_dt_s", control_dt_s, timestep_s, 0.1, "s")
-        check_range("force_cost", force_cost, 0.0, 100.0)
-        check_range("slip_cost", slip_cost, 0.0, 100.0)
-        check_range("drop_m", drop_m, 1e-4, 0.02, "m")
-        check_range("drop_penalty", drop_penalty, 0.0, 1e3)
-        check_range("settle_force_n", settle_force_n, 0.1, 5.0, "N")
+        in_range("timestep_s", timestep_s, 1e-4, 2e-3, "s")
+        in_range("control_dt_s", control_dt_s, timestep_s, 0.1, "s")
+        in_range("force_cost", force_cost, 0.0, 100.0)
+        in_range("slip_cost", slip_cost, 0.0, 100.0)
+        in_range("drop_m", drop_m, 1e-4, 0.02, "m")
+        in_range("drop_penalty", drop_penalty, 0.0, 1e3)
+        in_range("settle_force_n", settle_force_n, 0.1, 5.0, "N")
         frame_skip = round(control_dt_s / timestep_s)
         if not math.isclose(frame_skip * timestep_s, control_dt_s, rel_tol=1e-9):
             raise ValueError(f"control_dt_s = {control_dt_s} must be a multiple of timestep_s = "

@@ -45,8 +45,9 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-from mjtouch import scenes
-from mjtouch.envs.base import ObsBlock, TouchEnv, check_range
+from mjtouch._validate import in_range
+from mjtouch.envs.base import ObsBlock, TouchEnv
+from mjtouch.scene import scenes
 
 DEFAULT_CLASSES = (0.0, 0.6e-3, 1.0e-3, 1.5e-3, 2.5e-3)  # grating period D (m); 0: flat
 PARK_Y_M = 0.5  # unused textures wait here, far outside the pad's footprint
@@ -114,17 +115,17 @@ class TextureExploreEnv(TouchEnv):
             raise ValueError(f"classes has {len(classes)} entries; valid 2 to 16")
         for c in classes:
             if c != 0:
-                check_range("classes entry (grating period)", c, 2e-4, 1e-2, "m (0: flat)")
+                in_range("classes entry (grating period)", c, 2e-4, 1e-2, "m (0: flat)")
         if len(set(classes)) != len(classes):
             raise ValueError(f"classes {classes} has duplicates")
         lo, hi = (float(v) for v in force_range_n)
-        check_range("force_range_n[0]", lo, 0.01, 5.0, "N")
-        check_range("force_range_n[1]", hi, lo, 5.0, "N")
-        check_range("max_speed_m_s", max_speed_m_s, 0.0, 0.2, "m/s")
-        check_range("timestep_s", timestep_s, 1e-4, 2e-3, "s")
-        check_range("control_dt_s", control_dt_s, timestep_s, 0.1, "s")
-        check_range("step_cost", step_cost, 0.0, 1.0)
-        check_range("settle_force_n", settle_force_n, lo, hi, "N")
+        in_range("force_range_n[0]", lo, 0.01, 5.0, "N")
+        in_range("force_range_n[1]", hi, lo, 5.0, "N")
+        in_range("max_speed_m_s", max_speed_m_s, 0.0, 0.2, "m/s")
+        in_range("timestep_s", timestep_s, 1e-4, 2e-3, "s")
+        in_range("control_dt_s", control_dt_s, timestep_s, 0.1, "s")
+        in_range("step_cost", step_cost, 0.0, 1.0)
+        in_range("settle_force_n", settle_force_n, lo, hi, "N")
         frame_skip = round(control_dt_s / timestep_s)
         if not math.isclose(frame_skip * timestep_s, control_dt_s, rel_tol=1e-9):
             raise ValueError(f"control_dt_s = {control_dt_s} must be a multiple of timestep_s = "

@@ -3,11 +3,10 @@
 import mujoco
 import mujoco.rollout
 import numpy as np
-
-from mjtouch import scenes
-from mjtouch.sensor import SkinLayout
-
 from conftest import fast_tip, rollout_and_serial
+
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 
 def _model():
@@ -147,7 +146,7 @@ def test_elastic_pcg_matches_the_reference_solver_in_the_plugin():
     # the default (pcg, float FFTs: ~1e-6 from double, test_contact_solver.py).
     # Both stop at tolerance 1e-4 (about their error), so their pressures
     # differ by about that much, not more
-    from mjtouch.sensor import SkinLayout
+    from mjtouch.scene.sensor import SkinLayout
     runs = {}
     for solver, precision in (("pcg", "float"), ("pk", "double")):
         m = _elastic_model(solver, precision)

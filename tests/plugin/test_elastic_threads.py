@@ -8,11 +8,10 @@ share the pool with the plugin's must equal serial runs."""
 import mujoco
 import numpy as np
 import pytest
-
-from mjtouch import scenes
-from mjtouch.sensor import SkinLayout
-
 from conftest import fast_tip, rollout_and_serial
+
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 PROTO = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import mjtouch
-from mjtouch import scenes
+from mjtouch.scene import scenes
 
 EX = runpy.run_path(str(pathlib.Path(__file__).resolve().parents[2] / "examples" /
                         "gripper_slide.py"), run_name="example")

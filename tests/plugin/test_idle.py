@@ -5,8 +5,8 @@ resumes. Skipping must not change what the receptors report."""
 import mujoco
 import numpy as np
 
-from mjtouch import scenes
-from mjtouch.sensor import SkinLayout
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 IDLE_SLOT = 4  # plugin_state header: kStReceptorsIdle (plugin/core/pipeline/model.h)
 

@@ -6,11 +6,11 @@ import mujoco
 import numpy as np
 import pytest
 import trimesh
+from conftest import fast_tip
 
 import mjtouch  # noqa: F401
-from conftest import fast_tip
-from mjtouch import scenes
-from mjtouch.sensor import SkinLayout
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 R_PAD = 8e-3  # a sphere pad
 DEPTH = 0.3e-3  # its overlap with the target's top

@@ -2,12 +2,13 @@
 
 import json
 
-import numpy as np
 import pytest
-
 from conftest import fast_tip
-from mjtouch import analysis, cli, meshes, rollout, scenes
-from test_mesh_texture import D, H, W_PLATEAU, grating_points
+from test_mesh_texture import W_PLATEAU, D, H, grating_points
+
+from mjtouch import analysis, cli
+from mjtouch.experiments import rollout
+from mjtouch.scene import meshes, scenes
 
 SPEED = 0.04  # m/s: V/D = 40 Hz
 

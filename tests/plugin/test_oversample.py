@@ -2,12 +2,12 @@
 skin evaluated at K substeps per step with the pad's pose and MuJoCo's force
 interpolated; afferents the sampling cannot resolve are refused."""
 
-import mujoco
 import numpy as np
 import pytest
 
-from mjtouch import rollout, scenes
-from mjtouch.sensor import SkinLayout
+from mjtouch.experiments import rollout
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 
 def layout(dt, **skin):

@@ -1,7 +1,5 @@
 """Plugin registration, the committed models, and the sensordata layout."""
 
-import os
-import pathlib
 import subprocess
 import sys
 import tempfile
@@ -9,12 +7,11 @@ import tempfile
 import mujoco
 import numpy as np
 import pytest
+from conftest import MODELS, assert_no_warnings, pad_scene
 
 import mjtouch
-from mjtouch import scenes
-from mjtouch.sensor import SkinLayout
-
-from conftest import MODELS, REPO, assert_no_warnings, pad_scene
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 SCENES = sorted(p.name for p in MODELS.glob("slide_*.xml"))
 ALL_MODELS = sorted(p.name for p in MODELS.glob("*.xml"))
@@ -23,8 +20,8 @@ ALL_MODELS = sorted(p.name for p in MODELS.glob("*.xml"))
 def test_plain_import_mujoco_registers_plugin():
     # A fresh interpreter that imports only mujoco: the `mujoco.plugins`
     # entry point must register mjtouch.skin.
-    code = ("import mujoco; m = mujoco.MjModel.from_xml_path(%r); "
-            "print(m.nplugin, m.nsensordata)" % str(MODELS / "slide_flat.xml"))
+    code = (f"import mujoco; m = mujoco.MjModel.from_xml_path({str(MODELS / 'slide_flat.xml')!r}); "
+            "print(m.nplugin, m.nsensordata)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=tempfile.gettempdir(), timeout=120)
     assert out.returncode == 0, out.stderr

@@ -11,7 +11,9 @@ import mujoco.rollout
 import numpy as np
 import pytest
 
-from mjtouch import progress, rollout, scenes
+from mjtouch import progress
+from mjtouch.experiments import rollout
+from mjtouch.scene import scenes
 
 # a small slide: 300 press + 300 sliding steps, well under a second
 SMALL = ["--duration", "0.15", "--dt", "5e-4", "--nx", "24", "--pitch", "2e-4"]

@@ -5,6 +5,7 @@ import importlib.util
 import json
 import math
 import pathlib
+import re
 import runpy
 import subprocess
 import sys
@@ -12,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from mjtouch import sweep
+from mjtouch.experiments import sweep
 
 EXAMPLES = pathlib.Path(__file__).resolve().parents[2] / "examples"
 # tiny runs: 24 x 24 taxels, 0.5 ms steps, 0.15 s of sliding (~0.3 s each)
@@ -53,13 +54,13 @@ def test_values_ranges_and_names():
     v = sweep.parse_values({"period": ["0.8e-3", "1.2e-3"], "speed_m_s": "0.02:0.05:0.01",
                             "ridge-pitch": 4.5e-4, "ridges": [True, "off"], "nx": "16:24:8",
                             "force": {"start": 0.25, "stop": 0.75, "step": 0.25}})
-    assert v["period"] == [0.8e-3, 1.2e-3]
-    assert v["speed"] == [0.02, 0.03, 0.04, 0.05]  # decimal values, both ends included
-    assert v["ridge_pitch"] == [4.5e-4] and v["ridges"] == [True, False]
-    assert v["nx"] == [16, 24] and v["force"] == [0.25, 0.5, 0.75]
+    assert v["period_m"] == [0.8e-3, 1.2e-3]
+    assert v["speed_m_s"] == [0.02, 0.03, 0.04, 0.05]  # decimal values, both ends included
+    assert v["ridge_pitch_m"] == [4.5e-4] and v["ridges"] == [True, False]
+    assert v["nx"] == [16, 24] and v["force_n"] == [0.25, 0.5, 0.75]
     runs = sweep.expand(v)
     assert len(runs) == 2 * 4 * 2 * 2 * 3
-    assert runs[0]["texture"] == "grating" and runs[0]["duration"] == 1.0  # slide's defaults
+    assert runs[0]["texture"] == "grating" and runs[0]["duration_s"] == 1.0  # slide's defaults
     assert len({sweep.run_id(r) for r in runs}) == len(runs)
     assert sweep.run_id(dict(runs[0])) == sweep.run_id(runs[0])
 
@@ -69,7 +70,7 @@ def test_toml_config(tmp_path):
     f.write_text('texture = "random"\nseed = [1, 2]\nrms_m = "1e-5:3e-5:1e-5"\n'
                  'pressure = ["winkler", "elastic"]\n')
     v = sweep.read_config(f)
-    assert v == {"texture": ["random"], "seed": [1, 2], "rms": [1e-5, 2e-5, 3e-5],
+    assert v == {"texture": ["random"], "seed": [1, 2], "rms_m": [1e-5, 2e-5, 3e-5],
                  "pressure": ["winkler", "elastic"]}
 
 
@@ -77,11 +78,11 @@ def test_toml_config(tmp_path):
     ({"perod": 1e-3}, "unknown sweep parameter 'perod'; valid: texture, period_m"),
     ({"speed": "0.02:0.05:0.02"}, "STOP - START is not a whole number of STEPs"),
     ({"speed": "0.05:0.02:0.01"}, "needs STEP > 0 and STOP >= START"),
-    ({"speed": -1}, "--speed must be a positive number, got -1"),
-    ({"texture": "wood"}, "--texture 'wood' is not one of grating, random, dots, flat"),
+    ({"speed": -1}, "--speed = -1.0 is out of range; valid range (0, 2] m/s"),
+    ({"texture": "wood"}, "--texture = 'wood' is not one of 'grating', 'random', 'dots', 'flat'"),
     ({"ridges": "maybe"}, "--ridges 'maybe' is not a boolean"),
     ({"texture": "grating:flat:1"}, "a range is START:STOP:STEP of a numeric option"),
-    ({"nx": [2, 24]}, "--nx 2 is out of range; valid range [4, 512]"),
+    ({"nx": [2, 24]}, "--nx = 2 is out of range; valid range [4, 512]"),
 ])
 def test_bad_values_name_the_option_and_range(values, msg):
     with pytest.raises(ValueError, match=None) as e:
@@ -95,7 +96,7 @@ def test_bad_toml(tmp_path):
     with pytest.raises(ValueError, match=f"sweep config {f}"):
         sweep.read_config(f)
     f.write_text("duration = -1\n")
-    with pytest.raises(ValueError, match=f"{f}: duration: --duration must be a positive"):
+    with pytest.raises(ValueError, match=re.escape(f"{f}: duration = -1.0 is out of range; valid range [0.15, inf) s")):
         sweep.read_config(f)
 
 
@@ -181,7 +182,7 @@ def test_failed_run_is_reported_and_the_rest_run(tmp_path):
 
 def test_bad_arguments_exit_2_before_running(tmp_path):
     r = mjtouch("sweep", "--out", str(tmp_path), "--nx", "2", "--serial")
-    assert r.returncode == 2 and "--nx 2 is out of range; valid range [4, 512]" in r.stderr
+    assert r.returncode == 2 and "--nx = 2 is out of range; valid range [4, 512]" in r.stderr
     r = mjtouch("sweep", "--out", str(tmp_path), "--num-cpus", "0")
     assert r.returncode == 2 and "--num-cpus 0 must be >= 1" in r.stderr
     require("ray")  # an address where no cluster answers (port 1): an error, not a hang
@@ -208,6 +209,7 @@ def test_bench_sweep_example(capsys):
 
 def test_example_sweep_file():
     v = sweep.read_config(EXAMPLES / "sweep.toml")
-    assert v["period"] == [0.8e-3, 1.0e-3, 1.2e-3, 1.5e-3] and v["speed"] == [0.02, 0.04, 0.06]
-    assert v["ridges"] == [True, False] and v["duration"] == [0.5]
+    assert v["period_m"] == [0.8e-3, 1.0e-3, 1.2e-3, 1.5e-3]
+    assert v["speed_m_s"] == [0.02, 0.04, 0.06]
+    assert v["ridges"] == [True, False] and v["duration_s"] == [0.5]
     assert len(sweep.expand(v)) == 48  # as the file says

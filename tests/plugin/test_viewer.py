@@ -122,9 +122,19 @@ if __name__ == "__main__":
 
 import pytest  # noqa: E402
 
-from mjtouch import scenes, viewer  # noqa: E402
-from mjtouch.viewer import (KEY_DELETE, KEY_END, KEY_F9, KEY_HOME, KEY_INSERT,  # noqa: E402
-                            KEY_PAGE_DOWN, TEXTURES, SlideSession, ViewSettings)
+from mjtouch import viewer  # noqa: E402
+from mjtouch.scene import scenes  # noqa: E402
+from mjtouch.viewer import (  # noqa: E402
+    KEY_DELETE,
+    KEY_END,
+    KEY_F9,
+    KEY_HOME,
+    KEY_INSERT,
+    KEY_PAGE_DOWN,
+    TEXTURES,
+    SlideSession,
+    ViewSettings,
+)
 
 
 @pytest.fixture(scope="module")

@@ -11,8 +11,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtouch import scenes, viewer
-from mjtouch.sensor import SkinLayout
+from mjtouch import viewer
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 
 def scene(**skin):

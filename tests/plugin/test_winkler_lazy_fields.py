@@ -7,10 +7,9 @@ the folded direct sum, which reads the pressure alone."""
 
 import mujoco
 import numpy as np
-
-from mjtouch.sensor import SkinLayout
-
 from conftest import pad_scene
+
+from mjtouch.scene.sensor import SkinLayout
 
 
 def _run(skin: dict[str, str], steps: int = 120) -> dict[str, np.ndarray]:

@@ -12,9 +12,9 @@ import textwrap
 import mujoco
 import numpy as np
 import pytest
-
 from conftest import REPO, pad_spec
-from mjtouch import scenes
+
+from mjtouch.scene import scenes
 
 NAN_SAMPLES = [0, 1, 0, np.nan, 0, 0, 1, 0, 1, 0]
 

@@ -2,7 +2,6 @@
 
 import mujoco
 import pytest
-
 from conftest import add_geom, pad_scene, pad_spec, registered_attributes
 
 CASES = [
@@ -165,7 +164,7 @@ def test_every_attribute_is_checked_here_or_in_test_layered():
 @pytest.mark.parametrize("outputs", ["rate", "spikes rate", "rate pressure force"])
 def test_rate_output_is_accepted(outputs):
     # the counterpart of the `outputs` error: `rate` is a valid block
-    from mjtouch.sensor import SkinLayout
+    from mjtouch.scene.sensor import SkinLayout
     m = mujoco.MjModel.from_xml_string(pad_scene({"outputs": outputs, "rate_tau": "0.05"}))
     layout = SkinLayout.from_model(m)
     assert set(layout.blocks) == set(outputs.split())

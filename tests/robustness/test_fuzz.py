@@ -6,10 +6,9 @@ import resource
 
 import mujoco
 import numpy as np
+from conftest import add_geom, pad_scene, pad_spec, registered_attributes
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-from conftest import add_geom, pad_scene, pad_spec, registered_attributes
 
 # Ranges drawn for the numeric attributes, inside their valid ranges
 # (plugin/core/pipeline/attributes.cc; test_fuzz_ranges_are_valid). Draws inside

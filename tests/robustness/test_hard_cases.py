@@ -25,11 +25,10 @@ import dataclasses
 import mujoco
 import numpy as np
 import pytest
-
-from mjtouch import scenes
-from mjtouch.sensor import SkinLayout
-
 from conftest import assert_no_warnings
+
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 REFRACTORY_S = 1e-3
 

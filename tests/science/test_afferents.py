@@ -15,10 +15,10 @@ import mujoco.rollout
 import numpy as np
 import pytest
 
-from mjtouch import _core, analysis, core, scenes, stimuli
-from mjtouch.sensor import SkinLayout
-
-from test_receptors import SA1, lif_rate
+from mjtouch import _core, analysis, core
+from mjtouch.experiments import stimuli
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 FULLPHYSICS = mujoco.mjtState.mjSTATE_FULLPHYSICS
 
@@ -32,7 +32,7 @@ def flat_scene(skin=None, timestep_s=1e-4, mocap_plate=False) -> mujoco.MjModel:
     if not mocap_plate:
         return scenes.build_model(tip(skin), texture, protocol)
     # the vibrating plate of mjtouch.stimuli (a mocap body; adds the force output)
-    return stimuli.plate_spec(tip(skin), timestep_s).compile()
+    return stimuli.vibrating_plate_spec(tip(skin), timestep_s).compile()
 
 
 def initial_state(m, d=None):

@@ -15,8 +15,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtouch import bench, cli, scenes
-from mjtouch.sensor import SkinLayout
+from mjtouch import bench, cli
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 ERROR_KEYS = ("stress_rms_rel", "stress_rms_pa", "peak_freq_hz", "peak_amp_rel", "spike_rate_rel")
 

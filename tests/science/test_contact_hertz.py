@@ -3,10 +3,9 @@ plate by MuJoCo reproduces Hertz (examples/pressure_ladder.py prints how far
 every pressure model is from it)."""
 
 import pytest
-
-from mjtouch import oracles
-
 from conftest import hertz_sphere_press
+
+from mjtouch.analysis import reference_solutions
 
 E, NU = 80e3, 0.48
 
@@ -16,12 +15,12 @@ def test_elastic_sphere_pad_matches_hertz():
     # paraboloid, ~(a / R)^2 / 4 = 5e-4, stays below the 1e-3 tolerance; at
     # 32 cells per contact radius the boundary elements' own error is 1e-4
     # (tests/unit/test_pressure.py).
-    h = oracles.Hertz(load_n=0.5, radius_m=0.2, young_pa=E, poisson=NU)
+    h = reference_solutions.Hertz(load_n=0.5, radius_m=0.2, young_pa=E, poisson=NU)
     force, p, pitch = hertz_sphere_press(h, E, NU)
     assert force[0] == pytest.approx(h.load_n, rel=1e-6)  # settled on the set load
     # sum(p A) is MuJoCo's normal force (float32 pressure output: 1e-7)
     assert p.sum() * pitch**2 == pytest.approx(force[0], rel=1e-6)
-    err = oracles.hertz_errors(h, p, pitch, force[3])
+    err = reference_solutions.hertz_errors(h, p, pitch, force[3])
     assert all(abs(v) < 1e-3 for v in err.values()), err
 
 
@@ -30,11 +29,11 @@ def test_pressure_ladder_example():
     # departs from Hertz by the sphere's non-paraboloid shape, bounded by
     # (a / R)^2 / 4 = 1.1e-2; Winkler and contact splats are far off, which is
     # what the ladder shows.
-    import runpy
     import pathlib
+    import runpy
     ex = runpy.run_path(str(pathlib.Path(__file__).parents[2] / "examples" / "pressure_ladder.py"))
     out = ex["ladder"](radius_m=0.02, force_n=0.5, steps=1500)
-    h = oracles.Hertz(load_n=0.5, radius_m=0.02, young_pa=E, poisson=NU)
+    h = reference_solutions.Hertz(load_n=0.5, radius_m=0.02, young_pa=E, poisson=NU)
     bound = (h.contact_radius_m / h.radius_m) ** 2 / 4
     assert all(abs(v) < bound for v in out["elastic"].values()), out
     assert abs(out["winkler"]["indentation"]) > 10 * abs(out["elastic"]["indentation"])

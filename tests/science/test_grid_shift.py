@@ -9,12 +9,14 @@ V / pitch that edges sharper than a cell put in the PC stress
 import mujoco
 import numpy as np
 import pytest
-
-from mjtouch import analysis, oracles, rollout, scenes
-from mjtouch.bench.configs import lattice_sites
-from mjtouch.sensor import SkinLayout
-
 from conftest import fast_tip, hertz_sphere_press
+
+from mjtouch import analysis
+from mjtouch.analysis import reference_solutions
+from mjtouch.bench.configs import lattice_sites
+from mjtouch.experiments import rollout
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 E, NU = 80e3, 0.48
 SPEED = 0.025
@@ -25,12 +27,12 @@ def test_grid_shift_sphere_pad_matches_hertz():
     # errors below 1e-3 there); the deposit widens each shifted cell's load
     # by half a cell, which moves the second-moment radius by ~(h/a)^2 / 6 =
     # 1.6e-4 and the peak by ~(h/a)^2 / 8
-    h = oracles.Hertz(load_n=0.5, radius_m=0.2, young_pa=E, poisson=NU)
+    h = reference_solutions.Hertz(load_n=0.5, radius_m=0.2, young_pa=E, poisson=NU)
     force, p, pitch = hertz_sphere_press(h, E, NU, grid_shift="true")
     n = p.shape[0]
     assert force[0] == pytest.approx(h.load_n, rel=1e-6)
     assert p.sum() * pitch**2 == pytest.approx(force[0], rel=1e-6)
-    err = oracles.hertz_errors(h, p, pitch, force[3])
+    err = reference_solutions.hertz_errors(h, p, pitch, force[3])
     assert all(abs(v) < 1e-3 for v in err.values()), err
     # symmetric about the pole like the load (the shifted grid's cells
     # straddle it): the centroid stays on it to well under a cell

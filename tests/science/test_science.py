@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from mjtouch import scenes, testing
+from mjtouch.analysis import testing
+from mjtouch.scene import scenes
 
 
 @pytest.mark.parametrize("period_m", [0.2e-3, 0.6e-3, 1.8e-3])

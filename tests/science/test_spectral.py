@@ -2,10 +2,11 @@
 
 import numpy as np
 import pytest
-
-from mjtouch import analysis, rollout, scenes
-
 from conftest import fast_tip
+
+from mjtouch import analysis
+from mjtouch.experiments import rollout
+from mjtouch.scene import scenes
 
 
 @pytest.mark.parametrize("speed", [0.02, 0.04])

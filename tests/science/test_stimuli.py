@@ -7,7 +7,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtouch import analysis, scenes, stimuli
+from mjtouch import analysis
+from mjtouch.experiments import stimuli
+from mjtouch.scene import scenes
 
 DT = 1e-4
 
@@ -125,7 +127,7 @@ def _replayed_force(spec, press):
     """Replay the press controls in the skinned model; the skin's own normal
     force (its force block) per step."""
     m = spec.compile()
-    from mjtouch.sensor import SkinLayout
+    from mjtouch.scene.sensor import SkinLayout
     layout = SkinLayout.from_model(m)
     d = mujoco.MjData(m)
     s0 = np.empty(mujoco.mj_stateSize(m, stimuli._FULL))
@@ -139,7 +141,7 @@ def _replayed_force(spec, press):
 def test_force_control_tracks_a_50ms_ramp_within_5_percent():
     # preload 0.05 N, then a 50 ms ramp to 0.5 N and a hold (issue 14: the
     # open-loop motor reached 76% at the ramp's end)
-    spec = stimuli.plate_spec(timestep_s=DT, skin={"outputs": "force", "nx": "16"})
+    spec = stimuli.vibrating_plate_spec(timestep_s=DT, skin={"outputs": "force", "nx": "16"})
     t = np.arange(int(0.2 / DT)) * DT
     target = np.interp(t, [0, 0.1, 0.15, 1], [0.05, 0.05, 0.5, 0.5])
     press = stimuli.press_force_controls(spec, target)
@@ -154,7 +156,7 @@ def test_force_control_tracks_a_50ms_ramp_within_5_percent():
 
 @pytest.mark.parametrize("force_n", [0.01, 1.0])
 def test_force_control_lands_the_pad_within_50ms(force_n):
-    spec = stimuli.plate_spec(timestep_s=DT, skin={"outputs": "force", "nx": "16"})
+    spec = stimuli.vibrating_plate_spec(timestep_s=DT, skin={"outputs": "force", "nx": "16"})
     press = stimuli.press_force_controls(spec, np.full(int(0.2 / DT), force_n))
     force = _replayed_force(spec, press)
     # landed: from then on within 5% of the target for the rest of the 0.2 s
@@ -184,8 +186,8 @@ def test_force_control_lands_the_pad_within_50ms(force_n):
     (lambda: stimuli.ProbeScene(stimuli.Probe(x_m=0.01)), r"outside the pad's central half"),
     (lambda: stimuli.ProbeScene(preindent_m=4e-3), r"preindent_m = 0.004 is out of range"),
     (lambda: stimuli.PlateScene(press_n=0), r"press_n = 0 is out of range; valid range \(0, 20\]"),
-    (lambda: stimuli.press_force_controls(stimuli.plate_spec(), [-1.0]), r"valid range \[0, 100\]"),
-    (lambda: stimuli.press_force_controls(stimuli.plate_spec(), [0.1], counter="wall"),
+    (lambda: stimuli.press_force_controls(stimuli.vibrating_plate_spec(), [-1.0]), r"valid range \[0, 100\]"),
+    (lambda: stimuli.press_force_controls(stimuli.vibrating_plate_spec(), [0.1], counter="wall"),
      r"no geom 'wall'"),
 ])
 def test_bad_arguments_are_named_with_their_range(make, match):

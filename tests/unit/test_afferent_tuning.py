@@ -46,7 +46,8 @@ def sine_spikes(cls, f, amp, cfg, stream=0):
 def threshold(cls, f, cfg, per_cycle, stream=0, lo=1e-3, hi=1e7, iters=22):
     """Smallest amplitude (Pa) with >= per_cycle x 20 spikes (per_cycle 1/20:
     any spike)."""
-    ok = lambda a: sine_spikes(cls, f, a, cfg, stream) >= max(1, round(per_cycle * 20))
+    def ok(a):
+        return sine_spikes(cls, f, a, cfg, stream) >= max(1, round(per_cycle * 20))
     if not ok(hi):
         return math.inf
     for _ in range(iters):  # (1e10)^(2^-22): 0.5% relative
@@ -249,7 +250,7 @@ SA1_RATE_1P5MM_HZ = (0.8 * 50, 1.2 * 89)
 
 @pytest.fixture(scope="module")
 def pin_sa1_rates():
-    from mjtouch import stimuli
+    from mjtouch.experiments import stimuli
     scene = stimuli.ProbeScene(stimuli.Probe("pin", radius_m=0.5e-3), preindent_m=0.0,
                                settle_s=0.0, timestep_s=1e-4)
     hold_s, ramp_s = 0.3, 0.05

@@ -10,7 +10,8 @@ import sys
 import numpy as np
 import pytest
 
-from mjtouch import analysis, figures
+from mjtouch import analysis
+from mjtouch.analysis import figures
 
 
 def bin_times(times_s, dt_s, nstep, t0_s=0.0):

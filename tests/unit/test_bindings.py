@@ -10,9 +10,9 @@ import sys
 import mujoco
 import numpy as np
 import pytest
+from conftest import pad_scene
 from numpy.testing import assert_array_equal
 
-from conftest import pad_scene
 from mjtouch import _loader, core
 from mjtouch.core import _core
 

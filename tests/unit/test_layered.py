@@ -1,6 +1,6 @@
 """Stage 3b: the layered elastic skin (plugin/core/substrate/layered.*) and the stress
 stage (plugin/core/stress/stress_field.*), against an independent numpy/scipy
-computation (tests/unit/layered_oracle.py: Navier equations with Lame constants,
+computation (mjtouch.analysis.reference_solutions.layered: Navier equations with Lame constants,
 complex arithmetic, direct inverse 2D Fourier integration), closed forms and
 physical laws; and its wiring into the plugin (attributes, errors, outputs)."""
 
@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 import os
-import pathlib
 import shutil
 import subprocess
 import sys
@@ -16,12 +15,12 @@ import sys
 import mujoco
 import numpy as np
 import pytest
+from conftest import REPO, pad_scene
 from numpy.testing import assert_allclose
 
-import layered_oracle as oracle
-from conftest import REPO, pad_scene
 from mjtouch import core
-from mjtouch.sensor import SkinLayout
+from mjtouch.analysis.reference_solutions import layered as oracle
+from mjtouch.scene.sensor import SkinLayout
 
 XX, YY, ZZ, XY, XZ, YZ = range(6)
 SHAO = [(0.7e-3, 80e3, 0.48), (0.8e-3, 50e3, 0.48), (2.5e-3, 24e3, 0.4)]

@@ -1,10 +1,10 @@
-"""textures.from_mesh: a mesh's top surface as exact cell means (issue 16)."""
+"""meshes.from_mesh: a mesh's top surface as exact cell means (issue 16)."""
 
 import numpy as np
 import pytest
 import trimesh
 
-from mjtouch import meshes, textures
+from mjtouch.scene import meshes
 
 D, W_PLATEAU, H = 1e-3, 0.5e-3, 1e-4  # a square-wave grating
 
@@ -37,7 +37,7 @@ def grating_stl(tmp_path_factory):
 
 def test_stl_grating_heights_are_the_profiles_cell_means(grating_stl):
     r = 2e-5
-    mt = textures.from_mesh(grating_stl, resolution_m=r)
+    mt = meshes.from_mesh(grating_stl, resolution_m=r)
     assert mt.is_profile  # no variation along y: two rows, as the generated gratings
     x = np.linspace(-mt.length_m / 2, mt.length_m / 2, mt.heights.shape[1])
     inner = np.abs(x) < 5.5e-3  # the plateaux the mesh holds (|k| <= 5)
@@ -84,7 +84,7 @@ def test_placement_scale_up_axis_and_rotation(grating_stl, tmp_path):
 
 
 def test_mesh_texture_in_a_scene_compiles_with_its_heights(grating_stl):
-    from mjtouch import scenes
+    from mjtouch.scene import scenes
     mt = meshes.from_mesh(grating_stl, resolution_m=4e-5, width_m=0.002)
     tex = mt.texture(width_m=0.02)
     model = scenes.plate_spec(tex).compile()

@@ -8,8 +8,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from mjtouch import core, scenes
-from mjtouch.sensor import SkinLayout
+from mjtouch import core
+from mjtouch.scene import scenes
+from mjtouch.scene.sensor import SkinLayout
 
 # Stated tolerance of the folded path (issue 13): relative RMS over every
 # site and component. Folding rounds each table entry once more in float
@@ -286,6 +287,7 @@ def test_bench_baseline_build_in_one_process(sliding_contact, engine, tmp_path, 
     import importlib.util
     import pathlib
     import shutil
+
     from mjtouch import _core
     path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_kernel.py"
     spec = importlib.util.spec_from_file_location("bench_kernel", path)

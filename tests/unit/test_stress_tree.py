@@ -10,12 +10,11 @@ random texture, full-slip shear)."""
 import mujoco
 import numpy as np
 import pytest
+from conftest import pad_scene
 from numpy.testing import assert_allclose
 
 from mjtouch import core
-from mjtouch.sensor import SkinLayout
-
-from conftest import pad_scene
+from mjtouch.scene.sensor import SkinLayout
 
 N, H = 96, 1e-4
 DEPTHS = [0.75e-3, 2e-3]

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from mjtouch import _core, core, textures
+from mjtouch import _core, core
+from mjtouch.scene import textures
 
 N, PITCH = 48, 1e-4
 SEMI = (8e-3, 7e-3, 7e-3)

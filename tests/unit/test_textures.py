@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from mjtouch import core, scenes, textures
+from mjtouch import core
+from mjtouch.scene import scenes, textures
 
 
 def test_hfield_orientation_matches_mujoco_ray():

@@ -16,13 +16,9 @@ import math
 import numpy as np
 import scipy.signal
 
+from mjtouch._validate import positive_number
+
 CLASSES = ("SA1", "RA", "PC")
-
-
-def _check_dt(dt_s: float, name: str = "dt_s") -> float:
-    if not (isinstance(dt_s, (int, float, np.floating)) and math.isfinite(dt_s) and dt_s > 0):
-        raise ValueError(f"{name} = {dt_s!r} must be a positive finite number of seconds")
-    return float(dt_s)
 
 
 def _counts(spikes, ndim_max: int = 2) -> np.ndarray:
@@ -49,7 +45,7 @@ def rates_hz(spikes: np.ndarray, dt_s: float, classes: np.ndarray) -> dict[str, 
 def receptor_rates_hz(spikes: np.ndarray, dt_s: float) -> np.ndarray:
     """Mean firing rate (Hz) of each receptor over the given steps: spike
     count / (nstep * dt). spikes: nstep (one receptor) or nstep x nrec."""
-    dt_s = _check_dt(dt_s)
+    dt_s = positive_number("dt_s", dt_s, "seconds")
     a = _counts(spikes)
     if a.shape[0] == 0:
         raise ValueError("spikes has no steps: a rate needs at least one")
@@ -59,7 +55,7 @@ def receptor_rates_hz(spikes: np.ndarray, dt_s: float) -> np.ndarray:
 def spike_times(counts: np.ndarray, dt_s: float, t0_s: float = 0.0) -> np.ndarray:
     """Spike times (s) of one receptor from its counts per step: each spike
     at the middle of its step, t0_s + (k - 0.5) dt, repeated by the count."""
-    dt_s = _check_dt(dt_s)
+    dt_s = positive_number("dt_s", dt_s, "seconds")
     c = _counts(counts, ndim_max=1).astype(np.int64)
     k = np.repeat(np.arange(c.size), c)
     return t0_s + (k - 0.5) * dt_s
@@ -81,8 +77,8 @@ def psth(spikes: np.ndarray, dt_s: float, bin_s: float,
     Returns (bin start times in s, rate in Hz); a trailing partial bin is
     dropped. Bin start k * bin_s + t0_s - dt_s: row 0's step starts dt before
     t0_s (see the module docstring)."""
-    dt_s = _check_dt(dt_s)
-    bin_s = _check_dt(bin_s, "bin_s")
+    dt_s = positive_number("dt_s", dt_s, "seconds")
+    bin_s = positive_number("bin_s", bin_s, "seconds")
     a = np.asarray(spikes)
     if a.ndim == 3:  # trials x steps x receptors -> steps x (trials * receptors)
         a = np.moveaxis(a, 0, 1).reshape(a.shape[1], -1)
@@ -110,8 +106,8 @@ def smoothed_rate(spikes: np.ndarray, dt_s: float, tau_s: float) -> np.ndarray:
     (attribute ``rate_tau``) from the counts alone. The plugin weights each
     spike at its exact time in the step, so the two differ per spike by a
     factor within exp(+-dt / (2 tau))."""
-    dt_s = _check_dt(dt_s)
-    tau_s = _check_dt(tau_s, "tau_s")
+    dt_s = positive_number("dt_s", dt_s, "seconds")
+    tau_s = positive_number("tau_s", tau_s, "seconds")
     a = _counts(spikes)
     decay = math.exp(-dt_s / tau_s)
     gain = math.exp(-0.5 * dt_s / tau_s) / tau_s
@@ -146,7 +142,7 @@ def vector_strength(times_s: np.ndarray, freq_hz: float,
     vs = |sum w_j exp(i 2 pi f t_j)| / sum w_j, with the Rayleigh statistic
     Z = n vs^2 and its p-value. weights (spike counts at each time) default
     to 1; n is their sum."""
-    freq_hz = _check_dt(freq_hz, "freq_hz")
+    freq_hz = positive_number("freq_hz", freq_hz, "Hz")
     t = np.asarray(times_s, dtype=np.float64).ravel()
     w = np.ones_like(t) if weights is None else np.asarray(weights, dtype=np.float64).ravel()
     if w.shape != t.shape:
@@ -171,7 +167,7 @@ def vector_strength_counts(counts: np.ndarray, dt_s: float, freq_hz: float,
     to one phase reads vs >= cos(pi f dt) at worst."""
     c = _counts(counts, ndim_max=1)
     k = np.nonzero(c)[0]
-    return vector_strength(t0_s + (k - 0.5) * _check_dt(dt_s), freq_hz, c[k])
+    return vector_strength(t0_s + (k - 0.5) * positive_number("dt_s", dt_s, "seconds"), freq_hz, c[k])
 
 
 def spike_spectrum(spikes: np.ndarray, dt_s: float,
@@ -182,12 +178,12 @@ def spike_spectrum(spikes: np.ndarray, dt_s: float,
     removed per segment, one-sided. Units Hz^2 / Hz = Hz: a Poisson train of
     rate lam reads 2 lam at every f > 0; a train locked to f0 shows lines at
     f0 and its harmonics."""
-    dt_s = _check_dt(dt_s)
+    dt_s = positive_number("dt_s", dt_s, "seconds")
     a = _counts(spikes)
     if a.ndim == 1:
         a = a[:, None]
     n = a.shape[0]
-    nper = n if segment_s is None else int(round(_check_dt(segment_s, "segment_s") / dt_s))
+    nper = n if segment_s is None else int(round(positive_number("segment_s", segment_s, "seconds") / dt_s))
     if not 8 <= nper <= n:
         raise ValueError(f"segment_s must span 8 to {n} steps (the train's length); "
                          f"got {nper} steps")
@@ -251,8 +247,8 @@ def spikes_per_cycle(counts: np.ndarray, dt_s: float, freq_hz: float, t0_s: floa
     spike at its step middle. Entrainment 1:1 means every entry is 1; put
     the origin half a period from the spikes' mean phase (vector_strength)
     so that +-dt/2 timing never moves a spike across a cycle boundary."""
-    dt_s = _check_dt(dt_s)
-    freq_hz = _check_dt(freq_hz, "freq_hz")
+    dt_s = positive_number("dt_s", dt_s, "seconds")
+    freq_hz = positive_number("freq_hz", freq_hz, "Hz")
     c = _counts(counts, ndim_max=1)
     origin = t0_s if origin_s is None else float(origin_s)
     t = t0_s + (np.arange(c.size) - 0.5) * dt_s

@@ -1,6 +1,10 @@
-"""Independent oracle for the layered elastic kernel (plugin/core/substrate/layered.*).
+"""Stress in a layered elastic skin under surface tractions: an oracle for the
+layered kernel (plugin/core/substrate/layered.*), computed independently of it.
 
-A second computation of the same problem, written separately from the C++:
+The problem is Burmister's layered system (D. M. Burmister, J. Appl. Phys.
+16:89, 1945) in the Fourier-transform form of Johnson, *Contact Mechanics*
+(1985, sec. 3.3 for the homogeneous limits it is checked against). A second
+computation of what the C++ does, written separately:
 
 * per wavenumber k, the Navier equations in displacement form (Lame lambda,
   mu; so nu < 0.5 only) with the general solution
@@ -20,8 +24,8 @@ pushes into the skin, shear tractions along +x / +y; components in Voigt
 order (xx, yy, zz, xy, xz, yz). Layers are (thickness_m, young_pa, poisson);
 base is None for a rigid base (bone) or (young_pa, poisson) for a half-space.
 
-Run `python tests/unit/layered_oracle.py` for the self-checks, or
-`python tests/unit/layered_oracle.py DUMP.json` to compare with values written by
+Run `python -m mjtouch.analysis.reference_solutions.layered` for the
+self-checks, or add `DUMP.json` to compare with values written by
 `test_layered --dump DUMP.json` (the C++ standalone test).
 """
 
@@ -172,7 +176,7 @@ def solve(k, layers, base):
 
 
 def _locate(z, layers, base, upper):
-    tops = np.concatenate([[0.0], np.cumsum([l[0] for l in layers])])
+    tops = np.concatenate([[0.0], np.cumsum([layer[0] for layer in layers])])
     tol = 1e-9 * tops[-1]
     for j in range(len(layers)):
         if abs(z - tops[j + 1]) <= tol:
@@ -371,7 +375,7 @@ def compare_dump(path):
         dump = json.load(f)
     worst = 0.0
     for case in dump["cases"]:
-        layers = [tuple(l) for l in case["layers"]]
+        layers = [tuple(layer) for layer in case["layers"]]
         base = None if case["base"] is None else tuple(case["base"])
         for pt in case["disc"]:
             ref = disc_stress(pt["load"], pt["x"], pt["y"], pt["z"],
