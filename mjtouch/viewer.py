@@ -4,9 +4,9 @@ Opens MuJoCo's viewer (``mujoco.viewer.launch_passive``) on a sliding scene:
 the fingertip scans back and forth over a plate. The skin plugin draws the
 live pressure heatmap and flashes receptor sites when they spike (its own
 visualize callback, so plain ``python -m mujoco.viewer`` shows those too);
-this module adds live figures (a spike raster of a few receptors per class
-and the receptor-stress spectrum with V/D and V/lambda marked), a status
-line, and keys:
+this module adds live figures (the heatmap's colour scale in kPa, a spike
+raster of a few receptors per class and the receptor-stress spectrum with V/D
+and V/lambda marked), a status line, and keys:
 
 | key | action |
 |---|---|
@@ -50,9 +50,32 @@ TEXTURES: tuple[tuple[str, scenes.Texture], ...] = (
     ("flat", scenes.Texture(kind="flat")),
 )
 CLASS_RGB = {"SA1": (0.15, 0.45, 1.0), "RA": (0.1, 0.9, 0.25), "PC": (0.95, 0.2, 0.95)}
+# The skin's heatmap (plugin/mujoco/visualize.cc): pressure averaged over
+# tiles of at most this many per side, coloured by heat_rgb(tile / peak tile).
+HEATMAP_TILES_PER_SIDE = 32
+SCALE_STEPS = 24  # colour bands of the scale figure
 FORCE_RANGE_N = (0.1, 2.0)
 SPEED_RANGE_M_S = (0.0, 0.1)
 SCAN_HALF_M = 0.025  # the finger turns round this far from the plate's centre
+
+
+def heat_rgb(u: np.ndarray | float) -> np.ndarray:
+    """The heatmap's colour at pressure u x the frame's peak (visualize.cc
+    HeatColor): dark red, red, orange, yellow, near white."""
+    v = 0.2 + 0.8 * np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+    return np.stack([np.clip(3 * v, 0, 1), np.clip(3 * v - 1, 0, 1), np.clip(3 * v - 2, 0, 1)],
+                    axis=-1)
+
+
+def heatmap_peak_pa(pressure: np.ndarray) -> float:
+    """The peak the heatmap is scaled to: the largest tile mean of the nx x nx
+    pressure field (Pa), tiled as the skin draws it."""
+    n = pressure.shape[0]
+    b = -(-n // HEATMAP_TILES_PER_SIDE)
+    nt = -(-n // b)
+    padded = np.full((nt * b, nt * b), np.nan)
+    padded[:n, :n] = pressure
+    return float(np.nanmax(np.nanmean(padded.reshape(nt, b, nt, b), axis=(1, 3))))
 
 
 @dataclasses.dataclass
@@ -106,7 +129,9 @@ class SlideSession:
         s = self.settings
         if self.scene_path is None:
             # interactive preset: exact (folded) stress, as cheap as the tree
-            tip = scenes.Fingertip(nx=s.nx, pitch_m=s.pitch_m, ridges=s.ridges)
+            # the pressure output gives the colour scale its units
+            tip = scenes.Fingertip(nx=s.nx, pitch_m=s.pitch_m, ridges=s.ridges,
+                                   skin={"outputs": "spikes stress force pressure"})
             texture = dataclasses.replace(TEXTURES[s.texture][1])
             protocol = scenes.Protocol(force_n=s.force_n, speed_m_s=s.speed_m_s,
                                        timestep_s=s.timestep_s)
@@ -255,7 +280,7 @@ class SlideSession:
         colours), a tick per spike over the window."""
         fig = fig or mujoco.MjvFigure()
         mujoco.mjv_defaultFigure(fig)
-        fig.title = "spike raster (SA1 blue, RA green, PC magenta)"
+        fig.title = "spike raster"
         fig.xlabel = "time (s)"
         fig.flg_extend = 0
         fig.gridsize = [6, 2]
@@ -265,7 +290,8 @@ class SlideSession:
         fig.figurergba = fig.panergba = (0.0, 0.0, 0.0, 0.85)
         t, spikes, _ = self.window()
         t0 = t[0] if len(t) else 0.0
-        fig.range = [[0.0, self.window_s], [-0.5, len(self._raster_rows) + 0.5]]
+        # head room above the rows for the legend
+        fig.range = [[0.0, self.window_s], [-0.5, len(self._raster_rows) + 7.5]]
         maxpnt = (mujoco.mjMAXLINEPNT - 1) // 3
         for line, r in enumerate(self._raster_rows[:mujoco.mjMAXLINE]):
             ts = (t[spikes[:, r] > 0] - t0)[-maxpnt:]
@@ -282,7 +308,45 @@ class SlideSession:
                 pts[0] = [0.0, y]
             fig.linedata[line, :2 * len(pts)] = pts.ravel()
             fig.linepnt[line] = len(pts)
-            fig.linergb[line] = CLASS_RGB[self.layout.classes[r]]
+            cls = self.layout.classes[r]
+            fig.linergb[line] = CLASS_RGB[cls]
+            # the legend names each class once, on its first row
+            first = line == 0 or self.layout.classes[self._raster_rows[line - 1]] != cls
+            fig.linename[line] = cls if first else ""
+        fig.flg_legend = 1
+        return fig
+
+    def peak_pressure_pa(self) -> float | None:
+        """The pressure at the top of the heatmap's colour scale (Pa), or None
+        if the skin does not output its pressure field."""
+        lay = self.layout
+        if "pressure" not in lay.blocks:
+            return None
+        p = lay.block(self.data.sensordata, "pressure").reshape(lay.nx, lay.nx)
+        return heatmap_peak_pa(p)
+
+    def scale_figure(self, fig: mujoco.MjvFigure | None = None) -> mujoco.MjvFigure:
+        """The heatmap's colour scale: bands of the heat ramp along the x axis,
+        from 0 to the frame's peak tile pressure in kPa (or to 1 = the peak
+        when the pressure output is off). Tiles under 2% of the peak are not
+        drawn."""
+        fig = fig or mujoco.MjvFigure()
+        mujoco.mjv_defaultFigure(fig)
+        peak = self.peak_pressure_pa()
+        top = peak / 1e3 if peak else 1.0
+        fig.title = "pressure (kPa)" if peak else "pressure / frame peak"
+        fig.flg_extend = 0
+        fig.flg_ticklabel = [1, 0]
+        fig.gridsize = [5, 2]
+        fig.xformat = "%.0f" if top >= 10 else "%.1f"
+        fig.figurergba = fig.panergba = (0.0, 0.0, 0.0, 0.85)
+        fig.range = [[0.0, top], [0.0, 1.0]]
+        fig.linewidth = 24.0
+        for k in range(SCALE_STEPS):
+            x0, x1 = top * k / SCALE_STEPS, top * (k + 1) / SCALE_STEPS
+            fig.linedata[k, :4] = [x0, 0.5, x1, 0.5]
+            fig.linepnt[k] = 2
+            fig.linergb[k] = heat_rgb((k + 0.5) / SCALE_STEPS)
         return fig
 
     def spectrum_figure(self, fig: mujoco.MjvFigure | None = None,
@@ -335,7 +399,7 @@ class SlideSession:
         cam = mujoco.MjvCamera()
         cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
         cam.trackbodyid = max(0, self.model.geom_bodyid[self.layout_pad_geom()])
-        cam.distance, cam.elevation, cam.azimuth = 0.05, -40.0, 120.0
+        cam.distance, cam.elevation, cam.azimuth = 0.04, -50.0, 120.0
         return cam
 
     def layout_pad_geom(self) -> int:
@@ -363,11 +427,16 @@ class SlideSession:
         full = mujoco.MjrRect(0, 0, width, height)
         mujoco.mjr_render(full, self._scn, self._con)
         if figures:
-            fw, fh = width // 3, height // 2 - 20
-            mujoco.mjr_figure(mujoco.MjrRect(width - fw, fh + 20, fw, fh), self.raster_figure(),
+            # inside the frame with a margin, so titles and labels are not cut
+            margin = 8
+            fw, fh = width // 3 - margin, height // 2 - 20 - margin
+            x = width - fw - margin
+            mujoco.mjr_figure(mujoco.MjrRect(x, fh + 20 + margin, fw, fh), self.raster_figure(),
                               self._con)
-            mujoco.mjr_figure(mujoco.MjrRect(width - fw, 20, fw, fh), self.spectrum_figure(),
-                              self._con)
+            mujoco.mjr_figure(mujoco.MjrRect(x, 20, fw, fh), self.spectrum_figure(), self._con)
+            sw, sh = width // 3, 90
+            mujoco.mjr_figure(mujoco.MjrRect(margin, height - sh - margin, sw, sh),
+                              self.scale_figure(), self._con)
             mujoco.mjr_overlay(mujoco.mjtFont.mjFONT_NORMAL, mujoco.mjtGridPos.mjGRID_BOTTOMLEFT,
                                full, self.status(), "", self._con)
         rgb = np.empty((height, width, 3), np.uint8)
@@ -392,7 +461,7 @@ def launch(scene: str | None = None, settings: ViewSettings | None = None) -> No
     keys: queue.Queue[int] = queue.Queue()
     handle = mujoco.viewer.launch_passive(session.model, session.data, key_callback=keys.put)
     _set_camera(handle.cam, session)
-    raster, spectrum = mujoco.MjvFigure(), mujoco.MjvFigure()
+    raster, spectrum, scale = mujoco.MjvFigure(), mujoco.MjvFigure(), mujoco.MjvFigure()
     last_figure = 0.0
     frame_s = 1 / 60
     try:
@@ -419,7 +488,9 @@ def launch(scene: str | None = None, settings: ViewSettings | None = None) -> No
                         (mujoco.MjrRect(vp.left + vp.width - fw, vp.bottom + fh, fw, fh),
                          session.raster_figure(raster)),
                         (mujoco.MjrRect(vp.left + vp.width - fw, vp.bottom, fw, fh),
-                         session.spectrum_figure(spectrum))])
+                         session.spectrum_figure(spectrum)),
+                        (mujoco.MjrRect(vp.left + vp.width - fw, vp.bottom + 2 * fh, fw, fh // 2),
+                         session.scale_figure(scale))])
                 handle.set_texts([(None, mujoco.mjtGridPos.mjGRID_BOTTOMLEFT, session.status(),
                                    ""),
                                   (None, mujoco.mjtGridPos.mjGRID_TOPRIGHT, KEY_HELP, "")])

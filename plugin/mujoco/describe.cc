@@ -1,5 +1,7 @@
-// Describes an mjtouch.skin instance of a compiled model as JSON (output
-// blocks, receptor sites), so Python reads sensordata by name.
+// Describes an mjtouch.skin instance of a compiled model: as a struct for C
+// hosts (mjtouch_layout, declared in mjtouch/include/mjtouch.h) and as JSON
+// with every receptor's site for Python (mjtouch_describe).
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <sstream>
@@ -8,6 +10,8 @@
 #include <mujoco/mujoco.h>
 
 #include "skin_plugin.h"
+// The installed public header, shipped in the Python package.
+#include "../../mjtouch/include/mjtouch.h"
 
 // The C interface mjtouch._core reads live instances through (dlsym on this
 // library); bump on any change of these signatures or their meaning, with
@@ -17,9 +21,81 @@ extern "C" __attribute__((visibility("default"))) int mjtouch_instance_abi_versi
   return kInstanceAbiVersion;
 }
 
-extern "C" __attribute__((visibility("default"))) int mjtouch_describe(const mjModel* m,
-                                                                      int instance, char* buf,
-                                                                      int len) {
+static_assert(MJTOUCH_NUM_CLASSES == mjtouch::kNumClasses, "mjtouch.h: classes");
+static_assert(MJTOUCH_NUM_BLOCKS == mjtouch::kNumOutputs, "mjtouch.h: output blocks");
+static_assert(MJTOUCH_BLOCK_PRESSURE == mjtouch::kOutPressure && MJTOUCH_BLOCK_RATE ==
+              mjtouch::kOutRate, "mjtouch.h: output block order");
+
+#define MJTOUCH_EXPORT extern "C" __attribute__((visibility("default")))
+
+MJTOUCH_EXPORT int mjtouch_c_api_version(void) { return MJTOUCH_C_API_VERSION; }
+
+MJTOUCH_EXPORT const char* mjtouch_class_name(int cls) {
+  if (cls < 0 || cls >= mjtouch::kNumClasses) return nullptr;
+  return mjtouch::ClassName(static_cast<mjtouch::ReceptorClass>(cls));
+}
+
+MJTOUCH_EXPORT const char* mjtouch_block_name(int block) {
+  if (block < 0 || block >= mjtouch::kNumOutputs) return nullptr;
+  return mjtouch::OutputName(block);
+}
+
+MJTOUCH_EXPORT int mjtouch_layout(const mjModel* m, int instance, mjtouch_layout_t* out,
+                                  char* error, int error_len) {
+  using namespace mjtouch;
+  auto fail = [&](const std::string& message) {
+    if (error && error_len > 0) std::snprintf(error, error_len, "%s", message.c_str());
+    return -1;
+  };
+  if (!m || !out) return fail("mjtouch_layout: model and out must not be NULL");
+  if (instance < 0 || instance >= m->nplugin) {
+    return fail("mjtouch_layout: instance " + std::to_string(instance) +
+                " is out of range; valid range [0, " + std::to_string(m->nplugin) + ")");
+  }
+  SkinConfig cfg;
+  int sensor, pad;
+  std::string read_error;
+  if (!SkinPlugin::ReadConfig(m, instance, &cfg, &sensor, &pad, &read_error)) {
+    return fail(read_error);
+  }
+  const auto sites = SkinModel::PlaceReceptors(cfg);
+  mjtouch_layout_t l = {};
+  l.api_version = MJTOUCH_C_API_VERSION;
+  l.sensor_id = sensor;
+  l.sensor_adr = m->sensor_adr[sensor];
+  l.sensor_dim = m->sensor_dim[sensor];
+  l.nreceptor = static_cast<int>(sites.size());
+  for (int c = 0; c < kNumClasses; ++c) l.class_start[c] = -1;
+  for (int r = 0; r < l.nreceptor; ++r) {
+    const int c = static_cast<int>(sites[r].cls);
+    // Receptors come in runs by class; a class met again after another would
+    // make class_start wrong.
+    if (l.class_start[c] >= 0 && l.class_start[c] + l.class_count[c] != r) {
+      return fail("mjtouch_layout: receptors of class " + std::string(ClassName(sites[r].cls)) +
+                  " are not contiguous");
+    }
+    if (l.class_start[c] < 0) l.class_start[c] = r;
+    ++l.class_count[c];
+  }
+  // An empty class starts where the classes after it would.
+  for (int c = kNumClasses - 1, next = l.nreceptor; c >= 0; --c) {
+    if (l.class_start[c] < 0) l.class_start[c] = next;
+    next = l.class_start[c];
+  }
+  int adr = l.sensor_adr;
+  for (int b = 0; b < kNumOutputs; ++b) {
+    l.block_size[b] = SkinModel::BlockSize(cfg, l.nreceptor, b);
+    l.block_adr[b] = l.block_size[b] ? adr : -1;
+    adr += l.block_size[b];
+  }
+  l.nx = cfg.grid.n;
+  l.pitch_m = cfg.grid.pitch_m;
+  l.oversample = cfg.oversample;
+  *out = l;
+  return 0;
+}
+
+MJTOUCH_EXPORT int mjtouch_describe(const mjModel* m, int instance, char* buf, int len) {
   using namespace mjtouch;
   SkinConfig cfg;
   int sensor, pad;

@@ -18,8 +18,8 @@ constexpr double kMinRelPressure = 0.02;   // tiles under 2% of the peak are not
 constexpr double kFlashS = 0.03;           // s a spike stays lit (~2 frames at 60 Hz)
 constexpr double kTileHalfThickM = 2e-5;   // m
 constexpr double kAboveGapM = 2e-3;        // m: the `above` copy floats this far over the pad
-constexpr double kLitRadiusM = 2.5e-4;     // m, a receptor that just fired
-constexpr double kIdleRadiusM = 8e-5;      // m, a quiet receptor site
+constexpr double kLitRadiusM = 1.2e-4;     // m, a receptor that just fired
+constexpr double kIdleRadiusM = 4e-5;      // m, a quiet receptor site
 
 // Heat ramp (low -> high): dark red, red, orange, yellow, near white.
 void HeatColor(double u, float rgba[4]) {

@@ -27,7 +27,7 @@ import numpy as np
 FLASH_S = 0.03  # visualize.cc kFlashS
 MIN_REL_PRESSURE = 0.02  # visualize.cc kMinRelPressure
 MAX_TILES_PER_SIDE = 32  # visualize.cc kMaxTilesPerSide
-LIT_RADIUS_M, IDLE_RADIUS_M = 2.5e-4, 8e-5
+LIT_RADIUS_M, IDLE_RADIUS_M = 1.2e-4, 4e-5  # visualize.cc: small, so the heatmap reads
 CLASS_RGBA = {"SA1": (0.15, 0.45, 1.0, 1.0), "RA": (0.1, 0.9, 0.25, 1.0),
               "PC": (0.95, 0.2, 0.95, 1.0)}
 # Frames: half a grating period apart at V/D = 25 Hz, so the pattern moves.
@@ -91,6 +91,15 @@ def _worker(out: pathlib.Path) -> None:
         Image.fromarray(arrays[f"with_{k}"]).save(out / f"slide_{t:.2f}s.png")
     Image.fromarray(arrays["without_0"]).save(out / "slide_no_skin_drawing.png")
     arrays["session"] = session.render(960, 600)
+    # the colour scale's top against the tile means of the pressure output,
+    # tiled here as visualize.cc does (independently of viewer.py's helper)
+    lay = session.layout
+    p = lay.block(session.data.sensordata, "pressure").reshape(lay.nx, lay.nx)
+    b = -(-lay.nx // MAX_TILES_PER_SIDE)
+    tiles = [p[j:j + b, i:i + b].mean() for j in range(0, lay.nx, b)
+             for i in range(0, lay.nx, b)]
+    report["peak_tile_kpa"] = float(max(tiles)) / 1e3
+    report["scale_top_kpa"] = float(session.scale_figure().range[0][1])
     Image.fromarray(arrays["session"]).save(out / "viewer_session.png")
     report["expected_hz"] = session.expected_hz()
     session.close()
@@ -182,7 +191,7 @@ def test_rendered_frames_show_heatmap_and_spikes_over_the_pad(rendered):
         # the heatmap: a 9.6 mm square 5 cm from a 640 x 480 camera covers
         # ~100 x 60 pixels, the contact (~5 mm across) a good part of it
         assert counts["heat"] > 500, counts
-        # spike markers: lit spheres of 0.5 mm, a few pixels each; SA1 and
+        # spike markers: lit spheres of 0.24 mm, a few pixels each; SA1 and
         # PC fire steadily while sliding (RA: see the report on RA)
         assert counts["SA1"] > 10 and counts["PC"] > 3, counts
         # over the pad: the drawing's centre is within the pad's columns
@@ -218,6 +227,28 @@ def test_rendered_viewer_frame_has_raster_spectrum_and_marks(rendered):
     vl_mark = (g > 200) & (r < 90) & (b > 70) & (b < 140)  # V/lambda line, rgb (.2, 1, .4)
     assert vd_mark.sum() > 50 and vl_mark.sum() > 50
     assert report["expected_hz"]["V/D"] == pytest.approx(0.025 / 1e-3)
+
+
+def test_rendered_viewer_frame_has_a_colour_scale(rendered):
+    """Top left of the viewer frame: the heatmap's scale, bands of the heat
+    ramp from dark red (0) to near white (the peak), left to right."""
+    frames, report, _ = rendered
+    img = frames["session"].astype(int)
+    h, w, _ = img.shape
+    corner = img[: h // 5, : w // 3]
+    ramp = np.array([heat_color(u)[:3] * 255 for u in np.linspace(0, 1, 9)])
+    # a row of the bar: the row whose pixels match the most ramp colours
+    near = np.abs(corner[:, :, None, :] - ramp[None, None]).max(axis=3) < 40
+    row = int(np.argmax(near.any(axis=2).sum(axis=1)))
+    matched = np.nonzero(near[row].any(axis=1))[0]
+    assert len(matched) > 0.6 * (w // 3 - 20), (row, len(matched))
+    # along the bar the colour follows the ramp: brightness rises left to right
+    bright = corner[row, matched].sum(axis=1)[2:-2]  # the bar's anti-aliased ends left out
+    assert bright[: len(bright) // 4].mean() + 150 < bright[-len(bright) // 4:].mean()
+    assert np.all(np.diff(bright) >= 0), bright  # band by band, never darker
+    # MjvFigure.range is float32
+    assert report["scale_top_kpa"] == pytest.approx(report["peak_tile_kpa"], rel=1e-6)
+    assert report["scale_top_kpa"] > 1  # kPa under a 0.5 N press, not the unitless fallback
 
 
 def test_environments_render_rgb_arrays(rendered):
