@@ -28,7 +28,7 @@ class LayeredSubstrate;
 
 // Arithmetic of SurfaceCompliance::Apply's FFTs. kFloat: the spectra in
 // float (the table is float, and the contact solver stops at a relative
-// change ~1e-4; float rounding adds ~1e-7 relative to K p): 1.7-1.8x faster.
+// change ~1e-4; float rounding adds ~1e-7 relative to K p): the fast path.
 // kDouble: the reference path.
 enum class ApplyPrecision { kFloat = 0, kDouble };
 
@@ -143,9 +143,8 @@ class SurfaceCompliance {
 };
 
 // How many cells' AddCell (box_cells multiply-adds each) cost about one
-// Apply with spectrum s: measured on an 87 x 76 box (180 x 160 grid, float,
-// AVX2) 1.5 us per cell against ~100 us per apply, ~4 multiply-adds per
-// FFT flop (5 N log2 N).
+// Apply with spectrum s, taking one FFT flop (5 N log2 N) to cost as much as
+// ~4 multiply-adds.
 inline double DirectCellsPerApply(const SurfaceCompliance::Spectrum& s, size_t box_cells) {
   const double n = static_cast<double>(s.fft.nx()) * s.fft.ny();
   return 5.0 * n * std::log2(n) / (4.0 * static_cast<double>(box_cells));

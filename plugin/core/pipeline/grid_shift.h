@@ -1,4 +1,4 @@
-// `grid_shift` (issue 13): the `elastic` contact solved a second time on the
+// `grid_shift`: the `elastic` contact solved a second time on the
 // taxel grid shifted by half a cell in x and y (n + 1 cells: centres at the
 // taxel grid's cell corners), deposited back onto the taxel grid (each
 // shifted cell's load split equally over the 4 cells it overlaps, which

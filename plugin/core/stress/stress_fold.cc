@@ -1,3 +1,17 @@
+// The folded direct path of stage 3 (stress_fold.h): the fold of the tables,
+// the per-site sums in a copy per ISA, the rx cache and the driver.
+//
+// The canonical sum, one sequence of float operations whatever the ISA,
+// layout or thread split: a site's cells in bands of kTableRowsPerBand rows
+// on multiples of 8 of dy = cell row - site row; each row's products E * p
+// accumulated by fused multiply-add (one rounding per term) in 16 float
+// lanes (lane l: the cells at dx = l mod 16) over its chunks of 16 in
+// increasing dx; the band's row sums added in row order, widened and added
+// to 16 double lanes (bands in increasing dy); the 16 lanes reduced in a
+// fixed order at the end. Zero cells are exact no-ops (a lane that starts at
+// +0 never holds -0), so padding and which rows are summed together change
+// no bit. The fold is fused too: E = fma(r_y, K_y, fma(r_x, K_x, K_p)).
+// MJTOUCH_SUM_LANES=8 or 4 in the environment picks a narrower copy (tests).
 #include "stress/stress_fold.h"
 
 #include <algorithm>
@@ -19,17 +33,16 @@ namespace mjtouch {
 namespace {
 
 constexpr int kLanes = 8;           // cells per chunk of the cost model
-constexpr int kSumLanes = 16;       // canonical lanes of the sums (stress_fold.h)
+constexpr int kSumLanes = 16;       // lanes of the canonical sum (above)
 constexpr int kFoldLanes = 16;      // cells per fold chunk (one AVX-512 vector)
 constexpr int kSitesPerChunk = 8;
 // Folded table rows per band: folded together, then read by every site; also
 // the rows whose float sums are widened to double at once (a site's sum has
 // ~10^3-10^4 terms; float over a few rows keeps the error ~1e-7).
 constexpr int kTableRowsPerBand = 8;
-// Cost model of the folded path (one core; examples/bench_kernel.py
-// --calibrate fits them): per site x component x active cell, and per folded
-// table cell. Measured on the 2-core development machine under load, scaled
-// by the reference path's fixed / measured constant in the same run (0.65).
+// Cost model of the folded path (one core), fitted by examples/bench_kernel.py
+// --calibrate: seconds per site x component x active cell, and per folded
+// table cell.
 constexpr double kFoldedSecondsPerMac = 0.05e-9;
 constexpr double kFoldSecondsPerCell = 0.22e-9;
 
@@ -48,8 +61,8 @@ inline __attribute__((always_inline)) v16f Load16(const float* p) {
 // gives the same bits. kFma: the copy is compiled for an FMA unit; GCC
 // contracts a * b + c into one vector fma there (MJTOUCH_CONTRACT), Clang
 // (whose contraction is fixed where the code is parsed) vectorises fmaf
-// lane by lane. Without FMA: FmaFromDouble in double vectors (the stress
-// stage ~50x the AVX-512 time; fmaf, a call per lane, ~58x).
+// lane by lane. Without FMA: FmaFromDouble in double vectors (exact, and
+// cheaper than a fmaf call per lane).
 template <bool kFma, typename V>
 inline __attribute__((always_inline)) V MulAdd(V a, V b, V c) {
   if constexpr (!kFma) {
@@ -83,7 +96,7 @@ inline __attribute__((always_inline)) v16f MulAdd(float a, v16f b, v16f c) {
 // The hot functions (SumBand, the fold) in a copy per ISA: simd.h
 // MJTOUCH_ISA_COPIES.
 
-// One band of a site (stress_fold.h: the canonical sum): the kTableRowsPerBand
+// One band of a site (the canonical sum, above): the kTableRowsPerBand
 // pressure rows P + t ps (t = 0 ..; cells rlo[t] .. rhi[t], none: lo >= hi)
 // against the folded rows ebuf[comp] + t ew at the same cells, in chunks of
 // 16 on dx multiples of 16 (dx of pressure column x: g + x), so lane l = the
@@ -96,9 +109,8 @@ inline __attribute__((always_inline)) v16f MulAdd(float a, v16f b, v16f c) {
 // same sequence of operations on the nonzero products for any R, layout or
 // thread split. A chunk's 16 lanes are held as 16 / W vectors of the
 // machine's width W (one AVX-512 register, two AVX2 ones, four SSE2 / NEON
-// ones), each term one fma (MulAdd): the same bits on every ISA.
-// (One 16-float GCC vector on a narrower ISA is lowered through the stack:
-// the AVX2 copy ran 3.7x slower than the AVX-512 one.)
+// ones), each term one fma (MulAdd): the same bits on every ISA. (One
+// 16-float GCC vector on a narrower ISA would be lowered through the stack.)
 template <int W>
 struct Native {
   typedef float vf __attribute__((vector_size(W * sizeof(float))));
@@ -229,8 +241,7 @@ inline __attribute__((always_inline)) v16f Cells(const float* p, int x) {
 // overlapping chunks rewrite the same values. No cell outside [0, len) is
 // read or written and there is no scalar tail: folded rows are ~100 cells,
 // and the vectorised loops' tails, alias checks and cache-line-split stores
-// cost about as much as the cells (a replica of slide_grating's fold, CPU
-// time: 31 us -> 24 us per step).
+// would cost about as much as the cells.
 template <typename Chunk, typename One>
 inline __attribute__((always_inline)) void FoldCells(int len, float* e, Chunk chunk, One one) {
   if (len < kFoldLanes) {
@@ -283,7 +294,7 @@ inline __attribute__((always_inline)) void FoldRowCells(const float* kp, const f
 // just brought in: a row's three tables read once (fewer lines per step
 // than both sides of ky stored, which the fold is bound by when the step's
 // other stages have evicted them). Cells beyond the tables (|dx| > n - 1)
-// hold +0, so they fold to +-0 (an exact no-op in the sums, stress_fold.h).
+// hold +0, so they fold to +-0 (an exact no-op in the sums).
 inline int RxCacheHalf(int n) { return (n + kFoldLanes - 1) / kFoldLanes * kFoldLanes; }
 inline size_t RxCacheStride(int n) { return static_cast<size_t>(3) * RxCacheHalf(n) + kFoldLanes; }
 
@@ -434,7 +445,7 @@ float* AlignUp64(float* p) {
 // quadrant, built on the second consecutive call with the same tables and
 // float rx (a steady slide: MuJoCo's F_t / F_n at the friction cone rounds
 // to the same float step after step), dropped when rx changes. Only speed
-// depends on it: FoldRowH gives FoldRow's bits.
+// depends on it: FoldCachedRows gives FoldMirroredRows' bits.
 void UpdateRxCache(const KernelTables& kt, float rx, FoldScratch* w) {
   if (w->h_tables != &kt || w->h_components != kt.components || w->h_calls == 0 ||
       std::memcmp(&w->h_rx, &rx, sizeof(rx)) != 0) {
@@ -730,7 +741,7 @@ void ReferenceDirectStresses(const KernelTables& kt, const std::vector<StressSit
   for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
   // Component-major, depth by depth: the three tables of one (depth,
   // component), ~0.8 MB at n = 128, stay in cache while its sites read their
-  // windows (site-major order streamed all 18 tables per site: 2-3x slower).
+  // windows (site-major order would stream all 18 tables per site).
   struct Job { int d, c, s0, s1; };
   std::vector<Job> jobs;
   std::vector<int> order;
