@@ -13,7 +13,7 @@
 // first Fourier component, so the average cancels the V / pitch line; the
 // physical lines at m V / D are kept (examples/pc_grid_line_static.py,
 // examples/pc_grid_shift.py). Cost: a second render and solve per step,
-// warm-started from the shifted grid's own history in plugin_state (model.h)
+// warm-started from the shifted grid's own history in plugin_state (state_layout.h)
 // like the taxel grid's solve.
 #ifndef MJTOUCH_PIPELINE_GRID_SHIFT_H_
 #define MJTOUCH_PIPELINE_GRID_SHIFT_H_
@@ -29,7 +29,7 @@
 
 namespace mjtouch {
 
-struct HistoryBlock;  // model.h
+struct HistoryBlock;  // state_layout.h
 
 // The shifted grid's immutable tables (SkinModel, with `grid_shift`).
 struct ShiftedGrid {

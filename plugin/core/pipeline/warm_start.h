@@ -1,6 +1,6 @@
 // The `elastic` solve of one step, shared by the taxel grid's solve
 // (skin_traction.cc) and the half-cell shifted grid's (grid_shift.cc): the
-// cull level, the warm start from the pressure history (model.h,
+// cull level, the warm start from the pressure history (state_layout.h,
 // HistoryBlock), the solve on a growing box and the history write; defined
 // in warm_start.cc.
 #ifndef MJTOUCH_PIPELINE_WARM_START_H_
