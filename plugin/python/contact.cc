@@ -89,13 +89,13 @@ std::tuple<Out<double>, nb::dict> Solved(const mjtouch::SurfaceCompliance& K, co
   std::vector<double> p(initial_pa.data(), initial_pa.data() + N);
   ElasticWork work;
   ElasticSolveStats st;
+  ElasticSolveOptions options;
+  options.tolerance = tolerance;
+  options.max_iterations = max_iterations;
+  options.method = method == "pk" ? ElasticMethod::kPolonskyKeer : ElasticMethod::kPreconditioned;
+  options.precision = precision == "float" ? ApplyPrecision::kFloat : ApplyPrecision::kDouble;
   const bool ok =
-      SolveElasticContact(K, g, CellBox{0, 0, nx, ny}, force_n, tolerance, max_iterations, &p,
-                          &work, &st,
-                          method == "pk" ? ElasticMethod::kPolonskyKeer
-                                         : ElasticMethod::kPreconditioned,
-                          precision == "float" ? ApplyPrecision::kFloat
-                                               : ApplyPrecision::kDouble);
+      SolveElasticContact(K, g, CellBox{0, 0, nx, ny}, force_n, options, &p, &work, &st);
   if (!ok) Fail(kNoLoad);
   nb::dict info;
   info["iterations"] = st.iterations;

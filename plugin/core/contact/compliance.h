@@ -32,10 +32,8 @@ class LayeredSubstrate;
 // kDouble: the reference path.
 enum class ApplyPrecision { kFloat = 0, kDouble };
 
-// Per-caller FFT scratch (no state that outlives a call), and the threads
-// Apply may use (ThreadPool callers; the same bits for any count).
+// Per-caller FFT scratch (no state that outlives a call).
 struct ComplianceWork {
-  int threads = 1;
   std::vector<double> spec_re, spec_im, fft_scratch;
   std::vector<float> spec_re_f, spec_im_f, fft_scratch_f;
 };
@@ -87,9 +85,10 @@ class SurfaceCompliance {
   // spectrum from SpectrumFor(bx, by). in_rows, in_cols (<= by, bx; default
   // all): in is zero outside its first in_rows x in_cols block (fewer input
   // columns to transform; a spectrum of a smaller reach then suffices).
+  // threads: ThreadPool callers of the FFTs (the same bits for any count).
   void Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
-             ComplianceWork* w, ApplyPrecision precision = ApplyPrecision::kDouble,
-             int in_rows = -1, int in_cols = -1) const;
+             ComplianceWork* w, ApplyPrecision precision, int threads, int in_rows = -1,
+             int in_cols = -1) const;
   // u += K * (d on cell c of the box) by direct sum (non-periodic only):
   // cheaper than an FFT when few cells change.
   void AddCell(int c, double d, int bx, int by, double* u) const {

@@ -15,8 +15,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const Pose& pad_pose,
                             const std::vector<CounterSurface>& surfaces, double force_n,
-                            double depth_m, double tolerance, int max_iterations,
-                            ElasticMethod method, ApplyPrecision precision, bool fast_paths,
+                            double depth_m, const ElasticSolveOptions& options, bool fast_paths,
                             HistoryBlock* history, GridShiftWork* w, TractionField* field) {
   const TaxelGrid& g = sg.grid;  // g.n == grid.n + 1
   const int n = grid.n;
@@ -56,9 +55,9 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
       sbox = GrowBox(rbox, mb.i0, mb.i0 + mb.nx, mb.j0, mb.j0 + mb.ny);
       if (sbox.empty()) sbox = rbox;
     }
-    touching = SolveElasticWarm(g, *sg.elastic, rbox, w->coverage, history, force_n, tolerance,
-                                max_iterations, method, precision, &w->gap, &w->pressure,
-                                &w->elastic, &w->stats, &sbox, &u_region);
+    touching = SolveElasticWarm(g, *sg.elastic, rbox, w->coverage, history, force_n, options,
+                                &w->gap, &w->pressure, &w->elastic, &w->stats, &sbox,
+                                &u_region);
     if (!touching) return false;
     if (pass == 0 && w->stats.approach_m >= level) touching = false;  // render all, solve again
   }

@@ -60,8 +60,7 @@ struct GridShiftWork {
 // stays invalid in both cases).
 bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const Pose& pad_pose,
                             const std::vector<CounterSurface>& surfaces, double force_n,
-                            double depth_m, double tolerance, int max_iterations,
-                            ElasticMethod method, ApplyPrecision precision, bool fast_paths,
+                            double depth_m, const ElasticSolveOptions& options, bool fast_paths,
                             HistoryBlock* history, GridShiftWork* w, TractionField* field);
 
 }  // namespace mjtouch

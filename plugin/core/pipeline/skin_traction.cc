@@ -24,6 +24,17 @@ constexpr int kElasticMaxIterations = 500;
 // renders again without culling); a tight one renders and scans fewer cells.
 constexpr double kWinklerCullDepths = 1.1, kWinklerCullM = 3e-6;
 
+// The `elastic` solves' settings, threads included.
+ElasticSolveOptions ElasticOptions(const SkinConfig& cfg) {
+  ElasticSolveOptions o;
+  o.tolerance = cfg.tolerance;
+  o.max_iterations = kElasticMaxIterations;
+  o.method = cfg.elastic_method;
+  o.precision = cfg.elastic_precision;
+  o.threads = cfg.threads;
+  return o;
+}
+
 // CPU time of the calling thread (benchmarks: Workspace::render_time_s).
 double ThreadCpuSeconds() {
   timespec ts;
@@ -127,13 +138,11 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
         }
       } else {
         const ElasticContact& ec = *model.elastic();
-        ws->elastic.solve.fft.threads = cfg.threads;  // the operator's FFTs, the stencil
         CellBox solve_box = box;  // cold: uniform from the whole rendered box
         if (!warm) ws->pressure_guess.assign(grid.Size(), 0.0);
         ElasticSolveStats st;
         touching = SolveElasticWarm(grid, ec, box, ws->coverage, history ? taxel : nullptr,
-                                    in.normal_force_n, cfg.tolerance, kElasticMaxIterations,
-                                    cfg.elastic_method, cfg.elastic_precision, &ws->gap,
+                                    in.normal_force_n, ElasticOptions(cfg), &ws->gap,
                                     &ws->pressure_guess, &ws->elastic, &st, &solve_box,
                                     &u_region);
         if (touching) {
@@ -164,10 +173,8 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
     // fails (it carries the same load on nearly the same cells), the taxel
     // grid's solution stands.
     if (touching && model.shifted()) {
-      ws->grid_shift.elastic.solve.fft.threads = cfg.threads;
       AverageWithShiftedGrid(*model.shifted(), grid, in.pad_pose, in.surfaces,
-                             in.normal_force_n, state[kStContactDepth], cfg.tolerance,
-                             kElasticMaxIterations, cfg.elastic_method, cfg.elastic_precision,
+                             in.normal_force_n, state[kStContactDepth], ElasticOptions(cfg),
                              fast, shifted_history ? shifted : nullptr, &ws->grid_shift, &tf);
     }
     if (winkler_slip) {
