@@ -228,6 +228,8 @@ std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
   };
+  TractionNeeds needs;  // as Step states them; the rest is materialized below
+  needs.pressure_pa = cfg.outputs[kOutPressure];
   for (size_t t = 0; t < T; ++t) {
     for (int c = 0; c < 3; ++c) in.pad_pose.pos[c] = pad_pos.data()[3 * t + c];
     for (int c = 0; c < 9; ++c) in.pad_pose.mat[c] = pad_mat.data()[9 * t + c];
@@ -238,7 +240,7 @@ std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
     double render = 0.0;
     ws.render_time_s = &render;
     const double t0 = cpu_s();
-    const bool touching = ComputeTraction(*model, in, state.data(), &ws);
+    const bool touching = ComputeTraction(*model, in, needs, state.data(), &ws);
     total_s[t] = cpu_s() - t0;
     render_s[t] = render;
     approach[t] = touching ? ws.traction.approach_m : std::nan("");

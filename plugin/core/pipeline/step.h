@@ -50,14 +50,22 @@ struct Workspace {
   std::vector<double> spike_sum;  // `oversample`: spikes over the substeps
 };
 
+// What the later stages read of stage 2's field beyond the float pressure
+// and the active runs. A model may leave the rest lazy (zero until
+// MaterializeTraction; WriteWinklerSlipTraction does).
+struct TractionNeeds {
+  bool pressure_pa = false;  // the double pressure (the `pressure` output)
+  bool shear = false;        // the shear arrays (stress paths other than the folded one)
+};
+
 // Stages 1-2 for one step (skin_traction.cc): render the gap and solve the
-// tractions into ws->traction with the configured pressure model. Reads and
-// updates the state header (contact depth, level, valid) and the elastic
-// pressure history (StateLayout). new_time: false for a repeated evaluation
-// at the last one's time, which then reads the same history. Returns
-// whether the skin touches.
-bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state, Workspace* ws,
-                     bool new_time = true);
+// tractions into ws->traction with the configured pressure model, writing
+// at least what `needs` names. Reads and updates the state header (contact
+// depth, valid) and the elastic pressure history (StateLayout). new_time:
+// false for a repeated evaluation at the last one's time, which then reads
+// the same history. Returns whether the skin touches.
+bool ComputeTraction(const SkinModel& model, const StepInput& in, const TractionNeeds& needs,
+                     double* state, Workspace* ws, bool new_time = true);
 
 // Reset the state array to its initial value.
 void ResetState(const SkinModel& model, double* state);
