@@ -182,8 +182,10 @@ std::tuple<Out<double>, Out<double>> Render(const F64_2& skin_z_m, double pitch_
   DecodeSurfaces(surfaces, hfield, &list, &prefixes);
   const std::vector<double> z(skin_z_m.data(), skin_z_m.data() + grid.Size());
   std::vector<double> g, c;
-  RenderGap(grid, z, pad, list, std::numeric_limits<double>::infinity(), &g, &c, area_average,
-            nullptr, nullptr, fast_paths);
+  RenderRequest request{grid, z, pad, list};
+  request.area_average = area_average;
+  request.fast_paths = fast_paths;
+  RenderGap(request, RenderOutput{&g, &c});
   const size_t N = n;
   return {ToNumpy(std::move(g), {N, N}), ToNumpy(std::move(c), {N, N})};
 }

@@ -26,8 +26,11 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
   CellBox sbox, u_region;  // the final solve box, the check's K p region
   for (int pass = 0; pass < 2 && !touching; ++pass) {
     CellBox rbox;
-    const double level = RenderGap(g, sg.skin_z, pad_pose, surfaces, pass == 0 ? cull : kInf,
-                                   &w->gap, &w->coverage, true, &sg.blocks, &rbox, fast_paths);
+    RenderRequest request{g, sg.skin_z, pad_pose, surfaces, pass == 0 ? cull : kInf, &sg.blocks};
+    request.fast_paths = fast_paths;
+    RenderOutput out{&w->gap, &w->coverage, &rbox};
+    out.scratch = &w->render_scratch;
+    const double level = RenderGap(request, out);
     if (rbox.empty() || !std::isfinite(MinGap(g, rbox, w->gap, w->coverage)))
       return true;  // nothing under the shifted grid: keep the taxel grid's solution
     // Warm-started from the shifted grid's own history as the taxel grid's

@@ -42,6 +42,7 @@ struct ShiftedGrid {
 // Per-simulation scratch (Workspace).
 struct GridShiftWork {
   std::vector<double> gap, coverage, pressure;
+  RenderScratch render_scratch;
   ElasticStepWork elastic;
   ElasticSolveStats stats;
 };

@@ -65,10 +65,14 @@ struct TractionStep {
 double Render(const TractionStep& s, double cull_above_m, bool summary, CellBox* box) {
   Workspace* ws = s.ws;
   const double t0 = ws->render_time_s ? ThreadCpuSeconds() : 0.0;
-  const double level =
-      RenderGap(s.cfg.grid, s.model.skin_z(), s.in.pad_pose, s.in.surfaces, cull_above_m, &ws->gap,
-                &ws->coverage, true, &s.model.skin_blocks(), box, s.fast,
-                s.fast ? &ws->gap_written : nullptr, summary ? &ws->render_summary : nullptr);
+  RenderRequest request{s.cfg.grid, s.model.skin_z(), s.in.pad_pose, s.in.surfaces, cull_above_m,
+                        &s.model.skin_blocks()};
+  request.fast_paths = s.fast;
+  RenderOutput out{&ws->gap, &ws->coverage, box};
+  out.written = s.fast ? &ws->gap_written : nullptr;
+  out.summary = summary ? &ws->render_summary : nullptr;
+  out.scratch = &ws->render_scratch;
+  const double level = RenderGap(request, out);
   if (!s.fast) ws->gap_written = CellBox::All(s.cfg.grid);  // the reference cleared it all
   if (ws->render_time_s) *ws->render_time_s += ThreadCpuSeconds() - t0;
   return level;

@@ -29,8 +29,9 @@ struct Workspace {
   // Receptor propagators for the last step size (rebuilt when it changes).
   std::shared_ptr<const ReceptorStepper> stepper;
   std::vector<double> gap, coverage;
-  CellBox gap_written;  // outside it gap / coverage are +inf / 0 (RenderGap `written`)
+  CellBox gap_written;  // outside it gap / coverage are +inf / 0 (RenderOutput::written)
   RenderSummary render_summary;  // the last render's covered cells (winkler)
+  RenderScratch render_scratch;
   TractionField traction;
   std::vector<double> quantity;  // per receptor
   ElasticStepWork elastic;  // `elastic`

@@ -5,7 +5,6 @@
 #define MJTOUCH_SURFACE_ALIGNED_FACE_H_
 
 #include <algorithm>
-#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -46,10 +45,9 @@ struct AlignedFace {
   const double* t;  // pad origin in the surface frame
   double hx, hy;    // half extents of a cell's footprint (surface frame)
   double cull;      // cells whose gap lower bound exceeds it are skipped
-  // RenderGap's call (nonzero, unique per call on a thread): the per-column
-  // values of a face are reused by the next call on it in the same RenderGap
-  // call (0: never).
-  uint64_t render_call = 0;
+  // The per-column and per-row values; those of a face are reused by the
+  // next call on it in the same RenderGap call (which resets the key).
+  RenderScratch* scratch;
 };
 
 struct Extent {
