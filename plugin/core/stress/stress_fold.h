@@ -1,8 +1,9 @@
 // Stage 3, folded direct path: with a uniform-slip shear (q = r p, contact/
 // pressure.h UniformSlipShear) or none, the stress is sum_cells (K_p + r_x K_x
 // + r_y K_y) p, so one folded table per (depth, component) replaces three.
-// Every site's sum is one fixed sequence of float operations (stress_fold.cc),
-// so the output is bit-identical on every ISA and for any thread count.
+// Every site's sum is one fixed sequence of float operations
+// (stress_fold_kernels.cc), so the output is bit-identical on every ISA and
+// for any thread count.
 #ifndef MJTOUCH_STRESS_STRESS_FOLD_H_
 #define MJTOUCH_STRESS_STRESS_FOLD_H_
 
@@ -14,7 +15,7 @@
 namespace mjtouch {
 
 // One site's running sums on the folded path: its 16 double lanes per
-// component (d[c][l]: lane l = the cells at dx = l mod 16, stress_fold.cc).
+// component (d[c][l]: lane l = the cells at dx = l mod 16, stress_fold_kernels.cc).
 struct alignas(64) FoldSite {
   alignas(64) double d[kNumStress][16];
   int nc = 0;                 // components summed
@@ -48,9 +49,9 @@ struct FoldScratch {
   std::array<bool, kNumStress> key_components{};
   std::vector<StressSite> key_sites;
   // Kp + (+-rx) Kx (both signs of dx) and Ky per wanted (depth, component),
-  // n quadrant rows each, a row in one aligned stream (stress_fold.cc
+  // n quadrant rows each, a row in one aligned stream (stress_fold_internal.h
   // RxCacheHalf; h_offset: start from h_pad, -1 if none)
-  // while the float rx repeats (UpdateRxCache in stress_fold.cc): the fold
+  // while the float rx repeats (UpdateRxCache, stress_fold_plan.cc): the fold
   // then reads two tables, not three, each row once. A cache
   // of the inputs only: the bits do not depend on it.
   std::vector<float> h;
