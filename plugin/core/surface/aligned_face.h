@@ -1,6 +1,6 @@
 // Internal to the surface stage (not part of its interface): RenderGap's
 // fast path for faces whose axes are the pad's (aligned_face.cc), and the
-// helpers it shares with surface.cc.
+// helpers it shares with render.cc and primitives.cc.
 #ifndef MJTOUCH_SURFACE_ALIGNED_FACE_H_
 #define MJTOUCH_SURFACE_ALIGNED_FACE_H_
 
