@@ -1,10 +1,7 @@
 // Stage 4's parameters: the SA1 gains of Wang et al. 2016 (Table 1) and the
-// defaults derived from them, the per-unit variants, and the parameters'
-// cache key.
+// defaults derived from them, and the per-unit variants.
 #include <algorithm>
 #include <cstdint>
-#include <sstream>
-#include <string>
 
 #include "afferents/noise.h"
 #include "afferents/receptors.h"
@@ -76,23 +73,5 @@ int VariantOf(const ReceptorParams& p, ReceptorClass cls, unsigned long long str
                                 static_cast<uint64_t>(cls));
   return static_cast<int>(h % kNumVariants);
 }
-
-std::string ReceptorParamsKey(const ReceptorParams& p) {
-  std::ostringstream s;
-  s.precision(17);
-  for (double m : p.sa1.merkel_cells) s << m << ' ';
-  s << "| " << p.sa1.k0_a_per_pa << ' ' << p.sa1.k1_a_s_per_pa << ' ' << p.sa1.i0_a << ' '
-    << p.sa1.capacitance_f << ' ' << p.sa1.resistance_ohm << ' ' << p.sa1.threshold_v << ' '
-    << p.sa1.refractory_s << " | " << p.ra.gain_s_per_pa << ' ' << p.ra.lowpass_hz << ' '
-    << p.ra.tau_s << ' ' << p.ra.refractory_s << " | " << p.pc.gain_s2_per_pa << ' '
-    << p.pc.highpass_hz << ' ' << p.pc.lowpass_hz << ' ' << p.pc.tau_s << ' '
-    << p.pc.refractory_s << " | " << p.noise.sd[0] << ' ' << p.noise.sd[1] << ' '
-    << p.noise.sd[2] << ' ' << p.noise.tau_s << ' ' << p.noise.seed << " | " << p.rate_tau_s
-    << " | " << static_cast<int>(p.sa1.model) << ' ' << p.sa1.lowpass_hz << ' ' << p.varied;
-  for (const Adaptation& a : p.adapt) s << ' ' << a.jump << ' ' << a.tau_s;
-  s << ' ' << p.ra.saturation << ' ' << p.sa1.saturation;
-  return s.str();
-}
-
 
 }  // namespace mjtouch

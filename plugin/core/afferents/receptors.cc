@@ -492,9 +492,4 @@ bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
   return bound < 1e-6 && noise_margin < 1.0 - 2e-6 && st[kU0] < 1.0 - 1e-6;
 }
 
-int AdvanceReceptor(ReceptorClass cls, const ReceptorParams& p, double q_end, double dt,
-                    unsigned long long stream, double* state, double* voltage) {
-  return ReceptorStepper(p, dt).Advance(cls, q_end, stream, state, voltage);
-}
-
 }  // namespace mjtouch

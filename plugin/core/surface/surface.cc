@@ -24,16 +24,6 @@ const char* RidgeProfileName(RidgeProfile p) {
   }
 }
 
-bool ParseRidgeProfile(const std::string& name, RidgeProfile* p) {
-  for (RidgeProfile v : {RidgeProfile::kSine, RidgeProfile::kTriangle, RidgeProfile::kSquare}) {
-    if (name == RidgeProfileName(v)) {
-      *p = v;
-      return true;
-    }
-  }
-  return false;
-}
-
 double RidgeRelief(const Ridges& r, double s) {
   const double L = r.pitch_m, H = r.height_m;
   const double f = s - L * std::round(s / L);  // in [-L/2, L/2], crest at 0

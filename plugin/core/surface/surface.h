@@ -32,7 +32,6 @@ struct PadGeometry {
 // valleys, linear flanks); square (crests of width pitch / 2, flat).
 enum class RidgeProfile { kSine = 0, kTriangle, kSquare };
 const char* RidgeProfileName(RidgeProfile p);
-bool ParseRidgeProfile(const std::string& name, RidgeProfile* p);
 
 struct Ridges {
   bool enabled = true;
