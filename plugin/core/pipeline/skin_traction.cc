@@ -35,7 +35,7 @@ ElasticSolveOptions ElasticOptions(const SkinConfig& cfg) {
   return o;
 }
 
-// CPU time of the calling thread (benchmarks: Workspace::render_time_s).
+// CPU time of the calling thread (TractionRunOptions::render_time_s).
 double ThreadCpuSeconds() {
   timespec ts;
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
@@ -50,9 +50,10 @@ struct TractionStep {
   const TractionNeeds& needs;
   double* state;
   Workspace* ws;
-  bool fast;            // the fast paths (not Workspace::reference_paths)
-  bool warm;            // the last step touched: depth_prev_m bounds the render
-  double depth_prev_m;  // the last step's indentation depth
+  bool fast;              // the fast paths (not TractionRunOptions::reference_paths)
+  double* render_time_s;  // TractionRunOptions::render_time_s
+  bool warm;              // the last step touched: depth_prev_m bounds the render
+  double depth_prev_m;    // the last step's indentation depth
   // `elastic`: the pressure history of the taxel grid and of the shifted
   // grid (this time, the last step, the one before); null without one.
   HistoryBlock* taxel;
@@ -64,9 +65,9 @@ struct TractionStep {
 // summary (Winkler + shear). Returns the cull level reached.
 double Render(const TractionStep& s, double cull_above_m, bool summary, CellBox* box) {
   Workspace* ws = s.ws;
-  const double t0 = ws->render_time_s ? ThreadCpuSeconds() : 0.0;
-  RenderRequest request{s.cfg.grid, s.model.skin_z(), s.in.pad_pose, s.in.surfaces, cull_above_m,
-                        &s.model.skin_blocks()};
+  const double t0 = s.render_time_s ? ThreadCpuSeconds() : 0.0;
+  RenderRequest request{s.cfg.grid,    s.model.skin_z(), s.in.pad_pose,
+                        s.in.surfaces, cull_above_m,     &s.model.skin_blocks()};
   request.fast_paths = s.fast;
   RenderOutput out{&ws->gap, &ws->coverage, box};
   out.written = s.fast ? &ws->gap_written : nullptr;
@@ -74,7 +75,7 @@ double Render(const TractionStep& s, double cull_above_m, bool summary, CellBox*
   out.scratch = &ws->render_scratch;
   const double level = RenderGap(request, out);
   if (!s.fast) ws->gap_written = CellBox::All(s.cfg.grid);  // the reference cleared it all
-  if (ws->render_time_s) *ws->render_time_s += ThreadCpuSeconds() - t0;
+  if (s.render_time_s) *s.render_time_s += ThreadCpuSeconds() - t0;
   return level;
 }
 
@@ -253,7 +254,7 @@ bool ElasticTraction(const TractionStep& s) {
 }  // namespace
 
 bool ComputeTraction(const SkinModel& model, const StepInput& in, const TractionNeeds& needs,
-                     double* state, Workspace* ws, bool new_time) {
+                     double* state, Workspace* ws, bool new_time, const TractionRunOptions& run) {
   const SkinConfig& cfg = model.config();
   // `elastic`: the last step's contact from the pressure history, so a
   // repeated evaluation at the same time starts where the first one did.
@@ -283,7 +284,8 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, const Traction
                           needs,
                           state,
                           ws,
-                          !ws->reference_paths,
+                          !run.reference_paths,
+                          run.render_time_s,
                           warm,
                           depth_prev,
                           history ? taxel : nullptr,

@@ -42,12 +42,6 @@ struct Workspace {
   StressScratch stress_scratch;
   StressMethod last_stress_method = StressMethod::kDirect;
   StepInput substep;            // `oversample`: the interpolated input
-  // Stages 1-2 through their general (reference) code instead of the fast
-  // paths, which give bit-identical results: for tests and benchmarks.
-  bool reference_paths = false;
-  // Benchmarks: if set, ComputeTraction adds the CPU time of its surface
-  // rendering (seconds) to it.
-  double* render_time_s = nullptr;
   std::vector<double> spike_sum;  // `oversample`: spikes over the substeps
 };
 
@@ -65,8 +59,18 @@ struct TractionNeeds {
 // depth, valid) and the elastic pressure history (StateLayout). new_time:
 // false for a repeated evaluation at the last one's time, which then reads
 // the same history. Returns whether the skin touches.
+// How stages 1-2 run beyond the configuration (tests and benchmarks).
+struct TractionRunOptions {
+  // The general (reference) code instead of the fast paths, which give
+  // bit-identical results.
+  bool reference_paths = false;
+  // If set, the CPU time of the surface rendering (s) is added to it.
+  double* render_time_s = nullptr;
+};
+
 bool ComputeTraction(const SkinModel& model, const StepInput& in, const TractionNeeds& needs,
-                     double* state, Workspace* ws, bool new_time = true);
+                     double* state, Workspace* ws, bool new_time = true,
+                     const TractionRunOptions& run = TractionRunOptions());
 
 // Reset the state array to its initial value.
 void ResetState(const SkinModel& model, double* state);
