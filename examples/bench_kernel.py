@@ -203,7 +203,7 @@ def calibrate(n, pitch, ij, p, qx, qy, repeats):
     c = td / (len(ij) * 6 * 3 * active)
     print(f"cost model fit (N = {N}): kDirectSecondsPerMac = {c:.3g}, kFftSecondsPerPoint = "
           f"{a:.3g}, kMulSecondsPerPoint = {b:.3g}")
-    # Folded path (stress_fold.cc): its two constants (sums, fold) in a fixed
+    # Folded path (stress_fold_plan.cc): its two constants (sums, fold) in a fixed
     # ratio; the measured / modelled time scales both.
     slip = (float(qx.sum() / p.sum()), float(qy.sum() / p.sum()))
     _, tf, _, _ = e2.stress(p, qx, qy, method="direct", repeats=repeats, timing=True, slip=slip)

@@ -89,13 +89,13 @@ std::tuple<Out<double>, nb::dict> Solved(const mjtouch::SurfaceCompliance& K, co
   std::vector<double> p(initial_pa.data(), initial_pa.data() + N);
   ElasticWork work;
   ElasticSolveStats st;
+  ElasticSolveOptions options;
+  options.tolerance = tolerance;
+  options.max_iterations = max_iterations;
+  options.method = method == "pk" ? ElasticMethod::kPolonskyKeer : ElasticMethod::kPreconditioned;
+  options.precision = precision == "float" ? ApplyPrecision::kFloat : ApplyPrecision::kDouble;
   const bool ok =
-      SolveElasticContact(K, g, CellBox{0, 0, nx, ny}, force_n, tolerance, max_iterations, &p,
-                          &work, &st,
-                          method == "pk" ? ElasticMethod::kPolonskyKeer
-                                         : ElasticMethod::kPreconditioned,
-                          precision == "float" ? ApplyPrecision::kFloat
-                                               : ApplyPrecision::kDouble);
+      SolveElasticContact(K, g, CellBox{0, 0, nx, ny}, force_n, options, &p, &work, &st);
   if (!ok) Fail(kNoLoad);
   nb::dict info;
   info["iterations"] = st.iterations;
@@ -182,8 +182,10 @@ std::tuple<Out<double>, Out<double>> Render(const F64_2& skin_z_m, double pitch_
   DecodeSurfaces(surfaces, hfield, &list, &prefixes);
   const std::vector<double> z(skin_z_m.data(), skin_z_m.data() + grid.Size());
   std::vector<double> g, c;
-  RenderGap(grid, z, pad, list, std::numeric_limits<double>::infinity(), &g, &c, area_average,
-            nullptr, nullptr, fast_paths);
+  RenderRequest request{grid, z, pad, list};
+  request.area_average = area_average;
+  request.fast_paths = fast_paths;
+  RenderGap(request, RenderOutput{&g, &c});
   const size_t N = n;
   return {ToNumpy(std::move(g), {N, N}), ToNumpy(std::move(c), {N, N})};
 }

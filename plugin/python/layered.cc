@@ -367,7 +367,7 @@ void BindLayered(nb::module_& m) {
            "traction fields (n x n, [j, i]); shear both or neither. slip = (rx, ry): the\n"
            "shear is (rx, ry) x pressure, so the direct path folds its tables; fold=False:\n"
            "the reference direct sum. threads in [1, 64]: the same bits for any count.\n"
-           "fold_legacy: the folded path's layout before #13 (same bits; benchmarks).");
+           "fold_legacy: the folded path unaligned, without its rx cache (same bits; benchmarks).");
 }
 
 }  // namespace mjtouch::py

@@ -191,7 +191,7 @@ std::tuple<Out<double>, Out<double>, Out<double>> ReceptorRun(const std::string&
 
 // Stages 1-2 (ComputeTraction) over a recorded sequence of steps, from a
 // fresh state: the per-step CPU time of the whole of stages 1-2 and of its
-// rendering (Workspace::render_time_s), and each step's pressure. `reference`: the general (reference) code paths.
+// rendering (TractionRunOptions::render_time_s), and each step's pressure. `reference`: the general (reference) code paths.
 // surfaces: rows as render_gap's; height-field rows read `hfield`.
 std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
     std::array<double, 3> semi_axes_m, const Config& config, const F64_2& pad_pos,
@@ -216,7 +216,8 @@ std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
   std::vector<double> state(model->state_layout().size, 0.0);
   ResetState(*model, state.data());
   Workspace ws;
-  ws.reference_paths = reference;
+  TractionRunOptions run;
+  run.reference_paths = reference;
   // fields: per step the 7 planes pressure, shear x, shear y (Pa), their float
   // copies, and the active cells (runs) as 1.
   const size_t planes = fields ? 7 : 1;
@@ -228,6 +229,8 @@ std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
   };
+  TractionNeeds needs;  // as Step states them; the rest is materialized below
+  needs.pressure_pa = cfg.outputs[kOutPressure];
   for (size_t t = 0; t < T; ++t) {
     for (int c = 0; c < 3; ++c) in.pad_pose.pos[c] = pad_pos.data()[3 * t + c];
     for (int c = 0; c < 9; ++c) in.pad_pose.mat[c] = pad_mat.data()[9 * t + c];
@@ -236,9 +239,9 @@ std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
     in.shear_y_n = forces_n.data()[3 * t + 2];
     in.in_contact = in.normal_force_n > 0;
     double render = 0.0;
-    ws.render_time_s = &render;
+    run.render_time_s = &render;
     const double t0 = cpu_s();
-    const bool touching = ComputeTraction(*model, in, state.data(), &ws);
+    const bool touching = ComputeTraction(*model, in, needs, state.data(), &ws, true, run);
     total_s[t] = cpu_s() - t0;
     render_s[t] = render;
     approach[t] = touching ? ws.traction.approach_m : std::nan("");

@@ -3,11 +3,11 @@
 // ranges the SA1, RA and PC membranes meet: linear drive, adaptation current,
 // one node), the first spike LinearDriveLIF reports is the membrane's first
 // threshold crossing, found by dense sampling of the closed form. A spike
-// late by up to the whole interval (a bracket closure that returned the
-// interval's end: 13 in 2e6 intervals before the fix) fails it. The same
+// late by up to the whole interval (a bracket closure that returns the
+// interval's end) fails it. The same
 // intervals with the exponentials precomputed for their span (MembraneSpan,
 // as ReceptorStepper passes them) must give the same spikes, membrane and
-// adaptation current bit for bit. ~5 s.
+// adaptation current bit for bit.
 //   ./test_membrane   # PASS/FAIL lines, exit status 1 on failure
 #include <cmath>
 #include <cstdio>

@@ -26,8 +26,7 @@ using namespace receptor_state;  // NOLINT: the state slots
 namespace {
 
 // Four lanes: one AVX2 vector (the clone used on x86 machines that have it),
-// two SSE2 / NEON ones elsewhere (eight lanes were no faster with AVX-512,
-// two slower with AVX2).
+// two SSE2 / NEON ones elsewhere.
 constexpr int kLanes = 4;
 typedef double V __attribute__((vector_size(8 * kLanes)));
 typedef long long M __attribute__((vector_size(8 * kLanes)));  // lane masks (0 / -1)

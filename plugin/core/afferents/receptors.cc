@@ -1,169 +1,24 @@
+// Stage 4's stepper: ReceptorStepper advances each receptor's filters,
+// noise and membranes over one step, exactly for a drive linear in the step.
 #include "afferents/receptors.h"
-
-#include "afferents/receptor_state.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <sstream>
+
+#include "afferents/matrix_exp.h"
+#include "afferents/noise.h"
+#include "afferents/receptor_state.h"
 
 namespace mjtouch {
-namespace {
-
-// Eigenvalues of a symmetric 3x3 (Smith 1961), ascending; l2 and l3 may be
-// null when only the smallest is wanted (skips a cosine).
-void Principal(const double s[6], double* l1, double* l2, double* l3) {
-  const double xx = s[0], yy = s[1], zz = s[2], xy = s[3], xz = s[4], yz = s[5];
-  const double p1 = xy * xy + xz * xz + yz * yz;
-  const double q = (xx + yy + zz) / 3.0;
-  if (p1 <= 1e-30 * (xx * xx + yy * yy + zz * zz + 1e-300)) {
-    double e[3] = {xx, yy, zz};
-    std::sort(e, e + 3);
-    *l1 = e[0];
-    if (l3) { *l2 = e[1]; *l3 = e[2]; }
-    return;
-  }
-  const double p2 = (xx - q) * (xx - q) + (yy - q) * (yy - q) + (zz - q) * (zz - q) + 2 * p1;
-  const double p = std::sqrt(p2 / 6.0);
-  const double b00 = (xx - q) / p, b11 = (yy - q) / p, b22 = (zz - q) / p;
-  const double b01 = xy / p, b02 = xz / p, b12 = yz / p;
-  const double det = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
-                     b02 * (b01 * b12 - b11 * b02);
-  const double r = std::clamp(det / 2.0, -1.0, 1.0);
-  const double phi = std::acos(r) / 3.0;
-  const double e1 = q + 2 * p * std::cos(phi + 2.0943951023931957);
-  *l1 = e1;
-  if (!l3) return;
-  const double e3 = q + 2 * p * std::cos(phi);
-  *l3 = e3;
-  *l2 = 3 * q - e1 - e3;
-}
-
-}  // namespace
-
-const char* ClassName(ReceptorClass c) {
-  switch (c) {
-    case ReceptorClass::kSA1: return "SA1";
-    case ReceptorClass::kRA: return "RA";
-    default: return "PC";
-  }
-}
-
-const char* QuantityName(Quantity q) {
-  switch (q) {
-    case Quantity::kCompressiveSzz: return "szz";
-    case Quantity::kMaxCompressive: return "maxcomp";
-    case Quantity::kVonMises: return "vonmises";
-    case Quantity::kStrainEnergy: return "sed";
-    case Quantity::kCompressiveStrain: return "strain";
-    default: return "maxshear";
-  }
-}
-
-bool ParseQuantity(const std::string& s, Quantity* q) {
-  if (s == "szz") { *q = Quantity::kCompressiveSzz; return true; }
-  if (s == "maxcomp") { *q = Quantity::kMaxCompressive; return true; }
-  if (s == "vonmises") { *q = Quantity::kVonMises; return true; }
-  if (s == "maxshear") { *q = Quantity::kMaxShear; return true; }
-  if (s == "sed") { *q = Quantity::kStrainEnergy; return true; }
-  if (s == "strain") { *q = Quantity::kCompressiveStrain; return true; }
-  return false;
-}
-
-double ReceptorQuantity(Quantity q, const double s[6]) {
-  switch (q) {
-    case Quantity::kCompressiveSzz: return -s[2];
-    case Quantity::kStrainEnergy:
-    case Quantity::kCompressiveStrain:
-      return std::numeric_limits<double>::quiet_NaN();  // needs the material (pipeline/step.cc)
-    case Quantity::kVonMises: {
-      const double a = s[0] - s[1], b = s[1] - s[2], c = s[2] - s[0];
-      return std::sqrt(0.5 * (a * a + b * b + c * c) +
-                       3.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]));
-    }
-    default: {
-      double l1, l2, l3;
-      if (q == Quantity::kMaxCompressive) {
-        Principal(s, &l1, nullptr, nullptr);
-        return std::max(0.0, -l1);
-      }
-      Principal(s, &l1, &l2, &l3);
-      return 0.5 * (l3 - l1);
-    }
-  }
-}
-
-// ---------------------------------------------------------------------------
-// Afferent dynamics.
 
 using namespace receptor_state;  // NOLINT: the state slots
+using namespace afferent_noise;  // NOLINT: SplitMix64, NormalHashed, Normal, kTwoPi
 
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586;
 constexpr double kIdleNoiseSds = 4.5;  // ReceptorStepper::Quiescent with noise
-
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-// Standard normal deviate, a pure function of (seed, stream, count);
-// NormalHashed takes SplitMix64(seed) (ReceptorStepper: hashed once).
-// ReceptorStepper::NoiseRun evaluates the same expressions for several
-// receptors at once: change both together.
-double NormalHashed(uint64_t seed_hash, uint64_t stream, uint64_t count) {
-  const uint64_t h1 = SplitMix64(SplitMix64(seed_hash ^ stream) ^ count);
-  const uint64_t h2 = SplitMix64(h1);
-  const double u1 = (static_cast<double>(h1 >> 11) + 0.5) * 0x1p-53;  // (0, 1)
-  const double u2 = static_cast<double>(h2 >> 11) * 0x1p-53;
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
-}
-double Normal(uint64_t seed, uint64_t stream, uint64_t count) {
-  return NormalHashed(SplitMix64(seed), stream, count);
-}
-
-// exp(A) of an m x m row-major matrix (m <= 5): scaling and squaring with a
-// 16-term Taylor series (||A|| <= 1/4 after scaling: error < 1e-24).
-void Expm(int m, const double* A, double* E) {
-  double norm = 0.0;
-  for (int i = 0; i < m; ++i) {
-    double row = 0.0;
-    for (int j = 0; j < m; ++j) row += std::abs(A[i * m + j]);
-    norm = std::max(norm, row);
-  }
-  int squarings = 0;
-  while (norm > 0.25 && squarings < 1000) {
-    norm *= 0.5;
-    ++squarings;
-  }
-  const double scale = std::ldexp(1.0, -squarings);
-  double X[25], T[25], tmp[25];
-  for (int i = 0; i < m * m; ++i) X[i] = A[i] * scale;
-  for (int i = 0; i < m * m; ++i) T[i] = E[i] = (i % (m + 1) == 0) ? 1.0 : 0.0;
-  auto mul = [m](const double* P, const double* Q, double* R) {
-    for (int i = 0; i < m; ++i)
-      for (int j = 0; j < m; ++j) {
-        double acc = 0.0;
-        for (int k = 0; k < m; ++k) acc += P[i * m + k] * Q[k * m + j];
-        R[i * m + j] = acc;
-      }
-  };
-  for (int k = 1; k <= 16; ++k) {
-    mul(T, X, tmp);
-    for (int i = 0; i < m * m; ++i) {
-      T[i] = tmp[i] / k;
-      E[i] += T[i];
-    }
-  }
-  for (int s = 0; s < squarings; ++s) {
-    mul(E, E, tmp);
-    std::copy(tmp, tmp + m * m, E);
-  }
-}
 
 // SA1 input saturation q / (1 + |q| / s) (SA1Params::saturation; s = 0:
 // none); odd and monotone, so zero crossings and order are kept.
@@ -183,87 +38,6 @@ void OnSpike(double t, void* ctx) {
 }
 
 }  // namespace
-
-void WangTable1Gains(Quantity q, SA1Params* p) {
-  switch (q) {
-    case Quantity::kCompressiveStrain:  // strain-based model
-      p->k0_a_per_pa = 2.73e-12;
-      p->k1_a_s_per_pa = 5.29e-12;
-      p->i0_a = 4.66e-12;
-      break;
-    case Quantity::kStrainEnergy:  // SED-based model
-      p->k0_a_per_pa = 1.46e-15;
-      p->k1_a_s_per_pa = 6.81e-15;
-      p->i0_a = 7.59e-12;
-      break;
-    default:  // stress-based model
-      p->k0_a_per_pa = 1.40e-16;
-      p->k1_a_s_per_pa = 1.68e-16;
-      p->i0_a = 4.94e-12;
-      break;
-  }
-}
-
-void DefaultSA1Gains(Quantity q, SA1Params* p) {
-  WangTable1Gains(q, p);
-  p->saturation = 0.0;
-  if (p->model == SA1Model::kFiltered) {
-    // the row's rheobase quantity (heminode 1, the largest M) before rescaling
-    double mmax = 0.0;
-    for (double m : p->merkel_cells) mmax = std::max(mmax, m);
-    const double rheobase = (p->threshold_v / p->resistance_ohm - p->i0_a) /
-                            (mmax * p->k0_a_per_pa);
-    p->saturation = kSA1SaturationOverRheobase * rheobase;
-    p->k0_a_per_pa *= kSA1StaticScale;
-    p->k1_a_s_per_pa = p->k0_a_per_pa * kSA1RateTimeS;
-  }
-}
-
-namespace {
-// Per class: multipliers of (drive gain, membrane tau, adaptation jump).
-// Variant 0 is the calibrated median unit. The spread is of the order of
-// TouchSim's fitted afferents (membrane time constants within 0.6-2x of
-// their class median, Saal et al. 2017), chosen so that every variant keeps
-// its class's tuning (tests/unit/test_afferent_tuning.py).
-const VariantScale kVariants[kNumClasses][kNumVariants] = {
-    {{1.0, 1.0, 1.0}, {0.75, 1.3, 0.7}, {1.3, 0.8, 1.4}, {0.9, 1.15, 1.2}},
-    {{1.0, 1.0, 1.0}, {0.75, 1.3, 0.7}, {1.3, 0.8, 1.4}, {0.9, 1.15, 1.2}},
-    {{1.0, 1.0, 1.0}, {0.75, 1.2, 0.7}, {1.3, 0.85, 1.4}, {0.9, 1.1, 1.2}}};
-}  // namespace
-
-double NoiseSd(const ReceptorParams& p, ReceptorClass cls) {
-  if (cls == ReceptorClass::kSA1 && p.sa1.model == SA1Model::kWang2016) return 0.0;
-  return p.noise.sd[static_cast<int>(cls)];
-}
-
-const VariantScale& ReceptorVariant(ReceptorClass cls, int variant) {
-  return kVariants[static_cast<int>(cls)][variant];
-}
-
-int VariantOf(const ReceptorParams& p, ReceptorClass cls, unsigned long long stream) {
-  if (!p.varied || (cls == ReceptorClass::kSA1 && p.sa1.model == SA1Model::kWang2016)) return 0;
-  // a stream of its own, apart from the noise's (counts 0, 1, ...)
-  const uint64_t h = SplitMix64(SplitMix64(SplitMix64(p.noise.seed ^ 0x5a17ULL) ^ stream) ^
-                                static_cast<uint64_t>(cls));
-  return static_cast<int>(h % kNumVariants);
-}
-
-std::string ReceptorParamsKey(const ReceptorParams& p) {
-  std::ostringstream s;
-  s.precision(17);
-  for (double m : p.sa1.merkel_cells) s << m << ' ';
-  s << "| " << p.sa1.k0_a_per_pa << ' ' << p.sa1.k1_a_s_per_pa << ' ' << p.sa1.i0_a << ' '
-    << p.sa1.capacitance_f << ' ' << p.sa1.resistance_ohm << ' ' << p.sa1.threshold_v << ' '
-    << p.sa1.refractory_s << " | " << p.ra.gain_s_per_pa << ' ' << p.ra.lowpass_hz << ' '
-    << p.ra.tau_s << ' ' << p.ra.refractory_s << " | " << p.pc.gain_s2_per_pa << ' '
-    << p.pc.highpass_hz << ' ' << p.pc.lowpass_hz << ' ' << p.pc.tau_s << ' '
-    << p.pc.refractory_s << " | " << p.noise.sd[0] << ' ' << p.noise.sd[1] << ' '
-    << p.noise.sd[2] << ' ' << p.noise.tau_s << ' ' << p.noise.seed << " | " << p.rate_tau_s
-    << " | " << static_cast<int>(p.sa1.model) << ' ' << p.sa1.lowpass_hz << ' ' << p.varied;
-  for (const Adaptation& a : p.adapt) s << ' ' << a.jump << ' ' << a.tau_s;
-  s << ' ' << p.ra.saturation << ' ' << p.sa1.saturation;
-  return s.str();
-}
 
 namespace {
 // Membrane time constant of class cls, variant var (s), as Advance takes it.
@@ -716,11 +490,6 @@ bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
   const double gain = cls == ReceptorClass::kRA ? p_.ra.gain_s_per_pa : p_.pc.gain_s2_per_pa;
   const double bound = gain * gain_scale * filter_bound(f);
   return bound < 1e-6 && noise_margin < 1.0 - 2e-6 && st[kU0] < 1.0 - 1e-6;
-}
-
-int AdvanceReceptor(ReceptorClass cls, const ReceptorParams& p, double q_end, double dt,
-                    unsigned long long stream, double* state, double* voltage) {
-  return ReceptorStepper(p, dt).Advance(cls, q_end, stream, state, voltage);
 }
 
 }  // namespace mjtouch

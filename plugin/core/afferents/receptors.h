@@ -162,9 +162,6 @@ int VariantOf(const ReceptorParams& p, ReceptorClass cls, unsigned long long str
 // The noise sd of class cls: 0 for the kWang2016 SA1 (as published).
 double NoiseSd(const ReceptorParams& p, ReceptorClass cls);
 
-// Every parameter, printed at full precision (for model caches).
-std::string ReceptorParamsKey(const ReceptorParams& p);
-
 // Advances receptors over a step of dt. q is taken as linear in time between
 // the previous value and q_end (so dq/dt is constant over the step); the
 // filters are propagated exactly for that input; each class's drive is
@@ -254,10 +251,6 @@ void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
                    unsigned long long stream, double* state);
 // Exponentially smoothed firing rate (Hz) held in the state.
 double ReceptorRate(const double* state);
-
-// One step without a stepper (builds one: for tests and one-off calls).
-int AdvanceReceptor(ReceptorClass cls, const ReceptorParams& p, double q_end, double dt,
-                    unsigned long long stream, double* state, double* voltage);
 
 }  // namespace mjtouch
 

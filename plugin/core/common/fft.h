@@ -9,7 +9,6 @@
 // contiguous batch of columns), which the compiler vectorises without
 // intrinsics; the per-lane arithmetic does not depend on the batch width or
 // the instruction set, so results are bit-identical on every code path.
-// Measured here (128^2 complex, forward + inverse): 0.3 ms, numpy 1.0 ms.
 // Split storage (separate real and imaginary arrays); unnormalised. The
 // real transforms also run in float (twice the lanes, half the memory
 // traffic): the contact solver's operator is a float table applied to a CG

@@ -14,10 +14,9 @@ namespace mjtouch {
 namespace fft_detail {
 
 // Row strides an odd multiple of 8 elements: not a power of two (those put
-// the radix streams of a stage in the same cache sets, measured 3-8x slower
-// at 128 and 256), and whole 32-byte vectors, so that with SplitScratch's
-// aligned arrays rows start on a vector boundary (unaligned rows cross a
-// cache line every other load: measured 7-8% of ConvolveReal<float>).
+// the radix streams of a stage in the same cache sets), and whole 32-byte
+// vectors, so that with SplitScratch's aligned arrays rows start on a vector
+// boundary (unaligned rows cross a cache line every other load).
 inline int PaddedStride(int n) {
   int r = (n + 7) / 8 * 8;
   if ((r / 8) % 2 == 0) r += 8;

@@ -29,7 +29,7 @@
 // across iterations or need FMA, where target_clones will not do (it cannot
 // give each copy its own vector width or contraction; GCC's "avx2" has no
 // FMA; a 16-float vector kept across a loop on a narrower ISA is lowered
-// through the stack: the stress sums ran 3.7x slower on AVX2 so). Compiles
+// through the stack). Compiles
 // name##Body<W, kFma> args once per ISA (W: floats per native vector) and
 // defines `void name params`, which calls the copy picked once at run time:
 // AVX-512 (16), AVX2 + FMA (8), else the baseline (4: SSE2; NEON on aarch64,

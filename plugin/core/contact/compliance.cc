@@ -113,16 +113,16 @@ std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFo
 }
 
 void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
-                              ComplianceWork* w, ApplyPrecision precision, int in_rows,
-                              int in_cols) const {
+                              ComplianceWork* w, ApplyPrecision precision, int threads,
+                              int in_rows, int in_cols) const {
   if (in_rows < 0) in_rows = by;
   if (in_cols < 0) in_cols = bx;
   if (precision == ApplyPrecision::kFloat) {
     ApplyIn(s.fft, s.k_hat_f, in, bx, by, in_rows, in_cols, out, &w->spec_re_f, &w->spec_im_f,
-            &w->fft_scratch_f, w->threads);
+            &w->fft_scratch_f, threads);
   } else {
     ApplyIn(s.fft, s.k_hat, in, bx, by, in_rows, in_cols, out, &w->spec_re, &w->spec_im,
-            &w->fft_scratch, w->threads);
+            &w->fft_scratch, threads);
   }
 }
 

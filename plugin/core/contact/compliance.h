@@ -28,14 +28,12 @@ class LayeredSubstrate;
 
 // Arithmetic of SurfaceCompliance::Apply's FFTs. kFloat: the spectra in
 // float (the table is float, and the contact solver stops at a relative
-// change ~1e-4; float rounding adds ~1e-7 relative to K p): 1.7-1.8x faster.
+// change ~1e-4; float rounding adds ~1e-7 relative to K p): the fast path.
 // kDouble: the reference path.
 enum class ApplyPrecision { kFloat = 0, kDouble };
 
-// Per-caller FFT scratch (no state that outlives a call), and the threads
-// Apply may use (ThreadPool callers; the same bits for any count).
+// Per-caller FFT scratch (no state that outlives a call).
 struct ComplianceWork {
-  int threads = 1;
   std::vector<double> spec_re, spec_im, fft_scratch;
   std::vector<float> spec_re_f, spec_im_f, fft_scratch_f;
 };
@@ -87,9 +85,10 @@ class SurfaceCompliance {
   // spectrum from SpectrumFor(bx, by). in_rows, in_cols (<= by, bx; default
   // all): in is zero outside its first in_rows x in_cols block (fewer input
   // columns to transform; a spectrum of a smaller reach then suffices).
+  // threads: ThreadPool callers of the FFTs (the same bits for any count).
   void Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
-             ComplianceWork* w, ApplyPrecision precision = ApplyPrecision::kDouble,
-             int in_rows = -1, int in_cols = -1) const;
+             ComplianceWork* w, ApplyPrecision precision, int threads, int in_rows = -1,
+             int in_cols = -1) const;
   // u += K * (d on cell c of the box) by direct sum (non-periodic only):
   // cheaper than an FFT when few cells change.
   void AddCell(int c, double d, int bx, int by, double* u) const {
@@ -143,9 +142,8 @@ class SurfaceCompliance {
 };
 
 // How many cells' AddCell (box_cells multiply-adds each) cost about one
-// Apply with spectrum s: measured on an 87 x 76 box (180 x 160 grid, float,
-// AVX2) 1.5 us per cell against ~100 us per apply, ~4 multiply-adds per
-// FFT flop (5 N log2 N).
+// Apply with spectrum s, taking one FFT flop (5 N log2 N) to cost as much as
+// ~4 multiply-adds.
 inline double DirectCellsPerApply(const SurfaceCompliance::Spectrum& s, size_t box_cells) {
   const double n = static_cast<double>(s.fft.nx()) * s.fft.ny();
   return 5.0 * n * std::log2(n) / (4.0 * static_cast<double>(box_cells));

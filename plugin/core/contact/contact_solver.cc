@@ -21,6 +21,7 @@ struct Problem {
   double fft_cost;  // flops of one Apply, against direct sums
   ElasticWork* w;
   ApplyPrecision precision;
+  int threads;  // ThreadPool callers of the FFTs and the stencil
 };
 
 // sum of term(k), k < n, in four interleaved partial sums combined as
@@ -53,9 +54,9 @@ void UpdateDisplacement(const Problem& P, double tau, double s, ElasticSolveStat
   const size_t nchg = w->changed.size();
   if (nchg > 0) {
     if (!P.periodic && static_cast<double>(nchg) * static_cast<double>(P.B) < P.fft_cost) {
-      P.K.AddCells(w->changed.data(), nchg, dl, P.bx, P.by, u, w->fft.threads);
+      P.K.AddCells(w->changed.data(), nchg, dl, P.bx, P.by, u, P.threads);
     } else {
-      P.K.Apply(*P.spec, dl, P.bx, P.by, r, &w->fft, P.precision);
+      P.K.Apply(*P.spec, dl, P.bx, P.by, r, &w->fft, P.precision, P.threads);
       ++st->applies;
       for (size_t b = 0; b < P.B; ++b) u[b] += r[b];
     }
@@ -108,7 +109,7 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
     const double beta = beta_on * G / G_old;
     for (size_t b = 0; b < B; ++b) t[b] = p[b] > 0.0 ? g[b] + beta * t[b] : 0.0;
     G_old = G;
-    P.K.Apply(*P.spec, t, P.bx, P.by, r, &w->fft, P.precision);
+    P.K.Apply(*P.spec, t, P.bx, P.by, r, &w->fft, P.precision, P.threads);
     ++st->applies;
     double sum_r = 0.0;
     for (size_t b = 0; b < B; ++b)
@@ -297,9 +298,9 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     const int* lo = w->set_lo.data();
     const int* hi = w->set_hi.data();
     if (stencil_f) {
-      StencilRows<L>(M, gpf, px, bx, by, lo, hi, r, w->fft.threads);
+      StencilRows<L>(M, gpf, px, bx, by, lo, hi, r, P.threads);
     } else {
-      StencilRows<L>(M, gp, px, bx, by, lo, hi, r, w->fft.threads);
+      StencilRows<L>(M, gp, px, bx, by, lo, hi, r, P.threads);
     }
     const double zbar = ws::GatherSum(ns, S, r, zS) / static_cast<double>(ns);
     const double G = ws::CenterDot(ns, zbar, zS, gS);
@@ -323,7 +324,7 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
       if (num > 0.0 || beta == 0.0) break;
       beta = 0.0;
     }
-    P.K.Apply(*P.spec, t, bx, by, r, &w->fft, P.precision);
+    P.K.Apply(*P.spec, t, bx, by, r, &w->fft, P.precision, P.threads);
     ++st->applies;
     // t sums to zero over S: t.(K t - mean) = t.K t
     const double den = ws::GatherDot(ns, S, r, tS);
@@ -350,9 +351,9 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     double* kd = nullptr;
     if (nchg > 0) {
       if (!P.periodic && static_cast<double>(nchg) < DirectCellsPerApply(*P.spec, B)) {
-        P.K.AddCells(chg, nchg, dl, bx, by, u, w->fft.threads);
+        P.K.AddCells(chg, nchg, dl, bx, by, u, P.threads);
       } else {
-        P.K.Apply(*P.spec, dl, bx, by, g, &w->fft, P.precision);
+        P.K.Apply(*P.spec, dl, bx, by, g, &w->fft, P.precision, P.threads);
         ++st->applies;
         kd = g;
       }
@@ -372,18 +373,16 @@ ElasticContact::ElasticContact(std::shared_ptr<const SurfaceCompliance> complian
     : compliance_(std::move(compliance)) {}
 
 bool ElasticContact::Solve(const std::vector<double>& gap_m, const CellBox& box,
-                           double force_n, double tolerance, int max_iterations,
+                           double force_n, const ElasticSolveOptions& options,
                            std::vector<double>* pressure_pa, ElasticWork* work,
-                           ElasticSolveStats* stats, ElasticMethod method,
-                           ApplyPrecision precision, const double* initial_u_m) const {
-  return SolveElasticContact(*compliance_, gap_m, box, force_n, tolerance, max_iterations,
-                             pressure_pa, work, stats, method, precision, initial_u_m);
+                           ElasticSolveStats* stats, const double* initial_u_m) const {
+  return SolveElasticContact(*compliance_, gap_m, box, force_n, options, pressure_pa, work,
+                             stats, initial_u_m);
 }
 
 bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& gap,
-                         const CellBox& box_in, double force, double tol, int max_iter,
+                         const CellBox& box_in, double force, const ElasticSolveOptions& opt,
                          std::vector<double>* pressure, ElasticWork* w, ElasticSolveStats* st,
-                         ElasticMethod method, ApplyPrecision precision,
                          const double* initial_u) {
   *st = ElasticSolveStats();
   CellBox box = box_in;
@@ -400,7 +399,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   w->u.resize(B);
   // delta is zero between solves (both methods clear the cells they set)
   w->delta.resize(B);
-  if (method == ElasticMethod::kPreconditioned) {
+  if (opt.method == ElasticMethod::kPreconditioned) {
     // written before they are read (t: zeroed by BuildSet, g: K delta, r:
     // the stencil's output)
     w->t.resize(B);
@@ -425,7 +424,7 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
                                         w->dropped.data(), &ndropped);
   // initial_u, corrected for the dropped cells (direct sums unless they
   // are many), or a fresh K p.
-  bool have_u = initial_u != nullptr && !periodic && method == ElasticMethod::kPreconditioned &&
+  bool have_u = initial_u != nullptr && !periodic && opt.method == ElasticMethod::kPreconditioned &&
                 sum_p > 0.0;
   if (have_u) {
     // Too many dropped cells: the FFT is cheaper.
@@ -481,14 +480,14 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   const double fft_cost = 5.0 * static_cast<double>(spec->fft.nx()) * spec->fft.ny() *
                           std::log2(static_cast<double>(spec->fft.nx()) * spec->fft.ny());
   if (!have_u) {
-    K.Apply(*spec, p, bx, by, w->u.data(), &w->fft, precision);
+    K.Apply(*spec, p, bx, by, w->u.data(), &w->fft, opt.precision, opt.threads);
     st->applies = 1;
   }
-  const Problem P{K, spec, bx, by, B, periodic, target, fft_cost, w, precision};
-  if (method == ElasticMethod::kPolonskyKeer) {
-    PolonskyKeer(P, tol, max_iter, st);
+  const Problem P{K, spec, bx, by, B, periodic, target, fft_cost, w, opt.precision, opt.threads};
+  if (opt.method == ElasticMethod::kPolonskyKeer) {
+    PolonskyKeer(P, opt.tolerance, opt.max_iterations, st);
   } else {
-    Preconditioned(P, tol, max_iter, gap_sum, contacts, st);
+    Preconditioned(P, opt.tolerance, opt.max_iterations, gap_sum, contacts, st);
   }
   // The displacement of the final pressure for the approach: P&K recomputes
   // it; the preconditioned path keeps the running u = K p (updated with the
@@ -496,8 +495,8 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   // relative, not worth an FFT pair per step).
   p = w->p.data();
   double* u = w->u.data();
-  if (method == ElasticMethod::kPolonskyKeer) {
-    K.Apply(*spec, p, bx, by, u, &w->fft, precision);
+  if (opt.method == ElasticMethod::kPolonskyKeer) {
+    K.Apply(*spec, p, bx, by, u, &w->fft, opt.precision, opt.threads);
     ++st->applies;
   }
   size_t nc = 0;

@@ -35,6 +35,19 @@ namespace mjtouch {
 // kPolonskyKeer: Polonsky & Keer (1999) as published.
 enum class ElasticMethod { kPreconditioned = 0, kPolonskyKeer };
 
+// How one solve runs: it stops when the relative L1 change of the pressure
+// in one iteration is below `tolerance`, or after max_iterations; `method`;
+// the arithmetic of the operator's FFTs (compliance.h; the iteration itself
+// is double); the ThreadPool callers of the FFTs and the preconditioner's
+// stencil (the same bits for any count).
+struct ElasticSolveOptions {
+  double tolerance = 1e-4;
+  int max_iterations = 500;
+  ElasticMethod method = ElasticMethod::kPreconditioned;
+  ApplyPrecision precision = ApplyPrecision::kDouble;
+  int threads = 1;
+};
+
 struct ElasticSolveStats {
   int iterations = 0;
   double change = 0;         // last relative L1 pressure change (the stopping test)
@@ -67,21 +80,16 @@ struct ElasticWork {
 // are full nx x ny grids of the operator (row-major, j * nx + i). Cells with
 // non-finite gap never touch. pressure_pa holds the initial guess on entry
 // (any p >= 0; all zero: uniform over the candidates) and the solution on
-// exit (zero outside the box). Stops when the relative L1 change of the
-// pressure in one iteration is below `tolerance`, or after max_iterations.
-// Returns false if no cell can carry the load. precision: of the operator's
-// FFTs (compliance.h; the iteration itself is double). initial_u_m: if not
+// exit (zero outside the box). Returns false if no cell can carry the load.
+// initial_u_m: if not
 // null (kPreconditioned, non-periodic), K times the initial guess on the box
 // (bx * by, the guess's cells outside the box left out), which spares the
 // solve's first operator application; the solver corrects it for the cells
 // it drops (no candidates) and scales it with the guess.
 bool SolveElasticContact(const SurfaceCompliance& compliance, const std::vector<double>& gap_m,
-                         const CellBox& box, double force_n, double tolerance,
-                         int max_iterations, std::vector<double>* pressure_pa,
-                         ElasticWork* work, ElasticSolveStats* stats,
-                         ElasticMethod method = ElasticMethod::kPreconditioned,
-                         ApplyPrecision precision = ApplyPrecision::kDouble,
-                         const double* initial_u_m = nullptr);
+                         const CellBox& box, double force_n, const ElasticSolveOptions& options,
+                         std::vector<double>* pressure_pa, ElasticWork* work,
+                         ElasticSolveStats* stats, const double* initial_u_m = nullptr);
 
 // One skin's elastic contact: its compliance operator (shared, immutable,
 // spectra cached per box size) bound to the solver.
@@ -97,10 +105,8 @@ class ElasticContact {
 
   // SolveElasticContact with this skin's operator.
   bool Solve(const std::vector<double>& gap_m, const CellBox& box, double force_n,
-             double tolerance, int max_iterations, std::vector<double>* pressure_pa,
+             const ElasticSolveOptions& options, std::vector<double>* pressure_pa,
              ElasticWork* work, ElasticSolveStats* stats,
-             ElasticMethod method = ElasticMethod::kPreconditioned,
-             ApplyPrecision precision = ApplyPrecision::kDouble,
              const double* initial_u_m = nullptr) const;
 
  private:

@@ -16,17 +16,6 @@ const char* PressureModelName(PressureModel m) {
   }
 }
 
-bool ParsePressureModel(const std::string& name, PressureModel* m) {
-  for (PressureModel v : {PressureModel::kContacts, PressureModel::kWinkler,
-                          PressureModel::kElastic}) {
-    if (name == PressureModelName(v)) {
-      *m = v;
-      return true;
-    }
-  }
-  return false;
-}
-
 namespace {
 
 // Calls f(index) for every cell of the box, row by row.

@@ -19,7 +19,6 @@ namespace mjtouch {
 
 enum class PressureModel { kContacts = 0, kWinkler, kElastic };
 const char* PressureModelName(PressureModel m);
-bool ParsePressureModel(const std::string& name, PressureModel* m);
 
 // Every array is n*n, row-major (j * n + i), and zero outside `box`: the
 // per-step work of stage 2 is over the box only (the contact's candidate

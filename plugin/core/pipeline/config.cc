@@ -17,17 +17,21 @@ bool NeedsMaterial(Quantity q) {
 
 }  // namespace
 
-// Receptor depths inside the elastic skin; strain and SED need a material.
+std::unique_ptr<LayeredSubstrate> CreateLayeredSkin(const SkinConfig& cfg, std::string* error) {
+  std::string why;
+  auto skin = LayeredSubstrate::Create(cfg.layers, cfg.base, cfg.interface_side, &why);
+  if (!skin) *error = "mjtouch.skin: attribute `layers` / `base`: " + why;
+  return skin;
+}
+
 bool CheckElasticSkin(const SkinConfig& cfg, std::string* error) {
-  std::unique_ptr<LayeredSubstrate> sub;
-  if (cfg.layered) {
-    std::string why;
-    sub = LayeredSubstrate::Create(cfg.layers, cfg.base, cfg.interface_side, &why);
-    if (!sub) {
-      *error = "mjtouch.skin: attribute `layers` / `base`: " + why;
-      return false;
-    }
-  }
+  std::unique_ptr<LayeredSubstrate> skin;
+  if (cfg.layered && !(skin = CreateLayeredSkin(cfg, error))) return false;
+  return CheckElasticSkin(cfg, skin.get(), error);
+}
+
+// Receptor depths inside the elastic skin; strain and SED need a material.
+bool CheckElasticSkin(const SkinConfig& cfg, const LayeredSubstrate* sub, std::string* error) {
   for (int c = 0; c < kNumClasses; ++c) {
     const ClassConfig& k = cfg.classes[c];
     if (!k.present) continue;

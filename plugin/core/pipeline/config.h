@@ -3,6 +3,7 @@
 #ifndef MJTOUCH_PIPELINE_CONFIG_H_
 #define MJTOUCH_PIPELINE_CONFIG_H_
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -96,8 +97,14 @@ bool CheckTactileRate(const SkinConfig& cfg, double timestep_s, std::string* err
 // CheckTactileRate at timestep_s (1 for the contacts model, which has no
 // geometry to interpolate); an explicit count is kept.
 void ResolveOversample(SkinConfig* cfg, double timestep_s);
-// The layered stack builds and every class's receptor depth lies inside it;
-// `strain` and `sed` need a layered skin (after parsing, and in Build).
+// The layered stack of a skin="layered" config; null (and *error naming
+// `layers` / `base`) if it does not build.
+std::unique_ptr<LayeredSubstrate> CreateLayeredSkin(const SkinConfig& cfg, std::string* error);
+// Every class's receptor depth lies inside the layered stack `skin` (null:
+// the half-space skin, which has no depth limit); `strain` and `sed` need a
+// layered skin. SkinModel::Build checks the stack it builds.
+bool CheckElasticSkin(const SkinConfig& cfg, const LayeredSubstrate* skin, std::string* error);
+// The same after parsing: builds the stack first (CreateLayeredSkin).
 bool CheckElasticSkin(const SkinConfig& cfg, std::string* error);
 
 }  // namespace mjtouch

@@ -15,8 +15,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const Pose& pad_pose,
                             const std::vector<CounterSurface>& surfaces, double force_n,
-                            double depth_m, double tolerance, int max_iterations,
-                            ElasticMethod method, ApplyPrecision precision, bool fast_paths,
+                            double depth_m, const ElasticSolveOptions& options, bool fast_paths,
                             HistoryBlock* history, GridShiftWork* w, TractionField* field) {
   const TaxelGrid& g = sg.grid;  // g.n == grid.n + 1
   const int n = grid.n;
@@ -27,8 +26,11 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
   CellBox sbox, u_region;  // the final solve box, the check's K p region
   for (int pass = 0; pass < 2 && !touching; ++pass) {
     CellBox rbox;
-    const double level = RenderGap(g, sg.skin_z, pad_pose, surfaces, pass == 0 ? cull : kInf,
-                                   &w->gap, &w->coverage, true, &sg.blocks, &rbox, fast_paths);
+    RenderRequest request{g, sg.skin_z, pad_pose, surfaces, pass == 0 ? cull : kInf, &sg.blocks};
+    request.fast_paths = fast_paths;
+    RenderOutput out{&w->gap, &w->coverage, &rbox};
+    out.scratch = &w->render_scratch;
+    const double level = RenderGap(request, out);
     if (rbox.empty() || !std::isfinite(MinGap(g, rbox, w->gap, w->coverage)))
       return true;  // nothing under the shifted grid: keep the taxel grid's solution
     // Warm-started from the shifted grid's own history as the taxel grid's
@@ -56,9 +58,9 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
       sbox = GrowBox(rbox, mb.i0, mb.i0 + mb.nx, mb.j0, mb.j0 + mb.ny);
       if (sbox.empty()) sbox = rbox;
     }
-    touching = SolveElasticWarm(g, *sg.elastic, rbox, w->coverage, history, force_n, tolerance,
-                                max_iterations, method, precision, &w->gap, &w->pressure,
-                                &w->elastic, &w->stats, &sbox, &u_region);
+    touching = SolveElasticWarm(g, *sg.elastic, rbox, w->coverage, history, force_n, options,
+                                &w->gap, &w->pressure, &w->elastic, &w->stats, &sbox,
+                                &u_region);
     if (!touching) return false;
     if (pass == 0 && w->stats.approach_m >= level) touching = false;  // render all, solve again
   }

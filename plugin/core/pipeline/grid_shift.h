@@ -1,4 +1,4 @@
-// `grid_shift` (issue 13): the `elastic` contact solved a second time on the
+// `grid_shift`: the `elastic` contact solved a second time on the
 // taxel grid shifted by half a cell in x and y (n + 1 cells: centres at the
 // taxel grid's cell corners), deposited back onto the taxel grid (each
 // shifted cell's load split equally over the 4 cells it overlaps, which
@@ -13,7 +13,7 @@
 // first Fourier component, so the average cancels the V / pitch line; the
 // physical lines at m V / D are kept (examples/pc_grid_line_static.py,
 // examples/pc_grid_shift.py). Cost: a second render and solve per step,
-// warm-started from the shifted grid's own history in plugin_state (model.h)
+// warm-started from the shifted grid's own history in plugin_state (state_layout.h)
 // like the taxel grid's solve.
 #ifndef MJTOUCH_PIPELINE_GRID_SHIFT_H_
 #define MJTOUCH_PIPELINE_GRID_SHIFT_H_
@@ -29,7 +29,7 @@
 
 namespace mjtouch {
 
-struct HistoryBlock;  // model.h
+struct HistoryBlock;  // state_layout.h
 
 // The shifted grid's immutable tables (SkinModel, with `grid_shift`).
 struct ShiftedGrid {
@@ -42,6 +42,7 @@ struct ShiftedGrid {
 // Per-simulation scratch (Workspace).
 struct GridShiftWork {
   std::vector<double> gap, coverage, pressure;
+  RenderScratch render_scratch;
   ElasticStepWork elastic;
   ElasticSolveStats stats;
 };
@@ -60,8 +61,7 @@ struct GridShiftWork {
 // stays invalid in both cases).
 bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const Pose& pad_pose,
                             const std::vector<CounterSurface>& surfaces, double force_n,
-                            double depth_m, double tolerance, int max_iterations,
-                            ElasticMethod method, ApplyPrecision precision, bool fast_paths,
+                            double depth_m, const ElasticSolveOptions& options, bool fast_paths,
                             HistoryBlock* history, GridShiftWork* w, TractionField* field);
 
 }  // namespace mjtouch

@@ -123,15 +123,10 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
   for (int c = 0; c < kNumClasses; ++c)
     model->want_.push_back(ComponentsFor(cfg.classes[c].quantity));
   // The elastic skin, and the material at each class's depth.
-  if (!CheckElasticSkin(cfg, error)) return nullptr;
-  if (cfg.layered) {
-    std::string why;
-    std::shared_ptr<LayeredSubstrate> layered =
-        LayeredSubstrate::Create(cfg.layers, cfg.base, cfg.interface_side, &why);
-    if (!layered) {
-      *error = "mjtouch.skin: attribute `layers` / `base`: " + why;
-      return nullptr;
-    }
+  std::shared_ptr<LayeredSubstrate> layered;
+  if (cfg.layered && !(layered = CreateLayeredSkin(cfg, error))) return nullptr;
+  if (!CheckElasticSkin(cfg, layered.get(), error)) return nullptr;
+  if (layered) {
     for (int c = 0; c < kNumClasses; ++c)
       model->material_[c] = layered->MaterialAt(cfg.classes[c].depth_m,
                                                 cfg.interface_side == InterfaceSide::kUpper);

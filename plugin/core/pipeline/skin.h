@@ -7,7 +7,7 @@
 //   attributes.h  the MJCF attribute table: keys, parsing, ranges, docs, cache key
 //   config.h      SkinConfig and the checks that need the pad or timestep
 //   model.h       SkinModel (immutable, shared by every MjData of a model)
-//                 and the layout of the per-step state (MuJoCo plugin_state)
+//   state_layout.h  the layout of the per-step state (MuJoCo plugin_state)
 //   step.h        StepInput, Workspace (MuJoCo plugin_data scratch) and Step
 #ifndef MJTOUCH_PIPELINE_SKIN_H_
 #define MJTOUCH_PIPELINE_SKIN_H_
@@ -15,6 +15,7 @@
 #include "pipeline/attributes.h"
 #include "pipeline/config.h"
 #include "pipeline/model.h"
+#include "pipeline/state_layout.h"
 #include "pipeline/step.h"
 
 #endif  // MJTOUCH_PIPELINE_SKIN_H_

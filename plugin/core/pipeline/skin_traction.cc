@@ -1,12 +1,12 @@
 // Stages 1-2 of the pipeline for one step: render the gap (surface.h) and
 // turn it and MuJoCo's contact force into surface tractions (pressure.h,
-// contact_solver.h) with the model chosen by the `pressure` attribute.
-// Everything depends on the step's inputs and `state` only (warm starts
-// come from plugin_state), so copies and resets reproduce runs bit for bit.
+// contact_solver.h), one function per `pressure` model. Everything depends
+// on the step's inputs and `state` only (warm starts come from
+// plugin_state), so copies and resets reproduce runs bit for bit.
 #include <algorithm>
-#include <utility>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include <time.h>
 
@@ -24,33 +24,249 @@ constexpr int kElasticMaxIterations = 500;
 // renders again without culling); a tight one renders and scans fewer cells.
 constexpr double kWinklerCullDepths = 1.1, kWinklerCullM = 3e-6;
 
-// CPU time of the calling thread (benchmarks: Workspace::render_time_s).
+// The `elastic` solves' settings, threads included.
+ElasticSolveOptions ElasticOptions(const SkinConfig& cfg) {
+  ElasticSolveOptions o;
+  o.tolerance = cfg.tolerance;
+  o.max_iterations = kElasticMaxIterations;
+  o.method = cfg.elastic_method;
+  o.precision = cfg.elastic_precision;
+  o.threads = cfg.threads;
+  return o;
+}
+
+// CPU time of the calling thread (TractionRunOptions::render_time_s).
 double ThreadCpuSeconds() {
   timespec ts;
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+// One step of stage 2, as every pressure model sees it.
+struct TractionStep {
+  const SkinModel& model;
+  const SkinConfig& cfg;
+  const StepInput& in;
+  const TractionNeeds& needs;
+  double* state;
+  Workspace* ws;
+  bool fast;              // the fast paths (not TractionRunOptions::reference_paths)
+  double* render_time_s;  // TractionRunOptions::render_time_s
+  bool warm;              // the last step touched: depth_prev_m bounds the render
+  double depth_prev_m;    // the last step's indentation depth
+  // `elastic`: the pressure history of the taxel grid and of the shifted
+  // grid (this time, the last step, the one before); null without one.
+  HistoryBlock* taxel;
+  HistoryBlock* shifted;
+};
+
+// Renders the gap into ws->gap / ws->coverage, culling cells above
+// cull_above_m over the smallest gap; `summary`: with the covered cells'
+// summary (Winkler + shear). Returns the cull level reached.
+double Render(const TractionStep& s, double cull_above_m, bool summary, CellBox* box) {
+  Workspace* ws = s.ws;
+  const double t0 = s.render_time_s ? ThreadCpuSeconds() : 0.0;
+  RenderRequest request{s.cfg.grid,    s.model.skin_z(), s.in.pad_pose,
+                        s.in.surfaces, cull_above_m,     &s.model.skin_blocks()};
+  request.fast_paths = s.fast;
+  RenderOutput out{&ws->gap, &ws->coverage, box};
+  out.written = s.fast ? &ws->gap_written : nullptr;
+  out.summary = summary ? &ws->render_summary : nullptr;
+  out.scratch = &ws->render_scratch;
+  const double level = RenderGap(request, out);
+  if (!s.fast) ws->gap_written = CellBox::All(s.cfg.grid);  // the reference cleared it all
+  if (s.render_time_s) *s.render_time_s += ThreadCpuSeconds() - t0;
+  return level;
+}
+
+// Renders with cells above cull_rel over the smallest gap culled, then
+// solve(box, gmin, &approach) -> touching. A cell whose gap exceeds the
+// approach cannot touch (the skin's displacement only adds to the gap), so
+// if the solved approach reaches the cull level, everything is rendered and
+// solved again (after reset()): the result is exact either way. min_gap(box)
+// gives the smallest covered gap (+inf: nothing to touch). Sets the contact
+// depth (approach - smallest gap) when touching.
+template <typename MinGapFn, typename SolveFn, typename ResetFn>
+bool RenderAndSolve(const TractionStep& s, double cull_rel, bool summary, CellBox* box,
+                    MinGapFn min_gap, SolveFn solve, ResetFn reset) {
+  double cull = Render(s, cull_rel, summary, box);
+  bool touching = false;
+  for (int pass = 0; pass < 2 && !touching; ++pass) {
+    if (pass == 1) cull = Render(s, kInf, summary, box);
+    const double gmin = min_gap(*box);
+    if (!std::isfinite(gmin)) break;
+    double approach = 0.0;
+    touching = solve(*box, gmin, &approach);
+    if (touching && approach >= cull && pass == 0) {
+      touching = false;  // render all and solve again
+      reset();
+      continue;
+    }
+    if (touching) s.state[kStContactDepth] = approach - gmin;
+  }
+  return touching;
+}
+
+// The shear (full-slip Coulomb, uniform ratio) of a solved pressure field,
+// the float copies and the active runs.
+void FinishSolvedTraction(const TractionStep& s) {
+  const TaxelGrid& grid = s.cfg.grid;
+  TractionField* tf = &s.ws->traction;
+  const StepInput& in = s.in;
+  if (!s.cfg.shear) {
+    FinishTraction(grid, false, tf);
+  } else if (!s.fast) {
+    UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, tf);
+    FinishTraction(grid, true, tf);
+  } else {  // the shear and FinishTraction in one pass
+    FinishUniformSlipTraction(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, tf);
+  }
+}
+
+// `contacts`: MuJoCo's contact points splatted onto the grid.
+bool ContactsTraction(const TractionStep& s) {
+  TractionField* tf = &s.ws->traction;
+  const bool touching = SplatContacts(s.cfg.grid, s.in.contacts, tf);
+  s.state[kStContactDepth] = 0.0;
+  if (touching) FinishTraction(s.cfg.grid, s.cfg.shear, tf);
+  return touching;
+}
+
+// `winkler`: the elastic foundation, every array written (the reference
+// path, and the fast path without shear).
+bool WinklerTraction(const TractionStep& s) {
+  const TaxelGrid& grid = s.cfg.grid;
+  Workspace* ws = s.ws;
+  TractionField* tf = &ws->traction;
+  ClearTraction(grid, tf);
+  const double cull_rel = s.warm ? CullLevel(s.depth_prev_m) : kInf;
+  CellBox box;
+  const bool touching = RenderAndSolve(
+      s, cull_rel, false, &box,
+      [&](const CellBox& b) { return MinGap(grid, b, ws->gap, ws->coverage); },
+      [&](const CellBox& b, double gmin, double* approach) {
+        const double guess = s.warm ? gmin + s.depth_prev_m : std::nan("");
+        const bool t = (s.fast ? WinklerPressure : WinklerPressureReference)(
+            grid, ws->gap, ws->coverage, b, s.cfg.stiffness_pa_per_m, s.in.normal_force_n, guess,
+            tf);
+        *approach = tf->approach_m;
+        return t;
+      },
+      [&] { ClearTraction(grid, tf); });
+  if (touching) FinishSolvedTraction(s);
+  return touching;
+}
+
+// `winkler` with shear, fast path: solved first, then the field written over
+// the last one (WriteWinklerSlipTraction), which clears only what the new
+// contact does not cover; the arrays no later stage needs stay lazy.
+bool WinklerSlipTraction(const TractionStep& s) {
+  const TaxelGrid& grid = s.cfg.grid;
+  const StepInput& in = s.in;
+  Workspace* ws = s.ws;
+  TractionField& tf = ws->traction;
+  const double cull_rel = s.warm ? kWinklerCullDepths * s.depth_prev_m + kWinklerCullM : kInf;
+  CellBox box;
+  double solved_approach = 0.0;
+  bool touching = RenderAndSolve(
+      s, cull_rel, true, &box,
+      [&](const CellBox& b) {
+        // from the render's summary of the covered cells, else the solve's
+        // first pass; MinGap fixes a zero's sign
+        RenderSummary& rs = ws->render_summary;
+        if (rs.valid && rs.gap_min_m != 0.0) {
+          tf.scan_gmin = rs.gap_min_m;  // covered cells: finite gaps
+          tf.scan_covmax = rs.coverage_max;
+          std::swap(tf.scratch_spans, rs.spans);  // (the next render clears rs.spans)
+          return rs.gap_min_m;
+        }
+        const double gmin = ScanWinklerCandidates(grid, ws->gap, ws->coverage, b, &tf);
+        return gmin == 0.0 ? MinGap(grid, b, ws->gap, ws->coverage) : gmin;
+      },
+      [&](const CellBox& b, double gmin, double* approach) {
+        const double guess = s.warm ? gmin + s.depth_prev_m : std::nan("");
+        const bool t = SolveWinkler(grid, ws->gap, ws->coverage, b, s.cfg.stiffness_pa_per_m,
+                                    in.normal_force_n, guess, &tf, approach, true);
+        solved_approach = *approach;
+        return t;
+      },
+      [] {});
+  if (touching) {
+    touching = WriteWinklerSlipTraction(grid, box, solved_approach, in.normal_force_n, in.shear_x_n,
+                                        in.shear_y_n, s.needs.pressure_pa, &tf);
+  } else {
+    ClearTraction(grid, &tf);
+  }
+  return touching;
+}
+
+// `elastic`: boundary-element contact warm-started from the pressure
+// history, with `grid_shift` averaged with the half-cell shifted grid's.
+bool ElasticTraction(const TractionStep& s) {
+  const SkinConfig& cfg = s.cfg;
+  const TaxelGrid& grid = cfg.grid;
+  const StepInput& in = s.in;
+  Workspace* ws = s.ws;
+  TractionField& tf = ws->traction;
+  const ElasticSolveOptions options = ElasticOptions(cfg);
+  ClearTraction(grid, &tf);
+  const double cull_rel = s.warm ? CullLevel(s.depth_prev_m) : kInf;
+  CellBox box;
+  CellBox u_region;  // the region of the check's K p (ws->elastic.check_u)
+  bool touching = RenderAndSolve(
+      s, cull_rel, false, &box,
+      [&](const CellBox& b) { return MinGap(grid, b, ws->gap, ws->coverage); },
+      [&](const CellBox& b, double, double* approach) {
+        CellBox solve_box = b;  // cold: uniform from the whole rendered box
+        if (!s.warm) ws->pressure_guess.assign(grid.Size(), 0.0);
+        ElasticSolveStats st;
+        bool t = SolveElasticWarm(grid, *s.model.elastic(), b, ws->coverage, s.taxel,
+                                  in.normal_force_n, options, &ws->gap, &ws->pressure_guess,
+                                  &ws->elastic, &st, &solve_box, &u_region);
+        if (t) {
+          tf.pressure_pa.swap(ws->pressure_guess);
+          tf.box = solve_box;
+          t = NormalizeLoad(grid, in.normal_force_n, &tf);
+        }
+        ws->elastic_stats = st;
+        *approach = st.approach_m;
+        return t;
+      },
+      [&] { ClearTraction(grid, &tf); });
+  // The taxel grid's solution and the check's K p (NormalizeLoad's
+  // rescaling is rounding-level) for the next step's warm start.
+  if (touching && s.taxel)
+    StoreElasticHistory(grid, tf.pressure_pa, tf.box, u_region, ws->elastic.check_u,
+                        s.state[kStContactDepth], &s.taxel[0]);
+  // `grid_shift`: average with the solve on the half-cell shifted grid
+  // (grid_shift.h), warm-started from its own history; the taxel grid's
+  // history keeps the taxel grid's own solution. If the shifted solve
+  // fails (it carries the same load on nearly the same cells), the taxel
+  // grid's solution stands.
+  if (touching && s.model.shifted())
+    AverageWithShiftedGrid(*s.model.shifted(), grid, in.pad_pose, in.surfaces, in.normal_force_n,
+                           s.state[kStContactDepth], options, s.fast, s.shifted, &ws->grid_shift,
+                           &tf);
+  if (touching) FinishSolvedTraction(s);
+  return touching;
+}
+
 }  // namespace
 
-bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
-                     Workspace* ws, bool new_time) {
+bool ComputeTraction(const SkinModel& model, const StepInput& in, const TractionNeeds& needs,
+                     double* state, Workspace* ws, bool new_time, const TractionRunOptions& run) {
   const SkinConfig& cfg = model.config();
-  const TaxelGrid& grid = cfg.grid;
-  TractionField& tf = ws->traction;
   // `elastic`: the last step's contact from the pressure history, so a
   // repeated evaluation at the same time starts where the first one did.
   const StateLayout& lay = model.state_layout();
   const bool history = lay.history_block > 0;
-  // this time, the last step, the one before: the taxel grid's and the shifted grid's
   HistoryBlock taxel[3]{}, shifted[3]{};
-  const bool shifted_history = lay.shifted_block > 0;
   if (history) {
     if (new_time)
       state[lay.history_head] = (static_cast<int>(state[lay.history_head]) + 1) % kHistoryBlocks;
     for (int back = 0; back < 3; ++back) taxel[back] = lay.history_at(state, back);
     taxel[0].slots[kHsValid] = 0.0;
-    if (shifted_history) {
+    if (lay.shifted_block > 0) {
       for (int back = 0; back < 3; ++back) shifted[back] = lay.shifted_history_at(state, back);
       shifted[0].slots[kHsValid] = 0.0;
     }
@@ -59,142 +275,30 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state,
   const double depth_prev = history ? taxel[1].slots[kHsDepth] : state[kStContactDepth];
   state[kStContactValid] = 0.0;
   if (!(in.in_contact && in.normal_force_n > 0.0)) return false;
+  const bool contacts = cfg.pressure_model == PressureModel::kContacts;
+  if (!contacts && in.surfaces.empty()) return false;
 
-  bool touching = false;
-  bool finished = false;  // FinishTraction done
-  if (cfg.pressure_model == PressureModel::kContacts) {
-    touching = SplatContacts(grid, in.contacts, &tf);
-    state[kStContactDepth] = 0.0;
-  } else if (!in.surfaces.empty()) {
-    // Winkler with shear (fast paths): solved first, then the field written
-    // over the last one (WriteWinklerSlipTraction), which clears only what
-    // the new contact does not cover.
-    const bool winkler_slip = !ws->reference_paths &&
-                              cfg.pressure_model == PressureModel::kWinkler && cfg.shear;
-    if (!winkler_slip) ClearTraction(grid, &tf);
-    // Warm start: the last step's indentation depth (approach minus smallest
-    // gap) bounds which cells can touch; cells provably above 1.5x that
-    // depth are not rendered. A cell whose gap exceeds the approach cannot
-    // touch in either model (the skin's displacement only adds to the gap),
-    // so if the solved approach reaches the cull level, render everything and
-    // solve again: the result is exact either way.
-    const double cull_rel = !warm ? kInf
-                            : winkler_slip ? kWinklerCullDepths * depth_prev + kWinklerCullM
-                                           : CullLevel(depth_prev);
-    const bool fast = !ws->reference_paths;
-    CellBox box;
-    auto render = [&](double cull_above_m) {
-      const double t0 = ws->render_time_s ? ThreadCpuSeconds() : 0.0;
-      const double level = RenderGap(grid, model.skin_z(), in.pad_pose, in.surfaces, cull_above_m,
-                                     &ws->gap, &ws->coverage, true, &model.skin_blocks(), &box,
-                                     fast, fast ? &ws->gap_written : nullptr,
-                                     winkler_slip ? &ws->render_summary : nullptr);
-      if (!fast) ws->gap_written = CellBox::All(grid);  // the reference cleared it all
-      if (ws->render_time_s) *ws->render_time_s += ThreadCpuSeconds() - t0;
-      return level;
-    };
-    double cull = render(cull_rel);
-    double solved_approach = 0.0;  // winkler_slip: the field to write
-    CellBox u_region;  // elastic: the region of the check's K p (ws->elastic.check_u)
-    for (int pass = 0; pass < 2 && !touching; ++pass) {
-      if (pass == 1) cull = render(kInf);
-      // (winkler_slip: from the render's summary of the covered cells, else
-      // the solve's first pass; MinGap fixes a zero's sign)
-      double gmin;
-      if (!winkler_slip) {
-        gmin = MinGap(grid, box, ws->gap, ws->coverage);
-      } else if (RenderSummary& rs = ws->render_summary; rs.valid && rs.gap_min_m != 0.0) {
-        gmin = tf.scan_gmin = rs.gap_min_m;  // covered cells: finite gaps
-        tf.scan_covmax = rs.coverage_max;
-        std::swap(tf.scratch_spans, rs.spans);  // (the next render clears rs.spans)
-      } else {
-        gmin = ScanWinklerCandidates(grid, ws->gap, ws->coverage, box, &tf);
-        if (gmin == 0.0) gmin = MinGap(grid, box, ws->gap, ws->coverage);
-      }
-      if (!std::isfinite(gmin)) break;
-      double approach = 0.0;
-      if (cfg.pressure_model == PressureModel::kWinkler) {
-        const double guess = warm ? gmin + depth_prev : std::nan("");
-        if (winkler_slip) {
-          touching = SolveWinkler(grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m,
-                                  in.normal_force_n, guess, &tf, &approach, true);
-          solved_approach = approach;
-        } else {
-          touching = (fast ? WinklerPressure : WinklerPressureReference)(
-              grid, ws->gap, ws->coverage, box, cfg.stiffness_pa_per_m, in.normal_force_n,
-              guess, &tf);
-          approach = tf.approach_m;
-        }
-      } else {
-        const ElasticContact& ec = *model.elastic();
-        ws->elastic.solve.fft.threads = cfg.threads;  // the operator's FFTs, the stencil
-        CellBox solve_box = box;  // cold: uniform from the whole rendered box
-        if (!warm) ws->pressure_guess.assign(grid.Size(), 0.0);
-        ElasticSolveStats st;
-        touching = SolveElasticWarm(grid, ec, box, ws->coverage, history ? taxel : nullptr,
-                                    in.normal_force_n, cfg.tolerance, kElasticMaxIterations,
-                                    cfg.elastic_method, cfg.elastic_precision, &ws->gap,
-                                    &ws->pressure_guess, &ws->elastic, &st, &solve_box,
-                                    &u_region);
-        if (touching) {
-          tf.pressure_pa.swap(ws->pressure_guess);
-          tf.box = solve_box;
-          touching = NormalizeLoad(grid, in.normal_force_n, &tf);
-        }
-        ws->elastic_stats = st;
-        approach = st.approach_m;
-      }
-      if (touching && approach >= cull && pass == 0) {
-        touching = false;  // render all and solve again
-        if (!winkler_slip) ClearTraction(grid, &tf);
-        continue;
-      }
-      if (touching) {
-        state[kStContactDepth] = approach - gmin;
-      }
-    }
-    // The taxel grid's solution and the check's K p (NormalizeLoad's
-    // rescaling is rounding-level) for the next step's warm start.
-    if (touching && history)
-      StoreElasticHistory(grid, tf.pressure_pa, tf.box, u_region, ws->elastic.check_u,
-                          state[kStContactDepth], &taxel[0]);
-    // `grid_shift`: average with the solve on the half-cell shifted grid
-    // (grid_shift.h), warm-started from its own history; the taxel grid's
-    // history keeps the taxel grid's own solution. If the shifted solve
-    // fails (it carries the same load on nearly the same cells), the taxel
-    // grid's solution stands.
-    if (touching && model.shifted()) {
-      ws->grid_shift.elastic.solve.fft.threads = cfg.threads;
-      AverageWithShiftedGrid(*model.shifted(), grid, in.pad_pose, in.surfaces,
-                             in.normal_force_n, state[kStContactDepth], cfg.tolerance,
-                             kElasticMaxIterations, cfg.elastic_method, cfg.elastic_precision,
-                             fast, shifted_history ? shifted : nullptr, &ws->grid_shift, &tf);
-    }
-    if (winkler_slip) {
-      // the solve's field, or (no contact) the cleared one
-      if (touching) {
-        // pressure_pa for the `pressure` output; the rest on demand
-        // (MaterializeTraction: the stress stage, the Python stage readers)
-        touching = WriteWinklerSlipTraction(grid, box, solved_approach, in.normal_force_n,
-                                            in.shear_x_n, in.shear_y_n,
-                                            cfg.outputs[kOutPressure], &tf);
-        finished = true;
-      } else {
-        ClearTraction(grid, &tf);
-      }
-    } else if (touching && cfg.shear) {
-      if (ws->reference_paths) {
-        UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
-      } else {  // the shear and FinishTraction in one pass
-        FinishUniformSlipTraction(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, &tf);
-        finished = true;
-      }
-    }
+  const TractionStep step{model,
+                          cfg,
+                          in,
+                          needs,
+                          state,
+                          ws,
+                          !run.reference_paths,
+                          run.render_time_s,
+                          warm,
+                          depth_prev,
+                          history ? taxel : nullptr,
+                          history && lay.shifted_block > 0 ? shifted : nullptr};
+  bool touching;
+  switch (cfg.pressure_model) {
+    case PressureModel::kContacts: touching = ContactsTraction(step); break;
+    case PressureModel::kWinkler:
+      touching = step.fast && cfg.shear ? WinklerSlipTraction(step) : WinklerTraction(step);
+      break;
+    default: touching = ElasticTraction(step); break;
   }
-  if (touching) {
-    if (!finished) FinishTraction(grid, cfg.shear, &tf);
-    state[kStContactValid] = 1.0;
-  }
+  if (touching) state[kStContactValid] = 1.0;
   return touching;
 }
 

@@ -42,6 +42,26 @@ double QuantityAt(Quantity q, const Stress6& stress, const Material& m) {
   }
 }
 
+// Stage 3's path for this step's field (it depends on the active cells) and
+// what it reads of the field.
+struct StressPlan {
+  StressMethod method;
+  StressOptions options;
+  TractionNeeds reads;
+};
+
+StressPlan PlanStresses(const SkinModel& model, const KernelTables& kt,
+                        const TractionField& tf) {
+  const SkinConfig& cfg = model.config();
+  StressPlan plan;
+  plan.options = StressOptions{tf.uniform_slip, tf.slip_x, tf.slip_y, true, cfg.threads};
+  plan.method = ResolveStressMethod(kt, model.spectra(), model.tree(), cfg.stress_method,
+                                    model.stress_sites(), tf.runs.Count(), cfg.shear,
+                                    plan.options);
+  plan.reads.shear = PathReadsShear(kt, plan.method, cfg.shear, plan.options);
+  return plan;
+}
+
 // Stages 1-4 at time_s: receptors advance over the time since the last
 // evaluation. Leaves the quantities in ws->quantity and each receptor's
 // spike count and voltage in `state`; returns whether the skin touches and
@@ -63,7 +83,10 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
 
   const TractionField& tf = ws->traction;
   // Stages 1-2: gap and tractions (skin_traction.cc).
-  const bool touching = ComputeTraction(model, in, state, ws, !(time_valid && elapsed == 0.0));
+  TractionNeeds outputs_read;
+  outputs_read.pressure_pa = cfg.outputs[kOutPressure];
+  const bool touching =
+      ComputeTraction(model, in, outputs_read, state, ws, !(time_valid && elapsed == 0.0));
   const bool need_receptors =
       cfg.outputs[kOutSpikes] || cfg.outputs[kOutVoltage] || cfg.outputs[kOutRate];
   // Idle receptors: untouched, quiescent receptors (ReceptorStepper::Quiescent)
@@ -81,19 +104,16 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
   if (touching && kt) {
     // Stage 3: stress at the receptors (direct, FFT or tree).
     ws->stress.resize(nrec);
-    const StressOptions opt{tf.uniform_slip, tf.slip_x, tf.slip_y, true, cfg.threads};
-    // The path resolved first: the folded direct sum reads the pressure alone
-    // (shear = slip x pressure), so the shear arrays the Winkler fast path
-    // left lazy are written only for the other paths.
-    const StressMethod method =
-        ResolveStressMethod(*kt, model.spectra(), model.tree(), cfg.stress_method,
-                            model.stress_sites(), tf.runs.Count(), cfg.shear, opt);
-    if (PathReadsShear(*kt, method, cfg.shear, opt))
-      MaterializeTraction(cfg.grid, false, true, &ws->traction);
+    // The folded direct sum reads the pressure alone (shear = slip x
+    // pressure): the arrays the pressure model left lazy are written only
+    // for what the plan reads.
+    const StressPlan plan = PlanStresses(model, *kt, tf);
+    MaterializeTraction(cfg.grid, plan.reads.pressure_pa, plan.reads.shear, &ws->traction);
     ws->last_stress_method = ComputeStresses(
-        *kt, model.spectra(), model.tree(), method, model.stress_sites(), tf.runs,
+        *kt, model.spectra(), model.tree(), plan.method, model.stress_sites(), tf.runs,
         tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
-        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data(), opt);
+        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data(),
+        plan.options);
     // per run of one class's receptors; stress-based quantities at once
     static_assert(sizeof(Stress6) == 6 * sizeof(double), "stress tensors 6 doubles apart");
     for (int r = 0; r < nrec;) {

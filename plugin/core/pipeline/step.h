@@ -29,8 +29,9 @@ struct Workspace {
   // Receptor propagators for the last step size (rebuilt when it changes).
   std::shared_ptr<const ReceptorStepper> stepper;
   std::vector<double> gap, coverage;
-  CellBox gap_written;  // outside it gap / coverage are +inf / 0 (RenderGap `written`)
+  CellBox gap_written;  // outside it gap / coverage are +inf / 0 (RenderOutput::written)
   RenderSummary render_summary;  // the last render's covered cells (winkler)
+  RenderScratch render_scratch;
   TractionField traction;
   std::vector<double> quantity;  // per receptor
   ElasticStepWork elastic;  // `elastic`
@@ -41,23 +42,35 @@ struct Workspace {
   StressScratch stress_scratch;
   StressMethod last_stress_method = StressMethod::kDirect;
   StepInput substep;            // `oversample`: the interpolated input
-  // Stages 1-2 through their general (reference) code instead of the fast
-  // paths, which give bit-identical results: for tests and benchmarks.
-  bool reference_paths = false;
-  // Benchmarks: if set, ComputeTraction adds the CPU time of its surface
-  // rendering (seconds) to it.
-  double* render_time_s = nullptr;
   std::vector<double> spike_sum;  // `oversample`: spikes over the substeps
 };
 
+// What the later stages read of stage 2's field beyond the float pressure
+// and the active runs. A model may leave the rest lazy (zero until
+// MaterializeTraction; WriteWinklerSlipTraction does).
+struct TractionNeeds {
+  bool pressure_pa = false;  // the double pressure (the `pressure` output)
+  bool shear = false;        // the shear arrays (stress paths other than the folded one)
+};
+
 // Stages 1-2 for one step (skin_traction.cc): render the gap and solve the
-// tractions into ws->traction with the configured pressure model. Reads and
-// updates the state header (contact depth, level, valid) and the elastic
-// pressure history (StateLayout). new_time: false for a repeated evaluation
-// at the last one's time, which then reads the same history. Returns
-// whether the skin touches.
-bool ComputeTraction(const SkinModel& model, const StepInput& in, double* state, Workspace* ws,
-                     bool new_time = true);
+// tractions into ws->traction with the configured pressure model, writing
+// at least what `needs` names. Reads and updates the state header (contact
+// depth, valid) and the elastic pressure history (StateLayout). new_time:
+// false for a repeated evaluation at the last one's time, which then reads
+// the same history. Returns whether the skin touches.
+// How stages 1-2 run beyond the configuration (tests and benchmarks).
+struct TractionRunOptions {
+  // The general (reference) code instead of the fast paths, which give
+  // bit-identical results.
+  bool reference_paths = false;
+  // If set, the CPU time of the surface rendering (s) is added to it.
+  double* render_time_s = nullptr;
+};
+
+bool ComputeTraction(const SkinModel& model, const StepInput& in, const TractionNeeds& needs,
+                     double* state, Workspace* ws, bool new_time = true,
+                     const TractionRunOptions& run = TractionRunOptions());
 
 // Reset the state array to its initial value.
 void ResetState(const SkinModel& model, double* state);

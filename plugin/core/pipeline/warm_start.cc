@@ -62,7 +62,7 @@ namespace {
 bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
                      const std::vector<double>& gap, const CellBox& box, const CellBox& inner,
                      const std::vector<double>& pressure, double approach_m, double lift_m,
-                     ApplyPrecision precision, ElasticStepWork* w, CellBox* grown,
+                     const ElasticSolveOptions& opt, ElasticStepWork* w, CellBox* grown,
                      CellBox* u_region) {
   // fn(i, j) for the cells of [ia, ib) x [ja, jb) outside inner (row
   // segments: inner is most of the box).
@@ -108,8 +108,8 @@ bool BoxHoldsContact(const TaxelGrid& grid, const SurfaceCompliance& K,
   const int ox = inner.i0 - i0, oy = inner.j0 - j0;
   const auto spec = K.SpectrumForReach(std::max(ox + inner.nx - 1, cx - 1 - ox),
                                        std::max(oy + inner.ny - 1, cy - 1 - oy));
-  K.Apply(*spec, w->check_p.data(), cx, cy, w->check_u.data(), &w->solve.fft, precision,
-          oy + inner.ny, ox + inner.nx);
+  K.Apply(*spec, w->check_p.data(), cx, cy, w->check_u.data(), &w->solve.fft, opt.precision,
+          opt.threads, oy + inner.ny, ox + inner.nx);
   *u_region = CellBox{i0, j0, cx, cy};
   CellBounds fail(inner);  // inner and the cells outside it that would touch
   bool ok = true;
@@ -257,7 +257,7 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
 bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
                               const HistoryBlock& last, const HistoryBlock& prev,
                               const std::vector<double>& guess, const CellBox& box,
-                              ElasticStepWork* w) {
+                              int threads, ElasticStepWork* w) {
   const CellBox rl = last.u_box(), rp = prev.u_box();
   auto covers = [&](const CellBox& r) {
     return r.nx > 0 && r.ny > 0 && box.i0 >= r.i0 && box.j0 >= r.j0 &&
@@ -299,7 +299,7 @@ bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
     w->fix_d[f] = (Inside(box, i, j) ? guess[k] : 0.0) - lin;
   }
   K.AddCellsAt(w->fix_i.data(), w->fix_j.data(), w->fix_d.data(), nfix, box.nx, box.ny, u,
-               w->solve.fft.threads);
+               threads);
   return true;
 }
 
@@ -311,21 +311,20 @@ bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
 // K p of the solution (nx = 0: none), which the next step's warm start uses.
 bool SolveOnGrowingBox(const TaxelGrid& grid, const ElasticContact& ec,
                        const std::vector<double>& gap, const CellBox& box, double force_n,
-                       double lift_m, double tolerance, int max_iterations,
-                       ElasticMethod method, ApplyPrecision precision, const double* u0,
+                       double lift_m, const ElasticSolveOptions& opt, const double* u0,
                        std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
                        CellBox* solve_box, CellBox* u_region) {
   *u_region = CellBox{0, 0, 0, 0};
   bool touching = false;
   for (int attempt = 0;; ++attempt) {
-    touching = ec.Solve(gap, *solve_box, force_n, tolerance, max_iterations, pressure,
-                        &w->solve, st, method, precision, attempt == 0 ? u0 : nullptr);
+    touching = ec.Solve(gap, *solve_box, force_n, opt, pressure, &w->solve, st,
+                        attempt == 0 ? u0 : nullptr);
     const CellBox& sb = *solve_box;
     const bool whole = sb.i0 == box.i0 && sb.j0 == box.j0 && sb.nx == box.nx && sb.ny == box.ny;
     if (whole) break;
     CellBox grown = box;
     if (touching && BoxHoldsContact(grid, ec.compliance(), gap, box, sb, *pressure,
-                                    st->approach_m, lift_m, precision, w, &grown, u_region))
+                                    st->approach_m, lift_m, opt, w, &grown, u_region))
       break;
     *u_region = CellBox{0, 0, 0, 0};
     // the solution on the smaller box is a good start on the grown one
@@ -342,10 +341,10 @@ bool HasWarmStart(const HistoryBlock* history) {
 
 bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const CellBox& box,
                       const std::vector<double>& coverage, const HistoryBlock* history,
-                      double force_n, double tolerance, int max_iterations,
-                      ElasticMethod method, ApplyPrecision precision, std::vector<double>* gap,
-                      std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
-                      CellBox* solve_box, CellBox* u_region) {
+                      double force_n, const ElasticSolveOptions& opt,
+                      std::vector<double>* gap, std::vector<double>* pressure,
+                      ElasticStepWork* w, ElasticSolveStats* st, CellBox* solve_box,
+                      CellBox* u_region) {
   // Cells without coverage never touch (every cell stored, the select
   // vectorises).
   for (int j = box.j0; j < box.j0 + box.ny; ++j) {
@@ -361,7 +360,7 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
   // application.
   const HistoryBlock* last = HasWarmStart(history) ? &history[1] : nullptr;
   const bool extrapolate =
-      last && method == ElasticMethod::kPreconditioned && history[2].slots[kHsValid] > 0.0;
+      last && opt.method == ElasticMethod::kPreconditioned && history[2].slots[kHsValid] > 0.0;
   // The solve box: the last step's contact, kBoxMarginCells wider. The gap
   // alone bounds it poorly: an elastic contact is ~1/sqrt(2) as wide as the
   // region where the surfaces interpenetrate, and a layered skin bulges
@@ -374,12 +373,12 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
               pressure, w, solve_box);
   const bool have_u0 = extrapolate && ExtrapolatedDisplacement(grid, ec.compliance(), *last,
                                                                history[2], *pressure,
-                                                               *solve_box, w);
+                                                               *solve_box, opt.threads, w);
   // Upward bulge bound: max_lift times the whole load on one cell.
   const double lift = ec.max_lift_m_per_pa() * force_n / grid.Area();
-  return SolveOnGrowingBox(grid, ec, *gap, box, force_n, lift, tolerance, max_iterations, method,
-                           precision, have_u0 ? w->u0.data() : nullptr, pressure, w, st,
-                           solve_box, u_region);
+  return SolveOnGrowingBox(grid, ec, *gap, box, force_n, lift, opt,
+                           have_u0 ? w->u0.data() : nullptr, pressure, w, st, solve_box,
+                           u_region);
 }
 
 void StoreElasticHistory(const TaxelGrid& grid, const std::vector<double>& pressure,

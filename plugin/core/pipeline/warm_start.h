@@ -1,6 +1,6 @@
 // The `elastic` solve of one step, shared by the taxel grid's solve
 // (skin_traction.cc) and the half-cell shifted grid's (grid_shift.cc): the
-// cull level, the warm start from the pressure history (model.h,
+// cull level, the warm start from the pressure history (state_layout.h,
 // HistoryBlock), the solve on a growing box and the history write; defined
 // in warm_start.cc.
 #ifndef MJTOUCH_PIPELINE_WARM_START_H_
@@ -41,10 +41,10 @@ bool HasWarmStart(const HistoryBlock* history);
 // which w->check_u holds K p of the solution (nx = 0: none).
 bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const CellBox& box,
                       const std::vector<double>& coverage, const HistoryBlock* history,
-                      double force_n, double tolerance, int max_iterations,
-                      ElasticMethod method, ApplyPrecision precision, std::vector<double>* gap,
-                      std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
-                      CellBox* solve_box, CellBox* u_region);
+                      double force_n, const ElasticSolveOptions& options,
+                      std::vector<double>* gap, std::vector<double>* pressure,
+                      ElasticStepWork* w, ElasticSolveStats* st, CellBox* solve_box,
+                      CellBox* u_region);
 
 // Writes a solution to a history block: the pressure on p_box (zero
 // outside it), its K p u over u_region (row-major), the depth; marks it valid.

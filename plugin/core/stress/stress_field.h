@@ -3,7 +3,8 @@
 //  - direct summation over the active cells (StressAtReceptor): exact; cost
 //    ~ receptors x components x loads x active cells; with full-slip shear
 //    (or none) the folded direct path (stress_fold.h) sums one effective
-//    table instead of three, ~4x faster, equal to float rounding;
+//    table instead of three (a third of the multiply-adds), equal to float
+//    rounding;
 //  - FFT convolution of the whole grid with each table (zero padded to
 //    N >= 2n - 1, so no wrap-around; fft.h): exact; cost ~ N^2 log N per
 //    transform, independent of the contact size, and only the wanted
@@ -75,8 +76,9 @@ struct StressScratch {
 // (slip_x, slip_y) x pressure (UniformSlipShear), so the folded path
 // applies; without shear it always does. fold = false: the reference direct
 // sum (StressAtReceptor). threads: ThreadPool callers for the direct paths
-// (any count gives the same bits). fold_legacy: the folded path's memory
-// layout before #13 (FoldScratch::fold_legacy; same bits, for benchmarks).
+// (any count gives the same bits). fold_legacy: the folded path with
+// unaligned table loads and no rx cache (FoldScratch::fold_legacy; same bits,
+// for benchmarks).
 struct StressOptions {
   bool uniform_slip = false;
   double slip_x = 0, slip_y = 0;

@@ -1,38 +1,9 @@
-// Stage 3, the folded direct path: when the shear is a uniform multiple of
-// the pressure (full-slip Coulomb shear, contact/pressure.h
-// UniformSlipShear: q_x = r_x p, q_y = r_y p) or absent, the stress is
-//   sigma_c(site) = sum_cells (K_p,c + r_x K_x,c + r_y K_y,c) p,
-// so one effective table per step and (depth, component) replaces three:
-// a third of the multiply-adds and of the table reads per site. The table is
-// folded band by band of kTableRowsPerBand rows (stress_fold.cc), only over
-// the offsets (active cells - sites) that some site reads, and each band is
-// read at once by every site of the depth while it is in L1/L2. While the
-// float r_x repeats (a steady slide), K_p + r_x K_x is kept from the last
-// call, so the fold reads two tables instead of three.
-// The canonical sum (one sequence of float operations, whatever the ISA,
-// layout or thread split): a site's cells in blocks of 8 rows on multiples
-// of 8 of dy = cell row - site row (the bands), each row's products E_c * p
-// accumulated by fused multiply-add (one rounding per term) in 16 float lanes
-// (lane l: the cells at dx = l mod 16) over its chunks of 16 in increasing
-// dx, the block's 8 row sums added in row order,
-// then widened and added to 16 double lanes (blocks in increasing dy); the 16
-// lanes reduced in a fixed order at the end. Zero cells are exact no-ops
-// (a lane that starts at +0 never holds -0), so the chunk ranges (padding,
-// rows summed together) do not change a bit. The fold is fused too: E =
-// fma(r_y, K_y, fma(r_x, K_x, K_p)). The same operations run as one AVX-512
-// register, two AVX2 + FMA ones or four SSE2 / NEON ones (vector lanes are
-// elementwise and fma is exact: the same bits), in a copy per ISA, the
-// widest the CPU has picked at run time (MJTOUCH_SUM_LANES=8 or 4 in the
-// environment picks a narrower one, for tests; x86 without FMA calls fmaf,
-// slow). Same result as the reference
-// path (StressAtReceptor) to float rounding (tests/unit/test_stress_fold.py:
-// rel. RMS <= 1e-5); the alignment and the cache do not change a bit (same
-// file: against fold_legacy).
-//
-// Threads: each depth's sites split into `threads` ranges, each range
-// folding the bands it reads; a site's sum is one fixed sequence of
-// operations whatever range it is in, so the output is bit-identical for any
-// thread count. Pure C++: no MuJoCo types.
+// Stage 3, folded direct path: with a uniform-slip shear (q = r p, contact/
+// pressure.h UniformSlipShear) or none, the stress is sum_cells (K_p + r_x K_x
+// + r_y K_y) p, so one folded table per (depth, component) replaces three.
+// Every site's sum is one fixed sequence of float operations
+// (stress_fold_kernels.cc), so the output is bit-identical on every ISA and
+// for any thread count.
 #ifndef MJTOUCH_STRESS_STRESS_FOLD_H_
 #define MJTOUCH_STRESS_STRESS_FOLD_H_
 
@@ -44,7 +15,7 @@
 namespace mjtouch {
 
 // One site's running sums on the folded path: its 16 double lanes per
-// component (d[c][l]: lane l = the cells at dx = l mod 16, stress_fold.cc).
+// component (d[c][l]: lane l = the cells at dx = l mod 16, stress_fold_kernels.cc).
 struct alignas(64) FoldSite {
   alignas(64) double d[kNumStress][16];
   int nc = 0;                 // components summed
@@ -78,9 +49,9 @@ struct FoldScratch {
   std::array<bool, kNumStress> key_components{};
   std::vector<StressSite> key_sites;
   // Kp + (+-rx) Kx (both signs of dx) and Ky per wanted (depth, component),
-  // n quadrant rows each, a row in one aligned stream (stress_fold.cc
+  // n quadrant rows each, a row in one aligned stream (stress_fold_internal.h
   // RxCacheHalf; h_offset: start from h_pad, -1 if none)
-  // while the float rx repeats (UpdateRxCache in stress_fold.cc): the fold
+  // while the float rx repeats (UpdateRxCache, stress_fold_plan.cc): the fold
   // then reads two tables, not three, each row once. A cache
   // of the inputs only: the bits do not depend on it.
   std::vector<float> h;

@@ -21,9 +21,7 @@
 //  - LatticeTable: the radial functions are tabulated on a stretched r grid
 //    and integrated over each source cell (uniform traction on the cell,
 //    never a point force) by Gauss quadrature, in real space, so the slowly
-//    decaying in-plane tails (1/r^2, 1/r^3) have no periodic images (a
-//    zero-padded periodic FFT with a 4 n period left 1e-2 errors at mm
-//    depths through those images). In the
+//    decaying in-plane tails (1/r^2, 1/r^3) have no periodic images. In the
 //    top layer the homogeneous half-space part (kernel.cc HalfSpace, exact
 //    closed form, adaptive cell quadrature) is subtracted first, so what is
 //    transformed is smooth on the scale 2 h1 - z.

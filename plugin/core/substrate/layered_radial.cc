@@ -35,8 +35,8 @@ constexpr int kOddX[kNumLoads][kNumStress] = {
 constexpr int kOddY[kNumLoads][kNumStress] = {
     {0, 0, 0, 1, 0, 1}, {0, 0, 0, 1, 0, 1}, {1, 1, 1, 0, 1, 0}};
 
-// Bessel J0..J3. glibc's j0/j1 (POSIX) are ~40 ns and accurate to a few ulp;
-// std::cyl_bessel_j is ~100x slower. Upward recurrence is stable for x > n;
+// Bessel J0..J3. glibc's j0/j1 (POSIX) are accurate to a few ulp and much
+// cheaper than std::cyl_bessel_j. Upward recurrence is stable for x > n;
 // below that the power series converges fast.
 void BesselJ0123(double x, double* j) {
   j[0] = ::j0(x);

@@ -109,29 +109,22 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
   // Per column: x overlap with the face, the footprint's x range and (a
   // height field with equal rows) the texture's mean over the footprint,
   // NaN where it must be computed per cell. Per row: the same in y.
-  thread_local std::vector<double> cols, rows;
-  cols.resize(static_cast<size_t>(7) * n);
-  rows.resize(static_cast<size_t>(3) * n);
-  double *ox = cols.data(), *x0 = ox + n, *x1 = x0 + n, *mean = x1 + n, *u = mean + n;
+  RenderScratch& scratch = *f.scratch;
+  scratch.columns.resize(static_cast<size_t>(7) * n);
+  scratch.rows.resize(static_cast<size_t>(3) * n);
+  double *ox = scratch.columns.data(), *x0 = ox + n, *x1 = x0 + n, *mean = x1 + n, *u = mean + n;
   double* took = u + n;
   double* qz0 = took + n;  // per column: t_z + R[6] u (qz's first terms)
-  double *oy = rows.data(), *y0 = oy + n, *y1 = y0 + n;
+  double *oy = scratch.rows.data(), *y0 = oy + n, *y1 = y0 + n;
   const bool row_means = hfield && s.rows_identical && s.row_prefix;
   const double scx = hfield ? (s.ncol - 1) / (2.0 * s.half_x_m) : 0.0;
   bool per_cell = false, negative = false;
   // The columns of this face were computed by the last call (RenderGap's
   // covers_only test, then the render, in one RenderGap call): the same
   // inputs, so the same values, not computed again.
-  struct ColumnKey {
-    uint64_t call = 0;
-    const CounterSurface* s = nullptr;
-    int c0 = 0, c1 = 0;
-    bool per_cell = false, negative = false;
-  };
-  thread_local ColumnKey last_columns;
-  const bool same_columns = f.render_call != 0 && last_columns.call == f.render_call &&
-                            last_columns.s == &s && last_columns.c0 == c0 &&
-                            last_columns.c1 == c1;
+  RenderScratch::ColumnKey& last_columns = scratch.columns_key;
+  const bool same_columns =
+      last_columns.face == &s && last_columns.c0 == c0 && last_columns.c1 == c1;
   if (same_columns) {
     per_cell = last_columns.per_cell;
     negative = last_columns.negative;
@@ -153,7 +146,7 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
     per_cell |= mean[i] != mean[i] && ox[i] > 0.0;
     negative |= mean[i] < 0.0;
   }
-  last_columns = ColumnKey{f.render_call, &s, c0, c1, per_cell, negative};
+  last_columns = RenderScratch::ColumnKey{&s, c0, c1, per_cell, negative};
   if (covers_only) return !per_cell && !negative;
   if (overwrite) *overwrite = CellBox{c0, r0, c1 - c0, r1 - r0};
   for (int j = r0; j < r1; ++j) {

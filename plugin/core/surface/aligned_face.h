@@ -1,11 +1,10 @@
 // Internal to the surface stage (not part of its interface): RenderGap's
 // fast path for faces whose axes are the pad's (aligned_face.cc), and the
-// helpers it shares with surface.cc.
+// helpers it shares with render.cc and primitives.cc.
 #ifndef MJTOUCH_SURFACE_ALIGNED_FACE_H_
 #define MJTOUCH_SURFACE_ALIGNED_FACE_H_
 
 #include <algorithm>
-#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -46,10 +45,9 @@ struct AlignedFace {
   const double* t;  // pad origin in the surface frame
   double hx, hy;    // half extents of a cell's footprint (surface frame)
   double cull;      // cells whose gap lower bound exceeds it are skipped
-  // RenderGap's call (nonzero, unique per call on a thread): the per-column
-  // values of a face are reused by the next call on it in the same RenderGap
-  // call (0: never).
-  uint64_t render_call = 0;
+  // The per-column and per-row values; those of a face are reused by the
+  // next call on it in the same RenderGap call (which resets the key).
+  RenderScratch* scratch;
 };
 
 struct Extent {

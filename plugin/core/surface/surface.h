@@ -7,6 +7,7 @@
 #define MJTOUCH_SURFACE_SURFACE_H_
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -31,7 +32,6 @@ struct PadGeometry {
 // valleys, linear flanks); square (crests of width pitch / 2, flat).
 enum class RidgeProfile { kSine = 0, kTriangle, kSquare };
 const char* RidgeProfileName(RidgeProfile p);
-bool ParseRidgeProfile(const std::string& name, RidgeProfile* p);
 
 struct Ridges {
   bool enabled = true;
@@ -105,34 +105,65 @@ struct CounterSurface {
   int id = -1;  // caller's tag (e.g. MuJoCo geom id)
 };
 
-// Gap (m) between each taxel cell of the skin (pad at pose `pad_pose`) and the
-// nearest counter-surface, measured along each surface's normal; `coverage`
-// is the fraction of the cell over a surface (0: no surface, gap = +inf).
-// Cells whose gap is provably above `cull_above_m` (relative to the smallest
-// lower bound of any cell) are skipped and left at +inf: pass +inf to render
-// all. Returns the absolute cull level used (+inf if none), so a caller whose
-// contact reaches above it can render again without culling.
-// `area_average` = false samples each cell at its centre instead (point
-// sampling; for tests that show what the averaging removes).
-// `blocks`: MakeSkinBlocks(grid, skin_z), precomputed (else built per call).
 struct SkinBlocks;
-// `rendered`: if given, the bounding box of the cells with coverage > 0.
-// `fast_paths` = false renders every surface with the general per-cell code
-// (the reference the fast paths are tested and benchmarked against; the
-// results are bit-identical).
-// `written`: if given, in: a box outside which gap_m / coverage (already
-// grid-sized) hold +inf / 0, so only it is reset (not the whole grid); out:
-// the same for this call's result (the cells it rendered).
-// `summary`: if given, filled when one surface alone wrote cells, through
-// the aligned-face fast path (else summary->valid = false).
 struct RenderSummary;
-double RenderGap(const TaxelGrid& grid, const std::vector<double>& skin_z,
-                 const Pose& pad_pose, const std::vector<CounterSurface>& surfaces,
-                 double cull_above_m, std::vector<double>* gap_m,
-                 std::vector<double>* coverage, bool area_average = true,
-                 const SkinBlocks* blocks = nullptr, CellBox* rendered = nullptr,
-                 bool fast_paths = true, CellBox* written = nullptr,
-                 RenderSummary* summary = nullptr);
+struct RenderScratch;
+
+// What RenderGap renders: the skin (heights skin_z on the grid, pad at
+// pad_pose) against the counter-surfaces.
+struct RenderRequest {
+  const TaxelGrid& grid;
+  const std::vector<double>& skin_z;
+  const Pose& pad_pose;
+  const std::vector<CounterSurface>& surfaces;
+  // Cells whose gap is provably above this (m, relative to the smallest
+  // lower bound of any cell) are skipped and left at +inf; +inf renders all.
+  double cull_above_m = std::numeric_limits<double>::infinity();
+  const SkinBlocks* blocks = nullptr;  // MakeSkinBlocks(grid, skin_z); null: built per call
+  // false: each cell sampled at its centre (point sampling; for tests that
+  // show what the averaging removes).
+  bool area_average = true;
+  // false: every surface through the general per-cell code (the reference
+  // the fast paths are tested and benchmarked against; the same bits).
+  bool fast_paths = true;
+};
+
+// Where RenderGap writes. gap_m and coverage are resized to the grid.
+struct RenderOutput {
+  std::vector<double>* gap_m;
+  std::vector<double>* coverage;
+  CellBox* rendered = nullptr;  // if given: the box of the cells with coverage > 0
+  // If given, in: a box outside which gap_m / coverage (already grid-sized)
+  // hold +inf / 0, so only it is reset (not the whole grid); out: the same
+  // for this call's result (the cells it rendered).
+  CellBox* written = nullptr;
+  // If given: filled when one surface alone wrote cells, through the
+  // aligned-face fast path (else summary->valid = false).
+  RenderSummary* summary = nullptr;
+  RenderScratch* scratch = nullptr;  // reused between calls; null: one per call
+};
+
+// Gap (m) between each taxel cell of the skin and the nearest
+// counter-surface, measured along each surface's normal; coverage is the
+// fraction of the cell over a surface (0: no surface, gap = +inf). Returns
+// the absolute cull level used (+inf if none), so a caller whose contact
+// reaches above it can render again without culling.
+double RenderGap(const RenderRequest& request, const RenderOutput& out);
+
+// RenderGap's scratch, kept by a caller between calls (Workspace: one per
+// simulation) so that no call allocates; the results do not depend on it.
+struct RenderScratch {
+  std::vector<double> block_lb;       // per surface and skin block: a lower bound of the gap
+  std::vector<double> columns, rows;  // the aligned-face path's per-column / per-row values
+  // The face whose per-column values `columns` holds, reused within one
+  // RenderGap call (the covers-only test, then the render); reset per call.
+  struct ColumnKey {
+    const CounterSurface* face = nullptr;
+    int c0 = 0, c1 = 0;
+    bool per_cell = false, negative = false;
+  };
+  ColumnKey columns_key;
+};
 
 // The covered cells (coverage > 0, finite gap) of a RenderGap call, taken
 // while the rows are rendered (a later pass over them would read them from

@@ -1,0 +1,171 @@
+// The layout of plugin_state, the per-simulation state MuJoCo copies and
+// resets: header slots, receptor membranes, the last outputs, the `elastic`
+// pressure history and the last pad pose (StateLayout).
+#ifndef MJTOUCH_PIPELINE_STATE_LAYOUT_H_
+#define MJTOUCH_PIPELINE_STATE_LAYOUT_H_
+
+#include <algorithm>
+#include <cstring>
+
+#include "afferents/receptors.h"
+#include "common/grid.h"
+#include "pipeline/config.h"
+
+namespace mjtouch {
+
+// plugin_state header slots (StateLayout::header).
+enum StateSlot {
+  kStContactDepth = 0,  // indentation depth of the last contact, m
+  kStContactValid,      // 1 if the last evaluation touched
+  kStLastTime,          // time of the last evaluation, s
+  kStTimeValid,         // 1 once evaluated
+  kStReceptorsIdle,     // 1 while receptors are quiescent and not advanced
+  kStReceptorsTime,     // time the receptors were advanced to, s
+  kStateHeader
+};
+
+
+// `oversample` > 1: the last step's pad pose, MuJoCo force and whether they
+// are valid (StateLayout::last_pose).
+enum LastPoseSlot {
+  kLpPos = 0,         // pad position, 3 (world, m)
+  kLpMat = 3,         // pad rotation, 9 (row-major)
+  kLpNormalForce = 12,  // N, pad +z (0 without contact)
+  kLpShearX,          // N, pad x
+  kLpShearY,          // N, pad y
+  kLpValid,           // 1 once recorded
+  kLastPoseSize
+};
+
+// Where each block of plugin_state lives (offsets and sizes in doubles), in
+// this order: the header (StateSlot), per-receptor membranes
+// (kReceptorStateSize each), the last step's spike counts and voltages
+// (re-output on repeated calls), for `elastic` the pressure history (below);
+// then the last pose (LastPoseSlot; always there: `auto` oversampling depends
+// on the timestep, which MuJoCo's state-size callback does not see).
+//
+// Pressure history (`elastic`): kHistoryBlocks blocks of HistorySlot, then
+// 2 n*n floats packed two to a double (n*n doubles): the pressure (Pa) on the
+// grid, valid inside the box kHsPBox* (zero outside), and the surface
+// displacement K p (m) of that pressure over the box kHsURegion* (row-major,
+// at most n*n cells; none if kHsURegionNx is 0),
+// which spares the next step's solve the operator application of its warm
+// start. Floats: the history only seeds the warm start (the solve converges
+// from it; float rounding, 1e-7, is far below its tolerance) and halves the
+// state that mj_copyData and mujoco.rollout copy each step. Packed finite
+// floats never form a NaN or infinite double.
+// One slot names the head block h. Block h holds the evaluation at the
+// current time, (h + 2) % 3 the last step's, (h + 1) % 3 the one before: the
+// warm start extrapolates 2 p(n-1) - p(n-2). A new time rotates h (no
+// copies); a repeated evaluation at the same time (mj_forward twice)
+// overwrites block h only, so it starts from the same history and gives the
+// same bits.
+// `grid_shift`: the same three blocks for the shifted grid's solve ((n+1)^2
+// cells, rotating with the same head), after the taxel grid's; absent
+// without it (the shipped scenes' state is unchanged).
+enum HistorySlot {
+  kHsValid = 0,  // touched
+  kHsDepth,      // indentation, m
+  kHsPBoxI0, kHsPBoxJ0, kHsPBoxNx, kHsPBoxNy,              // box of the pressure
+  kHsURegionI0, kHsURegionJ0, kHsURegionNx, kHsURegionNy,  // box of the displacement
+  kHistorySlots
+};
+constexpr int kHistoryBlocks = 3;
+
+// A history block's packed floats: pressure at [0, ncell), displacement at
+// [ncell, 2 ncell) (memcpy: no aliasing of the doubles).
+struct HistoryBlock {
+  double* slots;
+  char* floats;
+  size_t ncell;
+  float p(size_t k) const { return Get(k); }
+  float u(size_t k) const { return Get(ncell + k); }
+  void set_p(size_t k, float v) { Set(k, v); }
+  void set_u(size_t k, float v) { Set(ncell + k, v); }
+  float Get(size_t k) const {
+    float v;
+    std::memcpy(&v, floats + 4 * k, 4);
+    return v;
+  }
+  void Set(size_t k, float v) { std::memcpy(floats + 4 * k, &v, 4); }
+  // count floats from index k on (pressure: k < ncell; displacement: ncell + k)
+  void SetRange(size_t k, size_t count, const float* v) {
+    std::memcpy(floats + 4 * k, v, 4 * count);
+  }
+  // count pressures from index k on
+  void p_row(size_t k, int count, float* out) const {
+    std::memcpy(out, floats + 4 * k, 4 * static_cast<size_t>(std::max(count, 0)));
+  }
+  // count displacements from index k on
+  void u_row(size_t k, int count, float* out) const {
+    std::memcpy(out, floats + 4 * (ncell + k), 4 * static_cast<size_t>(count));
+  }
+  CellBox SlotBox(int first) const {
+    return CellBox{static_cast<int>(slots[first]), static_cast<int>(slots[first + 1]),
+                   static_cast<int>(slots[first + 2]), static_cast<int>(slots[first + 3])};
+  }
+  void SetSlotBox(int first, const CellBox& b) {
+    slots[first] = b.i0;
+    slots[first + 1] = b.j0;
+    slots[first + 2] = b.nx;
+    slots[first + 3] = b.ny;
+  }
+  CellBox p_box() const { return SlotBox(kHsPBoxI0); }
+  CellBox u_box() const { return SlotBox(kHsURegionI0); }
+};
+
+struct StateLayout {
+  int receptors = 0, last_spikes = 0, last_voltage = 0, history = 0, last_pose = 0;
+  int history_block = 0;  // kHistorySlots + n*n; 0 without `elastic`
+  int shifted_history = 0, shifted_block = 0;  // kHistorySlots + (n+1)^2; 0 without `grid_shift`
+  int history_head = 0;   // slot of h
+  int size = 0;
+  size_t ncell = 0, shifted_ncell = 0;
+
+  StateLayout() = default;
+  StateLayout(const SkinConfig& cfg, int nreceptor) {
+    receptors = kStateHeader;
+    last_spikes = receptors + nreceptor * kReceptorStateSize;
+    last_voltage = last_spikes + nreceptor;
+    history = last_voltage + nreceptor;
+    const bool elastic = cfg.pressure_model == PressureModel::kElastic;
+    ncell = cfg.grid.Size();
+    history_block = elastic ? kHistorySlots + static_cast<int>(ncell) : 0;
+    shifted_history = history + kHistoryBlocks * history_block;
+    if (elastic && cfg.grid_shift) {
+      shifted_ncell = static_cast<size_t>(cfg.grid.n + 1) * (cfg.grid.n + 1);
+      shifted_block = kHistorySlots + static_cast<int>(shifted_ncell);
+    }
+    history_head = shifted_history + kHistoryBlocks * shifted_block;
+    last_pose = history_head + (elastic ? 1 : 0);
+    size = last_pose + kLastPoseSize;
+  }
+  // Block k steps back from the head (0: this time, 1: last step, 2: the one
+  // before).
+  HistoryBlock history_at(double* state, int back) const {
+    return Block(state, history, history_block, ncell, back);
+  }
+  // The same for the shifted grid (`grid_shift` only).
+  HistoryBlock shifted_history_at(double* state, int back) const {
+    return Block(state, shifted_history, shifted_block, shifted_ncell, back);
+  }
+  // Receptor r's membrane block.
+  double* receptor(double* state, int r) const {
+    return state + receptors + static_cast<size_t>(r) * kReceptorStateSize;
+  }
+  const double* receptor(const double* state, int r) const {
+    return state + receptors + static_cast<size_t>(r) * kReceptorStateSize;
+  }
+
+ private:
+  HistoryBlock Block(double* state, int first, int block, size_t cells, int back) const {
+    const int h = static_cast<int>(state[history_head]);
+    double* b = state + first +
+                static_cast<size_t>((h + kHistoryBlocks - back) % kHistoryBlocks) * block;
+    return HistoryBlock{b, reinterpret_cast<char*>(b + kHistorySlots), cells};
+  }
+};
+
+}  // namespace mjtouch
+
+#endif  // MJTOUCH_PIPELINE_STATE_LAYOUT_H_
