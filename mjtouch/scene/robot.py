@@ -6,9 +6,15 @@ own plugin instance and sensor), and :func:`layouts` reads every skin's
 The skin touches the -z side of its geom (sphere, ellipsoid, capsule or
 box; plugin/README.md): turn the geom so its local -z points out of the
 fingertip's pad. A texture the skin feels but MuJoCo does not collide is a
-non-colliding geom (contype = conaffinity = 0) in the skin's
-``texture_group`` (default here: scenes.TEXTURE_GROUP), or named by the
-``texture`` attribute.
+non-colliding geom (contype = conaffinity = 0) that the user names in the
+``texture`` attribute, or any such geom of a group the user opts into with
+``texture_group``. :func:`attach` sets no group: a robot's own visual
+meshes (often in group 3, non-colliding) never become textures unasked.
+
+``MjSpec.attach(child, prefix=..., suffix=...)`` renames the child's geoms;
+the skin's ``texture`` names follow, because :func:`attach` records the pad
+geom's name as written (attribute ``pad_geom``) and the plugin applies the
+prefix and suffix the pad's compiled name gained to each texture name.
 """
 
 from __future__ import annotations
@@ -39,12 +45,13 @@ def attach(spec: mujoco.MjSpec, geom: str, name: str | None = None,
     """Add an ``mjtouch.skin`` sensor named ``name`` (default ``skin_<geom>``)
     on ``geom`` with the given plugin attributes (``nx=48, pitch=2e-4,
     ridges=True, outputs="spikes stress force"``, ...; values as Python
-    numbers, bools, strings or lists; None leaves one out). Without
-    ``texture`` the skin feels the non-colliding geoms of group
-    scenes.TEXTURE_GROUP; with several fingers on one object, name each
-    skin's own texture geoms instead. Returns its plugin instance (named
-    like the sensor): edit ``.config`` to change attributes later.
-    Attribute values are checked when the spec compiles."""
+    numbers, bools, strings or lists; None leaves one out). The skin
+    feels the geoms MuJoCo reports in contact with the pad plus the
+    textures the user asks for: ``texture="geom names"`` and/or
+    ``texture_group=k`` (every non-colliding geom of group k); none by
+    default. Returns its plugin instance (named like the sensor): edit
+    ``.config`` to change attributes later. Attribute values are checked
+    when the spec compiles."""
     if not isinstance(geom, str) or not geom:
         raise ValueError(f"geom = {geom!r} must be the name of a geom in the spec")
     g = spec.geom(geom)
@@ -58,11 +65,8 @@ def attach(spec: mujoco.MjSpec, geom: str, name: str | None = None,
     if any(s.name == name for s in spec.sensors) or any(p.name == name for p in spec.plugins):
         raise ValueError(f"name = {name!r} is taken by a sensor or plugin of the spec; pass "
                          "another name")
-    # Textures: named ones only when named (a skin would otherwise also feel
-    # the group's textures on the far side of an object, seen from behind as
-    # deep overlap); else the non-colliding geoms of scenes.TEXTURE_GROUP.
-    config = {} if "texture" in attributes else {"texture_group": str(scenes.TEXTURE_GROUP)}
-    config.update({str(k): _value(k, v) for k, v in attributes.items() if v is not None})
+    config = {str(k): _value(k, v) for k, v in attributes.items() if v is not None}
+    config.setdefault("pad_geom", geom)  # texture names follow MjSpec.attach's renaming
     spec.activate_plugin(scenes.SKIN_PLUGIN)  # the <extension> entry
     plugin = spec.add_plugin(name=name, plugin_name=scenes.SKIN_PLUGIN, active=True)
     plugin.config = config

@@ -1,5 +1,7 @@
 #include "skin_plugin.h"
 
+#include "geom_names.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -285,12 +287,21 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
   auto renderable = [&](int g) { return m->geom_type[g] != mjGEOM_SDF; };
   auto on_pad = [&](int g) { return m->body_weldid[m->geom_bodyid[g]] == pad_body; };
   std::istringstream words(Config(m, instance, "texture"));
+  const std::string pad_as_written = Config(m, instance, "pad_geom");
+  const char* pad_name = mj_id2name(m, mjOBJ_GEOM, pad);
+  if (!pad_as_written.empty() &&
+      (!pad_name || std::string(pad_name).find(pad_as_written) == std::string::npos)) {
+    mju_warning("mjtouch.skin: attribute `pad_geom` = '%s' is not part of the pad geom's name "
+                "'%s'; valid: the pad's name as written, before MjSpec.attach's prefix and suffix",
+                pad_as_written.c_str(), pad_name ? pad_name : "(unnamed)");
+    return nullptr;
+  }
   std::string name;
   while (words >> name) {
-    const int g = mj_name2id(m, mjOBJ_GEOM, name.c_str());
+    const int g = ResolveWrittenGeom(m, pad, pad_as_written, name);
     if (g < 0) {
-      mju_warning("mjtouch.skin: attribute `texture` names geom '%s', which does not exist",
-                  name.c_str());
+      mju_warning("mjtouch.skin: attribute `texture` names geom '%s', which does not exist%s",
+                  name.c_str(), pad_as_written.empty() ? "" : " (with the pad's prefix and suffix)");
       return nullptr;
     }
     if (!renderable(g)) {

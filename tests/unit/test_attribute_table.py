@@ -69,7 +69,7 @@ NON_DEFAULT = {
     # SkinModel's config, so models with different counts must not share one
     "threads": "2",
 }
-NOT_PHYSICS = {"texture", "visual"}  # adapter and drawing only
+NOT_PHYSICS = {"texture", "pad_geom", "visual"}  # adapter and drawing only
 
 
 def _cache_key(attrs: dict) -> str:

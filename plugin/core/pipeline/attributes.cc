@@ -265,6 +265,13 @@ const std::vector<AttributeRow>& Rows() {
       {"interface_side", K::kChoice, 0, 0, false, false, "", "upper",
        "a receptor exactly on an interface takes the layer `upper` or `lower`", "upper lower",
        FIELD(interface_side), NO_PARSE, S::kModel},
+      // -- robots --------------------------------------------------------------
+      {"pad_geom", K::kCustom, 0, 0, false, false, "geom name", "(none)",
+       "the pad geom's name as written beside `texture` (mjtouch.attach sets it): the prefix "
+       "and suffix MjSpec.attach adds to the pad's name are added to each `texture` name",
+       "the pad's name without MjSpec.attach's prefix and suffix", NO_FIELD,
+       [](const std::string&, SkinConfig*, AttributeParser*) { return true; }, nullptr,
+       S::kAdapter},
   };
   return rows;
 }
