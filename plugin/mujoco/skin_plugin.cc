@@ -1,6 +1,7 @@
 #include "skin_plugin.h"
 
 #include "geom_names.h"
+#include "pad_frame.h"
 
 #include <algorithm>
 #include <cmath>
@@ -389,7 +390,8 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
   in.in_contact = false;
   const int pad = pad_geom_;
   const mjtNum* ppos = d->geom_xpos + 3 * pad;
-  const mjtNum* pmat = d->geom_xmat + 9 * pad;
+  mjtNum turned[9];
+  const mjtNum* pmat = PadFrameMat(d, pad, model_->config().pad, turned);
   CopyPose(ppos, pmat, &in.pad_pose);
   mjtNum total[3] = {0, 0, 0};
   for (int i = 0; i < d->ncon; ++i) {

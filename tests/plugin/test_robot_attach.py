@@ -92,3 +92,64 @@ def test_wrong_pad_geom_is_named():
     mjtouch.attach(spec, "pad", texture="tex", pad_geom="thumb", **SMALL)
     with pytest.raises(ValueError, match="`pad_geom` = 'thumb' is not part of the pad geom's"):
         spec.compile()
+
+
+def hand_with_unnamed_tips() -> mujoco.MjSpec:
+    """Two fingers whose colliding tip geoms are unnamed (as in Shadow and
+    Allegro MJCF), each with an unnamed non-colliding visual geom."""
+    spec = mujoco.MjSpec()
+    for k, x in enumerate((-0.02, 0.02)):
+        b = spec.worldbody.add_body(name=f"distal{k}", pos=[x, 0, 0.01])
+        b.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[3e-3, 3e-3, 3e-3], contype=0,
+                   conaffinity=0, group=3)
+        b.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[6e-3, 4e-3, 0])
+    return spec
+
+
+def test_body_picks_its_one_colliding_geom_and_names_it():
+    spec = hand_with_unnamed_tips()
+    plugins = [mjtouch.attach(spec, body=f"distal{k}", nx=16, pitch=2e-4) for k in range(2)]
+    assert [p.name for p in plugins] == ["skin_distal0_pad", "skin_distal1_pad"]
+    tip = spec.body("distal1").geoms[1]
+    assert tip.name == "distal1_pad" and spec.body("distal1").geoms[0].name == ""
+    model = spec.compile()
+    lays = mjtouch.layouts(model)
+    for k in range(2):
+        sid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, f"skin_distal{k}_pad")
+        assert model.sensor_objid[sid] == model.geom(f"distal{k}_pad").id
+        assert lays[f"skin_distal{k}_pad"].nx == 16
+    # an MjsGeom works as `geom`, unnamed too
+    spec = hand_with_unnamed_tips()
+    mjtouch.attach(spec, spec.body("distal0").geoms[1], nx=16, pitch=2e-4)
+    assert spec.body("distal0").geoms[1].name == "distal0_pad"
+
+
+def test_body_errors_list_the_colliding_geoms():
+    spec = hand_with_unnamed_tips()
+    spec.body("distal0").add_geom(name="nail", type=mujoco.mjtGeom.mjGEOM_BOX,
+                                  size=[1e-3, 1e-3, 1e-3])
+    with pytest.raises(ValueError, match=r"2 colliding geoms: \(unnamed geom 1 of the body, a "
+                                         r"mjGEOM_CAPSULE\), 'nail'; valid: exactly one"):
+        mjtouch.attach(spec, body="distal0")
+    spec.body("distal1").geoms[1].contype = 0
+    spec.body("distal1").geoms[1].conaffinity = 0
+    with pytest.raises(ValueError, match="0 colliding geoms; valid: exactly one"):
+        mjtouch.attach(spec, body="distal1")
+    with pytest.raises(ValueError, match="body = 'palm' is not in the spec"):
+        mjtouch.attach(spec, body="palm")
+    with pytest.raises(ValueError, match="give exactly one"):
+        mjtouch.attach(spec, "x", body="distal0")
+
+
+def test_facing_from_a_site_is_its_minus_z_in_the_geom_frame():
+    spec = hand_with_unnamed_tips()
+    body = spec.body("distal0")
+    body.geoms[1].quat = [np.sqrt(0.5), 0, np.sqrt(0.5), 0]  # geom z along body x
+    # a site whose -z points along body -z (world down), i.e. geom +x
+    body.add_site(name="pad_site", pos=[0, 0, -6e-3])
+    plugin = mjtouch.attach(spec, body="distal0", facing="pad_site", nx=16, pitch=2e-4)
+    f = np.array(plugin.config["facing"].split(), float)
+    np.testing.assert_allclose(f, [1, 0, 0], atol=1e-9)
+    spec.compile()
+    with pytest.raises(ValueError, match="facing = 'nope' is not a site"):
+        mjtouch.attach(spec, body="distal1", facing="nope")

@@ -64,7 +64,7 @@ NON_DEFAULT = {
     "interface_side": "lower", "sa1_model": "wang2016", "sa1_lowpass": "40",
     "adapt": "0.2 1 1", "adapt_tau": "0.05 0.03 0.03", "ra_saturation": "4",
     "sa1_saturation": "3e4",
-    "population": "uniform",
+    "population": "uniform", "facing": "0 1 0",
     # not physics (the same bits for any count), but read from the shared
     # SkinModel's config, so models with different counts must not share one
     "threads": "2",
