@@ -92,7 +92,7 @@ bool ParseOutputsAttribute(const std::string& v, SkinConfig* cfg, AttributeParse
       if (w == OutputName(b)) k = b;
     if (k < 0)
       return p->Fail(Fmt("attribute `outputs`: unknown output '%s'; valid: spikes stress "
-                         "voltage force pressure rate", w.c_str()));
+                         "voltage force pressure rate coverage", w.c_str()));
     cfg->outputs[k] = true;
   }
   return true;

@@ -157,7 +157,7 @@ const std::vector<AttributeRow>& Rows() {
        ParseQuantityAttribute, WriteQuantityKey, S::kModel},
       {"outputs", K::kCustom, 0, 0, false, false, "", "spikes stress force",
        "sensordata blocks (\"Sensordata layout\" below)",
-       "words of: spikes stress voltage force pressure rate", NO_FIELD, ParseOutputsAttribute,
+       "words of: spikes stress voltage force pressure rate coverage", NO_FIELD, ParseOutputsAttribute,
        WriteOutputsKey, S::kModel},
       // -- afferents (stage 4; README "Afferent models") ---------------------
       {"sa1_model", K::kChoice, 0, 0, false, false, "", "filtered",

@@ -69,7 +69,7 @@ bool CheckElasticSkin(const SkinConfig& cfg, const LayeredSubstrate* sub, std::s
 
 const char* OutputName(int block) {
   static const char* names[kNumOutputs] = {"spikes", "stress", "voltage", "force", "pressure",
-                                           "rate"};
+                                           "rate", "coverage"};
   return names[block];
 }
 

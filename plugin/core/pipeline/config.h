@@ -19,10 +19,14 @@ namespace mjtouch {
 
 // Output blocks, in sensordata order.
 enum OutputBlock {
-  kOutSpikes = 0, kOutStress, kOutVoltage, kOutForce, kOutPressure, kOutRate, kNumOutputs
+  kOutSpikes = 0, kOutStress, kOutVoltage, kOutForce, kOutPressure, kOutRate, kOutCoverage,
+  kNumOutputs
 };
 const char* OutputName(int block);
 constexpr int kForceBlockSize = 4;  // normal, tangential x, y (N, pad frame), indentation (m)
+// Share of MuJoCo's normal force on the pad geom that lands on the skin's
+// patch (1 without contact), and that normal force (N).
+constexpr int kCoverageBlockSize = 2;
 
 // `visual` attribute: none, pad (on the skin), above (a copy over the pad), both.
 enum class VisualMode { kNone = 0, kPad, kAbove, kBoth };
@@ -73,7 +77,7 @@ struct SkinConfig {
   bool radius_is_default = false;    // unset: fitted to the grid and pad
   ClassConfig classes[kNumClasses];
   ReceptorParams receptor;
-  bool outputs[kNumOutputs] = {true, true, false, true, false, false};
+  bool outputs[kNumOutputs] = {true, true, false, true, false, false, false};
   // `sites`: explicit receptors (replace the density population when set).
   std::vector<ExplicitSite> sites;
   // Where the MuJoCo adapter draws the pressure heatmap and receptor flashes
