@@ -22,7 +22,10 @@ prefix and suffix the pad's compiled name gained to each texture name.
 
 from __future__ import annotations
 
+import numbers
+
 import mujoco
+import numpy as np
 
 from mjtouch.scene import scenes
 from mjtouch.scene.sensor import SkinLayout
@@ -32,10 +35,12 @@ PAD_TYPES = {mujoco.mjtGeom.mjGEOM_SPHERE: "sphere", mujoco.mjtGeom.mjGEOM_ELLIP
 
 
 def _value(key: str, v) -> str:
-    if isinstance(v, bool):
+    if isinstance(v, (bool, np.bool_)):
         return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return scenes.fmt_number(v)
+    if isinstance(v, numbers.Real):
+        return scenes.fmt_number(float(v))
+    if isinstance(v, np.ndarray):
+        v = v.tolist()
     if isinstance(v, (list, tuple)):
         return " ".join(_value(key, x) for x in v)
     if isinstance(v, str):
