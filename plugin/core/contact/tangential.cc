@@ -467,7 +467,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
     }
   };
   residual();
-  double gg_old = 0;
+  double gg_old = 0, tau_ref = 0;
   bool restart = true;
   int it = 0;
   double change = 0;
@@ -517,11 +517,12 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
         }
       if (tw > 0) tau = tg / tw;
     }
-    if (!(tau > 0)) {
-      // No curvature on the stick cells (none left, or converged to
-      // round-off): a gradient step scaled by the kernel's self term.
-      tau = 1.0 / K.Kxx(0, 0);
-    }
+    // Slip cells step along their slip by the first iteration's
+    // (steepest-descent) step at most: the stick cells' conjugate steps grow
+    // long as they converge, and would flip slip directions.
+    if (!(tau > 0) || !std::isfinite(tau)) tau = 0.0;
+    if (tau_ref == 0.0) tau_ref = tau > 0 ? tau : 1.0 / K.Kxx(0, 0);
+    const double tau_slip = std::min(tau > 0 ? tau : tau_ref, tau_ref);
     // Stick cells along the conjugate direction, slip cells along their
     // slip (q + tau s, s = dW - r), then onto the disks with the force.
     for (size_t c = 0; c < m; ++c) {
@@ -531,8 +532,8 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
         yx[c] = qx[c] - tau * tcx[c];
         yy[c] = qy[c] - tau * tcy[c];
       } else {
-        yx[c] = qx[c] - tau * (rx[cb[c]] - dwx);
-        yy[c] = qy[c] - tau * (ry[cb[c]] - dwy);
+        yx[c] = qx[c] - tau_slip * (rx[cb[c]] - dwx);
+        yy[c] = qy[c] - tau_slip * (ry[cb[c]] - dwy);
       }
     }
     const std::vector<unsigned char> slip_before = slip;
