@@ -8,6 +8,10 @@ namespace mjtouch {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// |F| from this share of mu P up counts as full slip: the stick zone left
+// (c/a = (1 - |F|/(mu P))^(1/3) < 1e-4) is below any grid, and |F| = mu P
+// given by the caller must not miss the branch by round-off.
+constexpr double kFullSlipShare = 1.0 - 1e-12;
 
 std::string Num(double v) {
   char buf[32];
@@ -335,7 +339,7 @@ bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pr
   const double tx = fx_n / grid.Area(), ty = fy_n / grid.Area();
   result->iterations = 0;
   result->change = 0;
-  if (cells.index.empty() || std::hypot(tx, ty) >= cells.g_sum) {
+  if (cells.index.empty() || std::hypot(tx, ty) >= kFullSlipShare * cells.g_sum) {
     FullSlip(grid, pressure_pa, cells, fx_n, fy_n, state, result);
     return true;
   }
@@ -385,7 +389,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   const double tx = fx_n / grid.Area(), ty = fy_n / grid.Area();
   result->iterations = 0;
   result->change = 0;
-  if (cells.index.empty() || std::hypot(tx, ty) >= cells.g_sum) {
+  if (cells.index.empty() || std::hypot(tx, ty) >= kFullSlipShare * cells.g_sum) {
     FullSlip(grid, pressure_pa, cells, fx_n, fy_n, state, result);
     return true;
   }
