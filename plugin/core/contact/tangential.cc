@@ -115,9 +115,9 @@ int ProjectWithForce(const std::vector<double>& yx, const std::vector<double>& y
   for (; steps < 60; ++steps) {
     double gx, gy, hxx, hxy, hyy;
     const double phi = eval(lx, ly, &gx, &gy, &hxx, &hxy, &hyy);
-    // Converged, or stalled at round-off (the sums' own error is ~1e-16 m).
+    // Close enough (the rest goes to the stick cells below), or stalled.
     const double norm = std::hypot(gx, gy);
-    if (norm <= 1e-13 * scale || (norm <= 1e-9 * scale && norm > 0.5 * last_norm)) break;
+    if (norm <= 1e-10 * scale || (norm <= 1e-8 * scale && norm > 0.5 * last_norm)) break;
     last_norm = norm;
     // Regularised so that a step exists when every cell slips the same way.
     const double reg = 1e-12 * k * static_cast<double>(m);
