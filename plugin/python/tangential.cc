@@ -56,6 +56,7 @@ nb::dict Outputs(TangentialState&& s, TangentialResult&& r, size_t n) {
   d["stick_cells"] = r.stick_cells;
   d["full_slip"] = r.full_slip;
   d["iterations"] = r.iterations;
+  d["projection_steps"] = r.projection_steps;
   d["change"] = r.change;
   return d;
 }

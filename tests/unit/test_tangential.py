@@ -193,3 +193,36 @@ def test_bad_input():
     with pytest.raises(ValueError, match="give both shear_x_pa and shear_y_pa"):
         tg.winkler_partial_slip(p, h, 0.5, (0.1, 0.0), 1e7,
                                 state=tg.TangentialState(shear_x_pa=p))
+
+
+def test_rough_contact_against_tamaas():
+    # Tamaas's PolonskyKeerTan (periodic, coupled normal-tangential; no
+    # coupling at nu 0.5) on a rough sphere in a window 4x the contact: its
+    # pressure and mean traction in, our tractions against its. The periodic
+    # images and its stalled residual (~3e-6) leave ~1% differences.
+    import tamaas as tm
+
+    n, L, E, nu, mu = 64, 12.8e-3, 8e4, 0.5, 0.5
+    h = L / n
+    x = (np.arange(n) - (n - 1) / 2) * h
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    rng = np.random.default_rng(3)
+    k2 = np.fft.fftfreq(n)[:, None] ** 2 + np.fft.fftfreq(n)[None, :] ** 2
+    noise = np.real(np.fft.ifft2(np.fft.fft2(rng.standard_normal((n, n)))
+                                 * np.exp(-k2 / (2 * 0.06**2))))
+    surface = -(X**2 + Y**2) / (2 * 0.01) + noise * (3e-6 / noise.std())
+    model = tm.ModelFactory.createModel(tm.model_type.surface_2d, [L, L], [n, n])
+    model.E, model.nu = E, nu
+    solver = tm.PolonskyKeerTan(model, surface, 1e-12, mu)
+    solver.max_iter = 300
+    solver.solve([0.3 * mu * 0.5 / L**2, 0.0, 0.3 / L**2])
+    t = np.array(model.traction).transpose(1, 0, 2)  # tamaas [i, j] -> ours [j, i]
+    p, qx, qy = t[..., 2].copy(), t[..., 0], t[..., 1]
+    res, _ = tg.ElasticPartialSlip(n, h, E, nu).solve(
+        p, mu, (qx.sum() * h * h, qy.sum() * h * h), tolerance=1e-8, max_iterations=3000)
+    load = p > 0
+    diff = np.hypot(res["shear_x_pa"] - qx, res["shear_y_pa"] - qy)
+    assert diff.sum() / np.hypot(qx, qy).sum() < 0.04
+    tamaas_stick = load & (np.hypot(qx, qy) < mu * p * (1 - 1e-6))
+    assert res["stick_cells"] == pytest.approx(tamaas_stick.sum(), rel=0.03)
+    assert (tamaas_stick == (res["stick"] == 1))[load].mean() > 0.98

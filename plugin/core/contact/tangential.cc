@@ -127,8 +127,11 @@ int ProjectWithForce(const std::vector<double>& yx, const std::vector<double>& y
     const double dx = -(hyy * gx - hxy * gy) / det, dy = -(hxx * gy - hxy * gx) / det;
     const double slope = gx * dx + gy * dy;
     double s = 1.0;
-    bool accepted = false;
-    for (int b = 0; b < 60; ++b, s *= 0.5) {
+    // Phi's round-off (~1e-16 of its terms) hides decreases below ~1e-12 of
+    // it: near the solution Armijo cannot tell, and Newton is then exact
+    // (piecewise quadratic, one piece).
+    bool accepted = -slope <= 1e-12 * (std::fabs(phi) + g_sum * g_sum / k);
+    for (int b = 0; b < 40 && !accepted; ++b, s *= 0.5) {
       if (eval(lx + s * dx, ly + s * dy, nullptr, nullptr, nullptr, nullptr, nullptr) <=
           phi + 1e-4 * s * slope) {
         accepted = true;
@@ -338,6 +341,7 @@ bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pr
   const Cells cells = LoadedCells(pressure_pa, mu);
   const double tx = fx_n / grid.Area(), ty = fy_n / grid.Area();
   result->iterations = 0;
+  result->projection_steps = 0;
   result->change = 0;
   if (cells.index.empty() || std::hypot(tx, ty) >= kFullSlipShare * cells.g_sum) {
     FullSlip(grid, pressure_pa, cells, fx_n, fy_n, state, result);
@@ -353,7 +357,7 @@ bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pr
     }
   std::vector<unsigned char> slip;
   double dwx = 0, dwy = 0;
-  result->iterations = ProjectWithForce(yx, yy, cells.g, tangential_stiffness_pa_per_m, tx, ty,
+  result->iterations = result->projection_steps = ProjectWithForce(yx, yy, cells.g, tangential_stiffness_pa_per_m, tx, ty,
                                         &dwx, &dwy, &qx, &qy, &slip);
   state->shear_x_pa.assign(N, 0.0);
   state->shear_y_pa.assign(N, 0.0);
@@ -388,6 +392,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   const Cells cells = LoadedCells(pressure_pa, mu);
   const double tx = fx_n / grid.Area(), ty = fy_n / grid.Area();
   result->iterations = 0;
+  result->projection_steps = 0;
   result->change = 0;
   if (cells.index.empty() || std::hypot(tx, ty) >= kFullSlipShare * cells.g_sum) {
     FullSlip(grid, pressure_pa, cells, fx_n, fy_n, state, result);
@@ -431,7 +436,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   }
   std::vector<unsigned char> slip;
   double lx = 0, ly = 0;
-  ProjectWithForce(yx, yy, cells.g, 1.0, tx, ty, &lx, &ly, &qx, &qy, &slip);
+  int projection_steps = ProjectWithForce(yx, yy, cells.g, 1.0, tx, ty, &lx, &ly, &qx, &qy, &slip);
 
   std::vector<double> dx(B), dy(B), rx(B), ry(B), tbx(B, 0.0), tby(B, 0.0), wx(B), wy(B);
   std::vector<double> tcx(m, 0.0), tcy(m, 0.0), oldx(m), oldy(m);
@@ -542,7 +547,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
     }
     const std::vector<unsigned char> slip_before = slip;
     lx = ly = 0;
-    ProjectWithForce(yx, yy, cells.g, 1.0, tx, ty, &lx, &ly, &qx, &qy, &slip);
+    projection_steps += ProjectWithForce(yx, yy, cells.g, 1.0, tx, ty, &lx, &ly, &qx, &qy, &slip);
     restart = slip != slip_before;
     gg_old = gg;
     ++it;
@@ -566,6 +571,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   state->shift_x_m += dwx;
   state->shift_y_m += dwy;
   result->iterations = it;
+  result->projection_steps = projection_steps;
   result->change = change;
   Finish(cells, slip, N, result);
   return true;

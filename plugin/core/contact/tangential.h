@@ -54,6 +54,7 @@ struct TangentialResult {
   double stuck_share = 0;   // stick_cells / loaded_cells (0 without load)
   bool full_slip = false;   // |F| >= mu P: q = p F / P on every loaded cell
   int iterations = 0;       // elastic: CG iterations; winkler: Newton steps
+  int projection_steps = 0; // Newton steps of the force projections, in all
   double change = 0;        // elastic: last relative L1 change of q
 };
 
