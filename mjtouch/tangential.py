@@ -67,13 +67,13 @@ class ElasticPartialSlip:
         self.compliance = _core.TangentialCompliance(n, pitch_m, young_pa, poisson)
 
     def solve(self, pressure_pa, mu: float, force_n, state: Optional[TangentialState] = None,
-              tolerance: float = 1e-4, max_iterations: int = 200):
+              tolerance: float = 1e-3, max_iterations: int = 200, precision: str = "float"):
         """One step; as winkler_partial_slip, stopping at a relative L1 change of the
-        tractions below tolerance."""
+        tractions below tolerance; precision of the FFTs 'float' or 'double'."""
         state = state or TangentialState()
         r = self.compliance.solve(np.ascontiguousarray(pressure_pa, dtype=np.float64), mu,
                                   float(force_n[0]), float(force_n[1]), tolerance,
-                                  max_iterations, **state.arguments())
+                                  max_iterations, **state.arguments(), precision=precision)
         return r, TangentialState.from_result(r)
 
     def displacement(self, shear_x_pa, shear_y_pa):

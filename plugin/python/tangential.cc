@@ -126,14 +126,18 @@ std::tuple<Out<double>, Out<double>> Displacement(const TangentialCompliance& K,
 nb::dict Elastic(const TangentialCompliance& K, const F64_2& pressure_pa, double mu, double fx_n,
                  double fy_n, double tolerance, int max_iterations,
                  const std::optional<F64_2>& shear_x_pa, const std::optional<F64_2>& shear_y_pa,
-                 double shift_x_m, double shift_y_m) {
+                 double shift_x_m, double shift_y_m, const std::string& precision) {
+  if (precision != "float" && precision != "double")
+    Fail("precision '" + precision + "' is not one of ('float', 'double')");
   int n;
   const std::vector<double> p = Pressure(pressure_pa, &n);
   TangentialState s = StateOf(shear_x_pa, shear_y_pa, shift_x_m, shift_y_m, n);
   TangentialResult r;
   std::string error;
   if (!SolveTangentialElastic(TaxelGrid{n, K.pitch_m()}, p, mu, fx_n, fy_n, K, tolerance,
-                              max_iterations, &s, &r, &error))
+                              max_iterations, &s, &r, &error,
+                              precision == "float" ? ApplyPrecision::kFloat
+                                                   : ApplyPrecision::kDouble))
     Fail(error);
   return Outputs(std::move(s), std::move(r), n);
 }
@@ -173,9 +177,10 @@ void BindTangential(nb::module_& m) {
            nb::arg("fy_n"), nb::arg("tolerance") = 1e-4, nb::arg("max_iterations") = 200,
            nb::arg("shear_x_pa").noconvert() = nb::none(),
            nb::arg("shear_y_pa").noconvert() = nb::none(), nb::arg("shift_x_m") = 0.0,
-           nb::arg("shift_y_m") = 0.0,
+           nb::arg("shift_y_m") = 0.0, nb::arg("precision") = "float",
            "Partial slip on this half-space skin: as tangential_winkler, with the\n"
-           "stop at a relative L1 change of the tractions below tolerance.");
+           "stop at a relative L1 change of the tractions below tolerance. precision:\n"
+           "of the operator's FFTs, 'float' (~1e-7 of the displacement) or 'double'.");
 }
 
 }  // namespace mjtouch::py

@@ -45,7 +45,8 @@ def test_cattaneo_mindlin_half_space(nu, ratio):
     G, mu = 100e6, 0.5
     P = p.sum() * h * h
     Q = ratio * mu * P
-    res, _ = half_space(n, h, G, nu).solve(p, mu, (Q, 0.0), tolerance=1e-8, max_iterations=500)
+    res, _ = half_space(n, h, G, nu).solve(p, mu, (Q, 0.0), tolerance=1e-8, max_iterations=500,
+                                           precision="double")
     c = A_M * (1 - ratio) ** (1 / 3)
     # The stick edge runs through cells: c to within half a cell.
     assert stick_radius(res, h) == pytest.approx(c, abs=0.5 * h)
@@ -68,14 +69,16 @@ def test_cattaneo_mindlin_half_space(nu, ratio):
     np.testing.assert_allclose(q[slip], mu * p[slip], rtol=1e-12)
 
 
-def test_contact_cattaneo_example():
+@pytest.mark.parametrize("precision, tolerance", [("double", 1e-8), ("float", 1e-4)])
+def test_contact_cattaneo_example(precision, tolerance):
     # CONTACT's example: two identical bodies G 200 N/mm^2, nu 0.42; here one
     # half-space of G 100 N/mm^2 on a rigid plate has the same compliance.
     n, per = 96, 40
     h, r, p, p0 = hertz(n, per, fn=9.1954)
     P = p.sum() * h * h
     res, _ = half_space(n, h, 100e6, 0.42).solve(p, 0.4, (3.218 * P / 9.1954, 0.0),
-                                                 tolerance=1e-8, max_iterations=500)
+                                                 tolerance=tolerance, max_iterations=500,
+                                                 precision=precision)
     assert stick_radius(res, h) == pytest.approx(0.5e-3, abs=0.5 * h)
     # CONTACT 0.008155 mm, the formula 0.008171 mm: the grid (40 cells per
     # radius) moves the shift by < 0.3% (measured 32-64 cells per radius).
@@ -124,9 +127,10 @@ def test_mindlin_deresiewicz_unloading():
     P = p.sum() * h * h
     solver = half_space(n, h, G, nu)
     q_star, dq = 0.7 * mu * P, 0.6 * mu * P
-    _, state = solver.solve(p, mu, (q_star, 0.0), tolerance=1e-8, max_iterations=500)
+    _, state = solver.solve(p, mu, (q_star, 0.0), tolerance=1e-8, max_iterations=500,
+                            precision="double")
     res, _ = solver.solve(p, mu, (q_star - dq, 0.0), state=state, tolerance=1e-8,
-                          max_iterations=500)
+                          max_iterations=500, precision="double")
     c = A_M * (1 - q_star / (mu * P)) ** (1 / 3)
     b = A_M * (1 - dq / (2 * mu * P)) ** (1 / 3)
     # Johnson 1985 sec. 7.2: stick inside b, reversed slip in b < r < a.
@@ -138,7 +142,8 @@ def test_mindlin_deresiewicz_unloading():
     away = (np.abs(r - c) > 1.5 * h) & (np.abs(r - b) > 1.5 * h) & (r < A_M - 1.5 * h)
     assert err[away].max() < 0.02
     # Without memory the same force gives Cattaneo's loading profile instead.
-    fresh, _ = solver.solve(p, mu, (q_star - dq, 0.0), tolerance=1e-8, max_iterations=500)
+    fresh, _ = solver.solve(p, mu, (q_star - dq, 0.0), tolerance=1e-8, max_iterations=500,
+                            precision="double")
     assert np.all(fresh["shear_x_pa"][p > 0] >= 0)
 
 
@@ -219,7 +224,8 @@ def test_rough_contact_against_tamaas():
     t = np.array(model.traction).transpose(1, 0, 2)  # tamaas [i, j] -> ours [j, i]
     p, qx, qy = t[..., 2].copy(), t[..., 0], t[..., 1]
     res, _ = tg.ElasticPartialSlip(n, h, E, nu).solve(
-        p, mu, (qx.sum() * h * h, qy.sum() * h * h), tolerance=1e-8, max_iterations=3000)
+        p, mu, (qx.sum() * h * h, qy.sum() * h * h), tolerance=1e-8, max_iterations=3000,
+        precision="double")
     load = p > 0
     diff = np.hypot(res["shear_x_pa"] - qx, res["shear_y_pa"] - qy)
     assert diff.sum() / np.hypot(qx, qy).sum() < 0.04

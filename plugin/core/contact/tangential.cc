@@ -273,28 +273,53 @@ std::shared_ptr<const TangentialCompliance::Spectra> TangentialCompliance::Spect
   spectrum(kxx_, false, &s->xx);
   spectrum(kyy_, false, &s->yy);
   spectrum(kxy_, true, &s->xy);
+  s->xx_f.assign(s->xx.begin(), s->xx.end());
+  s->yy_f.assign(s->yy.begin(), s->yy.end());
+  s->xy_f.assign(s->xy.begin(), s->xy.end());
   slot = std::move(s);
   return slot;
 }
 
-void TangentialCompliance::Apply(const Spectra& s, const double* qx, const double* qy, int bx,
-                                 int by, double* ux, double* uy, Work* w) const {
-  const size_t S = s.fft.spectrum_size();
-  w->sxr.resize(S);
-  w->sxi.resize(S);
-  w->syr.resize(S);
-  w->syi.resize(S);
-  s.fft.ForwardReal(qx, bx, by, bx, w->sxr.data(), w->sxi.data(), &w->scratch);
-  s.fft.ForwardReal(qy, bx, by, bx, w->syr.data(), w->syi.data(), &w->scratch);
+namespace {
+
+template <typename T>
+void ApplyIn(const Fft2D& fft, const std::vector<T>& kxx, const std::vector<T>& kyy,
+             const std::vector<T>& kxy, const double* qx, const double* qy, int bx, int by,
+             double* ux, double* uy, std::vector<T>* sxr, std::vector<T>* sxi,
+             std::vector<T>* syr, std::vector<T>* syi, std::vector<T>* scratch) {
+  const size_t S = fft.spectrum_size();
+  sxr->resize(S);
+  sxi->resize(S);
+  syr->resize(S);
+  syi->resize(S);
+  fft.ForwardReal(qx, bx, by, bx, sxr->data(), sxi->data(), scratch);
+  fft.ForwardReal(qy, bx, by, bx, syr->data(), syi->data(), scratch);
+  T* __restrict ar = sxr->data();
+  T* __restrict ai = sxi->data();
+  T* __restrict br = syr->data();
+  T* __restrict bi = syi->data();
   for (size_t k = 0; k < S; ++k) {
-    const double xr = w->sxr[k], xi = w->sxi[k], yr = w->syr[k], yi = w->syi[k];
-    w->sxr[k] = s.xx[k] * xr + s.xy[k] * yr;
-    w->sxi[k] = s.xx[k] * xi + s.xy[k] * yi;
-    w->syr[k] = s.xy[k] * xr + s.yy[k] * yr;
-    w->syi[k] = s.xy[k] * xi + s.yy[k] * yi;
+    const T xr = ar[k], xi = ai[k], yr = br[k], yi = bi[k];
+    ar[k] = kxx[k] * xr + kxy[k] * yr;
+    ai[k] = kxx[k] * xi + kxy[k] * yi;
+    br[k] = kxy[k] * xr + kyy[k] * yr;
+    bi[k] = kxy[k] * xi + kyy[k] * yi;
   }
-  s.fft.InverseReal(w->sxr.data(), w->sxi.data(), by, bx, ux, bx, &w->scratch);
-  s.fft.InverseReal(w->syr.data(), w->syi.data(), by, bx, uy, bx, &w->scratch);
+  fft.InverseReal(ar, ai, by, bx, ux, bx, scratch);
+  fft.InverseReal(br, bi, by, bx, uy, bx, scratch);
+}
+
+}  // namespace
+
+void TangentialCompliance::Apply(const Spectra& s, const double* qx, const double* qy, int bx,
+                                 int by, double* ux, double* uy, Work* w,
+                                 ApplyPrecision precision) const {
+  if (precision == ApplyPrecision::kFloat)
+    ApplyIn(s.fft, s.xx_f, s.yy_f, s.xy_f, qx, qy, bx, by, ux, uy, &w->sxr_f, &w->sxi_f,
+            &w->syr_f, &w->syi_f, &w->scratch_f);
+  else
+    ApplyIn(s.fft, s.xx, s.yy, s.xy, qx, qy, bx, by, ux, uy, &w->sxr, &w->sxi, &w->syr,
+            &w->syi, &w->scratch);
 }
 
 double WinklerTangentialStiffness(double normal_stiffness_pa_per_m, double poisson) {
@@ -374,7 +399,8 @@ bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pr
 bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
                             double mu, double fx_n, double fy_n, const TangentialCompliance& K,
                             double tolerance, int max_iterations, TangentialState* state,
-                            TangentialResult* result, std::string* error) {
+                            TangentialResult* result, std::string* error,
+                            ApplyPrecision precision) {
   std::string e = CheckTangentialInputs(grid, pressure_pa, mu, fx_n, fy_n, *state);
   if (e.empty() && (K.n() != grid.n || K.pitch_m() != grid.pitch_m))
     e = "compliance built for n = " + std::to_string(K.n()) + ", pitch " + Num(K.pitch_m()) +
@@ -451,7 +477,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
       dx[cb[c]] += qx[c];
       dy[cb[c]] += qy[c];
     }
-    K.Apply(*spectra, dx.data(), dy.data(), bx, by, rx.data(), ry.data(), &work);
+    K.Apply(*spectra, dx.data(), dy.data(), bx, by, rx.data(), ry.data(), &work, precision);
   };
   // The shift increment: the stick cells' mean displacement (all cells'
   // when none sticks).
@@ -517,7 +543,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
           tbx[cb[c]] = tcx[c];
           tby[cb[c]] = tcy[c];
         }
-      K.Apply(*spectra, tbx.data(), tby.data(), bx, by, wx.data(), wy.data(), &work);
+      K.Apply(*spectra, tbx.data(), tby.data(), bx, by, wx.data(), wy.data(), &work, precision);
       double tw = 0, tg = 0;
       for (size_t c = 0; c < m; ++c)
         if (!slip[c]) {

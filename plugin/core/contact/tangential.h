@@ -34,6 +34,7 @@
 
 #include "common/fft.h"
 #include "common/grid.h"
+#include "contact/compliance.h"  // ApplyPrecision
 
 namespace mjtouch {
 
@@ -80,6 +81,7 @@ class TangentialCompliance {
   struct Spectra {
     Fft2D fft;
     std::vector<double> xx, yy, xy;  // real, divided by mx my
+    std::vector<float> xx_f, yy_f, xy_f;  // the same rounded to float
     Spectra(int mx, int my) : fft(mx, my) {}
   };
   std::shared_ptr<const Spectra> SpectraFor(int bx, int by) const;
@@ -87,10 +89,12 @@ class TangentialCompliance {
   // Work arrays of Apply (per caller).
   struct Work {
     std::vector<double> sxr, sxi, syr, syi, scratch;
+    std::vector<float> sxr_f, sxi_f, syr_f, syi_f, scratch_f;
   };
   // (ux, uy) = K * (qx, qy) on a bx x by box (row-major arrays, no wrap).
+  // kFloat: spectra in float (~1e-7 of u; the solver's tolerance is far above).
   void Apply(const Spectra& s, const double* qx, const double* qy, int bx, int by, double* ux,
-             double* uy, Work* w) const;
+             double* uy, Work* w, ApplyPrecision precision = ApplyPrecision::kDouble) const;
 
  private:
   double At(const std::vector<double>& t, int di, int dj) const {
@@ -128,7 +132,8 @@ bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pr
 bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
                             double mu, double fx_n, double fy_n, const TangentialCompliance& K,
                             double tolerance, int max_iterations, TangentialState* state,
-                            TangentialResult* result, std::string* error);
+                            TangentialResult* result, std::string* error,
+                            ApplyPrecision precision = ApplyPrecision::kDouble);
 
 }  // namespace mjtouch
 
