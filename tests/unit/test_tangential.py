@@ -232,3 +232,21 @@ def test_rough_contact_against_tamaas():
     tamaas_stick = load & (np.hypot(qx, qy) < mu * p * (1 - 1e-6))
     assert res["stick_cells"] == pytest.approx(tamaas_stick.sum(), rel=0.03)
     assert (tamaas_stick == (res["stick"] == 1))[load].mean() > 0.98
+
+
+def test_winkler_unloading_superposition():
+    # Local springs superpose exactly: unloading Q* -> Q* - dQ gives
+    # q(Q*) - 2 q(dQ/2) and stick radius b/a = (1 - dQ/(2 mu P))^(1/4).
+    n, per, mu, k = 96, 40, 0.5, 1e7
+    h, r, p, p0 = parabolic(n, per)
+    P = p.sum() * h * h
+    q_star, dq = 0.7 * mu * P, 0.6 * mu * P
+    loaded, state = tg.winkler_partial_slip(p, h, mu, (q_star, 0.0), k)
+    res, _ = tg.winkler_partial_slip(p, h, mu, (q_star - dq, 0.0), k, state=state)
+    half, _ = tg.winkler_partial_slip(p, h, mu, (dq / 2, 0.0), k)
+    b = A_M * (1 - dq / (2 * mu * P)) ** 0.25
+    assert stick_radius(res, h) == pytest.approx(b, abs=0.5 * h)
+    np.testing.assert_allclose(res["shear_x_pa"], loaded["shear_x_pa"] - 2 * half["shear_x_pa"],
+                               rtol=0, atol=1e-9 * mu * p0)
+    assert res["shift_x_m"] == pytest.approx(loaded["shift_x_m"] - 2 * half["shift_x_m"],
+                                             rel=1e-9)
