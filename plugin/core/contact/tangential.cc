@@ -431,9 +431,15 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   CellBounds bounds;
   for (int k : cells.index) bounds.Add(k % n, k / n);
   if (have_prev)
-    for (size_t k = 0; k < N; ++k)
-      if (state->shear_x_pa[k] != 0.0 || state->shear_y_pa[k] != 0.0)
-        bounds.Add(static_cast<int>(k % n), static_cast<int>(k / n));
+    for (int j = 0; j < n; ++j) {
+      const double* sx = state->shear_x_pa.data() + static_cast<size_t>(j) * n;
+      const double* sy = state->shear_y_pa.data() + static_cast<size_t>(j) * n;
+      int lo = 0, hi = n - 1;
+      while (lo < n && sx[lo] == 0.0 && sy[lo] == 0.0) ++lo;
+      if (lo == n) continue;
+      while (sx[hi] == 0.0 && sy[hi] == 0.0) --hi;
+      bounds.AddRow(lo, hi, j);
+    }
   const CellBox box = bounds.Box();
   const int bx = box.nx, by = box.ny;
   const size_t B = static_cast<size_t>(bx) * by;
@@ -588,8 +594,17 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   }
   double dwx, dwy;
   shift_increment(&dwx, &dwy);
-  state->shear_x_pa.assign(N, 0.0);
-  state->shear_y_pa.assign(N, 0.0);
+  // The box holds the old and the new tractions: clearing it suffices.
+  if (have_prev) {
+    for (int j = 0; j < by; ++j) {
+      const size_t k = static_cast<size_t>(box.j0 + j) * n + box.i0;
+      std::fill_n(state->shear_x_pa.begin() + k, bx, 0.0);
+      std::fill_n(state->shear_y_pa.begin() + k, bx, 0.0);
+    }
+  } else {
+    state->shear_x_pa.assign(N, 0.0);
+    state->shear_y_pa.assign(N, 0.0);
+  }
   for (size_t c = 0; c < m; ++c) {
     state->shear_x_pa[cells.index[c]] = qx[c];
     state->shear_y_pa[cells.index[c]] = qy[c];
