@@ -9,6 +9,8 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "pipeline/text.h"
+
 namespace mjtouch {
 namespace {
 
@@ -267,18 +269,13 @@ bool SkinPlugin::ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int
   return true;
 }
 
-SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
-  SkinConfig cfg;
-  int sensor_id, pad;
-  std::string error;
-  if (!ReadConfig(m, instance, &cfg, &sensor_id, &pad, &error) ||
-      !CheckTactileRate(cfg, m->opt.timestep, &error)) {
-    mju_warning("%s", error.c_str());
-    return nullptr;
-  }
+// The texture geoms (named by `texture`, and/or every non-colliding geom in
+// `texture_group`) and the height fields the skin renders, checked.
+bool SkinPlugin::ResolveTextures(const mjModel* m, int instance, const SkinConfig& cfg, int pad,
+                                 std::vector<int>* textures, std::string* error) {
+  textures->clear();
   // Texture geoms, rendered whenever the pad touches anything: named by
   // `texture`, and/or every non-colliding geom in `texture_group`.
-  std::vector<int> textures;
   // Every geom type but sdf (no geometry the plugin can query), and not the
   // pad's own body.
   const int pad_body = m->body_weldid[m->geom_bodyid[pad]];
@@ -289,37 +286,37 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
   while (words >> name) {
     const int g = mj_name2id(m, mjOBJ_GEOM, name.c_str());
     if (g < 0) {
-      mju_warning("mjtouch.skin: attribute `texture` names geom '%s', which does not exist",
-                  name.c_str());
-      return nullptr;
+      *error = Fmt("mjtouch.skin: attribute `texture` names geom '%s', which does not exist",
+                   name.c_str());
+      return false;
     }
     if (!renderable(g)) {
-      mju_warning("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: an "
-                  "sdf geom; valid: plane, hfield, sphere, capsule, ellipsoid, cylinder, box, mesh",
-                  name.c_str());
-      return nullptr;
+      *error = Fmt("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: an "
+                   "sdf geom; valid: plane, hfield, sphere, capsule, ellipsoid, cylinder, box, "
+                   "mesh", name.c_str());
+      return false;
     }
     if (on_pad(g)) {
-      mju_warning("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: it "
-                  "moves with the pad (same body)", name.c_str());
-      return nullptr;
+      *error = Fmt("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: it "
+                   "moves with the pad (same body)", name.c_str());
+      return false;
     }
-    textures.push_back(g);
+    textures->push_back(g);
   }
   if (cfg.texture_group >= 0) {
     for (int g = 0; g < m->ngeom; ++g) {
-      // Geoms on the pad's own body (e.g. its visual meshes) are not textures.
+      // Geoms on the pad's own body (e.g. its visual meshes) are not textures->
       if (m->geom_group[g] != cfg.texture_group || m->geom_contype[g] ||
           m->geom_conaffinity[g] || on_pad(g))
         continue;
       if (!renderable(g)) {
         const char* gname = mj_id2name(m, mjOBJ_GEOM, g);
-        mju_warning("mjtouch.skin: geom '%s' in `texture_group` %d cannot be rendered against (an "
-                    "sdf geom; move it to another group)", gname ? gname : "(unnamed)",
-                    cfg.texture_group);
-        return nullptr;
+        *error = Fmt("mjtouch.skin: geom '%s' in `texture_group` %d cannot be rendered against "
+                     "(an sdf geom; move it to another group)", gname ? gname : "(unnamed)",
+                     cfg.texture_group);
+        return false;
       }
-      if (std::find(textures.begin(), textures.end(), g) == textures.end()) textures.push_back(g);
+      if (std::find(textures->begin(), textures->end(), g) == textures->end()) textures->push_back(g);
     }
   }
   // Height fields the skin renders (textures, and hfields that can collide
@@ -336,13 +333,50 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
   };
   for (int g = 0; g < m->ngeom; ++g) {
     if (m->geom_type[g] != mjGEOM_HFIELD || on_pad(g)) continue;
-    if (!may_collide(g) && std::find(textures.begin(), textures.end(), g) == textures.end())
+    if (!may_collide(g) && std::find(textures->begin(), textures->end(), g) == textures->end())
       continue;
     const std::string bad = CheckHeightFieldSamples(m, g);
     if (!bad.empty()) {
-      mju_warning("%s", bad.c_str());
-      return nullptr;
+      *error = bad;
+      return false;
     }
+  }
+  return true;
+}
+
+// MuJoCo's compiler appends the warnings it collected to an init failure's
+// error twice, after its own "plugin->init failed"; an error raised while it
+// sizes the sensor reaches the user once, as the compile error. The sensor
+// is linked to the instance only on the second sizing call: the pad and
+// timestep checks run then.
+bool SkinPlugin::CheckAtCompile(const mjModel* m, int instance, std::string* error) {
+  SkinConfig cfg;
+  if (!ParseConfig(m, instance, &cfg, error)) return false;
+  bool linked = false;
+  for (int i = 0; i < m->nsensor; ++i)
+    linked = linked || (m->sensor_type[i] == mjSENS_PLUGIN && m->sensor_plugin[i] == instance);
+  if (!linked) return true;
+  int sensor_id, pad;
+  cfg = SkinConfig();
+  std::vector<int> textures;
+  return ReadConfig(m, instance, &cfg, &sensor_id, &pad, error) &&
+         CheckTactileRate(cfg, m->opt.timestep, error) &&
+         ResolveTextures(m, instance, cfg, pad, &textures, error);
+}
+
+SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
+  SkinConfig cfg;
+  int sensor_id, pad;
+  std::string error;
+  if (!ReadConfig(m, instance, &cfg, &sensor_id, &pad, &error) ||
+      !CheckTactileRate(cfg, m->opt.timestep, &error)) {
+    mju_warning("%s", error.c_str());
+    return nullptr;
+  }
+  std::vector<int> textures;
+  if (!ResolveTextures(m, instance, cfg, pad, &textures, &error)) {
+    mju_warning("%s", error.c_str());
+    return nullptr;
   }
   auto model = SkinModel::Build(cfg, &error);
   if (!model) {
@@ -495,6 +529,8 @@ void SkinPlugin::RegisterPlugin() {
   plugin.nsensordata = +[](const mjModel* m, int instance, int sensor_id) {
     SkinConfig cfg;
     std::string error;
+    // On a line of its own, after MuJoCo's "engine error: ".
+    if (!CheckAtCompile(m, instance, &error)) mju_error("\n%s", error.c_str());
     if (!ParseConfig(m, instance, &cfg, &error)) return 0;
     return SkinModel::OutputSize(cfg, static_cast<int>(SkinModel::PlaceReceptors(cfg).size()));
   };

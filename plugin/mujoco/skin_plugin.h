@@ -33,6 +33,10 @@ class SkinPlugin {
   static void RegisterPlugin();
   // Attributes alone (all that output and state sizes depend on): MuJoCo
   // asks for those sizes before the sensor's object is resolved.
+  // The attribute, pad and timestep checks, run while MuJoCo compiles.
+  static bool CheckAtCompile(const mjModel* m, int instance, std::string* error);
+  static bool ResolveTextures(const mjModel* m, int instance, const SkinConfig& cfg, int pad,
+                              std::vector<int>* textures, std::string* error);
   static bool ParseConfig(const mjModel* m, int instance, SkinConfig* cfg, std::string* error);
   // Attributes plus the pad geometry, for a compiled model.
   static bool ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int* sensor_id,
