@@ -447,15 +447,17 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     mjtNum n_into[3] = {c.frame[0] * -sign, c.frame[1] * -sign, c.frame[2] * -sign};
     bool seen = false;
     for (const auto& s : in.surfaces) seen = seen || s.id == other;
-    if (!seen) {
-      in.surfaces.push_back(SurfaceForGeom(m, d, other, ppos, c.pos, n_into, HeightField(m, other),
+    const HeightFieldCache* field = HeightField(m, other);
+    if (!seen && !(field && field->bad)) {
+      in.surfaces.push_back(SurfaceForGeom(m, d, other, ppos, c.pos, n_into, field,
                                            MeshCaster(m, other)));
     }
   }
   if (in.in_contact) {
     for (int g : texture_geoms_) {
-      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos, HeightField(m, g),
-                                           MeshCaster(m, g)));
+      const HeightFieldCache* field = HeightField(m, g);
+      if (field && field->bad) continue;
+      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos, field, MeshCaster(m, g)));
     }
   }
   // Force on the pad in the pad frame (columns of the row-major xmat).
@@ -481,18 +483,49 @@ const MeshRayCaster* SkinPlugin::MeshCaster(const mjModel* m, int geom) {
 const HeightFieldCache* SkinPlugin::HeightField(const mjModel* m, int geom) {
   if (m->geom_type[geom] != mjGEOM_HFIELD) return nullptr;
   const int h = m->geom_dataid[geom];
-  auto it = hfields_.find(h);
-  if (it != hfields_.end()) return &it->second;
-  HeightFieldCache& c = hfields_[h];
-  const float* samples = m->hfield_data + m->hfield_adr[h];
-  c.prefix = HeightFieldRowPrefix(m->hfield_nrow[h], m->hfield_ncol[h], samples);
-  c.max_sample = 0;
   const int nrow = m->hfield_nrow[h], ncol = m->hfield_ncol[h];
-  for (int k = 0; k < nrow * ncol; ++k) c.max_sample = std::max<double>(c.max_sample, samples[k]);
+  const float* samples = m->hfield_data + m->hfield_adr[h];
+  const size_t count = static_cast<size_t>(nrow) * ncol;
+  auto it = hfields_.find(h);
+  // mjModel.hfield_data may be edited while the model runs: the cache
+  // follows the samples (compared every use; an edit rebuilds it).
+  if (it != hfields_.end() && std::equal(samples, samples + count, it->second.samples.begin()))
+    return &it->second;
+  HeightFieldCache& c = hfields_[h];
+  c.samples.assign(samples, samples + count);
+  const std::string bad = CheckHeightFieldSamples(m, geom);
+  c.bad = !bad.empty();
+  if (c.bad) {
+    // Checked at init; an edit since: warned once, the field left out.
+    if (!warned_height_field_)
+      mju_warning("%s; it was edited after the MjData was made: the skin leaves this height "
+                  "field out until its samples are finite (warned once)", bad.c_str());
+    warned_height_field_ = true;
+    return &c;
+  }
+  c.prefix = HeightFieldRowPrefix(nrow, ncol, samples);
+  c.max_sample = 0;
+  for (size_t k = 0; k < count; ++k) c.max_sample = std::max<double>(c.max_sample, samples[k]);
   c.rows_identical = true;
   for (int r = 1; r < nrow && c.rows_identical; ++r)
     c.rows_identical = std::equal(samples, samples + ncol, samples + static_cast<size_t>(r) * ncol);
   return &c;
+}
+
+// Warnings of the run, each once per MjData: the force block's last column
+// flags every step past the skin.
+void SkinPlugin::WarnOnce(const mjModel* m, const double* state) {
+  if (!warned_beyond_skin_ && IndentationBeyondSkin(*model_, state)) {
+    warned_beyond_skin_ = true;
+    const SkinConfig& cfg = model_->config();
+    const bool stack = cfg.layered && cfg.base.rigid;
+    mju_warning("mjtouch.skin: the indentation %g m at time %g s exceeds %s (%g m): the linear "
+                "skin is past its range there (the bone or the pad would carry the load); the "
+                "force block's last column flags such steps (warned once)",
+                state[kStContactDepth], state[kStLastTime],
+                stack ? "the skin stack over the rigid base" : "the pad's half-height",
+                IndentationLimit(cfg));
+  }
 }
 
 void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {
@@ -500,6 +533,7 @@ void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {
   mjtNum* state = d->plugin_state + m->plugin_stateadr[instance];
   mjtNum* out = d->sensordata + m->sensor_adr[sensor_id_];
   const int fired = Step(*model_, input_, d->time, state, &workspace_, out);
+  WarnOnce(m, state);
   // For drawing only: whether the field is live, and when each receptor last fired.
   touching_ = state[kStContactValid] > 0.0;
   if (fired > 0) {

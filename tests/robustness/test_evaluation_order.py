@@ -23,10 +23,13 @@ def press_ctrl(i: int) -> list[float]:
     return [0.5, -1.0 - 0.5 * np.sin(0.05 * i)]
 
 
-def run(m, steps, forward_ctrl=None, first_only=False):
+def run(m, steps, forward_ctrl=None, first_only=False, pressed=False):
     """sensordata per step; before each mj_step (or only the first),
-    an mj_forward with forward_ctrl when given."""
+    an mj_forward with forward_ctrl when given. pressed: start with the pad
+    1 mm into the plate (touching at t = 0)."""
     d = mujoco.MjData(m)
+    if pressed:
+        d.joint("press_z").qpos = -1e-3
     out = np.empty((steps, m.nsensordata))
     for i in range(steps):
         if forward_ctrl is not None and (i == 0 or not first_only):
@@ -84,8 +87,8 @@ def test_leading_forward_of_a_fresh_run_leaves_the_spikes():
     m = slide_model()
     layout = SkinLayout.from_model(m)
     spikes = layout.blocks["spikes"]
-    alone = run(m, 400)
-    lead = run(m, 400, forward_ctrl=[0.0, 0.0], first_only=True)
+    alone = run(m, 400, pressed=True)
+    lead = run(m, 400, forward_ctrl=[0.0, 0.0], first_only=True, pressed=True)
     assert alone[:, spikes].sum() > 0
     np.testing.assert_array_equal(lead, alone)
 
