@@ -45,6 +45,10 @@ using S = AttributeScope;
 //     thinnest, the stratum corneum, is 10-20 um on hairy skin and a few
 //     hundred on the fingertip); the kernels' work also grows as the grid's
 //     span over the top layer's thickness (CheckKernelBuildWork).
+//   nu in (-1, 0.5]: the bounds of an isotropic elastic solid (positive
+//     bulk and shear moduli); tissue is 0.4-0.5 (Shao 2010).
+//   receptor depth in (0, 0.02] m: endings lie 0.02-2 mm deep (REFERENCE.md
+//     sec. 2); 2 cm is the whole pulp and more, and must lie in the stack.
 //   stiffness >= 1e5 Pa/m: a Winkler foundation is E / h, and 1 kPa tissue
 //     1 cm thick gives 1e5; the overlap is p / k, so far below it the
 //     overlap exceeds every pad and the approach solve finds no contact.
