@@ -71,7 +71,7 @@ int ClassIndex(const std::string& word) {
 // no `layers` value costs more than a few seconds (at the bounds, ~1-2 s on
 // one core; a 1e-30 m layer never returned).
 constexpr double kMaxSpanPerThickness = 5e3;   // half-diagonal / thickness
-constexpr double kMaxPitchPerThickness = 25;   // pitch / thickness
+constexpr double kMaxPitchPerThickness = 50;   // pitch / thickness
 
 bool CheckKernelBuildWork(const SkinConfig& cfg, std::string* error) {
   if (!cfg.layered || cfg.layers.empty()) return true;
