@@ -3,8 +3,9 @@
 The plugin writes, in this order, the output blocks its ``outputs`` attribute
 enables: ``spikes`` (count per receptor in the step), ``stress`` (receptor
 quantity, Pa, compressive positive), ``voltage`` (membrane potential over
-threshold), ``force`` (normal, tangential x, y in N in the pad frame, and the
-solved approach in m), ``pressure`` (nx*nx taxel pressures, Pa).
+threshold), ``force`` (normal, tangential x, y in N in the pad frame, the
+solved approach in m, 1 when it exceeds the skin else 0), ``pressure``
+(nx*nx taxel pressures, Pa).
 """
 
 from __future__ import annotations

@@ -22,7 +22,9 @@ enum OutputBlock {
   kOutSpikes = 0, kOutStress, kOutVoltage, kOutForce, kOutPressure, kOutRate, kNumOutputs
 };
 const char* OutputName(int block);
-constexpr int kForceBlockSize = 4;  // normal, tangential x, y (N, pad frame), indentation (m)
+// normal, tangential x, y (N, pad frame), indentation (m), and 1 when the
+// indentation exceeds the skin (IndentationLimit) else 0
+constexpr int kForceBlockSize = 5;
 
 // `visual` attribute: none, pad (on the skin), above (a copy over the pad), both.
 enum class VisualMode { kNone = 0, kPad, kAbove, kBoth };
