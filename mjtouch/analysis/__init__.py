@@ -10,7 +10,9 @@
 
 from mjtouch.analysis.signals import (
     CLASSES,
+    BandLine,
     VectorStrength,
+    band_line,
     power_at,
     psth,
     raster,
@@ -29,6 +31,8 @@ from mjtouch.analysis.signals import (
 
 __all__ = [
     "CLASSES",
+    "BandLine",
+    "band_line",
     "power_at",
     "psth",
     "raster",

@@ -232,6 +232,62 @@ def spectral_peaks(freqs: np.ndarray, power: np.ndarray, n: int = 5, fmin_hz: fl
     return out
 
 
+@dataclasses.dataclass(frozen=True)
+class BandLine:
+    """A spectral line looked for in a band around an expected frequency.
+
+    peak_hz: the strongest bin inside [lo_hz, hi_hz], refined by parabolic
+    interpolation of log power (None if the band holds no bin); power_pa2:
+    the power summed over the band; share: that power over the power of the
+    whole spectrum from fmin_hz up; contrast: the band's mean power per bin
+    over the mean of its two flanks (bands of the same width either side):
+    well above 1 where a line stands out of the background."""
+
+    expected_hz: float
+    lo_hz: float
+    hi_hz: float
+    peak_hz: float | None
+    power_pa2: float
+    share: float
+    contrast: float
+
+
+def band_line(freqs: np.ndarray, power: np.ndarray, f_hz: float, rel_half_width: float = 0.15,
+              fmin_hz: float = 5.0) -> BandLine:
+    """The line near f_hz: power, peak and contrast in f_hz x (1 +- rel_half_width)."""
+    if not (f_hz > 0 and 0 < rel_half_width < 1):
+        raise ValueError(f"f_hz = {f_hz} must be > 0 and rel_half_width = {rel_half_width} "
+                         "in (0, 1)")
+    lo, hi = f_hz * (1 - rel_half_width), f_hz * (1 + rel_half_width)
+    width = hi - lo
+
+    def mean_in(a, b):
+        sel = (freqs >= a) & (freqs <= b)
+        return float(power[sel].mean()) if sel.any() else 0.0
+
+    sel = (freqs >= lo) & (freqs <= hi)
+    band_power = float(power[sel].sum())
+    total = float(power[freqs >= fmin_hz].sum())
+    peak = None
+    if sel.any():
+        idx = np.nonzero(sel)[0]
+        i = int(idx[np.argmax(power[idx])])
+        peak = float(freqs[i])
+        if 0 < i < len(power) - 1 and min(power[i - 1:i + 2]) > 0:
+            a, b, c = np.log(power[i - 1:i + 2])
+            denom = a - 2 * b + c
+            shift = 0.5 * (a - c) / denom if denom != 0 else 0.0
+            peak += float(np.clip(shift, -0.5, 0.5) * (freqs[1] - freqs[0]))
+    flanks = [m for m in (mean_in(max(lo - width, fmin_hz), lo), mean_in(hi, hi + width)) if m > 0]
+    flank = float(np.mean(flanks)) if flanks else 0.0
+    band_mean = mean_in(lo, hi)
+    return BandLine(
+        expected_hz=float(f_hz), lo_hz=lo, hi_hz=hi, peak_hz=peak, power_pa2=band_power,
+        share=band_power / total if total > 0 else 0.0,
+        contrast=band_mean / flank if flank > 0 else float("inf") if band_mean > 0 else 0.0,
+    )
+
+
 def power_at(freqs: np.ndarray, power: np.ndarray, f_hz: float, half_width_bins: int = 1) -> float:
     """Spectral power summed over the bins within half_width_bins of f_hz."""
     i = int(np.argmin(np.abs(freqs - f_hz)))

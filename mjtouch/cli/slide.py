@@ -77,6 +77,13 @@ def main(args: argparse.Namespace) -> int:
     return 0
 
 
+PRESSURE_MODELS = {
+    "elastic": "elastic contact on the layered skin's compliance",
+    "winkler": "Winkler foundation",
+    "contacts": "MuJoCo's contact points",
+}
+
+
 def print_human(o: dict) -> None:
     period = f"{o['period_m'] * 1e3:.3g} mm" if o["period_m"] else "-"
     print(
@@ -85,6 +92,8 @@ def print_human(o: dict) -> None:
         f"ridges {'on' if o['ridges'] else 'off'} (lambda = {o['ridge_pitch_m'] * 1e3:.3g} mm), "
         f"{o['duration_s']:.3g} s sliding (wall {o['wall_s']:.1f} s)"
     )
+    shift = ", grid shift average" if o["grid_shift"] else ""
+    print(f"pressure model: {o['pressure']} ({PRESSURE_MODELS[o['pressure']]}{shift})")
     print(
         "firing rates (Hz):  "
         + "  ".join(f"{k} {v:.1f}" for k, v in o["rates_hz"].items())
@@ -103,7 +112,6 @@ def print_human(o: dict) -> None:
         "stress spectral peaks (Hz, strongest first): "
         + ", ".join(f"{x:.2f}" for x in o["peaks_hz"])
     )
-    near = o["nearest_peak_hz"]
     for key, name in (("texture", "V/D"), ("ridges", "V/lambda")):
         if not e[key]:
             continue
@@ -113,14 +121,23 @@ def print_human(o: dict) -> None:
                 "D/V, so its lines are V/D harmonics); ridges band-pass broadband textures: "
                 "--texture random"
             )
-        elif near[key] is not None:
-            print(
-                f"{name}: nearest peak {near[key]:.2f} Hz "
-                f"({round(100 * (near[key] / e[key] - 1)) + 0:+d}%)"
-            )
+            continue
+        line = o["lines"][key]
+        if line is None:
+            print(f"{name}: above the spectrum's top frequency")
+            continue
+        peak = (
+            f"peak {line['peak_hz']:.2f} Hz ({round(100 * (line['peak_hz'] / e[key] - 1)) + 0:+d}%)"
+            if line["peak_hz"] is not None
+            else "no bin"
+        )
+        print(
+            f"{name} band {line['lo_hz']:.1f}-{line['hi_hz']:.1f} Hz: {peak}, "
+            f"{100 * line['share']:.1f}% of the stress power, {line['contrast']:.1f}x its flanks"
+        )
     if o.get("grid_line_hz"):
         print(
             f"note: the elastic contact adds a grid line at V/pitch = {o['grid_line_hz']:.0f} Hz "
-            "to the stress; PC rates include it (--grid-shift cancels it; README, "
+            "to the stress; PC rates include it (--grid-shift cancels it; docs: Performance, "
             '"What accuracy costs")'
         )

@@ -379,16 +379,26 @@ def summarize(
         k: (min(peaks, key=lambda x, v=v: abs(x - v)) if v and len(peaks) else None)
         for k, v in expected.items()
     }
+    # Each expected line judged in its own band (V/lambda of the configured
+    # pitch for smooth skin too, so ridged and smooth runs compare): a line
+    # weaker than the six strongest peaks still shows there.
+    fmax = min(1000.0, 0.5 / dt)
+    line_at = {"texture": expected["texture"], "ridges": p.speed_m_s / p.ridge_pitch_m}
+    lines = {
+        k: (dataclasses.asdict(signals.band_line(f, power, v)) if v and v < fmax else None)
+        for k, v in line_at.items()
+    }
     fn = res.force[w, 0]
     return {
         "rates_hz": rates,
         "peaks_hz": peaks,
         "expected_hz": expected,
         "nearest_peak_hz": nearest,
+        "lines": lines,
         "ridge_line_expected": ridge_line_expected,
         # the elastic contact misplaces texture edges sharper than a cell: a
-        # stress line at V / pitch unless grid_shift cancels it (README "What
-        # accuracy costs"; examples/pc_grid_line.py)
+        # stress line at V / pitch unless grid_shift cancels it (docs,
+        # Performance; examples/pc_grid_line.py)
         "grid_line_hz": (
             p.speed_m_s / p.pitch_m if p.pressure == "elastic" and not p.grid_shift else None
         ),

@@ -3,11 +3,12 @@
 The plugin writes, in this order, the output blocks its ``outputs`` attribute
 enables: ``spikes`` (count per receptor in the step), ``stress`` (receptor
 quantity, Pa, compressive positive), ``voltage`` (membrane potential over
-threshold), ``force`` (normal, tangential x, y in N in the pad frame, and the
-solved approach in m), ``pressure`` (nx*nx taxel pressures, Pa), ``rate``
-(smoothed rate per receptor, Hz), ``coverage`` (the share of MuJoCo's normal
-force on the pad geom that lands on the skin's patch, 1 without contact, and
-that normal force in N; :meth:`SkinLayout.coverage` reads it and warns).
+threshold), ``force`` (normal, tangential x, y in N in the pad frame, the
+solved approach in m, 1 when it exceeds the skin else 0), ``pressure``
+(nx*nx taxel pressures, Pa), ``rate`` (smoothed rate per receptor, Hz),
+``coverage`` (the share of MuJoCo's normal force on the pad geom that lands
+on the skin's patch, 1 without contact, and that normal force in N;
+:meth:`SkinLayout.coverage` reads it and warns).
 """
 
 from __future__ import annotations

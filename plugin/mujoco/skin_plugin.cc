@@ -12,6 +12,8 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "pipeline/text.h"
+
 namespace mjtouch {
 namespace {
 
@@ -270,18 +272,13 @@ bool SkinPlugin::ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int
   return true;
 }
 
-SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
-  SkinConfig cfg;
-  int sensor_id, pad;
-  std::string error;
-  if (!ReadConfig(m, instance, &cfg, &sensor_id, &pad, &error) ||
-      !CheckTactileRate(cfg, m->opt.timestep, &error)) {
-    mju_warning("%s", error.c_str());
-    return nullptr;
-  }
+// The texture geoms (named by `texture`, and/or every non-colliding geom in
+// `texture_group`) and the height fields the skin renders, checked.
+bool SkinPlugin::ResolveTextures(const mjModel* m, int instance, const SkinConfig& cfg, int pad,
+                                 std::vector<int>* textures, std::string* error) {
+  textures->clear();
   // Texture geoms, rendered whenever the pad touches anything: named by
   // `texture`, and/or every non-colliding geom in `texture_group`.
-  std::vector<int> textures;
   // Every geom type but sdf (no geometry the plugin can query), and not the
   // pad's own body.
   const int pad_body = m->body_weldid[m->geom_bodyid[pad]];
@@ -292,46 +289,47 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
   const char* pad_name = mj_id2name(m, mjOBJ_GEOM, pad);
   if (!pad_as_written.empty() &&
       (!pad_name || std::string(pad_name).find(pad_as_written) == std::string::npos)) {
-    mju_warning("mjtouch.skin: attribute `pad_geom` = '%s' is not part of the pad geom's name "
-                "'%s'; valid: the pad's name as written, before MjSpec.attach's prefix and suffix",
-                pad_as_written.c_str(), pad_name ? pad_name : "(unnamed)");
-    return nullptr;
+    *error = Fmt("mjtouch.skin: attribute `pad_geom` = '%s' is not part of the pad geom's name "
+                 "'%s'; valid: the pad's name as written, before MjSpec.attach's prefix and suffix",
+                 pad_as_written.c_str(), pad_name ? pad_name : "(unnamed)");
+    return false;
   }
   std::string name;
   while (words >> name) {
     const int g = ResolveWrittenGeom(m, pad, pad_as_written, name);
     if (g < 0) {
-      mju_warning("mjtouch.skin: attribute `texture` names geom '%s', which does not exist%s",
-                  name.c_str(), pad_as_written.empty() ? "" : " (with the pad's prefix and suffix)");
-      return nullptr;
+      *error = Fmt("mjtouch.skin: attribute `texture` names geom '%s', which does not exist%s",
+                   name.c_str(),
+                   pad_as_written.empty() ? "" : " (with the pad's prefix and suffix)");
+      return false;
     }
     if (!renderable(g)) {
-      mju_warning("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: an "
-                  "sdf geom; valid: plane, hfield, sphere, capsule, ellipsoid, cylinder, box, mesh",
-                  name.c_str());
-      return nullptr;
+      *error = Fmt("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: an "
+                   "sdf geom; valid: plane, hfield, sphere, capsule, ellipsoid, cylinder, box, "
+                   "mesh", name.c_str());
+      return false;
     }
     if (on_pad(g)) {
-      mju_warning("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: it "
-                  "moves with the pad (same body)", name.c_str());
-      return nullptr;
+      *error = Fmt("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: it "
+                   "moves with the pad (same body)", name.c_str());
+      return false;
     }
-    textures.push_back(g);
+    textures->push_back(g);
   }
   if (cfg.texture_group >= 0) {
     for (int g = 0; g < m->ngeom; ++g) {
-      // Geoms on the pad's own body (e.g. its visual meshes) are not textures.
+      // Geoms on the pad's own body (e.g. its visual meshes) are not textures->
       if (m->geom_group[g] != cfg.texture_group || m->geom_contype[g] ||
           m->geom_conaffinity[g] || on_pad(g))
         continue;
       if (!renderable(g)) {
         const char* gname = mj_id2name(m, mjOBJ_GEOM, g);
-        mju_warning("mjtouch.skin: geom '%s' in `texture_group` %d cannot be rendered against (an "
-                    "sdf geom; move it to another group)", gname ? gname : "(unnamed)",
-                    cfg.texture_group);
-        return nullptr;
+        *error = Fmt("mjtouch.skin: geom '%s' in `texture_group` %d cannot be rendered against "
+                     "(an sdf geom; move it to another group)", gname ? gname : "(unnamed)",
+                     cfg.texture_group);
+        return false;
       }
-      if (std::find(textures.begin(), textures.end(), g) == textures.end()) textures.push_back(g);
+      if (std::find(textures->begin(), textures->end(), g) == textures->end()) textures->push_back(g);
     }
   }
   // Height fields the skin renders (textures, and hfields that can collide
@@ -348,13 +346,50 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
   };
   for (int g = 0; g < m->ngeom; ++g) {
     if (m->geom_type[g] != mjGEOM_HFIELD || on_pad(g)) continue;
-    if (!may_collide(g) && std::find(textures.begin(), textures.end(), g) == textures.end())
+    if (!may_collide(g) && std::find(textures->begin(), textures->end(), g) == textures->end())
       continue;
     const std::string bad = CheckHeightFieldSamples(m, g);
     if (!bad.empty()) {
-      mju_warning("%s", bad.c_str());
-      return nullptr;
+      *error = bad;
+      return false;
     }
+  }
+  return true;
+}
+
+// MuJoCo's compiler appends the warnings it collected to an init failure's
+// error twice, after its own "plugin->init failed"; an error raised while it
+// sizes the sensor reaches the user once, as the compile error. The sensor
+// is linked to the instance only on the second sizing call: the pad and
+// timestep checks run then.
+bool SkinPlugin::CheckAtCompile(const mjModel* m, int instance, std::string* error) {
+  SkinConfig cfg;
+  if (!ParseConfig(m, instance, &cfg, error)) return false;
+  bool linked = false;
+  for (int i = 0; i < m->nsensor; ++i)
+    linked = linked || (m->sensor_type[i] == mjSENS_PLUGIN && m->sensor_plugin[i] == instance);
+  if (!linked) return true;
+  int sensor_id, pad;
+  cfg = SkinConfig();
+  std::vector<int> textures;
+  return ReadConfig(m, instance, &cfg, &sensor_id, &pad, error) &&
+         CheckTactileRate(cfg, m->opt.timestep, error) &&
+         ResolveTextures(m, instance, cfg, pad, &textures, error);
+}
+
+SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
+  SkinConfig cfg;
+  int sensor_id, pad;
+  std::string error;
+  if (!ReadConfig(m, instance, &cfg, &sensor_id, &pad, &error) ||
+      !CheckTactileRate(cfg, m->opt.timestep, &error)) {
+    mju_warning("%s", error.c_str());
+    return nullptr;
+  }
+  std::vector<int> textures;
+  if (!ResolveTextures(m, instance, cfg, pad, &textures, &error)) {
+    mju_warning("%s", error.c_str());
+    return nullptr;
   }
   auto model = SkinModel::Build(cfg, &error);
   if (!model) {
@@ -429,15 +464,17 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     mjtNum n_into[3] = {c.frame[0] * -sign, c.frame[1] * -sign, c.frame[2] * -sign};
     bool seen = false;
     for (const auto& s : in.surfaces) seen = seen || s.id == other;
-    if (!seen) {
-      in.surfaces.push_back(SurfaceForGeom(m, d, other, ppos, c.pos, n_into, HeightField(m, other),
+    const HeightFieldCache* field = HeightField(m, other);
+    if (!seen && !(field && field->bad)) {
+      in.surfaces.push_back(SurfaceForGeom(m, d, other, ppos, c.pos, n_into, field,
                                            MeshCaster(m, other)));
     }
   }
   if (in.in_contact) {
     for (int g : texture_geoms_) {
-      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos, HeightField(m, g),
-                                           MeshCaster(m, g)));
+      const HeightFieldCache* field = HeightField(m, g);
+      if (field && field->bad) continue;
+      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos, field, MeshCaster(m, g)));
     }
   }
   // Force on the pad in the pad frame (columns of the row-major xmat).
@@ -499,18 +536,49 @@ const MeshRayCaster* SkinPlugin::MeshCaster(const mjModel* m, int geom) {
 const HeightFieldCache* SkinPlugin::HeightField(const mjModel* m, int geom) {
   if (m->geom_type[geom] != mjGEOM_HFIELD) return nullptr;
   const int h = m->geom_dataid[geom];
-  auto it = hfields_.find(h);
-  if (it != hfields_.end()) return &it->second;
-  HeightFieldCache& c = hfields_[h];
-  const float* samples = m->hfield_data + m->hfield_adr[h];
-  c.prefix = HeightFieldRowPrefix(m->hfield_nrow[h], m->hfield_ncol[h], samples);
-  c.max_sample = 0;
   const int nrow = m->hfield_nrow[h], ncol = m->hfield_ncol[h];
-  for (int k = 0; k < nrow * ncol; ++k) c.max_sample = std::max<double>(c.max_sample, samples[k]);
+  const float* samples = m->hfield_data + m->hfield_adr[h];
+  const size_t count = static_cast<size_t>(nrow) * ncol;
+  auto it = hfields_.find(h);
+  // mjModel.hfield_data may be edited while the model runs: the cache
+  // follows the samples (compared every use; an edit rebuilds it).
+  if (it != hfields_.end() && std::equal(samples, samples + count, it->second.samples.begin()))
+    return &it->second;
+  HeightFieldCache& c = hfields_[h];
+  c.samples.assign(samples, samples + count);
+  const std::string bad = CheckHeightFieldSamples(m, geom);
+  c.bad = !bad.empty();
+  if (c.bad) {
+    // Checked at init; an edit since: warned once, the field left out.
+    if (!warned_height_field_)
+      mju_warning("%s; it was edited after the MjData was made: the skin leaves this height "
+                  "field out until its samples are finite (warned once)", bad.c_str());
+    warned_height_field_ = true;
+    return &c;
+  }
+  c.prefix = HeightFieldRowPrefix(nrow, ncol, samples);
+  c.max_sample = 0;
+  for (size_t k = 0; k < count; ++k) c.max_sample = std::max<double>(c.max_sample, samples[k]);
   c.rows_identical = true;
   for (int r = 1; r < nrow && c.rows_identical; ++r)
     c.rows_identical = std::equal(samples, samples + ncol, samples + static_cast<size_t>(r) * ncol);
   return &c;
+}
+
+// Warnings of the run, each once per MjData: the force block's last column
+// flags every step past the skin.
+void SkinPlugin::WarnOnce(const mjModel* m, const double* state) {
+  if (!warned_beyond_skin_ && IndentationBeyondSkin(*model_, state)) {
+    warned_beyond_skin_ = true;
+    const SkinConfig& cfg = model_->config();
+    const bool stack = cfg.layered && cfg.base.rigid;
+    mju_warning("mjtouch.skin: the indentation %g m at time %g s exceeds %s (%g m): the linear "
+                "skin is past its range there (the bone or the pad would carry the load); the "
+                "force block's last column flags such steps (warned once)",
+                state[kStContactDepth], state[kStLastTime],
+                stack ? "the skin stack over the rigid base" : "the pad's half-height",
+                IndentationLimit(cfg));
+  }
 }
 
 void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {
@@ -519,6 +587,7 @@ void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {
   mjtNum* state = d->plugin_state + m->plugin_stateadr[instance];
   mjtNum* out = d->sensordata + m->sensor_adr[sensor_id_];
   const int fired = Step(*model_, input_, d->time, state, &workspace_, out);
+  WarnOnce(m, state);
   // For drawing only: whether the field is live, and when each receptor last fired.
   touching_ = state[kStContactValid] > 0.0;
   if (fired > 0) {
@@ -548,6 +617,8 @@ void SkinPlugin::RegisterPlugin() {
   plugin.nsensordata = +[](const mjModel* m, int instance, int sensor_id) {
     SkinConfig cfg;
     std::string error;
+    // On a line of its own, after MuJoCo's "engine error: ".
+    if (!CheckAtCompile(m, instance, &error)) mju_error("\n%s", error.c_str());
     if (!ParseConfig(m, instance, &cfg, &error)) return 0;
     return SkinModel::OutputSize(cfg, static_cast<int>(SkinModel::PlaceReceptors(cfg).size()));
   };

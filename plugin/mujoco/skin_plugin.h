@@ -18,6 +18,8 @@ namespace mjtouch {
 
 // Per-height-field running integrals (see HeightFieldRowPrefix).
 struct HeightFieldCache {
+  std::vector<float> samples;  // the samples the rest was built from
+  bool bad = false;            // a non-finite sample: left out
   std::vector<double> prefix;
   double max_sample = 0;
   bool rows_identical = false;  // a 1D texture (e.g. a grating)
@@ -33,6 +35,10 @@ class SkinPlugin {
   static void RegisterPlugin();
   // Attributes alone (all that output and state sizes depend on): MuJoCo
   // asks for those sizes before the sensor's object is resolved.
+  // The attribute, pad and timestep checks, run while MuJoCo compiles.
+  static bool CheckAtCompile(const mjModel* m, int instance, std::string* error);
+  static bool ResolveTextures(const mjModel* m, int instance, const SkinConfig& cfg, int pad,
+                              std::vector<int>* textures, std::string* error);
   static bool ParseConfig(const mjModel* m, int instance, SkinConfig* cfg, std::string* error);
   // Attributes plus the pad geometry, for a compiled model.
   static bool ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int* sensor_id,
@@ -69,6 +75,7 @@ class SkinPlugin {
   // mju_warning once when MuJoCo's normal force on the pad lands off the patch.
   void WarnOffPatch(const mjModel* m);
   const HeightFieldCache* HeightField(const mjModel* m, int geom);
+  void WarnOnce(const mjModel* m, const double* state);
   const MeshRayCaster* MeshCaster(const mjModel* m, int geom);
 
   std::shared_ptr<const SkinModel> model_;
@@ -78,7 +85,8 @@ class SkinPlugin {
   std::vector<int> texture_geoms_;
   StepInput input_;
   Workspace workspace_;
-  std::map<int, HeightFieldCache> hfields_;  // by hfield id, built on first use
+  bool warned_beyond_skin_ = false, warned_height_field_ = false;
+    std::map<int, HeightFieldCache> hfields_;  // by hfield id, built on first use
   std::map<int, std::unique_ptr<MeshRayCaster>> meshes_;  // by mesh id, built on first use
   // Drawing only (never read by the physics): the `visual` attribute, the
   // contact state of the last evaluation and each receptor's last spike time.

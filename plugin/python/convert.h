@@ -103,6 +103,7 @@ void DecodeSurfaces(const F64_2& surfaces, const F32_2& hfield,
 
 void BindStages(nb::module_& m);
 void BindContact(nb::module_& m);
+void BindTangential(nb::module_& m);
 void BindLayered(nb::module_& m);
 void BindInstance(nb::module_& m);
 void BindAttributes(nb::module_& m);

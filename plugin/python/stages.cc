@@ -322,6 +322,7 @@ NB_MODULE(_core, m) {
       "wrapped by mjtouch.core. Errors from the stages raise ValueError.";
   BindStages(m);
   BindContact(m);
+  BindTangential(m);
   BindLayered(m);
   BindInstance(m);
   BindAttributes(m);

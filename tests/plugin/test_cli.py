@@ -31,6 +31,13 @@ def test_slide_json_keys_and_peak():
     assert o["ridge_line_expected"] is False
     assert abs(o["nearest_peak_hz"]["texture"] - 30.0) <= o["fft_bin_hz"]
     assert o["nearest_peak_hz"]["ridges"] in o["peaks_hz"]
+    # each expected line is judged in its own +-15% band: the grating's line
+    # is the band's peak and stands far above its flanks
+    line = o["lines"]["texture"]
+    assert line["lo_hz"] == pytest.approx(30.0 * 0.85) and line["hi_hz"] == pytest.approx(34.5)
+    assert abs(line["peak_hz"] - 30.0) <= o["fft_bin_hz"]
+    assert line["contrast"] > 10 and 0 < line["share"] <= 1
+    assert o["lines"]["ridges"]["expected_hz"] == pytest.approx(0.03 / 0.45e-3)
     # the default elastic contact's grid line at V / pitch is reported
     assert o["pressure"] == "elastic" and o["grid_line_hz"] == pytest.approx(0.03 / 1.5e-4)
 
@@ -45,6 +52,8 @@ def test_slide_json_reports_ridge_line_power_for_smooth_skin():
     assert o["expected_hz"]["ridges"] is None
     assert o["ridge_line_expected"] is False and o["nearest_peak_hz"]["ridges"] is None
     assert np.isfinite(o["power_at_expected"]["ridges"]) and o["power_at_expected"]["ridges"] >= 0
+    # the band at V/lambda of the configured pitch, for the same comparison
+    assert o["lines"]["ridges"]["expected_hz"] == pytest.approx(0.03 / 6e-4)
 
 
 def test_slide_human_output_and_plot(tmp_path):
@@ -52,7 +61,8 @@ def test_slide_human_output_and_plot(tmp_path):
     out = run("slide", "--duration", "0.2", "--nx", "48", "--pitch", "1.5e-4", "--dt", "2e-4",
               "--no-ridges", "--plot", str(png))
     assert out.returncode == 0, out.stderr
-    assert "V/D" in out.stdout and "firing rates" in out.stdout
+    assert "V/D band" in out.stdout and "firing rates" in out.stdout
+    assert "pressure model: elastic" in out.stdout
     assert png.stat().st_size > 10_000
 
 

@@ -105,7 +105,7 @@ def test_layout_blocks_and_receptors():
     nrec = len(layout.classes)
     assert nrec > 0 and set(layout.classes) == {"SA1", "RA", "PC"}
     sizes = {k: s.stop - s.start for k, s in layout.blocks.items()}
-    assert sizes == {"spikes": nrec, "stress": nrec, "voltage": nrec, "force": 4,
+    assert sizes == {"spikes": nrec, "stress": nrec, "voltage": nrec, "force": 5,
                      "pressure": layout.nx ** 2}
     assert layout.size == m.nsensordata
     # densities (per cm^2) times the population disc's area

@@ -66,13 +66,13 @@ CASES = [
     ({"sa1_saturation": "-1"}, "`sa1_saturation`", "[0, 1e+12] units of q"),
     ({"population": "random"}, "`population`", "valid: uniform varied"),
     # explicit receptor sites
-    ({"sites": "SA1 0 0"}, "`sites` has 3 words", "'CLASS x y depth' (CLASS in SA1 RA PC"),
+    ({"sites": "SA1 0 0"}, "`sites` entry 1 has 3 words", "'CLASS x y depth' (CLASS in SA1 RA PC"),
     ({"sites": "XX 0 0 1e-3"}, "`sites` entry 1", "CLASS in SA1 RA PC"),
     ({"sites": "SA1 abc 0 1e-3"}, "`sites` entry 1", "x, y, depth in m"),
     ({"sites": "SA1 0 0 1e-3; RA 0.01 0 1e-3"}, "`sites` entry 2", "|x|, |y| <= nx * pitch / 2 - pitch = 0.00345 m"),
     ({"sites": "PC 0 0 0"}, "`sites` entry 1", "(0, 0.02] m"),
     ({"sites": "PC 0 0 0.03"}, "`sites` entry 1", "(0, 0.02] m"),
-    ({"sites": "SA1 0 0 1e-3, SA1 1e-3 0 2e-3"}, "`sites` entry 2", "the same depth"),
+    ({"sites": "SA1 0 0 1e-3; SA1 1e-3 0 2e-3"}, "`sites` entry 2", "the same depth"),
     ({"sites": "SA1 0 0 1e-3", "density": "70 140 21"}, "remove `density`", "valid with `sites`"),
     ({"sites": "SA1 0 0 1e-3", "radius": "2e-3"}, "remove `radius`", "valid with `sites`"),
     # afferent parameters
@@ -112,7 +112,7 @@ CASES = [
     ({"oversample": "2", "pressure": "contacts"}, "`oversample`", "valid with contacts: 1"),
     ({"skin": "foam"}, "`skin`", "layered halfspace"),
     ({"layers": "1e-3 5e4 0.45 2"}, "`layers`", "needs 3 numbers"),
-    ({"layers": "2 5e4 0.45"}, "`layers`", "(0, 1] m"),
+    ({"layers": "2 5e4 0.45"}, "`layers`", "[1e-06, 1] m"),
     ({"base": "5e4"}, "`base`", "nu in (-1, 0.5]"),
     ({"base": "5e4 0.45", "skin": "halfspace"}, "`base`", "skin=\"layered\" only"),
     ({"interface_side": "both"}, "`interface_side`", "upper lower"),
@@ -125,9 +125,9 @@ CASES = [
     ({"young": "99", "skin": "halfspace"}, "`young` = 99", "[100, 1e+10] Pa"),
     ({"stiffness": "1e-308"}, "`stiffness` = 1e-308", "[100000, 1e+12] Pa/m"),
     ({"stiffness": "9e4"}, "`stiffness` = 90000", "[100000, 1e+12] Pa/m"),
-    ({"layers": "7e-4 1e-20 0.48"}, "`layers`: layer 1 E = '1e-20'", "[100, 1e+12] Pa"),
-    ({"layers": "7e-4 8e4 0.48; 8e-4 99 0.48"}, "`layers`: layer 2 E = '99'", "[100, 1e+12] Pa"),
-    ({"base": "1e-308 0.45"}, "`base`: E = '1e-308'", "[100, 1e+12] Pa"),
+    ({"layers": "7e-4 1e-20 0.48"}, "`layers`: layer 1 E = '1e-20'", "[100, 2e+10] Pa"),
+    ({"layers": "7e-4 8e4 0.48; 8e-4 99 0.48"}, "`layers`: layer 2 E = '99'", "[100, 2e+10] Pa"),
+    ({"base": "1e-308 0.45"}, "`base`: E = '1e-308'", "[100, 2e+10] Pa"),
     # present but blank (MuJoCo keeps whitespace; value="" is stored as unset)
     ({"nx": " "}, "`nx` is empty", "[4, 512]"),
     ({"pitch": "  "}, "`pitch` is empty", "[1e-06, 0.01] m"),
@@ -136,6 +136,39 @@ CASES = [
     ({"pressure": " "}, "`pressure` is empty", "contacts winkler elastic"),
     ({"layers": "\t"}, "`layers` is empty", "1 to 64 layers"),
     ({"sites": " "}, "`sites` is empty", "CLASS x y depth"),
+    # one grammar for composite values: entries separated by ';', words by
+    # spaces; ',' is no separator and no entry is empty
+    ({"sites": ";"}, "`sites`: entry 1 is empty", "separated by ';'"),
+    ({"sites": "SA1 0 0 1e-3;"}, "`sites`: entry 2 is empty", "separated by ';'"),
+    ({"sites": "SA1,0,0,1e-3"}, "`sites`: ',' is not a separator", "entries by ';'"),
+    ({"layers": "7e-4 8e4 0.48;; 8e-4 5e4 0.48"}, "`layers`: entry 2 is empty", "separated by ';'"),
+    ({"layers": "7e-4 8e4 0.48, 8e-4 5e4 0.48"}, "`layers`: ',' is not a separator",
+     "'thickness E nu'"),
+    ({"density": "70,140,21"}, "`density` = '70,140,21': ',' is not a separator",
+     "separated by spaces"),
+    ({"noise": "0.3; 0.3; 0.1"}, "`noise` = '0.3; 0.3; 0.1': ';' is not a separator",
+     "separated by spaces"),
+    ({"classes": "SA1,RA"}, "`classes` = 'SA1,RA': ',' is not a separator", "SA1 RA PC"),
+    ({"outputs": "spikes;force"}, "`outputs` = 'spikes;force': ';'", "spikes stress voltage"),
+    ({"base": "5e4,0.45"}, "`base` = '5e4,0.45': ','", "'rigid' or 'E nu'"),
+    # physical ranges: a layer stiffer than bone, thinner than any tissue
+    ({"layers": "1e-3 1e12 0.48"}, "`layers`: layer 1 E = '1e12' Pa is above", "[100, 2e+10] Pa"),
+    ({"base": "1e12 0.3"}, "`base`: E = '1e12' Pa is above", "[100, 2e+10] Pa"),
+    ({"layers": "1e-30 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4"},
+     "`layers`: layer 1 thickness = '1e-30' m is below", "[1e-06, 1] m"),
+    ({"layers": "1e-300 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4"},
+     "`layers`: layer 1 thickness = '1e-300' m is below", "[1e-06, 1] m"),
+    ({"layers": "7e-4 8e4 0.48; 1e-7 5e4 0.48"}, "`layers`: layer 2 thickness = '1e-7' m",
+     "[1e-06, 1] m"),
+    # in range, but more work than a compile may take: the bound says what to change
+    ({"nx": "128", "pitch": "1e-4", "layers": "1.5e-6 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4"},
+     "`layers`: layer 1 thickness = 1.5e-06 m is below", "or a smaller `nx` x `pitch`"),
+    # a class that gets no receptor: an error naming why, not empty blocks
+    ({"nx": "4", "pitch": "1e-6"}, "no SA1 receptor", "(default): min(5e-3, `nx` * `pitch` / 2"),
+    ({"radius": "0"}, "no SA1 receptor", "raise `density` or `radius`"),
+    ({"radius": "1e-30"}, "no SA1 receptor", "raise `density` or `radius`"),
+    ({"density": "0 0 0"}, "no SA1 receptor", "remove SA1 from `classes`"),
+    ({"density": "70 140 0"}, "no PC receptor", "remove PC from `classes`"),
 ]
 
 
@@ -153,6 +186,38 @@ def test_bad_attribute_fails_at_compile(attrs, name, valid):
     ours = [line for line in msg.splitlines() if line.startswith("mjtouch.skin: ")]
     assert ours, msg
     assert name in ours[0] and valid in ours[0], msg
+    # one message, once: not repeated, not behind MuJoCo's init failure
+    assert len(ours) == 1 and msg.count(ours[0]) == 1, msg
+    assert "plugin->init failed" not in msg, msg
+
+
+@pytest.mark.parametrize("key,value,timestep", [("pc_lowpass", "1e5", 1e-4),
+                                               ("ra_lowpass", "1e4", 1e-3)])
+def test_sampling_advice_can_be_followed(key, value, timestep):
+    # e.g. dt 1e-4: even oversample 64 samples 640 kHz, below 8 x 100 kHz;
+    # the message must not ask for an oversample past its range but name a
+    # corner (or timestep) that compiles
+    import re
+    attrs = {key: value, "oversample": "auto", "classes": "SA1 RA PC"}
+    spec = pad_spec(attrs)
+    spec.option.timestep = timestep
+    with pytest.raises(ValueError) as e:
+        spec.compile()
+    msg = str(e.value)
+    assert "`oversample` >=" not in msg, msg
+    corner = re.search(rf"set `{key}` <= ([0-9.e+]+) Hz, or the timestep <= ([0-9.e+-]+) s", msg)
+    assert corner, msg
+    for fix, dt in ((corner.group(1), timestep), (value, float(corner.group(2)))):
+        spec = pad_spec({**attrs, key: fix})
+        spec.option.timestep = dt
+        spec.compile()
+
+
+def test_sampling_advice_within_range_names_oversample():
+    spec = pad_spec({"pc_lowpass": "3000", "oversample": "2"})
+    spec.option.timestep = 1e-4
+    with pytest.raises(ValueError, match=r"set `oversample` >= 3 \(valid \[1, 64\]\)"):
+        spec.compile()
 
 
 def test_every_attribute_is_checked_here_or_in_test_layered():

@@ -214,6 +214,37 @@ def test_spike_spectrum_of_a_regular_train_has_lines_at_its_harmonics():
 
 # --- bad input ----------------------------------------------------------------------------
 
+def test_band_line_finds_a_sine_off_its_expected_frequency(rng):
+    # a 61 Hz sine in white noise, looked for at 55.6 Hz (+-15%: 47.2-63.9 Hz)
+    dt, n = 1e-4, 20000
+    t = np.arange(n) * dt
+    x = 0.5 * np.sin(2 * np.pi * 61.0 * t) + rng.normal(0.0, 1.0, n)
+    f, p = analysis.stress_spectrum(x, dt)
+    line = analysis.band_line(f, p, 55.6)
+    assert line.lo_hz == pytest.approx(55.6 * 0.85) and line.hi_hz == pytest.approx(55.6 * 1.15)
+    assert abs(line.peak_hz - 61.0) <= f[1] - f[0]
+    # the sine's power (A^2 / 4 = 0.0625 in a few bins of the Hann lobe)
+    # against the noise's per bin (~sigma^2 / (n / 2) = 1e-4): the band's
+    # mean (33 bins) is ~20x its flanks'
+    assert line.contrast > 5
+    # white noise alone: band and flanks hold the same mean power. 20 s give
+    # 334 bins of 0.05 Hz per band (chi-squared, 2 dof each, ~1.5 bins per
+    # independent value under Hann): each mean within ~7%, their ratio within
+    # ~10% (1 sigma), so 0.3 is a 3-sigma bound
+    noise_x = rng.normal(0.0, 1.0, 200_000)
+    noise = analysis.band_line(*analysis.stress_spectrum(noise_x, dt), 55.6)
+    assert noise.contrast == pytest.approx(1.0, abs=0.3)
+    assert 0 < noise.share < 0.05
+
+
+def test_band_line_rejects_bad_arguments():
+    f = np.linspace(0, 100, 101)
+    with pytest.raises(ValueError, match="f_hz"):
+        analysis.band_line(f, np.ones_like(f), -1.0)
+    with pytest.raises(ValueError, match="rel_half_width"):
+        analysis.band_line(f, np.ones_like(f), 50.0, rel_half_width=1.5)
+
+
 def test_bad_arguments_name_the_argument():
     with pytest.raises(ValueError, match="dt_s"):
         analysis.psth(np.ones(10), -1e-4, 1e-3)

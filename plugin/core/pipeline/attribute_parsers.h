@@ -7,14 +7,22 @@
 
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "pipeline/attributes.h"
 
 namespace mjtouch {
 
-// Valid Young's moduli of `layers` and `base`, Pa (attributes.cc says why
-// the lower bound).
-constexpr double kMinLayerModulusPa = 100.0, kMaxLayerModulusPa = 1e12;
+// Valid Young's moduli of `layers` and `base`, Pa, and layer thicknesses, m
+// (attributes.cc says why).
+constexpr double kMinLayerModulusPa = 100.0, kMaxLayerModulusPa = 2e10;
+constexpr double kMinLayerThicknessM = 1e-6, kMaxLayerThicknessM = 1.0;
+
+// The grammar of a one-entry composite value (`classes`, `outputs`,
+// `quantity`, `sa1_merkel`, `base`, the per-class numbers): words separated
+// by whitespace; ',' or ';' fails naming the attribute and `form`.
+bool ListWords(AttributeParser* p, const char* key, const std::string& value, const char* form,
+               std::vector<std::string>* words);
 
 bool ParseTextureAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p);
 bool ParseOversampleAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p);

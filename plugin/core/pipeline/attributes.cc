@@ -38,6 +38,17 @@ using S = AttributeScope;
 //   moduli (young, layer and base E) >= 100 Pa: the softest tissues and gels
 //     (brain 0.1-1 kPa); the surface compliance goes as 1/E and overflows
 //     to inf near E = 1e-300 (NaN pressure).
+//   layer and base E <= 2e10 Pa: cortical bone (17 GPa, Shao 2010; REFERENCE.md
+//     sec. 2), the stiffest tissue under skin; anything stiffer is rigid next
+//     to 10-100 kPa skin: say base="rigid".
+//   layer thickness in [1 um, 1 m]: 1 um is below every layer of skin (the
+//     thinnest, the stratum corneum, is 10-20 um on hairy skin and a few
+//     hundred on the fingertip); the kernels' work also grows as the grid's
+//     span over the top layer's thickness (CheckKernelBuildWork).
+//   nu in (-1, 0.5]: the bounds of an isotropic elastic solid (positive
+//     bulk and shear moduli); tissue is 0.4-0.5 (Shao 2010).
+//   receptor depth in (0, 0.02] m: endings lie 0.02-2 mm deep (REFERENCE.md
+//     sec. 2); 2 cm is the whole pulp and more, and must lie in the stack.
 //   stiffness >= 1e5 Pa/m: a Winkler foundation is E / h, and 1 kPa tissue
 //     1 cm thick gives 1e5; the overlap is p / k, so far below it the
 //     overlap exceeds every pad and the approach solve finds no contact.
@@ -246,7 +257,8 @@ const std::vector<AttributeRow>& Rows() {
       {"sites", K::kCustom, 0, 0, false, false, "m", "(none)",
        "explicit receptors \"CLASS x y depth; ...\" (pad frame), replacing the density "
        "population",
-       "entries 'CLASS x y depth' (CLASS in SA1 RA PC; |x|, |y| inside the grid and under the "
+       "entries 'CLASS x y depth' separated by ';' (CLASS in SA1 RA PC; |x|, |y| inside the "
+       "grid and under the "
        "pad; depth in (0, 0.02] m, one per class)",
        NO_FIELD, ParseSitesAttribute, WriteSitesKey, S::kModel},
       // -- the elastic skin (stage 3) ----------------------------------------
@@ -276,7 +288,7 @@ const std::vector<AttributeRow>& Rows() {
       {"layers", K::kCustom, 0, 0, false, false, "m Pa -", "Shao 2010",
        "\"thickness E nu; ...\" top down; default 7e-4 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 "
        "0.4 (epidermis, dermis, subcutis)",
-       "1 to 64 layers, thickness (0, 1] m, E {E} Pa, nu (-1, 0.5]", NO_FIELD,
+       "1 to 64 layers separated by ';', thickness {T} m, E {E} Pa, nu (-1, 0.5]", NO_FIELD,
        ParseLayersAttribute, WriteLayersKey, S::kModel},
       {"base", K::kCustom, 0, 0, false, false, "Pa -", "rigid",
        "under the stack: `rigid` (bone) or \"E nu\" (an elastic half-space)",
@@ -354,7 +366,8 @@ bool ParseValue(const AttributeRow& row, const std::string& raw, SkinConfig* cfg
       return true;
     }
     case K::kPerClass: {
-      const auto w = Words(raw);
+      std::vector<std::string> w;
+      if (!ListWords(p, key, raw, "3 numbers (SA1 RA PC)", &w)) return false;
       if (w.size() != kNumClasses)
         return p->Fail(Fmt("attribute `%s` = '%s' needs 3 numbers (SA1 RA PC), each in %s %s",
                            key, raw.c_str(), NumberText(row).c_str(), row.units));
@@ -399,10 +412,14 @@ std::string ValidRangeText(const AttributeRow& row) {
     case K::kPerClass:
       return "3 numbers (SA1 RA PC), each in " + NumberText(row);
     case K::kCustom: {
-      std::string text = row.choices_or_range;  // {E}: the layer moduli's range
-      const size_t at = text.find("{E}");
+      // {E}, {T}: the layer moduli's and thicknesses' ranges
+      std::string text = row.choices_or_range;
+      size_t at = text.find("{E}");
       if (at != std::string::npos)
         text.replace(at, 3, Fmt("[%g, %g]", kMinLayerModulusPa, kMaxLayerModulusPa));
+      at = text.find("{T}");
+      if (at != std::string::npos)
+        text.replace(at, 3, Fmt("[%g, %g]", kMinLayerThicknessM, kMaxLayerThicknessM));
       return text;
     }
   }

@@ -11,6 +11,8 @@
 namespace mjtouch {
 namespace {
 
+constexpr int kMaxOversample = 64;  // `oversample`'s upper bound
+
 bool NeedsMaterial(Quantity q) {
   return q == Quantity::kStrainEnergy || q == Quantity::kCompressiveStrain;
 }
@@ -99,9 +101,16 @@ bool CheckTactileRate(const SkinConfig& cfg, double timestep_s, std::string* err
     const int k = static_cast<int>(std::ceil(need_hz * timestep_s * (1 - 1e-12)));
     *error = Fmt("mjtouch.skin: %s afferents need tactile sampling of at least %g Hz (8 x `%s` "
                  "= %g Hz: their band reaches a few times the corner); the timestep %g s with "
-                 "`oversample` = %d samples at %g Hz: set `oversample` >= %d (valid [1, 64]), "
-                 "or remove %s from `classes`", ClassName(b.cls), need_hz, b.key, b.corner_hz,
-                 timestep_s, cfg.oversample, rate_hz, k, ClassName(b.cls));
+                 "`oversample` = %d samples at %g Hz: ", ClassName(b.cls), need_hz, b.key,
+                 b.corner_hz, timestep_s, cfg.oversample, rate_hz);
+    // Advice that can be followed: `oversample` only while 64 suffices.
+    if (k <= kMaxOversample)
+      *error += Fmt("set `oversample` >= %d (valid [1, %d]), or ", k, kMaxOversample);
+    else
+      *error += Fmt("even `oversample` = %d reaches %g Hz; set `%s` <= %g Hz, or the timestep "
+                    "<= %g s, or ", kMaxOversample, kMaxOversample / timestep_s, b.key,
+                    kMaxOversample / timestep_s / 8.0, kMaxOversample / need_hz);
+    *error += Fmt("remove %s from `classes`", ClassName(b.cls));
     return false;
   }
   return true;

@@ -23,7 +23,9 @@ enum OutputBlock {
   kNumOutputs
 };
 const char* OutputName(int block);
-constexpr int kForceBlockSize = 4;  // normal, tangential x, y (N, pad frame), indentation (m)
+// normal, tangential x, y (N, pad frame), indentation (m), and 1 when the
+// indentation exceeds the skin (IndentationLimit) else 0
+constexpr int kForceBlockSize = 5;
 // Share of MuJoCo's normal force on the pad geom that lands on the skin's
 // patch (1 without contact), and that normal force (N).
 constexpr int kCoverageBlockSize = 2;

@@ -11,7 +11,7 @@
 
 #include "contact/contact_solver.h"
 #include "pipeline/config.h"
-#include "pipeline/grid_shift.h"
+#include "pipeline/elastic/grid_shift.h"
 #include "pipeline/state_layout.h"
 #include "stress/kernel_tables.h"
 #include "stress/stress_tree.h"

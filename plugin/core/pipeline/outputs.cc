@@ -5,6 +5,20 @@
 
 namespace mjtouch {
 
+double IndentationLimit(const SkinConfig& cfg) {
+  if (cfg.layered && cfg.base.rigid) {
+    double depth = 0.0;
+    for (const auto& l : cfg.layers) depth += l.thickness_m;
+    return depth;
+  }
+  return cfg.pad.semi_axes_m[2];
+}
+
+bool IndentationBeyondSkin(const SkinModel& model, const double* state) {
+  return state[kStContactValid] > 0.0 &&
+         state[kStContactDepth] > IndentationLimit(model.config());
+}
+
 void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching,
                   const double* state, const Workspace& ws, double* out) {
   const SkinConfig& cfg = model.config();
@@ -32,6 +46,7 @@ void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching,
     cursor[1] = touching ? in.shear_x_n : 0.0;
     cursor[2] = touching ? in.shear_y_n : 0.0;
     cursor[3] = touching ? state[kStContactDepth] : 0.0;  // indentation depth
+    cursor[4] = touching && IndentationBeyondSkin(model, state) ? 1.0 : 0.0;
     cursor += kForceBlockSize;
   }
   if (cfg.outputs[kOutPressure]) {

@@ -9,6 +9,8 @@
 //   model.h       SkinModel (immutable, shared by every MjData of a model)
 //   state_layout.h  the layout of the per-step state (MuJoCo plugin_state)
 //   step.h        StepInput, Workspace (MuJoCo plugin_data scratch) and Step
+// and elastic/ holds how the pipeline drives the `elastic` contact solver:
+// warm starts from the pressure history, the growing solve box, `grid_shift`.
 #ifndef MJTOUCH_PIPELINE_SKIN_H_
 #define MJTOUCH_PIPELINE_SKIN_H_
 

@@ -11,7 +11,7 @@
 #include <time.h>
 
 #include "pipeline/skin.h"
-#include "pipeline/warm_start.h"
+#include "pipeline/elastic/warm_start.h"
 
 namespace mjtouch {
 namespace {

@@ -37,6 +37,12 @@ enum LastPoseSlot {
   kLastPoseSize
 };
 
+enum EvalStartSlot {
+  kEsValid = 0,  // 1 once saved
+  kEsTime,       // the time of the evaluation it precedes, s
+  kEvalStartSlots
+};
+
 // Where each block of plugin_state lives (offsets and sizes in doubles), in
 // this order: the header (StateSlot), per-receptor membranes
 // (kReceptorStateSize each), the last step's spike counts and voltages
@@ -119,6 +125,10 @@ struct StateLayout {
   int history_block = 0;  // kHistorySlots + n*n; 0 without `elastic`
   int shifted_history = 0, shifted_block = 0;  // kHistorySlots + (n+1)^2; 0 without `grid_shift`
   int history_head = 0;   // slot of h
+  // The state before the first evaluation at a time (EvalStartSlot, then
+  // the header, the receptor blocks, the history head and the last pose): a
+  // repeated evaluation at that time starts again from it (step.cc).
+  int eval_start = 0, eval_start_size = 0;
   int size = 0;
   size_t ncell = 0, shifted_ncell = 0;
 
@@ -138,7 +148,10 @@ struct StateLayout {
     }
     history_head = shifted_history + kHistoryBlocks * shifted_block;
     last_pose = history_head + (elastic ? 1 : 0);
-    size = last_pose + kLastPoseSize;
+    eval_start = last_pose + kLastPoseSize;
+    eval_start_size = kEvalStartSlots + kStateHeader + (history - receptors) +
+                      (eval_start - history_head);
+    size = eval_start + eval_start_size;
   }
   // Block k steps back from the head (0: this time, 1: last step, 2: the one
   // before).

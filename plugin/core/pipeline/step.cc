@@ -234,6 +234,34 @@ Pose InterpolatePose(const Pose& a, const Pose& b, double s) {
   QuatToMat(q, out.mat);
   return out;
 }
+// The receptors' inputs at a time are that evaluation's own: the first
+// evaluation at a new time saves the state it starts from; a repeated one at
+// the same time (mj_forward, then mj_step with other ctrl) restores it and
+// evaluates again, giving what it alone would give. The pressure history is
+// restored through its head (the block written at this time is rewritten);
+// with `elastic` and oversample > 1 the first evaluation's substeps also
+// overwrite the older blocks the warm start reads, so there the repeat
+// agrees with the step alone to the solver's `tolerance`, not bit for bit.
+void SaveOrRestoreEvaluationStart(const StateLayout& lay, double time_s, double* state) {
+  double* saved = state + lay.eval_start;
+  struct Span { int first, count; };
+  const Span spans[] = {{0, kStateHeader},
+                        {lay.receptors, lay.history - lay.receptors},
+                        {lay.history_head, lay.eval_start - lay.history_head}};
+  const bool repeat = state[kStTimeValid] > 0.0 && state[kStLastTime] == time_s &&
+                      saved[kEsValid] > 0.0 && saved[kEsTime] == time_s;
+  double* at = saved + kEvalStartSlots;
+  for (const Span& sp : spans) {
+    if (repeat)
+      std::copy(at, at + sp.count, state + sp.first);
+    else
+      std::copy(state + sp.first, state + sp.first + sp.count, at);
+    at += sp.count;
+  }
+  saved[kEsValid] = 1.0;
+  saved[kEsTime] = time_s;
+}
+
 }  // namespace
 
 int Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
@@ -241,6 +269,7 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   const SkinConfig& cfg = model.config();
   const int K = cfg.oversample;
   int fired = 0;
+  SaveOrRestoreEvaluationStart(model.state_layout(), time_s, state);
   bool touching;
   double* last = K > 1 ? state + model.state_layout().last_pose : nullptr;
   const double elapsed = state[kStTimeValid] > 0.0 ? time_s - state[kStLastTime] : 0.0;

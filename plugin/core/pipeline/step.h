@@ -79,6 +79,13 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, const Traction
 void ResetState(const SkinModel& model, double* state);
 
 // Writes the enabled output blocks (outputs.cc) from the last evaluation.
+// The deepest indentation the skin can take, m: the stack over a rigid base
+// (bone), else the pad's own half-height; beyond it the linear skin is past
+// its range (the force block flags it).
+double IndentationLimit(const SkinConfig& cfg);
+// Whether the last evaluation touched deeper than IndentationLimit.
+bool IndentationBeyondSkin(const SkinModel& model, const double* state);
+
 void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching,
                   const double* state, const Workspace& ws, double* out);
 

@@ -2,8 +2,8 @@
 // solver's own (ElasticWork) and the warm start's and box check's, which
 // belong to the pipeline, not to the contact solver. Per simulation, no
 // state that outlives a call (Workspace, GridShiftWork).
-#ifndef MJTOUCH_PIPELINE_WARM_START_WORK_H_
-#define MJTOUCH_PIPELINE_WARM_START_WORK_H_
+#ifndef MJTOUCH_PIPELINE_ELASTIC_WARM_START_WORK_H_
+#define MJTOUCH_PIPELINE_ELASTIC_WARM_START_WORK_H_
 
 #include <vector>
 
@@ -26,4 +26,4 @@ struct ElasticStepWork {
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_PIPELINE_WARM_START_WORK_H_
+#endif  // MJTOUCH_PIPELINE_ELASTIC_WARM_START_WORK_H_

@@ -15,8 +15,8 @@
 // examples/pc_grid_shift.py). Cost: a second render and solve per step,
 // warm-started from the shifted grid's own history in plugin_state (state_layout.h)
 // like the taxel grid's solve.
-#ifndef MJTOUCH_PIPELINE_GRID_SHIFT_H_
-#define MJTOUCH_PIPELINE_GRID_SHIFT_H_
+#ifndef MJTOUCH_PIPELINE_ELASTIC_GRID_SHIFT_H_
+#define MJTOUCH_PIPELINE_ELASTIC_GRID_SHIFT_H_
 
 #include <memory>
 #include <vector>
@@ -24,7 +24,7 @@
 #include "common/grid.h"
 #include "contact/contact_solver.h"
 #include "contact/pressure.h"
-#include "pipeline/warm_start_work.h"
+#include "pipeline/elastic/warm_start_work.h"
 #include "surface/surface.h"
 
 namespace mjtouch {
@@ -66,4 +66,4 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_PIPELINE_GRID_SHIFT_H_
+#endif  // MJTOUCH_PIPELINE_ELASTIC_GRID_SHIFT_H_

@@ -1,6 +1,6 @@
-#include "pipeline/grid_shift.h"
+#include "pipeline/elastic/grid_shift.h"
 
-#include "pipeline/warm_start.h"
+#include "pipeline/elastic/warm_start.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,13 +3,13 @@
 // cull level, the warm start from the pressure history (state_layout.h,
 // HistoryBlock), the solve on a growing box and the history write; defined
 // in warm_start.cc.
-#ifndef MJTOUCH_PIPELINE_WARM_START_H_
-#define MJTOUCH_PIPELINE_WARM_START_H_
+#ifndef MJTOUCH_PIPELINE_ELASTIC_WARM_START_H_
+#define MJTOUCH_PIPELINE_ELASTIC_WARM_START_H_
 
 #include <vector>
 
 #include "pipeline/model.h"
-#include "pipeline/warm_start_work.h"
+#include "pipeline/elastic/warm_start_work.h"
 
 namespace mjtouch {
 
@@ -54,4 +54,4 @@ void StoreElasticHistory(const TaxelGrid& grid, const std::vector<double>& press
 
 }  // namespace mjtouch
 
-#endif  // MJTOUCH_PIPELINE_WARM_START_H_
+#endif  // MJTOUCH_PIPELINE_ELASTIC_WARM_START_H_

@@ -1,7 +1,7 @@
 // The `elastic` contact's solve sequence for one step (warm_start.h): the
 // warm start from the pressure history, the solve on a box grown until no
 // rendered cell outside it can touch, and the history write.
-#include "pipeline/warm_start.h"
+#include "pipeline/elastic/warm_start.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,0 +1,621 @@
+#include "contact/tangential.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace mjtouch {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// |F| from this share of mu P up counts as full slip: the stick zone left
+// (c/a = (1 - |F|/(mu P))^(1/3) < 1e-4) is below any grid, and |F| = mu P
+// given by the caller must not miss the branch by round-off.
+constexpr double kFullSlipShare = 1.0 - 1e-12;
+
+std::string Num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%g", v);
+  return buf;
+}
+
+// Primitives of the Cerruti kernels over a rectangle (their mixed second
+// derivatives): d2/dxdy of x asinh(y/|x|) is y^2/r^3 (+ terms in x alone,
+// which a corner sum cancels), of y asinh(x/|y|) is x^2/r^3, of -r is x y / r^3.
+double PrimA(double x, double y) { return x == 0.0 ? 0.0 : x * std::asinh(y / std::fabs(x)); }
+double PrimB(double x, double y) { return y == 0.0 ? 0.0 : y * std::asinh(x / std::fabs(y)); }
+double PrimR(double x, double y) { return -std::hypot(x, y); }
+
+template <typename F>
+double CornerSum(F f, double x, double y, double h) {
+  const double a = 0.5 * h;
+  return f(x + a, y + a) - f(x - a, y + a) - f(x + a, y - a) + f(x - a, y - a);
+}
+
+// The convex potential of the projection onto the disk |q| <= g:
+// psi(t) = |t|^2 / 2 inside, g |t| - g^2 / 2 outside (its gradient is the
+// projection).
+double Psi(double tx, double ty, double g) {
+  const double t2 = tx * tx + ty * ty;
+  if (t2 <= g * g) return 0.5 * t2;
+  return g * std::sqrt(t2) - 0.5 * g * g;
+}
+
+// The loaded cells (p > 0) of a step, in index order, with their disk radii.
+struct Cells {
+  std::vector<int> index;  // grid index
+  std::vector<double> g;   // mu p, Pa
+  double pressure_sum = 0; // sum of p, Pa (force / cell area)
+  double g_sum = 0;
+};
+
+Cells LoadedCells(const std::vector<double>& pressure_pa, double mu) {
+  Cells c;
+  for (size_t k = 0; k < pressure_pa.size(); ++k)
+    if (pressure_pa[k] > 0.0) {
+      c.index.push_back(static_cast<int>(k));
+      c.g.push_back(mu * pressure_pa[k]);
+      c.pressure_sum += pressure_pa[k];
+      c.g_sum += mu * pressure_pa[k];
+    }
+  return c;
+}
+
+// q_c = Proj_{|q| <= g_c}(y_c + k lam): lam (2-D) such that sum_c q_c =
+// (tx, ty), by Newton's method with backtracking on the convex potential
+// Phi(lam) = sum psi(y + k lam) / k - t . lam, whose gradient is sum q - t.
+// Requires |t| < sum g (a solution exists). Then the round-off residual of
+// the sum goes evenly to the cells inside their disks. slip[c] = 1 where the
+// projection clipped. Returns the Newton steps taken.
+int ProjectWithForce(const std::vector<double>& yx, const std::vector<double>& yy,
+                     const std::vector<double>& g, double k, double tx, double ty,
+                     double* lam_x, double* lam_y, std::vector<double>* qx,
+                     std::vector<double>* qy, std::vector<unsigned char>* slip) {
+  const size_t m = g.size();
+  qx->resize(m);
+  qy->resize(m);
+  slip->resize(m);
+  double lx = *lam_x, ly = *lam_y;
+  double g_sum = 0;
+  for (size_t c = 0; c < m; ++c) g_sum += g[c];
+  const double scale = g_sum + std::hypot(tx, ty);
+  auto eval = [&](double ax, double ay, double* gx, double* gy, double* hxx, double* hxy,
+                  double* hyy) {
+    double phi = 0, sx = 0, sy = 0, h11 = 0, h12 = 0, h22 = 0;
+    for (size_t c = 0; c < m; ++c) {
+      const double px = yx[c] + k * ax, py = yy[c] + k * ay;
+      phi += Psi(px, py, g[c]);
+      const double t2 = px * px + py * py;
+      if (t2 <= g[c] * g[c]) {
+        sx += px;
+        sy += py;
+        h11 += 1.0;
+        h22 += 1.0;
+      } else {
+        const double t = std::sqrt(t2), f = g[c] / t;
+        sx += f * px;
+        sy += f * py;
+        const double ux = px / t, uy = py / t;
+        h11 += f * (1.0 - ux * ux);
+        h12 -= f * ux * uy;
+        h22 += f * (1.0 - uy * uy);
+      }
+    }
+    if (gx) {
+      *gx = sx - tx;
+      *gy = sy - ty;
+      *hxx = k * h11;
+      *hxy = k * h12;
+      *hyy = k * h22;
+    }
+    return phi / k - tx * ax - ty * ay;
+  };
+  int steps = 0;
+  double last_norm = HUGE_VAL;
+  for (; steps < 60; ++steps) {
+    double gx, gy, hxx, hxy, hyy;
+    const double phi = eval(lx, ly, &gx, &gy, &hxx, &hxy, &hyy);
+    // Close enough (the rest goes to the stick cells below), or stalled.
+    const double norm = std::hypot(gx, gy);
+    if (norm <= 1e-10 * scale || (norm <= 1e-8 * scale && norm > 0.5 * last_norm)) break;
+    last_norm = norm;
+    // Regularised so that a step exists when every cell slips the same way.
+    const double reg = 1e-12 * k * static_cast<double>(m);
+    hxx += reg;
+    hyy += reg;
+    const double det = hxx * hyy - hxy * hxy;
+    const double dx = -(hyy * gx - hxy * gy) / det, dy = -(hxx * gy - hxy * gx) / det;
+    const double slope = gx * dx + gy * dy;
+    double s = 1.0;
+    // Phi's round-off (~1e-16 of its terms) hides decreases below ~1e-12 of
+    // it: near the solution Armijo cannot tell, and Newton is then exact
+    // (piecewise quadratic, one piece).
+    bool accepted = -slope <= 1e-12 * (std::fabs(phi) + g_sum * g_sum / k);
+    for (int b = 0; b < 40 && !accepted; ++b, s *= 0.5) {
+      if (eval(lx + s * dx, ly + s * dy, nullptr, nullptr, nullptr, nullptr, nullptr) <=
+          phi + 1e-4 * s * slope) {
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) {
+      // Phi flat to round-off along d: take the Newton step if it shrinks
+      // the gradient, else stop.
+      double g2x, g2y, a, b2, c2;
+      eval(lx + dx, ly + dy, &g2x, &g2y, &a, &b2, &c2);
+      if (std::hypot(g2x, g2y) >= std::hypot(gx, gy)) break;
+      s = 1.0;
+    }
+    lx += s * dx;
+    ly += s * dy;
+  }
+  double sx = 0, sy = 0;
+  int inside = 0;
+  for (size_t c = 0; c < m; ++c) {
+    const double px = yx[c] + k * lx, py = yy[c] + k * ly;
+    const double t2 = px * px + py * py;
+    if (t2 <= g[c] * g[c]) {
+      (*qx)[c] = px;
+      (*qy)[c] = py;
+      (*slip)[c] = 0;
+      ++inside;
+    } else {
+      const double f = g[c] / std::sqrt(t2);
+      (*qx)[c] = f * px;
+      (*qy)[c] = f * py;
+      (*slip)[c] = 1;
+    }
+    sx += (*qx)[c];
+    sy += (*qy)[c];
+  }
+  if (inside > 0) {
+    const double ex = (tx - sx) / inside, ey = (ty - sy) / inside;
+    for (size_t c = 0; c < m; ++c)
+      if (!(*slip)[c]) {
+        (*qx)[c] += ex;
+        (*qy)[c] += ey;
+      }
+  }
+  *lam_x = lx;
+  *lam_y = ly;
+  return steps;
+}
+
+// Full slip (|F| >= mu P) or no load: q = p F / P on the loaded cells.
+void FullSlip(const TaxelGrid& grid, const std::vector<double>& pressure_pa, const Cells& cells,
+              double fx_n, double fy_n, TangentialState* state, TangentialResult* result) {
+  const size_t N = grid.Size();
+  state->shear_x_pa.assign(N, 0.0);
+  state->shear_y_pa.assign(N, 0.0);
+  if (cells.pressure_sum > 0.0) {
+    const double force_per_pa = cells.pressure_sum * grid.Area();
+    const double rx = fx_n / force_per_pa, ry = fy_n / force_per_pa;
+    for (int k : cells.index) {
+      state->shear_x_pa[k] = rx * pressure_pa[k];
+      state->shear_y_pa[k] = ry * pressure_pa[k];
+    }
+  }
+  result->stick.assign(N, 0);
+  result->loaded_cells = static_cast<int>(cells.index.size());
+  result->stick_cells = 0;
+  result->stuck_share = 0;
+  result->full_slip = !cells.index.empty();
+}
+
+void Finish(const Cells& cells, const std::vector<unsigned char>& slip, size_t N,
+            TangentialResult* result) {
+  result->stick.assign(N, 0);
+  result->loaded_cells = static_cast<int>(cells.index.size());
+  result->stick_cells = 0;
+  for (size_t c = 0; c < cells.index.size(); ++c)
+    if (!slip[c]) {
+      result->stick[cells.index[c]] = 1;
+      ++result->stick_cells;
+    }
+  result->stuck_share =
+      result->loaded_cells > 0 ? static_cast<double>(result->stick_cells) / result->loaded_cells
+                               : 0.0;
+  result->full_slip = false;
+}
+
+}  // namespace
+
+TangentialCompliance::TangentialCompliance(double young_pa, double poisson, double pitch_m,
+                                           int n)
+    : n_(n), pitch_m_(pitch_m) {
+  const double G = young_pa / (2.0 * (1.0 + poisson));
+  const double c = 1.0 / (2.0 * kPi * G);
+  const size_t L = 2 * static_cast<size_t>(n) - 1;
+  kxx_.resize(L * L);
+  kyy_.resize(L * L);
+  kxy_.resize(L * L);
+  for (int dj = -(n - 1); dj <= n - 1; ++dj)
+    for (int di = -(n - 1); di <= n - 1; ++di) {
+      const double x = di * pitch_m, y = dj * pitch_m;
+      const double a = CornerSum(PrimA, x, y, pitch_m), b = CornerSum(PrimB, x, y, pitch_m);
+      const double r = CornerSum(PrimR, x, y, pitch_m);
+      const size_t k = static_cast<size_t>(dj + n - 1) * L + (di + n - 1);
+      kxx_[k] = c * ((1.0 - poisson) * a + b);
+      kyy_[k] = c * (a + (1.0 - poisson) * b);
+      kxy_[k] = c * poisson * r;
+    }
+}
+
+std::shared_ptr<const TangentialCompliance::Spectra> TangentialCompliance::SpectraFor(
+    int bx, int by) const {
+  const int mx = NextFftSize(2 * bx - 1), my = NextFftSize(2 * by - 1);
+  std::lock_guard<std::mutex> lock(mu_);
+  auto& slot = spectra_[{mx, my}];
+  if (slot) return slot;
+  auto s = std::make_shared<Spectra>(mx, my);
+  const double norm = 1.0 / (static_cast<double>(mx) * my);
+  std::vector<double> kr(static_cast<size_t>(mx) * my), sre(s->fft.spectrum_size()),
+      sim(s->fft.spectrum_size()), scratch;
+  // Each kernel wrapped onto the torus (offsets up to the box's reach do
+  // not wrap); K(-d) = K(d) for all three (xy is odd in x and in y), so the
+  // transforms are real. The xy kernel is left zero on a Nyquist row or
+  // column, where +d and -d share a point.
+  auto spectrum = [&](const std::vector<double>& table, bool odd, std::vector<double>* out) {
+    std::fill(kr.begin(), kr.end(), 0.0);
+    for (int y = 0; y < my; ++y) {
+      const int dy = y <= my / 2 ? y : y - my;
+      if (std::abs(dy) > n_ - 1 || (odd && 2 * y == my)) continue;
+      for (int x = 0; x < mx; ++x) {
+        const int dx = x <= mx / 2 ? x : x - mx;
+        if (std::abs(dx) > n_ - 1 || (odd && 2 * x == mx)) continue;
+        kr[static_cast<size_t>(y) * mx + x] = At(table, dx, dy);
+      }
+    }
+    s->fft.Forward(kr.data(), nullptr, mx, my, mx, sre.data(), sim.data(), &scratch);
+    out->resize(sre.size());
+    for (size_t k = 0; k < sre.size(); ++k) (*out)[k] = sre[k] * norm;
+  };
+  spectrum(kxx_, false, &s->xx);
+  spectrum(kyy_, false, &s->yy);
+  spectrum(kxy_, true, &s->xy);
+  s->xx_f.assign(s->xx.begin(), s->xx.end());
+  s->yy_f.assign(s->yy.begin(), s->yy.end());
+  s->xy_f.assign(s->xy.begin(), s->xy.end());
+  slot = std::move(s);
+  return slot;
+}
+
+namespace {
+
+template <typename T>
+void ApplyIn(const Fft2D& fft, const std::vector<T>& kxx, const std::vector<T>& kyy,
+             const std::vector<T>& kxy, const double* qx, const double* qy, int bx, int by,
+             double* ux, double* uy, std::vector<T>* sxr, std::vector<T>* sxi,
+             std::vector<T>* syr, std::vector<T>* syi, std::vector<T>* scratch) {
+  const size_t S = fft.spectrum_size();
+  sxr->resize(S);
+  sxi->resize(S);
+  syr->resize(S);
+  syi->resize(S);
+  fft.ForwardReal(qx, bx, by, bx, sxr->data(), sxi->data(), scratch);
+  fft.ForwardReal(qy, bx, by, bx, syr->data(), syi->data(), scratch);
+  T* __restrict ar = sxr->data();
+  T* __restrict ai = sxi->data();
+  T* __restrict br = syr->data();
+  T* __restrict bi = syi->data();
+  for (size_t k = 0; k < S; ++k) {
+    const T xr = ar[k], xi = ai[k], yr = br[k], yi = bi[k];
+    ar[k] = kxx[k] * xr + kxy[k] * yr;
+    ai[k] = kxx[k] * xi + kxy[k] * yi;
+    br[k] = kxy[k] * xr + kyy[k] * yr;
+    bi[k] = kxy[k] * xi + kyy[k] * yi;
+  }
+  fft.InverseReal(ar, ai, by, bx, ux, bx, scratch);
+  fft.InverseReal(br, bi, by, bx, uy, bx, scratch);
+}
+
+}  // namespace
+
+void TangentialCompliance::Apply(const Spectra& s, const double* qx, const double* qy, int bx,
+                                 int by, double* ux, double* uy, Work* w,
+                                 ApplyPrecision precision) const {
+  if (precision == ApplyPrecision::kFloat)
+    ApplyIn(s.fft, s.xx_f, s.yy_f, s.xy_f, qx, qy, bx, by, ux, uy, &w->sxr_f, &w->sxi_f,
+            &w->syr_f, &w->syi_f, &w->scratch_f);
+  else
+    ApplyIn(s.fft, s.xx, s.yy, s.xy, qx, qy, bx, by, ux, uy, &w->sxr, &w->sxi, &w->syr,
+            &w->syi, &w->scratch);
+}
+
+double WinklerTangentialStiffness(double normal_stiffness_pa_per_m, double poisson) {
+  return normal_stiffness_pa_per_m * 2.0 * (1.0 - poisson) / (2.0 - poisson);
+}
+
+std::string CheckTangentialInputs(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
+                                  double mu, double fx_n, double fy_n,
+                                  const TangentialState& state) {
+  const size_t N = grid.Size();
+  if (grid.n <= 0 || !(grid.pitch_m > 0))
+    return "grid: n = " + std::to_string(grid.n) + ", pitch_m = " + Num(grid.pitch_m) +
+           " must be > 0";
+  if (pressure_pa.size() != N)
+    return "pressure_pa has " + std::to_string(pressure_pa.size()) + " cells, the grid " +
+           std::to_string(N);
+  for (double p : pressure_pa)
+    if (!std::isfinite(p) || p < 0)
+      return "pressure_pa must be finite and >= 0, got " + Num(p);
+  if (!std::isfinite(mu) || mu < 0) return "friction mu = " + Num(mu) + " must be finite, >= 0";
+  if (!std::isfinite(fx_n) || !std::isfinite(fy_n))
+    return "tangential force (" + Num(fx_n) + ", " + Num(fy_n) + ") N must be finite";
+  const bool empty = state.shear_x_pa.empty() && state.shear_y_pa.empty();
+  if (!empty && (state.shear_x_pa.size() != N || state.shear_y_pa.size() != N))
+    return "state tractions must be empty or have the grid's " + std::to_string(N) + " cells";
+  if (!std::isfinite(state.shift_x_m) || !std::isfinite(state.shift_y_m))
+    return "state shift must be finite";
+  return "";
+}
+
+bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
+                            double mu, double fx_n, double fy_n,
+                            double tangential_stiffness_pa_per_m, TangentialState* state,
+                            TangentialResult* result, std::string* error) {
+  std::string e = CheckTangentialInputs(grid, pressure_pa, mu, fx_n, fy_n, *state);
+  if (e.empty() && !(tangential_stiffness_pa_per_m > 0 &&
+                     std::isfinite(tangential_stiffness_pa_per_m)))
+    e = "tangential stiffness " + Num(tangential_stiffness_pa_per_m) + " Pa/m must be > 0";
+  if (!e.empty()) {
+    if (error) *error = "tangential (winkler): " + e;
+    return false;
+  }
+  const size_t N = grid.Size();
+  const Cells cells = LoadedCells(pressure_pa, mu);
+  const double tx = fx_n / grid.Area(), ty = fy_n / grid.Area();
+  result->iterations = 0;
+  result->projection_steps = 0;
+  result->change = 0;
+  if (cells.index.empty() || std::hypot(tx, ty) >= kFullSlipShare * cells.g_sum) {
+    FullSlip(grid, pressure_pa, cells, fx_n, fy_n, state, result);
+    return true;
+  }
+  const size_t m = cells.index.size();
+  const bool have_prev = !state->shear_x_pa.empty();
+  std::vector<double> yx(m, 0.0), yy(m, 0.0), qx, qy;
+  if (have_prev)
+    for (size_t c = 0; c < m; ++c) {
+      yx[c] = state->shear_x_pa[cells.index[c]];
+      yy[c] = state->shear_y_pa[cells.index[c]];
+    }
+  std::vector<unsigned char> slip;
+  double dwx = 0, dwy = 0;
+  result->iterations = result->projection_steps = ProjectWithForce(yx, yy, cells.g, tangential_stiffness_pa_per_m, tx, ty,
+                                        &dwx, &dwy, &qx, &qy, &slip);
+  state->shear_x_pa.assign(N, 0.0);
+  state->shear_y_pa.assign(N, 0.0);
+  for (size_t c = 0; c < m; ++c) {
+    state->shear_x_pa[cells.index[c]] = qx[c];
+    state->shear_y_pa[cells.index[c]] = qy[c];
+  }
+  state->shift_x_m += dwx;
+  state->shift_y_m += dwy;
+  Finish(cells, slip, N, result);
+  return true;
+}
+
+bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
+                            double mu, double fx_n, double fy_n, const TangentialCompliance& K,
+                            double tolerance, int max_iterations, TangentialState* state,
+                            TangentialResult* result, std::string* error,
+                            ApplyPrecision precision) {
+  std::string e = CheckTangentialInputs(grid, pressure_pa, mu, fx_n, fy_n, *state);
+  if (e.empty() && (K.n() != grid.n || K.pitch_m() != grid.pitch_m))
+    e = "compliance built for n = " + std::to_string(K.n()) + ", pitch " + Num(K.pitch_m()) +
+        " m, not the grid's";
+  if (e.empty() && !(tolerance > 0 && tolerance < 1))
+    e = "tolerance " + Num(tolerance) + " must be in (0, 1)";
+  if (e.empty() && max_iterations < 1)
+    e = "max_iterations " + std::to_string(max_iterations) + " must be >= 1";
+  if (!e.empty()) {
+    if (error) *error = "tangential (elastic): " + e;
+    return false;
+  }
+  const size_t N = grid.Size();
+  const int n = grid.n;
+  const Cells cells = LoadedCells(pressure_pa, mu);
+  const double tx = fx_n / grid.Area(), ty = fy_n / grid.Area();
+  result->iterations = 0;
+  result->projection_steps = 0;
+  result->change = 0;
+  if (cells.index.empty() || std::hypot(tx, ty) >= kFullSlipShare * cells.g_sum) {
+    FullSlip(grid, pressure_pa, cells, fx_n, fy_n, state, result);
+    return true;
+  }
+  const size_t m = cells.index.size();
+  const bool have_prev = !state->shear_x_pa.empty();
+  // The box: the loaded cells and the last step's tractions (their
+  // removal moves the surface too).
+  CellBounds bounds;
+  for (int k : cells.index) bounds.Add(k % n, k / n);
+  if (have_prev)
+    for (int j = 0; j < n; ++j) {
+      const double* sx = state->shear_x_pa.data() + static_cast<size_t>(j) * n;
+      const double* sy = state->shear_y_pa.data() + static_cast<size_t>(j) * n;
+      int lo = 0, hi = n - 1;
+      while (lo < n && sx[lo] == 0.0 && sy[lo] == 0.0) ++lo;
+      if (lo == n) continue;
+      while (sx[hi] == 0.0 && sy[hi] == 0.0) --hi;
+      bounds.AddRow(lo, hi, j);
+    }
+  const CellBox box = bounds.Box();
+  const int bx = box.nx, by = box.ny;
+  const size_t B = static_cast<size_t>(bx) * by;
+  auto box_index = [&](int k) {
+    return static_cast<size_t>(k / n - box.j0) * bx + (k % n - box.i0);
+  };
+  std::vector<size_t> cb(m);
+  for (size_t c = 0; c < m; ++c) cb[c] = box_index(cells.index[c]);
+  std::vector<double> pqx(B, 0.0), pqy(B, 0.0);
+  if (have_prev)
+    for (int j = 0; j < by; ++j)
+      for (int i = 0; i < bx; ++i) {
+        const size_t k = static_cast<size_t>(box.j0 + j) * n + box.i0 + i;
+        pqx[static_cast<size_t>(j) * bx + i] = state->shear_x_pa[k];
+        pqy[static_cast<size_t>(j) * bx + i] = state->shear_y_pa[k];
+      }
+  const auto spectra = K.SpectraFor(bx, by);
+  TangentialCompliance::Work work;
+
+  // Warm start: the last tractions on today's cells, projected onto the
+  // disks with the force restored.
+  std::vector<double> yx(m), yy(m), qx, qy;
+  for (size_t c = 0; c < m; ++c) {
+    yx[c] = pqx[cb[c]];
+    yy[c] = pqy[cb[c]];
+  }
+  std::vector<unsigned char> slip;
+  double lx = 0, ly = 0;
+  int projection_steps = ProjectWithForce(yx, yy, cells.g, 1.0, tx, ty, &lx, &ly, &qx, &qy, &slip);
+
+  std::vector<double> dx(B), dy(B), rx(B), ry(B), tbx(B, 0.0), tby(B, 0.0), wx(B), wy(B);
+  std::vector<double> tcx(m, 0.0), tcy(m, 0.0), oldx(m), oldy(m);
+  // r = K (q - q_prev) on the box: the surface's tangential displacement
+  // since the last step.
+  auto residual = [&]() {
+    for (size_t b = 0; b < B; ++b) {
+      dx[b] = -pqx[b];
+      dy[b] = -pqy[b];
+    }
+    for (size_t c = 0; c < m; ++c) {
+      dx[cb[c]] += qx[c];
+      dy[cb[c]] += qy[c];
+    }
+    K.Apply(*spectra, dx.data(), dy.data(), bx, by, rx.data(), ry.data(), &work, precision);
+  };
+  // The shift increment: the stick cells' mean displacement (all cells'
+  // when none sticks).
+  auto shift_increment = [&](double* wxm, double* wym) {
+    double sx = 0, sy = 0, ax = 0, ay = 0;
+    int count = 0;
+    for (size_t c = 0; c < m; ++c) {
+      ax += rx[cb[c]];
+      ay += ry[cb[c]];
+      if (!slip[c]) {
+        sx += rx[cb[c]];
+        sy += ry[cb[c]];
+        ++count;
+      }
+    }
+    if (count > 0) {
+      *wxm = sx / count;
+      *wym = sy / count;
+    } else {
+      *wxm = ax / m;
+      *wym = ay / m;
+    }
+  };
+  residual();
+  double gg_old = 0, tau_ref = 0;
+  bool restart = true;
+  int it = 0;
+  double change = 0;
+  for (; it < max_iterations;) {
+    double dwx, dwy;
+    shift_increment(&dwx, &dwy);
+    // Gradient on the stick cells (zero mean there), conjugate direction.
+    double gg = 0;
+    for (size_t c = 0; c < m; ++c)
+      if (!slip[c]) {
+        const double gx = rx[cb[c]] - dwx, gy = ry[cb[c]] - dwy;
+        gg += gx * gx + gy * gy;
+      }
+    const double beta = restart || gg_old <= 0 ? 0.0 : gg / gg_old;
+    double mx = 0, my = 0;
+    int count = 0;
+    for (size_t c = 0; c < m; ++c) {
+      if (slip[c]) {
+        tcx[c] = tcy[c] = 0.0;
+        continue;
+      }
+      tcx[c] = rx[cb[c]] - dwx + beta * tcx[c];
+      tcy[c] = ry[cb[c]] - dwy + beta * tcy[c];
+      mx += tcx[c];
+      my += tcy[c];
+      ++count;
+    }
+    double tau = 0;
+    if (count > 0) {
+      mx /= count;
+      my /= count;
+      std::fill(tbx.begin(), tbx.end(), 0.0);
+      std::fill(tby.begin(), tby.end(), 0.0);
+      for (size_t c = 0; c < m; ++c)
+        if (!slip[c]) {
+          tcx[c] -= mx;
+          tcy[c] -= my;
+          tbx[cb[c]] = tcx[c];
+          tby[cb[c]] = tcy[c];
+        }
+      K.Apply(*spectra, tbx.data(), tby.data(), bx, by, wx.data(), wy.data(), &work, precision);
+      double tw = 0, tg = 0;
+      for (size_t c = 0; c < m; ++c)
+        if (!slip[c]) {
+          tw += tcx[c] * wx[cb[c]] + tcy[c] * wy[cb[c]];
+          tg += tcx[c] * (rx[cb[c]] - dwx) + tcy[c] * (ry[cb[c]] - dwy);
+        }
+      if (tw > 0) tau = tg / tw;
+    }
+    // Slip cells step along their slip by the first iteration's
+    // (steepest-descent) step at most: the stick cells' conjugate steps grow
+    // long as they converge, and would flip slip directions.
+    if (!(tau > 0) || !std::isfinite(tau)) tau = 0.0;
+    if (tau_ref == 0.0) tau_ref = tau > 0 ? tau : 1.0 / K.Kxx(0, 0);
+    const double tau_slip = std::min(tau > 0 ? tau : tau_ref, tau_ref);
+    // Stick cells along the conjugate direction, slip cells along their
+    // slip (q + tau s, s = dW - r), then onto the disks with the force.
+    for (size_t c = 0; c < m; ++c) {
+      oldx[c] = qx[c];
+      oldy[c] = qy[c];
+      if (!slip[c]) {
+        yx[c] = qx[c] - tau * tcx[c];
+        yy[c] = qy[c] - tau * tcy[c];
+      } else {
+        yx[c] = qx[c] - tau_slip * (rx[cb[c]] - dwx);
+        yy[c] = qy[c] - tau_slip * (ry[cb[c]] - dwy);
+      }
+    }
+    const std::vector<unsigned char> slip_before = slip;
+    lx = ly = 0;
+    projection_steps += ProjectWithForce(yx, yy, cells.g, 1.0, tx, ty, &lx, &ly, &qx, &qy, &slip);
+    restart = slip != slip_before;
+    gg_old = gg;
+    ++it;
+    double diff = 0, norm = 0;
+    for (size_t c = 0; c < m; ++c) {
+      diff += std::fabs(qx[c] - oldx[c]) + std::fabs(qy[c] - oldy[c]);
+      norm += std::fabs(qx[c]) + std::fabs(qy[c]);
+    }
+    change = norm > 0 ? diff / norm : 0.0;
+    residual();
+    if (change < tolerance) break;
+  }
+  double dwx, dwy;
+  shift_increment(&dwx, &dwy);
+  // The box holds the old and the new tractions: clearing it suffices.
+  if (have_prev) {
+    for (int j = 0; j < by; ++j) {
+      const size_t k = static_cast<size_t>(box.j0 + j) * n + box.i0;
+      std::fill_n(state->shear_x_pa.begin() + k, bx, 0.0);
+      std::fill_n(state->shear_y_pa.begin() + k, bx, 0.0);
+    }
+  } else {
+    state->shear_x_pa.assign(N, 0.0);
+    state->shear_y_pa.assign(N, 0.0);
+  }
+  for (size_t c = 0; c < m; ++c) {
+    state->shear_x_pa[cells.index[c]] = qx[c];
+    state->shear_y_pa[cells.index[c]] = qy[c];
+  }
+  state->shift_x_m += dwx;
+  state->shift_y_m += dwy;
+  result->iterations = it;
+  result->projection_steps = projection_steps;
+  result->change = change;
+  Finish(cells, slip, N, result);
+  return true;
+}
+
+}  // namespace mjtouch
