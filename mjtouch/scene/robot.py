@@ -30,8 +30,12 @@ import numpy as np
 from mjtouch.scene import scenes
 from mjtouch.scene.sensor import SkinLayout
 
-PAD_TYPES = {mujoco.mjtGeom.mjGEOM_SPHERE: "sphere", mujoco.mjtGeom.mjGEOM_ELLIPSOID: "ellipsoid",
-             mujoco.mjtGeom.mjGEOM_CAPSULE: "capsule", mujoco.mjtGeom.mjGEOM_BOX: "box"}
+PAD_TYPES = {
+    mujoco.mjtGeom.mjGEOM_SPHERE: "sphere",
+    mujoco.mjtGeom.mjGEOM_ELLIPSOID: "ellipsoid",
+    mujoco.mjtGeom.mjGEOM_CAPSULE: "capsule",
+    mujoco.mjtGeom.mjGEOM_BOX: "box",
+}
 
 
 def _value(key: str, v) -> str:
@@ -56,14 +60,17 @@ def _pad_geom(spec: mujoco.MjSpec, geom, body) -> mujoco.MjsGeom:
     """The pad geom: `geom` (a name or an MjsGeom) or `body`'s one colliding
     geom (a name or an MjsBody)."""
     if (geom is None) == (body is None):
-        raise ValueError(f"geom = {geom!r}, body = {body!r}: give exactly one (a geom's name "
-                         "or MjsGeom, or a body's name or MjsBody)")
+        raise ValueError(
+            f"geom = {geom!r}, body = {body!r}: give exactly one (a geom's name "
+            "or MjsGeom, or a body's name or MjsBody)"
+        )
     if geom is not None:
         if isinstance(geom, mujoco.MjsGeom):
             return geom
         if not isinstance(geom, str) or not geom:
-            raise ValueError(f"geom = {geom!r} must be the name of a geom in the spec, or an "
-                             "MjsGeom")
+            raise ValueError(
+                f"geom = {geom!r} must be the name of a geom in the spec, or an MjsGeom"
+            )
         g = spec.geom(geom)
         if g is None:
             names = [x.name for x in spec.geoms if x.name]
@@ -80,11 +87,14 @@ def _pad_geom(spec: mujoco.MjSpec, geom, body) -> mujoco.MjsGeom:
     colliding = [g for g in body.geoms if g.contype or g.conaffinity]
     label = repr(body.name) if body.name else "(unnamed body)"
     if len(colliding) != 1:
-        listed = ", ".join(_geom_label(g, k) for k, g in enumerate(body.geoms)
-                           if g.contype or g.conaffinity)
-        raise ValueError(f"body {label} has {len(colliding)} colliding geoms"
-                         f"{': ' + listed if listed else ''}; valid: exactly one, or pass "
-                         "geom= (a name or the MjsGeom)")
+        listed = ", ".join(
+            _geom_label(g, k) for k, g in enumerate(body.geoms) if g.contype or g.conaffinity
+        )
+        raise ValueError(
+            f"body {label} has {len(colliding)} colliding geoms"
+            f"{': ' + listed if listed else ''}; valid: exactly one, or pass "
+            "geom= (a name or the MjsGeom)"
+        )
     return colliding[0]
 
 
@@ -106,8 +116,10 @@ def _facing_from_site(spec: mujoco.MjSpec, g: mujoco.MjsGeom, site: str) -> list
     """The site's -z axis in the geom's frame (at the model's initial pose)."""
     if spec.site(site) is None:
         names = [x.name for x in spec.sites if x.name]
-        raise ValueError(f"facing = {site!r} is not a site of the spec; named sites: {names} "
-                         "(or give a 3-vector in the geom's frame)")
+        raise ValueError(
+            f"facing = {site!r} is not a site of the spec; named sites: {names} "
+            "(or give a 3-vector in the geom's frame)"
+        )
     model = spec.compile()
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
@@ -117,9 +129,15 @@ def _facing_from_site(spec: mujoco.MjSpec, g: mujoco.MjsGeom, site: str) -> list
     return [0.0 if abs(x) < 1e-12 else float(x) for x in f]
 
 
-def attach(spec: mujoco.MjSpec, geom: str | mujoco.MjsGeom | None = None,
-           name: str | None = None, *, body: str | mujoco.MjsBody | None = None,
-           facing=None, **attributes) -> mujoco.MjsPlugin:
+def attach(
+    spec: mujoco.MjSpec,
+    geom: str | mujoco.MjsGeom | None = None,
+    name: str | None = None,
+    *,
+    body: str | mujoco.MjsBody | None = None,
+    facing=None,
+    **attributes,
+) -> mujoco.MjsPlugin:
     """Add an ``mjtouch.skin`` sensor named ``name`` (default
     ``skin_<geom>``) on a fingertip geom with the given plugin attributes
     (``nx=48, pitch=2e-4, ridges=True, outputs="spikes stress force"``,
@@ -142,13 +160,16 @@ def attach(spec: mujoco.MjSpec, geom: str | mujoco.MjsGeom | None = None,
     g = _pad_geom(spec, geom, body)
     if g.type not in PAD_TYPES:
         label = repr(g.name) if g.name else "(unnamed)"
-        raise ValueError(f"geom {label} is a {g.type.name}; a skin needs a pad geom of type "
-                         f"{', '.join(PAD_TYPES.values())}")
+        raise ValueError(
+            f"geom {label} is a {g.type.name}; a skin needs a pad geom of type "
+            f"{', '.join(PAD_TYPES.values())}"
+        )
     geom_name = _name_geom(spec, g)
     name = name or f"skin_{geom_name}"
     if any(s.name == name for s in spec.sensors) or any(p.name == name for p in spec.plugins):
-        raise ValueError(f"name = {name!r} is taken by a sensor or plugin of the spec; pass "
-                         "another name")
+        raise ValueError(
+            f"name = {name!r} is taken by a sensor or plugin of the spec; pass another name"
+        )
     if isinstance(facing, str):
         facing = _facing_from_site(spec, g, facing)
     if facing is not None:
@@ -158,8 +179,12 @@ def attach(spec: mujoco.MjSpec, geom: str | mujoco.MjsGeom | None = None,
     spec.activate_plugin(scenes.SKIN_PLUGIN)  # the <extension> entry
     plugin = spec.add_plugin(name=name, plugin_name=scenes.SKIN_PLUGIN, active=True)
     plugin.config = config
-    sensor = spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_PLUGIN,
-                             objtype=mujoco.mjtObj.mjOBJ_GEOM, objname=geom_name)
+    sensor = spec.add_sensor(
+        name=name,
+        type=mujoco.mjtSensor.mjSENS_PLUGIN,
+        objtype=mujoco.mjtObj.mjOBJ_GEOM,
+        objname=geom_name,
+    )
     # the sensor keeps a copy of the reference: assign after naming the plugin
     sensor.plugin = plugin
     return plugin

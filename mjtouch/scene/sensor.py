@@ -76,10 +76,12 @@ class SkinLayout:
     def block(self, sensordata: np.ndarray, name: str) -> np.ndarray:
         """View of block `name` in sensordata (last axis = model.nsensordata)."""
         if name not in self.blocks:
-            raise KeyError(f"output block {name!r} is not enabled; enabled: {sorted(self.blocks)} "
-                           "(set the plugin's `outputs` attribute)")
+            raise KeyError(
+                f"output block {name!r} is not enabled; enabled: {sorted(self.blocks)} "
+                "(set the plugin's `outputs` attribute)"
+            )
         s = self.blocks[name]
-        return sensordata[..., self.sensor_adr + s.start:self.sensor_adr + s.stop]
+        return sensordata[..., self.sensor_adr + s.start : self.sensor_adr + s.stop]
 
     def coverage(self, sensordata: np.ndarray) -> np.ndarray:
         """The share of MuJoCo's normal force on the pad geom that the skin's
@@ -97,7 +99,9 @@ class SkinLayout:
                 f"{float(np.ravel(share)[k]):.3g} of MuJoCo's {float(np.ravel(normal_n)[k]):.3g} "
                 f"N normal force on its pad geom (worst of {int(np.sum(off))} off-patch "
                 "rows); widen the grid (nx, pitch) or turn the skin (facing)",
-                OffPatchWarning, stacklevel=2)
+                OffPatchWarning,
+                stacklevel=2,
+            )
         return share
 
     def last_evaluation(self, data: mujoco.MjData) -> dict:
@@ -114,8 +118,9 @@ class SkinLayout:
 
 
 def _find_instance(model: mujoco.MjModel, instance: int | str | None) -> int:
-    plugin_sensors = [i for i in range(model.nsensor)
-                      if model.sensor_type[i] == mujoco.mjtSensor.mjSENS_PLUGIN]
+    plugin_sensors = [
+        i for i in range(model.nsensor) if model.sensor_type[i] == mujoco.mjtSensor.mjSENS_PLUGIN
+    ]
     instances = [int(model.sensor_plugin[i]) for i in plugin_sensors]
     if instance is None:
         if not instances:

@@ -22,8 +22,8 @@ inline int ResolveWrittenGeom(const mjModel* m, int pad, const std::string& pad_
   const std::string compiled = pad_name;
   for (size_t at = compiled.find(pad_as_written); at != std::string::npos;
        at = compiled.find(pad_as_written, at + 1)) {
-    const std::string name = compiled.substr(0, at) + written +
-                             compiled.substr(at + pad_as_written.size());
+    const std::string name =
+        compiled.substr(0, at) + written + compiled.substr(at + pad_as_written.size());
     const int g = mj_name2id(m, mjOBJ_GEOM, name.c_str());
     if (g >= 0) return g;
   }

@@ -11,8 +11,7 @@ namespace mjtouch {
 
 // World-from-skin rotation (row-major) of pad geom g: geom_xmat itself when
 // the pad is not rotated (the same bits), else geom_xmat * rotation.
-inline const mjtNum* PadFrameMat(const mjData* d, int g, const PadGeometry& pad,
-                                 mjtNum out[9]) {
+inline const mjtNum* PadFrameMat(const mjData* d, int g, const PadGeometry& pad, mjtNum out[9]) {
   const mjtNum* gmat = d->geom_xmat + 9 * g;
   if (!pad.rotated) return gmat;
   mju_mulMatMat(out, gmat, pad.rotation, 3, 3, 3);

@@ -86,13 +86,13 @@ class SkinPlugin {
   StepInput input_;
   Workspace workspace_;
   bool warned_beyond_skin_ = false, warned_height_field_ = false;
-    std::map<int, HeightFieldCache> hfields_;  // by hfield id, built on first use
+  std::map<int, HeightFieldCache> hfields_;               // by hfield id, built on first use
   std::map<int, std::unique_ptr<MeshRayCaster>> meshes_;  // by mesh id, built on first use
   // Drawing only (never read by the physics): the `visual` attribute, the
   // contact state of the last evaluation and each receptor's last spike time.
   VisualMode visual_ = VisualMode::kBoth;
   bool touching_ = false;
-  bool warned_off_patch_ = false;  // contact off the skin's patch: warned once per data
+  bool warned_off_patch_ = false;          // contact off the skin's patch: warned once per data
   std::vector<double> last_spike_time_s_;  // s, per receptor; -inf: none yet
 };
 

@@ -15,8 +15,15 @@ DEPTH = 1e-4  # m, the pad's overlap with the floor
 
 def bump(spec_body, name: str, group: int = 0):
     """A non-colliding box 50 um proud of the floor, right of the pole (x > 0)."""
-    spec_body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=[8e-4, 2e-3, 5e-4],
-                       pos=[1.2e-3, 0, 5e-5 - 5e-4], contype=0, conaffinity=0, group=group)
+    spec_body.add_geom(
+        name=name,
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[8e-4, 2e-3, 5e-4],
+        pos=[1.2e-3, 0, 5e-5 - 5e-4],
+        contype=0,
+        conaffinity=0,
+        group=group,
+    )
 
 
 def finger(texture: bool = False, visual_group: int | None = None) -> mujoco.MjSpec:
@@ -73,8 +80,9 @@ def test_texture_names_follow_spec_attach_prefix_and_suffix():
     for prefix, suffix in (("h_", ""), ("h_", "_r")):
         parent = mujoco.MjSpec()
         parent.option.gravity = [0, 0, 0]
-        parent.attach(finger_with_skin(), prefix=prefix, suffix=suffix,
-                      frame=parent.worldbody.add_frame())
+        parent.attach(
+            finger_with_skin(), prefix=prefix, suffix=suffix, frame=parent.worldbody.add_frame()
+        )
         assert parent.geom(f"{prefix}tex{suffix}") is not None
         model = parent.compile()  # `texture="tex"` resolves to the renamed geom
         assert pressure_x_centroid(model, f"{prefix}skin_pad{suffix}") == alone, (prefix, suffix)
@@ -100,8 +108,13 @@ def hand_with_unnamed_tips() -> mujoco.MjSpec:
     spec = mujoco.MjSpec()
     for k, x in enumerate((-0.02, 0.02)):
         b = spec.worldbody.add_body(name=f"distal{k}", pos=[x, 0, 0.01])
-        b.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[3e-3, 3e-3, 3e-3], contype=0,
-                   conaffinity=0, group=3)
+        b.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[3e-3, 3e-3, 3e-3],
+            contype=0,
+            conaffinity=0,
+            group=3,
+        )
         b.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[6e-3, 4e-3, 0])
     return spec
 
@@ -126,10 +139,14 @@ def test_body_picks_its_one_colliding_geom_and_names_it():
 
 def test_body_errors_list_the_colliding_geoms():
     spec = hand_with_unnamed_tips()
-    spec.body("distal0").add_geom(name="nail", type=mujoco.mjtGeom.mjGEOM_BOX,
-                                  size=[1e-3, 1e-3, 1e-3])
-    with pytest.raises(ValueError, match=r"2 colliding geoms: \(unnamed geom 1 of the body, a "
-                                         r"mjGEOM_CAPSULE\), 'nail'; valid: exactly one"):
+    spec.body("distal0").add_geom(
+        name="nail", type=mujoco.mjtGeom.mjGEOM_BOX, size=[1e-3, 1e-3, 1e-3]
+    )
+    with pytest.raises(
+        ValueError,
+        match=r"2 colliding geoms: \(unnamed geom 1 of the body, a "
+        r"mjGEOM_CAPSULE\), 'nail'; valid: exactly one",
+    ):
         mjtouch.attach(spec, body="distal0")
     spec.body("distal1").geoms[1].contype = 0
     spec.body("distal1").geoms[1].conaffinity = 0

@@ -48,10 +48,10 @@ def test_contact_beyond_the_grid(nx, covered, capfd):
     # a sphere turned 30 degrees about x: it touches the plate 30 degrees
     # off its pole, R sin 30 = 3 mm across the skin; a 1.6 mm grid misses
     # it, a 16 mm grid holds it
-    sphere = dict(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[2 * R / 1.6, 0, 0],
-                  euler=[30, 0, 0])
-    model, data = pressed(sphere, 2 * R / 1.6, outputs="force coverage", nx=nx, pitch=1e-4,
-                          radius=5e-4)
+    sphere = dict(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[2 * R / 1.6, 0, 0], euler=[30, 0, 0])
+    model, data = pressed(
+        sphere, 2 * R / 1.6, outputs="force coverage", nx=nx, pitch=1e-4, radius=5e-4
+    )
     lay, cov = coverage(model, data)
     assert cov[1] == pytest.approx(mujoco_normal_n(model, data), rel=1e-12) and cov[1] > 0.4
     assert cov[0] == (1.0 if covered else 0.0)
@@ -62,7 +62,7 @@ def test_coverage_reads_a_rollout_and_warns_from_python():
     model, _ = pressed(CAPSULE_SIDEWAYS, R, outputs="coverage")
     lay = mjtouch.layouts(model)["skin_tip"]
     sd = np.zeros((3, model.nsensordata))
-    sd[:, lay.sensor_adr + lay.blocks["coverage"].start:][:, :2] = [[1, 0], [1, 0.2], [0.25, 0.4]]
+    sd[:, lay.sensor_adr + lay.blocks["coverage"].start :][:, :2] = [[1, 0], [1, 0.2], [0.25, 0.4]]
     with pytest.warns(OffPatchWarning, match=r"carries 0.25 of MuJoCo's 0.4 N"):
         share = lay.coverage(sd)
     np.testing.assert_array_equal(share, [1, 1, 0.25])

@@ -18,13 +18,15 @@ def pressed(geom_kw: dict, rest_z: float, **skin) -> tuple[mujoco.MjModel, mujoc
     """A finger on a slide joint resting on a plate under gravity (settled)."""
     spec = mujoco.MjSpec()
     spec.option.timestep = 1e-3
-    spec.worldbody.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX,
-                            size=[0.03, 0.03, 0.002], pos=[0, 0, -0.002])
+    spec.worldbody.add_geom(
+        name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.03, 0.03, 0.002], pos=[0, 0, -0.002]
+    )
     body = spec.worldbody.add_body(name="finger", pos=[0, 0, rest_z])
     body.add_joint(name="z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
     body.add_geom(name="tip", mass=MASS, **geom_kw)
-    attrs = dict(nx=N, pitch=PITCH, pressure="winkler", outputs="force pressure",
-                 ridges=False, radius=4e-3)
+    attrs = dict(
+        nx=N, pitch=PITCH, pressure="winkler", outputs="force pressure", ridges=False, radius=4e-3
+    )
     attrs.update(skin)
     mjtouch.attach(spec, "tip", **attrs)
     model = spec.compile()
@@ -52,8 +54,9 @@ def readout(model, data):
     return force, p
 
 
-CAPSULE_SIDEWAYS = dict(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[R, HALF, 0],
-                        euler=[0, 90, 0])  # axis along world x; world down = geom +x
+CAPSULE_SIDEWAYS = dict(
+    type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[R, HALF, 0], euler=[0, 90, 0]
+)  # axis along world x; world down = geom +x
 
 
 def test_sideways_capsule_is_its_cylinder_pressed_on_a_plate():
@@ -88,8 +91,9 @@ def test_sideways_capsule_is_its_cylinder_pressed_on_a_plate():
 
 
 def test_sideways_capsule_elastic_carries_mujocos_force():
-    model, data = pressed(CAPSULE_SIDEWAYS, R, facing=(1, 0, 0), pressure="elastic", nx=48,
-                          pitch=3e-4)
+    model, data = pressed(
+        CAPSULE_SIDEWAYS, R, facing=(1, 0, 0), pressure="elastic", nx=48, pitch=3e-4
+    )
     lay = mjtouch.layouts(model)["skin_tip"]
     force = lay.block(data.sensordata, "force")
     p = lay.block(data.sensordata, "pressure")

@@ -15,8 +15,9 @@ import mjtouch
 # the assets only (importing gymnasium_robotics registers every env)
 _SPEC = importlib.util.find_spec("gymnasium_robotics")
 assert _SPEC is not None, "Gymnasium-Robotics is missing: pip install -e '.[test]' (or [robots])"
-HAND_XML = (pathlib.Path(_SPEC.submodule_search_locations[0]) / "envs" / "assets" / "hand" /
-            "reach.xml")
+HAND_XML = (
+    pathlib.Path(_SPEC.submodule_search_locations[0]) / "envs" / "assets" / "hand" / "reach.xml"
+)
 FINGERS = ("ff", "mf", "rf", "lf", "th")
 PRESSED = ("ff", "mf", "rf", "th")  # lf stays free
 RL = dict(nx=65, pitch=2e-4, pressure="winkler")  # the bench's `rl` preset grid
@@ -56,11 +57,22 @@ def test_five_shadow_fingertips_report_mujocos_normal_force():
         x = R[:, 2]  # along the capsule: 8 mm of it, inside the 13 mm grid
         quat = np.zeros(4)
         mujoco.mju_mat2Quat(quat, np.column_stack([x, np.cross(n, x), n]).ravel())
-        spec.worldbody.add_geom(name=f"plate_{f}", type=mujoco.mjtGeom.mjGEOM_BOX,
-                                size=[4e-3, 8e-3, 2e-3], pos=centre, quat=quat)
+        spec.worldbody.add_geom(
+            name=f"plate_{f}",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[4e-3, 8e-3, 2e-3],
+            pos=centre,
+            quat=quat,
+        )
     for f in FINGERS:  # one call each: the body's one colliding geom, its pad side
-        mjtouch.attach(spec, body=f"robot0:{f}distal", name=f"skin_{f}", facing=facing[f],
-                       outputs="spikes force coverage", **RL)
+        mjtouch.attach(
+            spec,
+            body=f"robot0:{f}distal",
+            name=f"skin_{f}",
+            facing=facing[f],
+            outputs="spikes force coverage",
+            **RL,
+        )
     model = spec.compile()
     data = mujoco.MjData(model)
     data.qpos[:] = model.qpos0

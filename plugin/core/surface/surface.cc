@@ -112,13 +112,11 @@ double PadFootprintSemiAxis(const PadGeometry& pad) {
   if (!pad.rotated) return std::min(ax[0], ax[1]);
   // The shape's half extent along the skin's x and y axes (geom frame u).
   auto extent = [&](int column) {
-    const double u[3] = {pad.rotation[column], pad.rotation[3 + column],
-                         pad.rotation[6 + column]};
+    const double u[3] = {pad.rotation[column], pad.rotation[3 + column], pad.rotation[6 + column]};
     switch (pad.shape) {
       case PadShape::kBox:
         return std::abs(u[0]) * ax[0] + std::abs(u[1]) * ax[1] + std::abs(u[2]) * ax[2];
-      case PadShape::kCapsule:
-        return ax[0] + (ax[2] - ax[0]) * std::abs(u[2]);
+      case PadShape::kCapsule: return ax[0] + (ax[2] - ax[0]) * std::abs(u[2]);
       default:
         return std::sqrt(u[0] * u[0] * ax[0] * ax[0] + u[1] * u[1] * ax[1] * ax[1] +
                          u[2] * u[2] * ax[2] * ax[2]);
@@ -219,7 +217,10 @@ std::vector<double> SkinSurface(const TaxelGrid& grid, const PadGeometry& pad,
       for (int sx = -1; sx <= 1 && inside; sx += 2) {
         for (int sy = -1; sy <= 1; sy += 2) {
           double zz;
-          if (!shape(u + sx * g, v + sy * g, &zz)) { inside = false; break; }
+          if (!shape(u + sx * g, v + sy * g, &zz)) {
+            inside = false;
+            break;
+          }
           sum += zz;
         }
       }
