@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import itertools
 import json
 import os
 import subprocess
@@ -182,7 +181,7 @@ def sine_thresholds(ts) -> dict:
             st1, dy1, _ = unit.propagate(pop)
             dst, ddy = st1 - st0, dy1 - dy0  # per mm of sine amplitude
 
-            def counts(amps):
+            def counts(amps, pop=pop, st0=st0, dst=dst, dy0=dy0, ddy=ddy):
                 return _spike_counts(ts, pop, st0 + dst * amps, dy0 + ddy * amps)
 
             # linearity check against a full run at one amplitude
