@@ -524,8 +524,7 @@ def axis_sites(layout: SkinLayout, centre_m) -> str:
     pos = layout.positions_m.copy()
     for u in centred_units(layout, centre_m).values():
         pos[u, :2] = centre_m
-    return "; ".join(f"{c} {x:.17g} {y:.17g} {z:.17g}"
-                     for c, (x, y, z) in zip(layout.classes, pos))
+    return "; ".join(f"{c} {x:.17g} {y:.17g} {z:.17g}" for c, (x, y, z) in zip(layout.classes, pos))
 
 
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS

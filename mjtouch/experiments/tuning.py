@@ -419,11 +419,18 @@ PIN_SITES = "SA1 0 0 7.5e-4; RA 0 0 7.5e-4; PC 0 0 2e-3"
 PIN_AFFERENTS = {"noise": "0 0 0", "population": "uniform"}
 
 
-def pin_reference_stress(depths_m: Sequence[float], freqs_hz: Sequence[float],
-                         duration_s: float = 1.0, ramp_s: float = 0.05,
-                         preindent_m: float = 0.5e-3, ref_m: float = 10e-6,
-                         timestep_s: float = 1e-4, nx: int = 49, pitch_m: float = 1.5e-4,
-                         threads: int = 2) -> dict:
+def pin_reference_stress(
+    depths_m: Sequence[float],
+    freqs_hz: Sequence[float],
+    duration_s: float = 1.0,
+    ramp_s: float = 0.05,
+    preindent_m: float = 0.5e-3,
+    ref_m: float = 10e-6,
+    timestep_s: float = 1e-4,
+    nx: int = 49,
+    pitch_m: float = 1.5e-4,
+    threads: int = 2,
+) -> dict:
     """Receptor stress (Pa, one column per class) under the 1 mm pin:
     ramp-and-holds to each depth from first touch (``duration_s`` in all,
     ``ramp_s`` ramps), and per frequency a sine of 0 and of ``ref_m`` about
@@ -432,31 +439,46 @@ def pin_reference_stress(depths_m: Sequence[float], freqs_hz: Sequence[float],
     tip = scenes.Fingertip(nx=int(nx), pitch_m=pitch_m, ridges=False)
     skin = dict(PIN_AFFERENTS, sites=PIN_SITES)
     pin = stimuli.Probe("pin", radius_m=0.5e-3)
-    touch = stimuli.ProbeScene(pin, tip, preindent_m=0.0, settle_s=0.0, timestep_s=timestep_s,
-                               skin=skin)
+    touch = stimuli.ProbeScene(
+        pin, tip, preindent_m=0.0, settle_s=0.0, timestep_s=timestep_s, skin=skin
+    )
     hold = duration_s - 2 * ramp_s
-    ramps = touch.run([stimuli.ramp_and_hold(d, ramp_s=ramp_s, hold_s=hold, rest_s=0.0)
-                       for d in depths_m], threads=threads)
-    vib = stimuli.ProbeScene(pin, tip, preindent_m=preindent_m, settle_s=0.1,
-                             timestep_s=timestep_s, skin=skin)
+    ramps = touch.run(
+        [stimuli.ramp_and_hold(d, ramp_s=ramp_s, hold_s=hold, rest_s=0.0) for d in depths_m],
+        threads=threads,
+    )
+    vib = stimuli.ProbeScene(
+        pin, tip, preindent_m=preindent_m, settle_s=0.1, timestep_s=timestep_s, skin=skin
+    )
     # TouchSim's sines: linear ramps (its apply_ramp), sampled at every step
     t = np.arange(int(round(duration_s / timestep_s)) + 1) * timestep_s
     env = np.clip(np.minimum(t, duration_s - t) / ramp_s, 0, 1)
-    waves = [stimuli.trace(a * env * np.sin(2 * np.pi * f * t), timestep_s)
-             for f in freqs_hz for a in (0.0, ref_m)]
+    waves = [
+        stimuli.trace(a * env * np.sin(2 * np.pi * f * t), timestep_s)
+        for f in freqs_hz
+        for a in (0.0, ref_m)
+    ]
     sines = vib.run(waves, threads=threads)
     classes = list(touch.layout.classes)
     offaxis = np.hypot(*touch.layout.positions_m[:, :2].T)
-    return dict(classes=classes, offaxis_m=offaxis.tolist(), dt_s=touch.dt_s,
-                depths_m=[float(d) for d in depths_m], freqs_hz=[float(f) for f in freqs_hz],
-                preindent_m=preindent_m, ref_m=ref_m,
-                ramp=[r.stress for r in ramps],
-                sine={float(f): (sines[2 * i].stress, sines[2 * i + 1].stress)
-                      for i, f in enumerate(freqs_hz)})
+    return dict(
+        classes=classes,
+        offaxis_m=offaxis.tolist(),
+        dt_s=touch.dt_s,
+        depths_m=[float(d) for d in depths_m],
+        freqs_hz=[float(f) for f in freqs_hz],
+        preindent_m=preindent_m,
+        ref_m=ref_m,
+        ramp=[r.stress for r in ramps],
+        sine={
+            float(f): (sines[2 * i].stress, sines[2 * i + 1].stress) for i, f in enumerate(freqs_hz)
+        },
+    )
 
 
-def pin_reference_table(stress: dict, afferents: dict | None = None,
-                        scale_range=(1e-4, 45.0), iters: int = 24) -> dict:
+def pin_reference_table(
+    stress: dict, afferents: dict | None = None, scale_range=(1e-4, 45.0), iters: int = 24
+) -> dict:
     """From :func:`pin_reference_stress`, TouchSim's table for our receptors:
     whole-stimulus rates (Hz) of the ramp-and-holds, the stress mid-hold
     (kPa), and per frequency the absolute (>= 1 spike more than the
@@ -469,6 +491,7 @@ def pin_reference_table(stress: dict, afferents: dict | None = None,
     dt = stress["dt_s"]
     out = {}
     for r, c in enumerate(stress["classes"]):
+
         def count(q, c=c, r=r):
             return int(core.receptor_run(c, q, dt, cfg, stream=r)[0].sum())
 
@@ -481,8 +504,7 @@ def pin_reference_table(stress: dict, afferents: dict | None = None,
             q0, dq = q0[:, r], q1[:, r] - q0[:, r]
             rest = count(q0)
             dur = q0.size * dt
-            for key, need in (("absolute_um", rest + 1), ("entrainment_um",
-                                                         rest + 0.9 * f * dur)):
+            for key, need in (("absolute_um", rest + 1), ("entrainment_um", rest + 0.9 * f * dur)):
                 lo, hi = scale_range
                 if count(q0 + hi * dq) < need:
                     thr[key].append(math.inf)
