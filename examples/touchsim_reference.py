@@ -71,8 +71,9 @@ def _guvectorize(_types, signature, **_kw):
 
     def deco(fn):
         def wrapper(*args):
-            arrs = [np.asarray(a, dtype=float if np.asarray(a).dtype != bool else bool)
-                    for a in args]
+            arrs = [
+                np.asarray(a, dtype=float if np.asarray(a).dtype != bool else bool) for a in args
+            ]
             sizes, loops = {}, []
             for a, dims in zip(arrs, in_dims):
                 core = a.ndim - len(dims)
@@ -85,15 +86,25 @@ def _guvectorize(_types, signature, **_kw):
                 parts = []
                 for a, dims in zip(arrs, in_dims):
                     core = a.ndim - len(dims)
-                    sub = a[tuple(i if s > 1 else 0 for i, s in zip(idx[len(idx) - core:],
-                                                                 a.shape[:core]))] if core else a
+                    sub = (
+                        a[
+                            tuple(
+                                i if s > 1 else 0
+                                for i, s in zip(idx[len(idx) - core :], a.shape[:core])
+                            )
+                        ]
+                        if core
+                        else a
+                    )
                     sub = np.array(sub, copy=True)
                     parts.append(sub.reshape(1) if not dims else sub)
                 o = np.zeros(tuple(sizes[d] for d in out_dims) or (1,))
                 fn(*parts, o)
                 res[idx] = o if out_dims else o[0]
             return res
+
         return wrapper
+
     return deco
 
 
@@ -101,9 +112,11 @@ def load_touchsim(src: str) -> types.SimpleNamespace:
     """Import TouchSim's modules from its source tree with the shims above."""
     numba = types.ModuleType("numba")
     numba.guvectorize = _guvectorize
+
     class _Type:  # float64[:], boolean[:, :]: only read by numba
         def __getitem__(self, _):
             return self
+
     numba.float64 = numba.boolean = _Type()
     sys.modules.setdefault("numba", numba)
     for name in ("skimage", "skimage.measure", "skimage.morphology"):
@@ -121,7 +134,7 @@ def load_touchsim(src: str) -> types.SimpleNamespace:
         sys.modules["touchsim." + name] = mod
         code = open(path).read()
         if name == "surface":  # the hand outline needs skimage; unused on the sheet
-            code = code[:code.index("hand_surface = Surface(")] + "hand_surface = None\n"
+            code = code[: code.index("hand_surface = Surface(")] + "hand_surface = None\n"
         exec(compile(code, path, "exec"), mod.__dict__)
         mods[name] = mod
     return types.SimpleNamespace(**mods)
@@ -130,9 +143,12 @@ def load_touchsim(src: str) -> types.SimpleNamespace:
 def _population(ts, cls: str, depth_mm: float | None = None):
     n = ts.classes.Afferent.affparams[cls].shape[0]
     kw = {} if depth_mm is None else {"depth": depth_mm}
-    return ts.classes.AfferentPopulation(*[
-        ts.classes.Afferent(cls, idx=i, location=np.array([[0.0, 0.0]]), noisy=False, **kw)
-        for i in range(n)])
+    return ts.classes.AfferentPopulation(
+        *[
+            ts.classes.Afferent(cls, idx=i, location=np.array([[0.0, 0.0]]), noisy=False, **kw)
+            for i in range(n)
+        ]
+    )
 
 
 def _median(v):
@@ -140,11 +156,11 @@ def _median(v):
 
 
 def ramp_table(ts) -> dict:
-    out = {c: {"rates_hz": [], "stress_kpa": [], "stress_kpa_mjtouch_depth": []}
-           for c in CLASSES}
+    out = {c: {"rates_hz": [], "stress_kpa": [], "stress_kpa_mjtouch_depth": []} for c in CLASSES}
     for depth in DEPTHS_MM:
-        s = ts.generators.stim_ramp(amp=depth, len=DURATION_S, ramp_len=RAMP_S, fs=FS_HZ,
-                                    pin_radius=PIN_RADIUS_MM)
+        s = ts.generators.stim_ramp(
+            amp=depth, len=DURATION_S, ramp_len=RAMP_S, fs=FS_HZ, pin_radius=PIN_RADIUS_MM
+        )
         hold = int(round(DURATION_S / 2 * FS_HZ))  # mid-hold sample
         for c in CLASSES:
             pop = _population(ts, c)
@@ -167,17 +183,30 @@ def _spike_counts(ts, pop, stat, dyn):
 
 def sine_thresholds(ts) -> dict:
     out = {c: {"absolute_um": [], "entrainment_um": []} for c in CLASSES}
-    base = ts.generators.stim_sine(freq=10.0, amp=0.0, len=DURATION_S, ramp_len=RAMP_S,
-                                   fs=FS_HZ, pin_radius=PIN_RADIUS_MM, pre_indent=PREINDENT_MM)
+    base = ts.generators.stim_sine(
+        freq=10.0,
+        amp=0.0,
+        len=DURATION_S,
+        ramp_len=RAMP_S,
+        fs=FS_HZ,
+        pin_radius=PIN_RADIUS_MM,
+        pre_indent=PREINDENT_MM,
+    )
     for c in CLASSES:
         pop = _population(ts, c)
         n = len(pop)
         st0, dy0, _ = base.propagate(pop)
         rest = _spike_counts(ts, pop, st0, dy0)
         for f in FREQS_HZ:
-            unit = ts.generators.stim_sine(freq=f, amp=1.0, len=DURATION_S, ramp_len=RAMP_S,
-                                           fs=FS_HZ, pin_radius=PIN_RADIUS_MM,
-                                           pre_indent=PREINDENT_MM)
+            unit = ts.generators.stim_sine(
+                freq=f,
+                amp=1.0,
+                len=DURATION_S,
+                ramp_len=RAMP_S,
+                fs=FS_HZ,
+                pin_radius=PIN_RADIUS_MM,
+                pre_indent=PREINDENT_MM,
+            )
             st1, dy1, _ = unit.propagate(pop)
             dst, ddy = st1 - st0, dy1 - dy0  # per mm of sine amplitude
 
@@ -186,14 +215,22 @@ def sine_thresholds(ts) -> dict:
 
             # linearity check against a full run at one amplitude
             a_chk = 0.01
-            full = ts.generators.stim_sine(freq=f, amp=a_chk, len=DURATION_S, ramp_len=RAMP_S,
-                                           fs=FS_HZ, pin_radius=PIN_RADIUS_MM,
-                                           pre_indent=PREINDENT_MM)
+            full = ts.generators.stim_sine(
+                freq=f,
+                amp=a_chk,
+                len=DURATION_S,
+                ramp_len=RAMP_S,
+                fs=FS_HZ,
+                pin_radius=PIN_RADIUS_MM,
+                pre_indent=PREINDENT_MM,
+            )
             stf, dyf, _ = full.propagate(pop)
             assert np.allclose(stf, st0 + dst * a_chk, rtol=1e-9, atol=1e-12)
             assert np.allclose(dyf, dy0 + ddy * a_chk, rtol=1e-9, atol=1e-9)
-            for crit, need in (("absolute", rest + 1), ("entrainment",
-                                                         np.full(n, 0.9 * f * DURATION_S))):
+            for crit, need in (
+                ("absolute", rest + 1),
+                ("entrainment", np.full(n, 0.9 * f * DURATION_S)),
+            ):
                 lo = np.full(n, AMP_RANGE_MM[0])
                 hi = np.full(n, AMP_RANGE_MM[1])
                 ok_hi = counts(hi) >= need
@@ -204,8 +241,15 @@ def sine_thresholds(ts) -> dict:
                     lo = np.where(ok, lo, mid)
                 thr = np.where(ok_hi, hi * 1e3, np.inf)  # um; inf: not reached
                 out[c][f"{crit}_um"].append([float(x) for x in thr])
-            print(c, f, "abs", np.round(out[c]["absolute_um"][-1], 4),
-                  "ent", np.round(out[c]["entrainment_um"][-1], 3), flush=True)
+            print(
+                c,
+                f,
+                "abs",
+                np.round(out[c]["absolute_um"][-1], 4),
+                "ent",
+                np.round(out[c]["entrainment_um"][-1], 3),
+                flush=True,
+            )
         for crit in ("absolute", "entrainment"):
             out[c][f"{crit}_median_um"] = [_median(t) for t in out[c][f"{crit}_um"]]
         out[c]["rest_spikes"] = [int(x) for x in rest]
@@ -215,37 +259,60 @@ def sine_thresholds(ts) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("touchsim", help="hsaal/touchsim source tree (git archive of a commit)")
-    ap.add_argument("--commit", help="the commit the tree was archived from "
-                    "(default: git rev-parse HEAD in the tree, if it is a work tree)")
+    ap.add_argument(
+        "--commit",
+        help="the commit the tree was archived from "
+        "(default: git rev-parse HEAD in the tree, if it is a work tree)",
+    )
     ap.add_argument("--out", default="tests/data/touchsim_reference.json")
     ap.add_argument("--skip-sines", action="store_true")
     a = ap.parse_args()
     commit = a.commit
     if commit is None:
-        commit = subprocess.run(["git", "-C", a.touchsim, "rev-parse", "HEAD"],
-                                capture_output=True, text=True).stdout.strip() or "unknown"
+        commit = (
+            subprocess.run(
+                ["git", "-C", a.touchsim, "rev-parse", "HEAD"], capture_output=True, text=True
+            ).stdout.strip()
+            or "unknown"
+        )
     ts = load_touchsim(a.touchsim)
     ramp = ramp_table(ts)
     for c in CLASSES:
-        print(c, "median", ramp[c]["median_hz"], "stress kPa", np.round(ramp[c]["stress_kpa"], 2),
-              flush=True)
+        print(
+            c,
+            "median",
+            ramp[c]["median_hz"],
+            "stress kPa",
+            np.round(ramp[c]["stress_kpa"], 2),
+            flush=True,
+        )
     res = dict(
-        source="hsaal/touchsim", commit=commit,
+        source="hsaal/touchsim",
+        commit=commit,
         command="python examples/touchsim_reference.py " + " ".join(sys.argv[1:]),
         shims="numba.guvectorize as a Python loop; skimage stubbed; hand_surface skipped",
-        pin_radius_mm=PIN_RADIUS_MM, fs_hz=FS_HZ, ramp_s=RAMP_S, duration_s=DURATION_S,
-        afferent_depth_mm=dict(ts.constants.affdepths), noisy=False,
+        pin_radius_mm=PIN_RADIUS_MM,
+        fs_hz=FS_HZ,
+        ramp_s=RAMP_S,
+        duration_s=DURATION_S,
+        afferent_depth_mm=dict(ts.constants.affdepths),
+        noisy=False,
         median="median over the class's fitted afferents (4 SA1, 9 RA, 4 PC) of each value",
         ramp_and_hold=dict(depths_mm=list(DEPTHS_MM), **ramp),
         stress_note="static vertical stress s_z (Sneddon flat punch, E 50 kPa, nu 0.4) "
-                    "mid-hold, kPa; at TouchSim's class depth and at mjtouch's",
-        mjtouch_depth_mm=MJTOUCH_DEPTH_MM)
+        "mid-hold, kPa; at TouchSim's class depth and at mjtouch's",
+        mjtouch_depth_mm=MJTOUCH_DEPTH_MM,
+    )
     if not a.skip_sines:
-        res["sines"] = dict(freqs_hz=list(FREQS_HZ), preindent_mm=PREINDENT_MM,
-                            absolute="spikes in 1 s >= the pre-indentation's + 1",
-                            entrainment="spikes in 1 s >= 0.9 f",
-                            amplitude_range_mm=list(AMP_RANGE_MM),
-                            bisection_steps=BISECTION_STEPS, **sine_thresholds(ts))
+        res["sines"] = dict(
+            freqs_hz=list(FREQS_HZ),
+            preindent_mm=PREINDENT_MM,
+            absolute="spikes in 1 s >= the pre-indentation's + 1",
+            entrainment="spikes in 1 s >= 0.9 f",
+            amplitude_range_mm=list(AMP_RANGE_MM),
+            bisection_steps=BISECTION_STEPS,
+            **sine_thresholds(ts),
+        )
     os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
     with open(a.out, "w") as fh:
         json.dump(res, fh, indent=1)
