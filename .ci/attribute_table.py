@@ -4,6 +4,7 @@ table (plugin/core/pipeline/attributes.cc), between marker comments:
     python .ci/attribute_table.py --check   # exit 1 with a diff if README differs
     python .ci/attribute_table.py --write   # rewrite README's section
 (tests/unit/test_attribute_table.py runs the check.)"""
+
 import difflib
 import pathlib
 import sys
@@ -16,6 +17,7 @@ END = "<!-- end of attribute table -->"
 def generated() -> str:
     """The markdown table built from the plugin's attribute rows."""
     from mjtouch import _core
+
     return _core.attribute_table_markdown()
 
 
@@ -29,9 +31,14 @@ def diff() -> str:
     """A unified diff from README's section to the generated table ('' if equal)."""
     text = README.read_text()
     start, end = readme_section(text)
-    return "".join(difflib.unified_diff(
-        text[start:end].splitlines(keepends=True), generated().splitlines(keepends=True),
-        "plugin/README.md (attribute table)", "generated from attributes.cc"))
+    return "".join(
+        difflib.unified_diff(
+            text[start:end].splitlines(keepends=True),
+            generated().splitlines(keepends=True),
+            "plugin/README.md (attribute table)",
+            "generated from attributes.cc",
+        )
+    )
 
 
 def write() -> None:

@@ -6,6 +6,7 @@ bit for bit across refactors:
 (a rounding-level change: compare prints, per sensordata block, the largest
 difference over each channel's largest value, and the spike totals).
 Press 0.5 N from t = 0, slide at 40 mm/s from t = 0.1 s."""
+
 import pathlib
 import sys
 
@@ -18,6 +19,7 @@ def record(out):
     import mujoco
 
     import mjtouch  # noqa: F401  (registers the plugin)
+
     models = pathlib.Path(__file__).resolve().parents[1] / "models"
     arrays = {}
     for name in SCENES:
@@ -51,6 +53,7 @@ def _block_differences(name, x, y):
     import mujoco
 
     from mjtouch.sensor import SkinLayout
+
     models = pathlib.Path(__file__).resolve().parents[1] / "models"
     layout = SkinLayout.from_model(mujoco.MjModel.from_xml_path(str(models / f"{name}.xml")))
     out = []
@@ -58,12 +61,16 @@ def _block_differences(name, x, y):
         a = np.stack([layout.block(r, block) for r in x])
         b = np.stack([layout.block(r, block) for r in y])
         if block == "spikes":
-            out.append(f"spikes {a.sum():.0f} -> {b.sum():.0f} ({int((a != b).sum())} entries differ)")
+            out.append(
+                f"spikes {a.sum():.0f} -> {b.sum():.0f} ({int((a != b).sum())} entries differ)"
+            )
             continue
         scale = np.abs(a).max(axis=0)
         scale[scale == 0] = 1.0
         rel = (np.abs(a - b) / scale).max(axis=0)
-        out.append(f"{block}: max {rel.max():.1e}, median {np.median(rel):.1e} of each channel's largest")
+        out.append(
+            f"{block}: max {rel.max():.1e}, median {np.median(rel):.1e} of each channel's largest"
+        )
     return out
 
 

@@ -91,9 +91,10 @@ def accuracy(name: str, start, steps: int) -> dict:
     """Iterations and errors of each solver against the tight reference."""
     out = {}
     traces = {}
-    for label, skin in (("ref", dict(contact_solver="pk", tolerance="1e-8",
-                                     elastic_precision="double")),
-                        *SOLVERS.items()):
+    for label, skin in (
+        ("ref", dict(contact_solver="pk", tolerance="1e-8", elastic_precision="double")),
+        *SOLVERS.items(),
+    ):
         run = make_run(name, start, steps, outputs="force pressure", **skin)
         layout = SkinLayout.from_model(run.model)
         mujoco.mj_setState(run.model, run.data, run.state0, _FULL)
@@ -113,9 +114,13 @@ def accuracy(name: str, start, steps: int) -> dict:
     p_ref, d_ref, _ = traces["ref"]
     for s in SOLVERS:
         p, d, its = traces[s]
-        out[s] = dict(iterations_median=float(np.median(its)), iterations_max=int(its.max()),
-                      pressure_rms_rel=float(np.sqrt(((p - p_ref) ** 2).sum() / (p_ref ** 2).sum())),
-                      depth_max_abs_m=float(np.abs(d - d_ref).max()), fft_grid=out[s + "_grid"])
+        out[s] = dict(
+            iterations_median=float(np.median(its)),
+            iterations_max=int(its.max()),
+            pressure_rms_rel=float(np.sqrt(((p - p_ref) ** 2).sum() / (p_ref**2).sum())),
+            depth_max_abs_m=float(np.abs(d - d_ref).max()),
+            fft_grid=out[s + "_grid"],
+        )
     out["ref_iterations_median"] = float(np.median(traces["ref"][2]))
     return out
 
@@ -123,11 +128,17 @@ def accuracy(name: str, start, steps: int) -> dict:
 def timing(name: str, start, steps: int, rounds: int) -> dict:
     # winkler (the fast model) in the same rounds: a yardstick for the
     # machine's load, against the issue's quiet-machine figures
-    runs = {(s, stage): make_run(name, start, steps,
-                                 **({"pressure": "winkler"} if s == "winkler"
-                                    else SOLVERS[s]),
-                                 **({"outputs": "force"} if stage == "stages 1-2" else {}))
-            for s in (*SOLVERS, "winkler") for stage in ("stages 1-2", "full")}
+    runs = {
+        (s, stage): make_run(
+            name,
+            start,
+            steps,
+            **({"pressure": "winkler"} if s == "winkler" else SOLVERS[s]),
+            **({"outputs": "force"} if stage == "stages 1-2" else {}),
+        )
+        for s in (*SOLVERS, "winkler")
+        for stage in ("stages 1-2", "full")
+    }
     times = {k: [] for k in runs}
     last = {}
     for _ in range(rounds):  # interleaved: a load change hits every configuration alike
@@ -169,11 +180,24 @@ def thread_timing(name: str, start, steps: int, rounds: int, threads: int) -> di
     """pcg float (and the Winkler full step) with threads 1 and `threads`:
     (cpu, wall) us/step lists per (threads, stage), and the free-cores
     yardstick per round."""
-    runs = {(t, stage): make_run(name, start, steps, **SOLVERS["pcg float"], threads=str(t),
-                                 **({"outputs": "force"} if stage == "stages 1-2" else {}))
-            for t in (1, threads) for stage in ("stages 1-2", "full")}
-    runs.update({(t, "winkler"): make_run(name, start, steps, pressure="winkler", threads=str(t))
-                 for t in (1, threads)})
+    runs = {
+        (t, stage): make_run(
+            name,
+            start,
+            steps,
+            **SOLVERS["pcg float"],
+            threads=str(t),
+            **({"outputs": "force"} if stage == "stages 1-2" else {}),
+        )
+        for t in (1, threads)
+        for stage in ("stages 1-2", "full")
+    }
+    runs.update(
+        {
+            (t, "winkler"): make_run(name, start, steps, pressure="winkler", threads=str(t))
+            for t in (1, threads)
+        }
+    )
     out = {k: [] for k in runs}
     yard = []
     for _ in range(rounds):
@@ -181,8 +205,9 @@ def thread_timing(name: str, start, steps: int, rounds: int, threads: int) -> di
         for k, run in runs.items():
             t0, c0 = time.perf_counter(), time.process_time()
             run.step(steps)
-            out[k].append(((time.process_time() - c0) / steps * 1e6,
-                           (time.perf_counter() - t0) / steps * 1e6))
+            out[k].append(
+                ((time.process_time() - c0) / steps * 1e6, (time.perf_counter() - t0) / steps * 1e6)
+            )
     return out, yard
 
 
@@ -196,13 +221,17 @@ def main() -> None:
         start = settled(name)
         acc = accuracy(name, start, args.steps)
         t = timing(name, start, args.steps, args.rounds)
-        print(f"{name} ({args.steps} steps; reference pk at tolerance 1e-8: "
-              f"{acc['ref_iterations_median']:.0f} median iterations)")
+        print(
+            f"{name} ({args.steps} steps; reference pk at tolerance 1e-8: "
+            f"{acc['ref_iterations_median']:.0f} median iterations)"
+        )
         for s in SOLVERS:
             a = acc[s]
-            print(f"  {s:10s} iterations median {a['iterations_median']:5.1f} max "
-                  f"{a['iterations_max']:3d}  pressure rms rel {a['pressure_rms_rel']:.2e}  "
-                  f"depth max |diff| {a['depth_max_abs_m']:.2e} m  FFT grid {a['fft_grid'][0]}x{a['fft_grid'][1]}")
+            print(
+                f"  {s:10s} iterations median {a['iterations_median']:5.1f} max "
+                f"{a['iterations_max']:3d}  pressure rms rel {a['pressure_rms_rel']:.2e}  "
+                f"depth max |diff| {a['depth_max_abs_m']:.2e} m  FFT grid {a['fft_grid'][0]}x{a['fft_grid'][1]}"
+            )
             for stage in ("stages 1-2", "full"):
                 lo, med = t[s, stage]
                 print(f"             {stage:10s} us/step min {lo:8.1f} median {med:8.1f}")
@@ -213,23 +242,32 @@ def main() -> None:
             for stage in ("stages 1-2", "full"):
                 r_min = t[base, stage][0] / t["pcg float", stage][0]
                 r_med = t[base, stage][1] / t["pcg float", stage][1]
-                print(f"  ratio {base} / pcg float {stage:10s}: min {r_min:.2f}x  "
-                      f"median {r_med:.2f}x")
-        print(f"  iterations pk / pcg float: "
-              f"{acc['pk']['iterations_median'] / acc['pcg float']['iterations_median']:.2f}x")
+                print(
+                    f"  ratio {base} / pcg float {stage:10s}: min {r_min:.2f}x  median {r_med:.2f}x"
+                )
+        print(
+            f"  iterations pk / pcg float: "
+            f"{acc['pk']['iterations_median'] / acc['pcg float']['iterations_median']:.2f}x"
+        )
         tt, yard = thread_timing(name, start, args.steps, args.rounds, args.threads)
-        print(f"  pcg float, threads 1 / {args.threads} (free-cores yardstick min "
-              f"{min(yard):.2f} median {np.median(yard):.2f} max {max(yard):.2f})")
+        print(
+            f"  pcg float, threads 1 / {args.threads} (free-cores yardstick min "
+            f"{min(yard):.2f} median {np.median(yard):.2f} max {max(yard):.2f})"
+        )
         for stage in ("stages 1-2", "full", "winkler"):
             for t in (1, args.threads):
                 c = [a for a, _ in tt[t, stage]]
                 w = [b for _, b in tt[t, stage]]
-                print(f"    threads {t} {stage:10s} us/step cpu min {min(c):7.1f} median "
-                      f"{np.median(c):7.1f}  wall min {min(w):7.1f} median {np.median(w):7.1f}")
+                print(
+                    f"    threads {t} {stage:10s} us/step cpu min {min(c):7.1f} median "
+                    f"{np.median(c):7.1f}  wall min {min(w):7.1f} median {np.median(w):7.1f}"
+                )
             w1 = [b for _, b in tt[1, stage]]
             wn = [b for _, b in tt[args.threads, stage]]
-            print(f"    wall threads 1 / {args.threads} {stage:10s}: min {min(w1) / min(wn):.2f}x  "
-                  f"median {np.median(w1) / np.median(wn):.2f}x")
+            print(
+                f"    wall threads 1 / {args.threads} {stage:10s}: min {min(w1) / min(wn):.2f}x  "
+                f"median {np.median(w1) / np.median(wn):.2f}x"
+            )
 
 
 if __name__ == "__main__":

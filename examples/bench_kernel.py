@@ -88,14 +88,17 @@ def load_baseline_core(path):
     state = api.PyInterpreterState_GetDict(api.PyInterpreterState_Get())
     ours = {k: v for k, v in state.items() if isinstance(k, str) and k.startswith("__nb_internals")}
     if not ours:
-        raise RuntimeError("nanobind's state not found where expected (nanobind >= 2 keeps it "
-                           "in the interpreter's dict): cannot load a baseline build")
+        raise RuntimeError(
+            "nanobind's state not found where expected (nanobind >= 2 keeps it "
+            "in the interpreter's dict): cannot load a baseline build"
+        )
     for k in ours:
         del state[k]
     try:
         loader = importlib.machinery.ExtensionFileLoader("mjtouch_baseline._core", str(path))
         module = importlib.util.module_from_spec(
-            importlib.util.spec_from_loader("mjtouch_baseline._core", loader))
+            importlib.util.spec_from_loader("mjtouch_baseline._core", loader)
+        )
         loader.exec_module(module)
     finally:
         for k in [k for k in state if isinstance(k, str) and k.startswith("__nb_internals")]:
@@ -124,8 +127,11 @@ def scene_stage(name: str, baseline=None):
     spec = mujoco.MjSpec.from_file(str(path))
     for s in spec.sensors:  # the shipped models embed the config in <sensor><plugin>
         if s.type == mujoco.mjtSensor.mjSENS_PLUGIN:
-            s.plugin.config = {**dict(s.plugin.config), "pressure": "winkler",
-                               "outputs": "force pressure stress"}
+            s.plugin.config = {
+                **dict(s.plugin.config),
+                "pressure": "winkler",
+                "outputs": "force pressure stress",
+            }
     model = spec.compile()
     data = mujoco.MjData(model)
     for row in scenes.controls(scenes.Protocol(), LEAD_IN_S):
@@ -141,18 +147,35 @@ def scene_stage(name: str, baseline=None):
     depths = sorted(set(pos[:, 2]))
     depth_index = np.array([depths.index(z) for z in pos[:, 2]])
     comps = [SZZ if lay.quantity[str(c)] == "szz" else ALL for c in lay.classes]
-    e = core.StressEngine(core.LayeredSkin(), n, pitch, depths, ij, depth_index=depth_index,
-                          components=comps, method="direct")
+    e = core.StressEngine(
+        core.LayeredSkin(),
+        n,
+        pitch,
+        depths,
+        ij,
+        depth_index=depth_index,
+        components=comps,
+        method="direct",
+    )
     if baseline is not None:  # the same engine on another build's _core
         with using_core(baseline):
-            e.baseline = core.StressEngine(core.LayeredSkin(), n, pitch, depths, ij,
-                                           depth_index=depth_index, components=comps,
-                                           method="direct")
+            e.baseline = core.StressEngine(
+                core.LayeredSkin(),
+                n,
+                pitch,
+                depths,
+                ij,
+                depth_index=depth_index,
+                components=comps,
+                method="direct",
+            )
     counts = {c: int((lay.classes == c).sum()) for c in ("SA1", "RA", "PC")}
     macs = sum(len(c) for c in comps) * int((p > 0).sum())
-    desc = (f"{name}: {f[0]:.3f} N normal, {int((p > 0).sum())} active cells of {n}x{n} at "
-            f"{pitch * 1e3:.2g} mm; {len(ij)} receptors {counts}, quantities {lay.quantity}; "
-            f"{macs / 1e6:.2f} M multiply-adds per step on the folded path")
+    desc = (
+        f"{name}: {f[0]:.3f} N normal, {int((p > 0).sum())} active cells of {n}x{n} at "
+        f"{pitch * 1e3:.2g} mm; {len(ij)} receptors {counts}, quantities {lay.quantity}; "
+        f"{macs / 1e6:.2f} M multiply-adds per step on the folded path"
+    )
     szz = np.array([c is SZZ for c in comps])
     return e, p, ratio, desc, lay.block(data.sensordata, "stress").copy(), szz
 
@@ -181,8 +204,16 @@ def engine(skin, n, pitch, ij, cls):
     shares its forward transforms as in the plugin)."""
     depth_index = np.where(cls == 2, 1, 0)
     comps = [ALL if c == 0 else SZZ for c in cls]
-    return core.StressEngine(skin, n, pitch, [0.75e-3, 2.0e-3], ij, depth_index=depth_index,
-                             components=comps, method="fft")
+    return core.StressEngine(
+        skin,
+        n,
+        pitch,
+        [0.75e-3, 2.0e-3],
+        ij,
+        depth_index=depth_index,
+        components=comps,
+        method="fft",
+    )
 
 
 def calibrate(n, pitch, ij, p, qx, qy, repeats):
@@ -190,8 +221,9 @@ def calibrate(n, pitch, ij, p, qx, qy, repeats):
     seconds per multiply-add (direct), per N^2 log2(N^2) of one 2D transform,
     and per N^2 x load of one output pair's spectral products (FFT)."""
     e1 = core.StressEngine(0.48, n, pitch, [0.75e-3], ij, components=SZZ, method="fft")
-    e2 = core.StressEngine(0.48, n, pitch, [0.75e-3, 2e-3], ij,
-                           depth_index=np.arange(len(ij)) % 2, method="fft")
+    e2 = core.StressEngine(
+        0.48, n, pitch, [0.75e-3, 2e-3], ij, depth_index=np.arange(len(ij)) % 2, method="fft"
+    )
     _, t1, _, _ = e1.stress(p, method="fft", repeats=repeats, timing=True)
     _, t2, _, _ = e2.stress(p, qx, qy, method="fft", repeats=repeats, timing=True)
     _, td, _, active = e2.stress(p, qx, qy, method="direct", repeats=repeats, timing=True)
@@ -201,15 +233,19 @@ def calibrate(n, pitch, ij, p, qx, qy, repeats):
     # t2 = a (2 forward + 6 pairs) P + b (6 pairs x 3 loads) Q
     a, b = np.linalg.solve([[2 * P, Q], [8 * P, 18 * Q]], [t1, t2])
     c = td / (len(ij) * 6 * 3 * active)
-    print(f"cost model fit (N = {N}): kDirectSecondsPerMac = {c:.3g}, kFftSecondsPerPoint = "
-          f"{a:.3g}, kMulSecondsPerPoint = {b:.3g}")
+    print(
+        f"cost model fit (N = {N}): kDirectSecondsPerMac = {c:.3g}, kFftSecondsPerPoint = "
+        f"{a:.3g}, kMulSecondsPerPoint = {b:.3g}"
+    )
     # Folded path (stress_fold_plan.cc): its two constants (sums, fold) in a fixed
     # ratio; the measured / modelled time scales both.
     slip = (float(qx.sum() / p.sum()), float(qy.sum() / p.sum()))
     _, tf, _, _ = e2.stress(p, qx, qy, method="direct", repeats=repeats, timing=True, slip=slip)
     model = e2.estimated_cost(active, True, folded=True)[0]
-    print(f"folded path: measured {tf * 1e6:.1f} us, model {model * 1e6:.1f} us: scale "
-          f"kFoldedSecondsPerMac and kFoldSecondsPerCell by {tf / model:.2f}")
+    print(
+        f"folded path: measured {tf * 1e6:.1f} us, model {model * 1e6:.1f} us: scale "
+        f"kFoldedSecondsPerMac and kFoldSecondsPerCell by {tf / model:.2f}"
+    )
 
 
 def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
@@ -220,10 +256,12 @@ def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
     memory layout before #13 (fold_legacy: unaligned table loads; the same
     bits), and folded on `threads` threads. Prints min / median per call (CPU
     time on one thread, wall time on several) and the ratios."""
-    paths = {"reference": dict(fold=False, threads=1),
-             "folded (legacy layout)": dict(fold=True, threads=1, fold_legacy=True),
-             "folded": dict(fold=True, threads=1),
-             f"folded+{threads}threads": dict(fold=True, threads=threads)}
+    paths = {
+        "reference": dict(fold=False, threads=1),
+        "folded (legacy layout)": dict(fold=True, threads=1, fold_legacy=True),
+        "folded": dict(fold=True, threads=1),
+        f"folded+{threads}threads": dict(fold=True, threads=threads),
+    }
     base = getattr(e, "baseline", None)
     if base is not None:  # another build's folded path (load_baseline_core)
         paths["folded (baseline build)"] = dict(fold=True, threads=1)
@@ -243,8 +281,9 @@ def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
             # also counts waiting for a core); more: wall time
             eng = base if name == "folded (baseline build)" else e
             c0 = time.process_time()
-            outs[name], t, _, _ = eng.stress(p, slip=ratio, method="direct", repeats=repeats,
-                                             timing=True, **kw)
+            outs[name], t, _, _ = eng.stress(
+                p, slip=ratio, method="direct", repeats=repeats, timing=True, **kw
+            )
             if kw["threads"] == 1:
                 t = (time.process_time() - c0) / repeats
             times[name].append(t)
@@ -254,24 +293,32 @@ def folded_stage(e, p, ratio, rounds: int, repeats: int, threads: int):
     for name, ts in times.items():
         d = outs[name] - ref
         rms = math.sqrt(float((d**2).sum() / (ref**2).sum()))
-        print(f"  {name:22s} min {min(ts) * 1e6:8.1f} us  median {np.median(ts) * 1e6:8.1f} us"
-              f"  | rel. RMS vs reference {rms:.1e}")
-    r = {k: (min(times["reference"]) / min(v), np.median(times["reference"]) / np.median(v))
-         for k, v in times.items()}
+        print(
+            f"  {name:22s} min {min(ts) * 1e6:8.1f} us  median {np.median(ts) * 1e6:8.1f} us"
+            f"  | rel. RMS vs reference {rms:.1e}"
+        )
+    r = {
+        k: (min(times["reference"]) / min(v), np.median(times["reference"]) / np.median(v))
+        for k, v in times.items()
+    }
     f1, ft, fl = "folded", f"folded+{threads}threads", "folded (legacy layout)"
-    print(f"  ratios (min / median): reference / folded {r[f1][0]:.2f} / {r[f1][1]:.2f}, "
-          f"reference / {ft} {r[ft][0]:.2f} / {r[ft][1]:.2f}, folded / {ft} "
-          f"{min(times[f1]) / min(times[ft]):.2f} / "
-          f"{np.median(times[f1]) / np.median(times[ft]):.2f}, legacy layout / folded "
-          f"{min(times[fl]) / min(times[f1]):.2f} / "
-          f"{np.median(times[fl]) / np.median(times[f1]):.2f}")
+    print(
+        f"  ratios (min / median): reference / folded {r[f1][0]:.2f} / {r[f1][1]:.2f}, "
+        f"reference / {ft} {r[ft][0]:.2f} / {r[ft][1]:.2f}, folded / {ft} "
+        f"{min(times[f1]) / min(times[ft]):.2f} / "
+        f"{np.median(times[f1]) / np.median(times[ft]):.2f}, legacy layout / folded "
+        f"{min(times[fl]) / min(times[f1]):.2f} / "
+        f"{np.median(times[fl]) / np.median(times[f1]):.2f}"
+    )
     if base is not None:
         fb = "folded (baseline build)"
         paired = np.median(np.array(times[fb]) / np.array(times[f1]))
-        print(f"  baseline build / this build (folded, one thread): min "
-              f"{min(times[fb]) / min(times[f1]):.3f}, median "
-              f"{np.median(times[fb]) / np.median(times[f1]):.3f}, median of rounds {paired:.3f}; "
-              f"same bits: {np.array_equal(outs[fb], outs[f1])}")
+        print(
+            f"  baseline build / this build (folded, one thread): min "
+            f"{min(times[fb]) / min(times[f1]):.3f}, median "
+            f"{np.median(times[fb]) / np.median(times[f1]):.3f}, median of rounds {paired:.3f}; "
+            f"same bits: {np.array_equal(outs[fb], outs[f1])}"
+        )
     return times
 
 
@@ -281,14 +328,20 @@ def main(argv=None):
     ap.add_argument("--receptors", type=int, default=250)
     ap.add_argument("--repeats", type=int, default=200)
     ap.add_argument("--calibrate", action="store_true", help="fit the cost model's constants")
-    ap.add_argument("--stage-only", action="store_true",
-                    help="only the stress stage by path: reference / folded / folded+threads")
+    ap.add_argument(
+        "--stage-only",
+        action="store_true",
+        help="only the stress stage by path: reference / folded / folded+threads",
+    )
     ap.add_argument("--threads", type=int, default=2, help="threads for folded+threads")
     ap.add_argument("--rounds", type=int, default=15, help="interleaved rounds (stage table)")
     ap.add_argument("--scene", help="only the stage table, on models/SCENE.xml's own stage")
-    ap.add_argument("--baseline-core", metavar="PATH",
-                    help="with --scene: also time another build's mjtouch._core (a copy of its "
-                         "_core*.so) in this process, interleaved")
+    ap.add_argument(
+        "--baseline-core",
+        metavar="PATH",
+        help="with --scene: also time another build's mjtouch._core (a copy of its "
+        "_core*.so) in this process, interleaved",
+    )
     args = ap.parse_args(argv)
 
     if args.baseline_core and not args.scene:
@@ -297,8 +350,10 @@ def main(argv=None):
         base = load_baseline_core(args.baseline_core) if args.baseline_core else None
         e, p, ratio, desc, _, _ = scene_stage(args.scene, base)
         print(desc)
-        print(f"stress stage, slip ratio ({ratio[0]:.3f}, {ratio[1]:.2g}), {args.rounds} "
-              f"interleaved rounds of {max(1, args.repeats // 20)} calls:")
+        print(
+            f"stress stage, slip ratio ({ratio[0]:.3f}, {ratio[1]:.2g}), {args.rounds} "
+            f"interleaved rounds of {max(1, args.repeats // 20)} calls:"
+        )
         folded_stage(e, p, ratio, args.rounds, max(1, args.repeats // 20), args.threads)
         return
 
@@ -306,17 +361,27 @@ def main(argv=None):
     n, pitch = tip.nx, tip.pitch_m
     qx, qy = (p * ratio[0]).astype(np.float32), (p * ratio[1]).astype(np.float32)
     ij, cls = sites(n, pitch, args.receptors)
-    print(f"contact: {f[0]:.3f} N normal, {math.hypot(f[1], f[2]):.3f} N tangential, "
-          f"{int((p > 0).sum())} active cells of {n}x{n} at {pitch * 1e3:.2g} mm; "
-          f"{len(ij)} receptors (SA1 {int((cls == 0).sum())}, RA {int((cls == 1).sum())}, "
-          f"PC {int((cls == 2).sum())})")
+    print(
+        f"contact: {f[0]:.3f} N normal, {math.hypot(f[1], f[2]):.3f} N tangential, "
+        f"{int((p > 0).sum())} active cells of {n}x{n} at {pitch * 1e3:.2g} mm; "
+        f"{len(ij)} receptors (SA1 {int((cls == 0).sum())}, RA {int((cls == 1).sum())}, "
+        f"PC {int((cls == 2).sum())})"
+    )
 
     if args.calibrate:
         calibrate(n, pitch, ij, p, qx, qy, args.repeats)
-    print(f"stress stage, layered skin, slip ratio ({ratio[0]:.3f}, {ratio[1]:.2g}), "
-          f"{args.rounds} interleaved rounds of {max(1, args.repeats // 20)} calls:")
-    folded_stage(engine(core.LayeredSkin(), n, pitch, ij, cls), p, ratio, args.rounds,
-                 max(1, args.repeats // 20), args.threads)
+    print(
+        f"stress stage, layered skin, slip ratio ({ratio[0]:.3f}, {ratio[1]:.2g}), "
+        f"{args.rounds} interleaved rounds of {max(1, args.repeats // 20)} calls:"
+    )
+    folded_stage(
+        engine(core.LayeredSkin(), n, pitch, ij, cls),
+        p,
+        ratio,
+        args.rounds,
+        max(1, args.repeats // 20),
+        args.threads,
+    )
     if args.stage_only:
         return
     skins = {"layered (Shao)": core.LayeredSkin(), "homogeneous (nu 0.48)": 0.48}
@@ -328,30 +393,39 @@ def main(argv=None):
         row = {"build_s": build}
         for method in ("direct", "fft"):  # direct: the folded path, as in the plugin
             e.stress(p, qx, qy, method=method, repeats=3, slip=ratio)  # warm up
-            out, row[method], _, active = e.stress(p, qx, qy, method=method, slip=ratio,
-                                                   repeats=args.repeats, timing=True)
+            out, row[method], _, active = e.stress(
+                p, qx, qy, method=method, slip=ratio, repeats=args.repeats, timing=True
+            )
             row[method + "_out"] = out
         row["est_direct"], row["est_fft"] = e.estimated_cost(active, True, folded=True)
         results[name] = row
-        print(f"{name:22s} tables+spectra {build:6.2f} s | direct {row['direct'] * 1e6:8.1f} us"
-              f" | fft {row['fft'] * 1e6:8.1f} us | model: direct {row['est_direct'] * 1e6:8.1f}"
-              f" us, fft {row['est_fft'] * 1e6:8.1f} us")
+        print(
+            f"{name:22s} tables+spectra {build:6.2f} s | direct {row['direct'] * 1e6:8.1f} us"
+            f" | fft {row['fft'] * 1e6:8.1f} us | model: direct {row['est_direct'] * 1e6:8.1f}"
+            f" us, fft {row['est_fft'] * 1e6:8.1f} us"
+        )
         a, b = row["direct_out"], row["fft_out"]
         agree = np.abs(a - b).max() / np.abs(a).max()
         print(f"{'':22s} direct vs fft: max difference {agree:.1e} of the largest stress")
 
     lay, hom = results["layered (Shao)"], results["homogeneous (nu 0.48)"]
-    print(f"ratio layered / homogeneous: direct {lay['direct'] / hom['direct']:.3f}, "
-          f"fft {lay['fft'] / hom['fft']:.3f}")
+    print(
+        f"ratio layered / homogeneous: direct {lay['direct'] / hom['direct']:.3f}, "
+        f"fft {lay['fft'] / hom['fft']:.3f}"
+    )
     best = min(lay["direct"], lay["fft"])
-    print(f"per-step stress cost (layered, best path): {best * 1e6:.1f} us; goal 100 us: "
-          f"{'met' if best <= 100e-6 else 'NOT met'}")
+    print(
+        f"per-step stress cost (layered, best path): {best * 1e6:.1f} us; goal 100 us: "
+        f"{'met' if best <= 100e-6 else 'NOT met'}"
+    )
     # What bounds the folded direct path: one multiply-add per (site,
     # component, active cell) on the effective tables (plus their fold).
     active = int((p > 0).sum())
     macs = (int((cls == 0).sum()) * 6 + int((cls != 0).sum())) * active
-    print(f"folded direct path: {macs / 1e6:.2f} M multiply-adds per step -> "
-          f"{lay['direct'] / macs * 1e9:.3f} ns each")
+    print(
+        f"folded direct path: {macs / 1e6:.2f} M multiply-adds per step -> "
+        f"{lay['direct'] / macs * 1e9:.3f} ns each"
+    )
 
 
 if __name__ == "__main__":

@@ -30,22 +30,28 @@ def measure(steps: int = 200, elastic_steps: int = 30, rounds: int = 3) -> list[
     runs = {}
     for n in GRIDS:
         for model in MODELS:
-            tip, proto = bench.scene_parts({"nx": n, "pitch_m": 1e-4, "skin.pressure": model,
-                                            "skin.outputs": "force"})
+            tip, proto = bench.scene_parts(
+                {"nx": n, "pitch_m": 1e-4, "skin.pressure": model, "skin.outputs": "force"}
+            )
             m = scenes.build_model(tip, texture, proto)
             state, warm = states.initial(m)
             nstep = elastic_steps if model == "elastic" else steps
             runs[n, model] = (bench.Run(m, state, warm, bench.slide_ctrl(proto, nstep)), nstep)
         tip, proto = bench.scene_parts({"nx": n, "pitch_m": 1e-4})
-        native = bench.add_native_tactile(scenes.scene_spec(tip, texture, proto), n, 1e-4,
-                                          tip.semi_axes_m).compile()
+        native = bench.add_native_tactile(
+            scenes.scene_spec(tip, texture, proto), n, 1e-4, tip.semi_axes_m
+        ).compile()
         state, warm = states.initial(native)
-        runs[n, "native tactile"] = (bench.Run(native, state, warm, bench.slide_ctrl(proto, steps)),
-                                     steps)
+        runs[n, "native tactile"] = (
+            bench.Run(native, state, warm, bench.slide_ctrl(proto, steps)),
+            steps,
+        )
     bare = bench.bare_model(scenes.Fingertip(), texture, scenes.Protocol())
     state, warm = states.initial(bare)
-    runs[0, "bare"] = (bench.Run(bare, state, warm, bench.slide_ctrl(scenes.Protocol(), steps)),
-                       steps)
+    runs[0, "bare"] = (
+        bench.Run(bare, state, warm, bench.slide_ctrl(scenes.Protocol(), steps)),
+        steps,
+    )
     best = {k: float("inf") for k in runs}
     for _ in range(rounds):  # interleaved rounds: a load change hits every row alike
         for k, (run, nstep) in runs.items():
@@ -56,11 +62,17 @@ def measure(steps: int = 200, elastic_steps: int = 30, rounds: int = 3) -> list[
     for n in GRIDS:
         for model in MODELS:
             us = best[n, model]
-            rows.append({"taxels": n * n, "model": model, "us_per_step": us,
-                         "over_bare": us / best[0, "bare"],
-                         "over_native_tactile": us / best[n, "native tactile"],
-                         "native_tactile_us_per_step": best[n, "native tactile"],
-                         "bare_us_per_step": best[0, "bare"]})
+            rows.append(
+                {
+                    "taxels": n * n,
+                    "model": model,
+                    "us_per_step": us,
+                    "over_bare": us / best[0, "bare"],
+                    "over_native_tactile": us / best[n, "native tactile"],
+                    "native_tactile_us_per_step": best[n, "native tactile"],
+                    "bare_us_per_step": best[0, "bare"],
+                }
+            )
     return rows
 
 
@@ -71,11 +83,15 @@ def main() -> None:
     args = ap.parse_args()
     rows = measure(args.steps, args.elastic_steps)
     print(f"bare MuJoCo step {rows[0]['bare_us_per_step']:.2f} us")
-    print(f"{'taxels':>7s} {'model':9s} {'us/step':>9s} {'x bare':>8s} {'x native':>9s} "
-          f"{'native us':>10s}")
+    print(
+        f"{'taxels':>7s} {'model':9s} {'us/step':>9s} {'x bare':>8s} {'x native':>9s} "
+        f"{'native us':>10s}"
+    )
     for r in rows:
-        print(f"{r['taxels']:7d} {r['model']:9s} {r['us_per_step']:9.1f} {r['over_bare']:8.1f} "
-              f"{r['over_native_tactile']:9.2f} {r['native_tactile_us_per_step']:10.1f}")
+        print(
+            f"{r['taxels']:7d} {r['model']:9s} {r['us_per_step']:9.1f} {r['over_bare']:8.1f} "
+            f"{r['over_native_tactile']:9.2f} {r['native_tactile_us_per_step']:10.1f}"
+        )
 
 
 if __name__ == "__main__":

@@ -38,9 +38,14 @@ def skin_config(xml_path: pathlib.Path) -> dict:
     plugin = ET.parse(xml_path).getroot().find("sensor/plugin")
     # Winkler: the fast paths under test (the elastic solve has its own
     # bench, bench_elastic.py); the scene's own attributes may say otherwise
-    return {"pressure": "winkler", **{c.get("key"): c.get("value")
-                                      for c in plugin.findall("config")
-                                      if c.get("key") != "texture_group"}}
+    return {
+        "pressure": "winkler",
+        **{
+            c.get("key"): c.get("value")
+            for c in plugin.findall("config")
+            if c.get("key") != "texture_group"
+        },
+    }
 
 
 def record(xml_path: pathlib.Path, steps: int, lead_in_s: float = 0.1):
@@ -52,7 +57,9 @@ def record(xml_path: pathlib.Path, steps: int, lead_in_s: float = 0.1):
     d = mujoco.MjData(m)
     pad = m.geom("pad").id
     plate, tex = m.geom("plate"), m.geom("texture")
-    ctrl = scenes.controls(scenes.Protocol(timestep_s=m.opt.timestep), lead_in_s + steps * m.opt.timestep)
+    ctrl = scenes.controls(
+        scenes.Protocol(timestep_s=m.opt.timestep), lead_in_s + steps * m.opt.timestep
+    )
     pos, mat, forces = [], [], []
     f6 = np.zeros(6)
     for k, row in enumerate(ctrl):
@@ -74,11 +81,15 @@ def record(xml_path: pathlib.Path, steps: int, lead_in_s: float = 0.1):
         mat.append(d.geom_xmat[pad].copy())
         forces.append([fn, fx, fy])
     h = m.geom_dataid[tex.id]
-    samples = m.hfield_data[m.hfield_adr[h]:m.hfield_adr[h] + m.hfield_nrow[h] * m.hfield_ncol[h]]
+    samples = m.hfield_data[m.hfield_adr[h] : m.hfield_adr[h] + m.hfield_nrow[h] * m.hfield_ncol[h]]
     samples = samples.reshape(m.hfield_nrow[h], m.hfield_ncol[h]).astype(np.float32)
     top = np.zeros(20)  # the plate box's +z face (the box is not rotated in the scene)
     top[0] = RECTANGLE
-    top[1:4] = d.geom_xpos[plate.id] + d.geom_xmat[plate.id].reshape(3, 3) @ [0, 0, m.geom_size[plate.id][2]]
+    top[1:4] = d.geom_xpos[plate.id] + d.geom_xmat[plate.id].reshape(3, 3) @ [
+        0,
+        0,
+        m.geom_size[plate.id][2],
+    ]
     top[4:13] = d.geom_xmat[plate.id]
     top[16:18] = m.geom_size[plate.id][:2]
     hf = np.zeros(20)
@@ -87,8 +98,14 @@ def record(xml_path: pathlib.Path, steps: int, lead_in_s: float = 0.1):
     hf[4:13] = d.geom_xmat[tex.id]
     hf[16:19] = m.hfield_size[h][:3]
     hf[19] = m.hfield_size[h][2] * float(samples.max())
-    return (np.array(pos), np.array(mat), np.array(forces), np.array([top, hf]), samples,
-            m.geom_size[pad].copy())
+    return (
+        np.array(pos),
+        np.array(mat),
+        np.array(forces),
+        np.array([top, hf]),
+        samples,
+        m.geom_size[pad].copy(),
+    )
 
 
 def main(argv: list[str] | None = None) -> bool:
@@ -107,29 +124,38 @@ def main(argv: list[str] | None = None) -> bool:
         yaw = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
         mat = np.ascontiguousarray([(m.reshape(3, 3) @ yaw).ravel() for m in mat])
         forces = np.ascontiguousarray(  # the same force, seen in the turned pad frame
-            [[f[0], *(yaw[:2, :2].T @ f[1:])] for f in forces])
+            [[f[0], *(yaw[:2, :2].T @ f[1:])] for f in forces]
+        )
     config = skin_config(path)
     times = {True: [], False: []}
     results = {}
     for _ in range(args.repeats):
         for reference in (True, False):  # interleaved: a load change hits both alike
             render_s, total_s, approach, pressure = _core.traction_steps(
-                list(semi_axes), config, pos, mat, forces, surfaces, samples, reference=reference)
+                list(semi_axes), config, pos, mat, forces, surfaces, samples, reference=reference
+            )
             times[reference].append((render_s.mean(), (total_s - render_s).mean(), total_s.mean()))
             results[reference] = (approach, pressure)
     diff = float(np.nanmax(np.abs(results[True][1] - results[False][1])))
-    same = (np.array_equal(results[True][1], results[False][1])
-            and np.array_equal(results[True][0], results[False][0], equal_nan=True))
-    print(f"{path.name}, pad yaw {args.yaw_deg:g} deg: {args.steps} steps, "
-          f"{args.repeats} interleaved repeats, "
-          f"{np.mean(np.isfinite(results[False][0])):.0%} of steps in contact")
+    same = np.array_equal(results[True][1], results[False][1]) and np.array_equal(
+        results[True][0], results[False][0], equal_nan=True
+    )
+    print(
+        f"{path.name}, pad yaw {args.yaw_deg:g} deg: {args.steps} steps, "
+        f"{args.repeats} interleaved repeats, "
+        f"{np.mean(np.isfinite(results[False][0])):.0%} of steps in contact"
+    )
     print(f"{'stage':<28}{'reference us':>16}{'fast us':>16}{'ratio (min, median)':>24}")
-    for col, name in enumerate(("1 render (RenderGap)", "2 pressure + shear", "1-2 (ComputeTraction)")):
+    for col, name in enumerate(
+        ("1 render (RenderGap)", "2 pressure + shear", "1-2 (ComputeTraction)")
+    ):
         ref = np.array([t[col] for t in times[True]]) * 1e6
         new = np.array([t[col] for t in times[False]]) * 1e6
-        print(f"{name:<28}{np.min(ref):7.1f} / {np.median(ref):6.1f}"
-              f"{np.min(new):7.1f} / {np.median(new):6.1f}"
-              f"{np.min(ref) / np.min(new):11.2f}x {np.median(ref) / np.median(new):7.2f}x")
+        print(
+            f"{name:<28}{np.min(ref):7.1f} / {np.median(ref):6.1f}"
+            f"{np.min(new):7.1f} / {np.median(new):6.1f}"
+            f"{np.min(ref) / np.min(new):11.2f}x {np.median(ref) / np.median(new):7.2f}x"
+        )
     print(f"pressure and approach bit-identical: {same} (max |difference| {diff:.3g} Pa)")
     return same
 

@@ -54,17 +54,26 @@ def main(argv=None) -> int:
     for f in a.forces:
         target = np.full(int(round(a.duration / a.dt)), f)
         closed = stimuli.press_force_controls(spec, target).force_n
-        landing.append(dict(force_n=f, closed_s=landed_s(closed, f, a.dt),
-                            motor_s=landed_s(motor_force(bare, target), f, a.dt)))
+        landing.append(
+            dict(
+                force_n=f,
+                closed_s=landed_s(closed, f, a.dt),
+                motor_s=landed_s(motor_force(bare, target), f, a.dt),
+            )
+        )
     t = np.arange(int(round(0.3 / a.dt))) * a.dt
     target = np.interp(t, [0, 0.1, 0.15, 1], [0.05, 0.05, 0.5, 0.5])
     end = int(round(0.15 / a.dt)) - 1
     after = t >= 0.1
     ramp = {}
-    for name, force in (("closed", stimuli.press_force_controls(spec, target).force_n),
-                        ("motor", motor_force(bare, target))):
-        ramp[name] = dict(end_fraction=float(force[end] / target[end]),
-                          max_error_fraction=float(np.abs(force - target)[after].max() / 0.5))
+    for name, force in (
+        ("closed", stimuli.press_force_controls(spec, target).force_n),
+        ("motor", motor_force(bare, target)),
+    ):
+        ramp[name] = dict(
+            end_fraction=float(force[end] / target[end]),
+            max_error_fraction=float(np.abs(force - target)[after].max() / 0.5),
+        )
     out = dict(landing=landing, ramp_50ms_0p05_to_0p5_n=ramp, dt_s=a.dt)
     if a.json:
         print(json.dumps(out))

@@ -31,8 +31,10 @@ BAR_HALF_M = (0.04, 0.005, 0.01)  # the bar: 80 mm long, 10 mm thick, 20 mm tall
 PAD_SEMI_AXES_M = (0.008, 0.007, 0.007)
 SKIN = dict(nx=48, pitch=2e-4, ridges=True, outputs="spikes stress force")
 # Each pad's local -z (the skin) faces the bar: a quarter turn about x.
-FACE_QUAT = {"left": [math.sqrt(0.5), -math.sqrt(0.5), 0, 0],   # local z -> +y
-             "right": [math.sqrt(0.5), math.sqrt(0.5), 0, 0]}   # local z -> -y
+FACE_QUAT = {
+    "left": [math.sqrt(0.5), -math.sqrt(0.5), 0, 0],  # local z -> +y
+    "right": [math.sqrt(0.5), math.sqrt(0.5), 0, 0],
+}  # local z -> -y
 SIDE = {"left": 1.0, "right": -1.0}
 
 
@@ -45,46 +47,85 @@ def gripper_spec(protocol: scenes.Protocol | None = None, **skin) -> mujoco.MjSp
     spec.modelname = "gripper_slide"
     scenes.set_options(spec, protocol)
     L, T, H = BAR_HALF_M
-    spec.worldbody.add_geom(name="bar", type=mujoco.mjtGeom.mjGEOM_BOX, size=[L, T, H],
-                            rgba=[0.55, 0.6, 0.65, 1])
+    spec.worldbody.add_geom(
+        name="bar", type=mujoco.mjtGeom.mjGEOM_BOX, size=[L, T, H], rgba=[0.55, 0.6, 0.65, 1]
+    )
     for side, period in PERIODS_M.items():
         tex = scenes.Texture(kind="grating", period_m=period, length_m=2 * L)
         scenes.add_grating_hfield(spec, f"grating_{side}", tex, H)
-        spec.worldbody.add_geom(name=f"grating_{side}", type=mujoco.mjtGeom.mjGEOM_HFIELD,
-                                hfieldname=f"grating_{side}", pos=[0, SIDE[side] * T, 0],
-                                quat=FACE_QUAT[side], contype=0, conaffinity=0,
-                                group=scenes.TEXTURE_GROUP, rgba=[0.45, 0.5, 0.55, 1])
+        spec.worldbody.add_geom(
+            name=f"grating_{side}",
+            type=mujoco.mjtGeom.mjGEOM_HFIELD,
+            hfieldname=f"grating_{side}",
+            pos=[0, SIDE[side] * T, 0],
+            quat=FACE_QUAT[side],
+            contype=0,
+            conaffinity=0,
+            group=scenes.TEXTURE_GROUP,
+            rgba=[0.45, 0.5, 0.55, 1],
+        )
     start_x = -L / 2
     carriage = spec.worldbody.add_body(name="carriage", pos=[start_x, 0, 0])
-    carriage.add_joint(name="slide_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
-                       damping=2 * math.sqrt(scenes.SLIDE_KP * 0.1))
-    carriage.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.005, 0.03, 0.004],
-                      pos=[0, 0, H + 0.02], mass=0.06, contype=0, conaffinity=0)
+    carriage.add_joint(
+        name="slide_x",
+        type=mujoco.mjtJoint.mjJNT_SLIDE,
+        axis=[1, 0, 0],
+        damping=2 * math.sqrt(scenes.SLIDE_KP * 0.1),
+    )
+    carriage.add_geom(
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[0.005, 0.03, 0.004],
+        pos=[0, 0, H + 0.02],
+        mass=0.06,
+        contype=0,
+        conaffinity=0,
+    )
     a, b, c = PAD_SEMI_AXES_M
     for side in ("left", "right"):
         y0 = SIDE[side] * (T + c + scenes.PAD_CLEARANCE_M)
         finger = carriage.add_body(name=f"finger_{side}", pos=[0, y0, 0])
-        finger.add_joint(name=f"close_{side}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0],
-                         damping=2)
-        finger.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[0.002, 0.01, 0],
-                        pos=[0, 0, H + 0.01], mass=0.01, contype=0, conaffinity=0)
-        finger.add_geom(name=f"pad_{side}", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID,
-                        size=[a, b, c], quat=FACE_QUAT[side], mass=tip.mass_kg,
-                        friction=[tip.friction, 0.005, 0.0001], solref=scenes.CONTACT_SOLREF,
-                        solimp=scenes.CONTACT_SOLIMP, rgba=[0.93, 0.72, 0.62, 1])
-        squeeze = spec.add_actuator(name=f"squeeze_{side}", target=f"close_{side}",
-                                    trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        finger.add_joint(
+            name=f"close_{side}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0], damping=2
+        )
+        finger.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+            size=[0.002, 0.01, 0],
+            pos=[0, 0, H + 0.01],
+            mass=0.01,
+            contype=0,
+            conaffinity=0,
+        )
+        finger.add_geom(
+            name=f"pad_{side}",
+            type=mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+            size=[a, b, c],
+            quat=FACE_QUAT[side],
+            mass=tip.mass_kg,
+            friction=[tip.friction, 0.005, 0.0001],
+            solref=scenes.CONTACT_SOLREF,
+            solimp=scenes.CONTACT_SOLIMP,
+            rgba=[0.93, 0.72, 0.62, 1],
+        )
+        squeeze = spec.add_actuator(
+            name=f"squeeze_{side}", target=f"close_{side}", trntype=mujoco.mjtTrn.mjTRN_JOINT
+        )
         squeeze.set_to_motor()
         squeeze.ctrlrange = [-10, 10]
         mu = tip.friction
-        spec.add_pair(geomname1=f"pad_{side}", geomname2="bar", condim=3,
-                      friction=[mu, mu, 0.005, 0.0001, 0.0001], solref=scenes.CONTACT_SOLREF,
-                      solimp=scenes.PAIR_SOLIMP,
-                      solreffriction=[scenes.friction_timeconst(tip, protocol), 1])
+        spec.add_pair(
+            geomname1=f"pad_{side}",
+            geomname2="bar",
+            condim=3,
+            friction=[mu, mu, 0.005, 0.0001, 0.0001],
+            solref=scenes.CONTACT_SOLREF,
+            solimp=scenes.PAIR_SOLIMP,
+            solreffriction=[scenes.friction_timeconst(tip, protocol), 1],
+        )
         # each skin feels its own face's grating (the far one, seen from
         # behind the bar, would read as a deep overlap)
-        mjtouch.attach(spec, f"pad_{side}", name=f"skin_{side}", texture=f"grating_{side}",
-                       **{**SKIN, **skin})
+        mjtouch.attach(
+            spec, f"pad_{side}", name=f"skin_{side}", texture=f"grating_{side}", **{**SKIN, **skin}
+        )
     slide = spec.add_actuator(name="slide", target="slide_x", trntype=mujoco.mjtTrn.mjTRN_JOINT)
     slide.set_to_intvelocity(kp=scenes.SLIDE_KP)
     slide.actrange = [-L, L]
@@ -112,8 +153,9 @@ def run(model: mujoco.MjModel, ctrl: np.ndarray, nthread: int | None = None):
     mujoco.mj_getState(model, data, state0, spec)
     if nthread:
         datas = [mujoco.MjData(model) for _ in range(nthread)]
-        state, sd = mujoco.rollout.rollout(model, datas, np.stack([state0] * nthread),
-                                           np.stack([ctrl] * nthread))
+        state, sd = mujoco.rollout.rollout(
+            model, datas, np.stack([state0] * nthread), np.stack([ctrl] * nthread)
+        )
         return state, sd
     state, sd = mujoco.rollout.rollout(model, data, state0[None], ctrl[None])
     return state[0], sd[0]
@@ -155,18 +197,23 @@ def main(argv=None) -> int:
         print(json.dumps(out))
         return 0
     for side, r in out.items():
-        print(f"{side:5s} finger (D = {PERIODS_M[side] * 1e3:.1f} mm): V/D = "
-              f"{r['expected_hz']:.1f} Hz, stress peaks "
-              + ", ".join(f"{x:.1f}" for x in r["peaks_hz"]) + " Hz; rates "
-              + "  ".join(f"{k} {v:.1f}" for k, v in r["rates_hz"].items())
-              + f" Hz; F = {r['normal_force_n']:.2f} N")
+        print(
+            f"{side:5s} finger (D = {PERIODS_M[side] * 1e3:.1f} mm): V/D = "
+            f"{r['expected_hz']:.1f} Hz, stress peaks "
+            + ", ".join(f"{x:.1f}" for x in r["peaks_hz"])
+            + " Hz; rates "
+            + "  ".join(f"{k} {v:.1f}" for k, v in r["rates_hz"].items())
+            + f" Hz; F = {r['normal_force_n']:.2f} N"
+        )
     return 0
 
 
 def _plot(path, model, sd, protocol):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     lays = mjtouch.layouts(model)
     fig, axes = plt.subplots(2, len(lays), figsize=(5 * len(lays), 6), squeeze=False)
     dt = protocol.timestep_s

@@ -30,15 +30,23 @@ def band_max(f, p, fc, half_width_hz):
 
 def run(pressure: str, pitch_m: float, nx: int, duration_s: float) -> dict:
     tip = scenes.Fingertip(nx=nx, pitch_m=pitch_m, skin={"pressure": pressure, "noise": "0 0 0"})
-    r = rollout.run_slide(tip, scenes.Texture(), scenes.Protocol(speed_m_s=SPEED_M_S, force_n=0.5),
-                          duration_s=duration_s)
+    r = rollout.run_slide(
+        tip,
+        scenes.Texture(),
+        scenes.Protocol(speed_m_s=SPEED_M_S, force_n=0.5),
+        duration_s=duration_s,
+    )
     w = r.window()
     f, p = analysis.stress_spectrum(r.stress[w][:, r.layout.mask("PC")], r.dt)
     hw = max(3.0, 1.5 * (f[1] - f[0]))
-    return {"pressure": pressure, "pitch_m": pitch_m, "v_over_pitch_hz": SPEED_M_S / pitch_m,
-            "power_at_v_over_pitch_pa2": band_max(f, p, SPEED_M_S / pitch_m, hw),
-            "power_at_harmonics_pa2": {str(h): band_max(f, p, h, hw) for h in (225, 250, 275)},
-            "pc_rate_hz": analysis.rates_hz(r.spikes[w], r.dt, r.layout.classes)["PC"]}
+    return {
+        "pressure": pressure,
+        "pitch_m": pitch_m,
+        "v_over_pitch_hz": SPEED_M_S / pitch_m,
+        "power_at_v_over_pitch_pa2": band_max(f, p, SPEED_M_S / pitch_m, hw),
+        "power_at_harmonics_pa2": {str(h): band_max(f, p, h, hw) for h in (225, 250, 275)},
+        "pc_rate_hz": analysis.rates_hz(r.spikes[w], r.dt, r.layout.classes)["PC"],
+    }
 
 
 def main(argv=None) -> int:
@@ -54,10 +62,12 @@ def main(argv=None) -> int:
         return 0
     for r in rows:
         hm = r["power_at_harmonics_pa2"]
-        print(f"{r['pressure']:8s} pitch {r['pitch_m'] * 1e6:5.1f} um: power at V/pitch "
-              f"({r['v_over_pitch_hz']:.0f} Hz) {r['power_at_v_over_pitch_pa2']:.3g} Pa^2; "
-              f"at 225/250/275 Hz {hm['225']:.3g} / {hm['250']:.3g} / {hm['275']:.3g}; "
-              f"PC {r['pc_rate_hz']:.0f} Hz")
+        print(
+            f"{r['pressure']:8s} pitch {r['pitch_m'] * 1e6:5.1f} um: power at V/pitch "
+            f"({r['v_over_pitch_hz']:.0f} Hz) {r['power_at_v_over_pitch_pa2']:.3g} Pa^2; "
+            f"at 225/250/275 Hz {hm['225']:.3g} / {hm['250']:.3g} / {hm['275']:.3g}; "
+            f"PC {r['pc_rate_hz']:.0f} Hz"
+        )
     return 0
 
 

@@ -46,13 +46,19 @@ SLIP = (0.5, 0.0)
 
 
 def skin_surface(n: int, pitch_m: float) -> np.ndarray:
-    cfg = {"nx": str(n), "pitch": repr(pitch_m), "ridges": "true", "ridge_pitch": "0.00045",
-           "ridge_height": "5e-05"}
+    cfg = {
+        "nx": str(n),
+        "pitch": repr(pitch_m),
+        "ridges": "true",
+        "ridge_pitch": "0.00045",
+        "ridge_height": "5e-05",
+    }
     return core.skin_surface((0.008, 0.007, 0.007), cfg)
 
 
-def grating_cells(n: int, pitch_m: float, shift_m: float, period_m: float, edge_m: float,
-                  sub: int = 16) -> np.ndarray:
+def grating_cells(
+    n: int, pitch_m: float, shift_m: float, period_m: float, edge_m: float, sub: int = 16
+) -> np.ndarray:
     """Grating height (plateaux along y, half the period wide, 0.1 mm tall)
     averaged over each cell of an n-cell grid centred on the origin (as the
     plugin renders it: exact cell means; here by sub-sampling along x)."""
@@ -73,16 +79,18 @@ def sites_on(nf: int, hf: float) -> np.ndarray:
     return np.stack([i[keep], j[keep]], 1)
 
 
-def run(n: int, pitch_m: float, period_m: float, edge_m: float, samples: int,
-        shift_average: bool) -> np.ndarray:
+def run(
+    n: int, pitch_m: float, period_m: float, edge_m: float, samples: int, shift_average: bool
+) -> np.ndarray:
     """-s_zz (samples x sites, Pa) over one period of the grating. Grid A: n
     cells; grid B (shift_average): n + 1 cells, i.e. A shifted by half a cell
     in x and y. Both grids' pressures are evaluated on a grid of half the pitch
     (each cell's uniform load split exactly over its 2 x 2 sub-cells), so the
     sites are the same points for both."""
     nf, hf = 2 * n + 2, pitch_m / 2
-    eng = core.StressEngine(core.LayeredSkin(), nf, hf, [PC_DEPTH_M], sites_on(nf, hf),
-                            components=[2])
+    eng = core.StressEngine(
+        core.LayeredSkin(), nf, hf, [PC_DEPTH_M], sites_on(nf, hf), components=[2]
+    )
     grids = [(n, 1)] + ([(n + 1, 0)] if shift_average else [])  # (cells, offset in sub-cells)
     skins = {m: skin_surface(m, pitch_m) for m, _ in grids}
     z0 = min(z[np.isfinite(z)].min() for z in skins.values())
@@ -93,12 +101,18 @@ def run(n: int, pitch_m: float, period_m: float, edge_m: float, samples: int,
         s = k * period_m / samples
         for m, off in grids:
             gap = skins[m] - z0 - grating_cells(m, pitch_m, s, period_m, edge_m)
-            p, _ = core.elastic_pressure(np.where(np.isfinite(gap), gap, np.inf), pitch_m,
-                                         FORCE_N, compliance_m_per_pa=tables[m], tolerance=1e-8,
-                                         max_iterations=20000, initial_pa=guess[m])
+            p, _ = core.elastic_pressure(
+                np.where(np.isfinite(gap), gap, np.inf),
+                pitch_m,
+                FORCE_N,
+                compliance_m_per_pa=tables[m],
+                tolerance=1e-8,
+                max_iterations=20000,
+                initial_pa=guess[m],
+            )
             guess[m] = p
             fine = np.zeros((nf, nf))
-            fine[off:off + 2 * m, off:off + 2 * m] = np.kron(p, np.ones((2, 2)))
+            fine[off : off + 2 * m, off : off + 2 * m] = np.kron(p, np.ones((2, 2)))
             out[k] -= eng.stress(fine, slip=SLIP)[:, 2] / len(grids)
     return out
 
@@ -111,8 +125,11 @@ def harmonic_power(stress: np.ndarray) -> np.ndarray:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--small", action="store_true",
-                    help="64 x 0.2 mm taxels, the texture scaled x2 (period 2 mm)")
+    ap.add_argument(
+        "--small",
+        action="store_true",
+        help="64 x 0.2 mm taxels, the texture scaled x2 (period 2 mm)",
+    )
     ap.add_argument("--samples", type=int, default=40, help="shifts per grating period")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
@@ -120,22 +137,33 @@ def main(argv=None) -> int:
     line = int(round(period / pitch))
     if a.samples <= 2 * (line + 1):
         ap.error(f"--samples must exceed {2 * (line + 1)} (the grid line is harmonic {line})")
-    cases = (("default", 0.05e-3 * period / 1e-3, False),
-             ("edges resolved", 2 * pitch, False),
-             ("grid shift average", 0.05e-3 * period / 1e-3, True))
+    cases = (
+        ("default", 0.05e-3 * period / 1e-3, False),
+        ("edges resolved", 2 * pitch, False),
+        ("grid shift average", 0.05e-3 * period / 1e-3, True),
+    )
     rows = []
     for name, edge, shift in cases:
         pw = harmonic_power(run(n, pitch, period, edge, a.samples, shift))
-        rows.append({"case": name, "pitch_m": pitch, "edge_m": edge, "grid_harmonic": line,
-                     "power_pa2": {str(h): float(pw[h]) for h in range(1, line + 3)}})
+        rows.append(
+            {
+                "case": name,
+                "pitch_m": pitch,
+                "edge_m": edge,
+                "grid_harmonic": line,
+                "power_pa2": {str(h): float(pw[h]) for h in range(1, line + 3)},
+            }
+        )
     if a.json:
         print(json.dumps(rows))
         return 0
     for r in rows:
         p = r["power_pa2"]
-        print(f"{r['case']:20s} pitch {pitch * 1e6:.0f} um, edge {r['edge_m'] * 1e6:.0f} um: "
-              f"harmonic 1 {p['1']:.3g} Pa^2; grid line (harmonic {line}) {p[str(line)]:.3g}; "
-              f"neighbours {p[str(line - 1)]:.3g} / {p[str(line + 1)]:.3g}")
+        print(
+            f"{r['case']:20s} pitch {pitch * 1e6:.0f} um, edge {r['edge_m'] * 1e6:.0f} um: "
+            f"harmonic 1 {p['1']:.3g} Pa^2; grid line (harmonic {line}) {p[str(line)]:.3g}; "
+            f"neighbours {p[str(line - 1)]:.3g} / {p[str(line + 1)]:.3g}"
+        )
     return 0
 
 

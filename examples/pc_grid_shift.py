@@ -45,24 +45,36 @@ def shifted_sites(sites: str, dx_m: float) -> str:
 
 def pc_trace(nx: int, pitch_m: float, sites: str, duration_s: float):
     tip = scenes.Fingertip(nx=nx, pitch_m=pitch_m, skin={"noise": "0 0 0", "sites": sites})
-    r = rollout.run_slide(tip, scenes.Texture(), scenes.Protocol(speed_m_s=SPEED_M_S, force_n=0.5),
-                          duration_s=duration_s)
+    r = rollout.run_slide(
+        tip,
+        scenes.Texture(),
+        scenes.Protocol(speed_m_s=SPEED_M_S, force_n=0.5),
+        duration_s=duration_s,
+    )
     m = r.layout.mask("PC")
     return r.stress[:, m], r.layout.positions_m[m, :2], r.window(), r.dt
 
 
 def summarize(name: str, stress: np.ndarray, window: slice, dt: float, pitch_m: float) -> dict:
-    spikes = np.array([core.receptor_run("PC", stress[:, k], dt, config={"noise": "0 0 0"},
-                                         stream=k)[0] for k in range(stress.shape[1])]).T
+    spikes = np.array(
+        [
+            core.receptor_run("PC", stress[:, k], dt, config={"noise": "0 0 0"}, stream=k)[0]
+            for k in range(stress.shape[1])
+        ]
+    ).T
     steps = window.stop - window.start
     f, p = analysis.stress_spectrum(stress[window], dt)
     hw = max(3.0, 1.5 * (f[1] - f[0]))
     band = lambda fc: float(p[np.abs(f - fc) <= hw].max())  # noqa: E731
     line = SPEED_M_S / pitch_m
-    return {"case": name, "pitch_m": pitch_m, "v_over_pitch_hz": line,
-            "pc_rate_hz": float(spikes[window].sum() / (spikes.shape[1] * steps * dt)),
-            "power_at_v_over_pitch_pa2": band(line),
-            "power_beside_pa2": [band(line - 25.0), band(line + 25.0)]}
+    return {
+        "case": name,
+        "pitch_m": pitch_m,
+        "v_over_pitch_hz": line,
+        "pc_rate_hz": float(spikes[window].sum() / (spikes.shape[1] * steps * dt)),
+        "power_at_v_over_pitch_pa2": band(line),
+        "power_beside_pa2": [band(line - 25.0), band(line + 25.0)],
+    }
 
 
 def main(argv=None) -> int:
@@ -70,8 +82,12 @@ def main(argv=None) -> int:
     ap.add_argument("--nx", type=int, default=129, help="the odd grid (the even one is nx - 1)")
     ap.add_argument("--pitch", type=float, default=1e-4, help="taxel pitch (m)")
     ap.add_argument("--duration", type=float, default=0.3, help="sliding time (s)")
-    ap.add_argument("--reference", type=int, default=0,
-                    help="also run this odd nx at the pitch that keeps the skin's extent")
+    ap.add_argument(
+        "--reference",
+        type=int,
+        default=0,
+        help="also run this odd nx at the pitch that keeps the skin's extent",
+    )
     ap.add_argument("--small", action="store_true", help="65 / 64 x 0.2 mm, 0.25 s")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
@@ -81,13 +97,16 @@ def main(argv=None) -> int:
         ap.error(f"--nx = {a.nx} must be odd and >= 5")
     sites = lattice_sites([(a.nx, a.pitch)])
     s_odd, pos_odd, w, dt = pc_trace(a.nx, a.pitch, sites, a.duration)
-    s_even, pos_even, _, _ = pc_trace(a.nx - 1, a.pitch, shifted_sites(sites, a.pitch / 2),
-                                      a.duration)
+    s_even, pos_even, _, _ = pc_trace(
+        a.nx - 1, a.pitch, shifted_sites(sites, a.pitch / 2), a.duration
+    )
     if not np.allclose(pos_even - pos_odd, a.pitch / 2, rtol=0, atol=1e-9):
         raise RuntimeError("the even grid's PC sites are not the odd grid's moved by pitch / 2")
-    rows = [summarize(f"odd grid nx {a.nx}", s_odd, w, dt, a.pitch),
-            summarize(f"even grid nx {a.nx - 1}", s_even, w, dt, a.pitch),
-            summarize("grid shift average", 0.5 * (s_odd + s_even), w, dt, a.pitch)]
+    rows = [
+        summarize(f"odd grid nx {a.nx}", s_odd, w, dt, a.pitch),
+        summarize(f"even grid nx {a.nx - 1}", s_even, w, dt, a.pitch),
+        summarize("grid shift average", 0.5 * (s_odd + s_even), w, dt, a.pitch),
+    ]
     if a.reference:
         ref_pitch = a.nx * a.pitch / a.reference
         s_ref, _, wr, dtr = pc_trace(a.reference, ref_pitch, sites, a.duration)
@@ -97,9 +116,11 @@ def main(argv=None) -> int:
         return 0
     for r in rows:
         b = r["power_beside_pa2"]
-        print(f"{r['case']:22s} pitch {r['pitch_m'] * 1e6:5.1f} um: PC {r['pc_rate_hz']:6.1f} Hz; "
-              f"stress power at V/pitch ({r['v_over_pitch_hz']:.0f} Hz) "
-              f"{r['power_at_v_over_pitch_pa2']:.3g} Pa^2, beside {b[0]:.3g} / {b[1]:.3g}")
+        print(
+            f"{r['case']:22s} pitch {r['pitch_m'] * 1e6:5.1f} um: PC {r['pc_rate_hz']:6.1f} Hz; "
+            f"stress power at V/pitch ({r['v_over_pitch_hz']:.0f} Hz) "
+            f"{r['power_at_v_over_pitch_pa2']:.3g} Pa^2, beside {b[0]:.3g} / {b[1]:.3g}"
+        )
     return 0
 
 

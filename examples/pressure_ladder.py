@@ -25,8 +25,15 @@ def ladder(radius_m: float = 0.02, force_n: float = 0.5, steps: int = 1500) -> d
     pitch, n = h.contact_radius_m / 32, 96
     out = {}
     for model in ("contacts", "winkler", "elastic"):
-        skin = dict(nx=n, pitch=pitch, ridges="false", pressure=model, skin="halfspace",
-                    poisson=h.poisson, outputs="force pressure")
+        skin = dict(
+            nx=n,
+            pitch=pitch,
+            ridges="false",
+            pressure=model,
+            skin="halfspace",
+            poisson=h.poisson,
+            outputs="force pressure",
+        )
         if model == "elastic":
             skin.update(young=h.young_pa, tolerance=1e-8)
         m = scenes.sphere_press_spec(radius_m, skin).compile()

@@ -21,12 +21,22 @@ from mjtouch.experiments import rollout
 from mjtouch.scene import scenes
 
 
-def run(duration_s: float = 1.0, nx: int = 128, pitch_m: float = 1e-4, dt_s: float = 1e-4,
-        speed_m_s: float = 0.025, period_m: float = 1e-3, force_n: float = 0.5) -> dict:
+def run(
+    duration_s: float = 1.0,
+    nx: int = 128,
+    pitch_m: float = 1e-4,
+    dt_s: float = 1e-4,
+    speed_m_s: float = 0.025,
+    period_m: float = 1e-3,
+    force_n: float = 0.5,
+) -> dict:
     tip = scenes.Fingertip(nx=nx, pitch_m=pitch_m)
-    res = rollout.run_slide(tip, scenes.Texture(period_m=period_m),
-                            scenes.Protocol(force_n=force_n, speed_m_s=speed_m_s, timestep_s=dt_s),
-                            duration_s=duration_s)
+    res = rollout.run_slide(
+        tip,
+        scenes.Texture(period_m=period_m),
+        scenes.Protocol(force_n=force_n, speed_m_s=speed_m_s, timestep_s=dt_s),
+        duration_s=duration_s,
+    )
     w = res.window()  # steady sliding: from slide start + 0.1 s
     f, p = analysis.stress_spectrum(res.stress[w], res.dt)
     peaks = analysis.spectral_peaks(f, p)
@@ -43,8 +53,9 @@ def run(duration_s: float = 1.0, nx: int = 128, pitch_m: float = 1e-4, dt_s: flo
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     p.add_argument("--duration", type=float, default=1.0, help="sliding time (s), default 1")
     p.add_argument("--nx", type=int, default=128, help="taxels per side, default 128")
     p.add_argument("--pitch", type=float, default=1e-4, help="taxel pitch (m), default 1e-4")
@@ -54,8 +65,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     args = p.parse_args(argv)
     if not 0.15 <= args.duration <= 10:
-        p.error(f"--duration {args.duration} is out of range; valid [0.15, 10] s (0.1 s "
-                "settles before the spectrum window)")
+        p.error(
+            f"--duration {args.duration} is out of range; valid [0.15, 10] s (0.1 s "
+            "settles before the spectrum window)"
+        )
     try:
         r = run(args.duration, args.nx, args.pitch, args.dt, args.speed, args.period)
     except ValueError as e:
@@ -64,10 +77,14 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(r))
         return 0
     print("firing rates (Hz): " + "  ".join(f"{c} {v:.1f}" for c, v in r["rates_hz"].items()))
-    print(f"expected lines: V/D = {r['v_over_d_hz']:.2f} Hz, V/lambda = "
-          f"{r['v_over_lambda_hz']:.2f} Hz (FFT bin {r['fft_bin_hz']:.2f} Hz)")
-    print("stress spectral peaks (Hz, strongest first): "
-          + ", ".join(f"{x:.2f}" for x in r["peaks_hz"]))
+    print(
+        f"expected lines: V/D = {r['v_over_d_hz']:.2f} Hz, V/lambda = "
+        f"{r['v_over_lambda_hz']:.2f} Hz (FFT bin {r['fft_bin_hz']:.2f} Hz)"
+    )
+    print(
+        "stress spectral peaks (Hz, strongest first): "
+        + ", ".join(f"{x:.2f}" for x in r["peaks_hz"])
+    )
     print(f"strongest peak at V/D within one bin: {'yes' if r['peak_at_v_over_d'] else 'NO'}")
     return 0
 

@@ -39,15 +39,27 @@ SITES = {"Meissner": "RA", "Pacinian": "PC"}
 
 def case(period_m: float, ridges: bool, duration_s: float) -> dict:
     coarse = period_m >= 0.6e-3
-    texture = scenes.Texture(kind="grating", period_m=period_m, plateau_m=period_m / 2,
-                             height_m=0.2e-3 if coarse else 0.05e-3,
-                             edge_m=min(period_m / 8, 0.075e-3), resolution_m=period_m / 30,
-                             length_m=2 * SPEED_M_S * duration_s + 0.03)
+    texture = scenes.Texture(
+        kind="grating",
+        period_m=period_m,
+        plateau_m=period_m / 2,
+        height_m=0.2e-3 if coarse else 0.05e-3,
+        edge_m=min(period_m / 8, 0.075e-3),
+        resolution_m=period_m / 30,
+        length_m=2 * SPEED_M_S * duration_s + 0.03,
+    )
     # 4-6 taxels per period; the contact at 0.1 N (~4 mm) fits the grid
     nx, pitch, dt = (64, 1e-4, 5e-4) if coarse else (96, 5e-5, 2.5e-4)
-    tip = scenes.Fingertip(nx=nx, pitch_m=pitch, ridges=ridges,
-                           skin={"pressure": "elastic", "quantity": "maxcomp vonmises vonmises",
-                                 "outputs": "stress force"})
+    tip = scenes.Fingertip(
+        nx=nx,
+        pitch_m=pitch,
+        ridges=ridges,
+        skin={
+            "pressure": "elastic",
+            "quantity": "maxcomp vonmises vonmises",
+            "outputs": "stress force",
+        },
+    )
     proto = scenes.Protocol(force_n=0.1, speed_m_s=SPEED_M_S, timestep_s=dt, press_s=0.1)
     res = rollout.run_slide(tip, texture, proto, duration_s=duration_s)
     w = res.window(0.05)
@@ -58,7 +70,8 @@ def case(period_m: float, ridges: bool, duration_s: float) -> dict:
         out["sites"][name] = {
             "peaks_hz": [float(x) for x in analysis.spectral_peaks(f, p, n=6, fmin_hz=10.0)],
             "power_at_harmonics_pa2": [float(analysis.power_at(f, p, k * fd)) for k in (1, 2, 3)],
-            "fft_bin_hz": float(f[1] - f[0])}
+            "fft_bin_hz": float(f[1] - f[0]),
+        }
     return out
 
 
@@ -78,12 +91,16 @@ def main() -> None:
         print(json.dumps(cases))
         return
     for c in cases:
-        print(f"D = {c['period_m'] * 1e3:.1f} mm, {'ridged' if c['ridges'] else 'smooth'} skin "
-              f"(V/D = {c['v_over_d_hz']:.1f} Hz)")
+        print(
+            f"D = {c['period_m'] * 1e3:.1f} mm, {'ridged' if c['ridges'] else 'smooth'} skin "
+            f"(V/D = {c['v_over_d_hz']:.1f} Hz)"
+        )
         for name, s in c["sites"].items():
             p = np.array(s["power_at_harmonics_pa2"])
-            print(f"  {name:9s} peaks {np.round(s['peaks_hz'], 1)} Hz; power at V/D, 2V/D, 3V/D "
-                  f"{p[0]:.3g}, {p[1]:.3g}, {p[2]:.3g} Pa^2")
+            print(
+                f"  {name:9s} peaks {np.round(s['peaks_hz'], 1)} Hz; power at V/D, 2V/D, 3V/D "
+                f"{p[0]:.3g}, {p[1]:.3g}, {p[2]:.3g} Pa^2"
+            )
 
 
 if __name__ == "__main__":

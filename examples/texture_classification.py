@@ -28,8 +28,9 @@ import mjtouch.envs  # noqa: F401  (registers the environments)
 ENV_ID = "mjtouch/TextureExplore-v0"
 
 
-def explore(env: gym.Env, texture: int, seed: int, steps: int, force_n: float,
-            speed_m_s: float, skip: int) -> np.ndarray:
+def explore(
+    env: gym.Env, texture: int, seed: int, steps: int, force_n: float, speed_m_s: float, skip: int
+) -> np.ndarray:
     """One episode's feature vector: mean of the observation's touch block
     (or, without touch, of the whole observation) over steps skip..steps."""
     u = env.unwrapped
@@ -59,8 +60,15 @@ def nearest_centroid(train_x, train_y, test_x, nclass):
     return dist.sum(axis=2).argmin(axis=1)
 
 
-def run(episodes: int = 8, steps: int = 30, touch: str = "counts", seed: int = 0,
-        force_n: float = 0.5, speed_m_s: float = 0.04, skip: int = 5) -> dict:
+def run(
+    episodes: int = 8,
+    steps: int = 30,
+    touch: str = "counts",
+    seed: int = 0,
+    force_n: float = 0.5,
+    speed_m_s: float = 0.04,
+    skip: int = 5,
+) -> dict:
     if episodes < 2 or steps <= skip:
         raise ValueError(f"need episodes >= 2 (now {episodes}) and steps > skip = {skip}")
     env = gym.make(ENV_ID, touch=touch)
@@ -77,14 +85,20 @@ def run(episodes: int = 8, steps: int = 30, touch: str = "counts", seed: int = 0
     truth = y[split == 1]
     confusion = np.zeros((len(classes), len(classes)), int)
     np.add.at(confusion, (truth, pred), 1)
-    return {"touch": touch, "classes_m": list(classes), "accuracy": float((pred == truth).mean()),
-            "chance": 1.0 / len(classes), "confusion": confusion.tolist(),
-            "test_episodes": int(len(truth))}
+    return {
+        "touch": touch,
+        "classes_m": list(classes),
+        "accuracy": float((pred == truth).mean()),
+        "chance": 1.0 / len(classes),
+        "confusion": confusion.tolist(),
+        "test_episodes": int(len(truth)),
+    }
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     p.add_argument("--episodes", type=int, default=8, help="episodes per class (half train)")
     p.add_argument("--steps", type=int, default=30, help="control steps (10 ms) per episode")
     p.add_argument("--seed", type=int, default=0)
@@ -95,11 +109,15 @@ def main(argv=None) -> int:
         print(json.dumps(results))
         return 0
     for r in results:
-        print(f"touch={r['touch']:6s}  accuracy {r['accuracy']:.2f} on {r['test_episodes']} test "
-              f"episodes (chance {r['chance']:.2f})")
-    print("confusion with touch (rows: true class, periods "
-          + ", ".join("flat" if c == 0 else f"{c * 1e3:g} mm" for c in results[0]["classes_m"])
-          + "):")
+        print(
+            f"touch={r['touch']:6s}  accuracy {r['accuracy']:.2f} on {r['test_episodes']} test "
+            f"episodes (chance {r['chance']:.2f})"
+        )
+    print(
+        "confusion with touch (rows: true class, periods "
+        + ", ".join("flat" if c == 0 else f"{c * 1e3:g} mm" for c in results[0]["classes_m"])
+        + "):"
+    )
     for row in results[0]["confusion"]:
         print("   " + " ".join(f"{v:3d}" for v in row))
     return 0

@@ -27,21 +27,37 @@ import sys
 
 
 def parse(argv: list[str] | None):
-    p = argparse.ArgumentParser(description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     p.add_argument("--force", type=float, default=0.5, help="normal force (N), default 0.5")
     p.add_argument("--speed", type=float, default=0.025, help="sliding speed (m/s), default 0.025")
-    p.add_argument("--texture", type=int, default=0,
-                   help="0: grating D = 1 mm, 1: 0.6 mm, 2: 2.5 mm, 3: flat")
+    p.add_argument(
+        "--texture", type=int, default=0, help="0: grating D = 1 mm, 1: 0.6 mm, 2: 2.5 mm, 3: flat"
+    )
     p.add_argument("--ridges", action=argparse.BooleanOptionalAction, default=True)
     p.add_argument("--offscreen", metavar="DIR", help="write PNG frames here instead of a window")
     p.add_argument("--frames", type=int, default=4, help="offscreen: frames to write, default 4")
-    p.add_argument("--every", type=float, default=0.05,
-                   help="offscreen: simulated seconds between frames, default 0.05")
-    p.add_argument("--settle", type=float, default=0.3,
-                   help="offscreen: simulated seconds before the first frame, default 0.3")
-    p.add_argument("--size", type=int, nargs=2, default=(960, 600), metavar=("W", "H"),
-                   help="offscreen: frame size in pixels, default 960 600")
+    p.add_argument(
+        "--every",
+        type=float,
+        default=0.05,
+        help="offscreen: simulated seconds between frames, default 0.05",
+    )
+    p.add_argument(
+        "--settle",
+        type=float,
+        default=0.3,
+        help="offscreen: simulated seconds before the first frame, default 0.3",
+    )
+    p.add_argument(
+        "--size",
+        type=int,
+        nargs=2,
+        default=(960, 600),
+        metavar=("W", "H"),
+        help="offscreen: frame size in pixels, default 960 600",
+    )
     args = p.parse_args(argv)
     if args.offscreen is not None:
         if not 1 <= args.frames <= 1000:
@@ -58,8 +74,9 @@ def offscreen(args) -> int:
 
     from mjtouch import viewer
 
-    settings = viewer.ViewSettings(force_n=args.force, speed_m_s=args.speed,
-                                   texture=args.texture, ridges=args.ridges)
+    settings = viewer.ViewSettings(
+        force_n=args.force, speed_m_s=args.speed, texture=args.texture, ridges=args.ridges
+    )
     session = viewer.SlideSession(settings)
     out = pathlib.Path(args.offscreen)
     out.mkdir(parents=True, exist_ok=True)
@@ -81,15 +98,26 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.offscreen is None:
             from mjtouch import viewer
-            viewer.launch(None, viewer.ViewSettings(force_n=args.force, speed_m_s=args.speed,
-                                                    texture=args.texture, ridges=args.ridges))
+
+            viewer.launch(
+                None,
+                viewer.ViewSettings(
+                    force_n=args.force,
+                    speed_m_s=args.speed,
+                    texture=args.texture,
+                    ridges=args.ridges,
+                ),
+            )
             return 0
         if "MUJOCO_GL" not in os.environ:
             from mjtouch.viewer import offscreen_backend
+
             backend = offscreen_backend()
             if backend is None:
-                p.error("no offscreen OpenGL backend works here: install EGL (apt-get install "
-                        "libegl1 libegl-mesa0) or OSMesa (apt-get install libosmesa6)")
+                p.error(
+                    "no offscreen OpenGL backend works here: install EGL (apt-get install "
+                    "libegl1 libegl-mesa0) or OSMesa (apt-get install libosmesa6)"
+                )
             env = {**os.environ, "MUJOCO_GL": backend, "PYOPENGL_PLATFORM": backend}
             return subprocess.run([sys.executable, __file__, *argv], env=env).returncode
         return offscreen(args)

@@ -72,8 +72,10 @@ FORCES_N = (2.6e-3, 3.9e-3, 5.2e-3, 6.5e-3, 7.8e-3)  # the paper's five upper le
 PAPER_DISPLACEMENTS_M = (0.47e-3, 0.53e-3, 0.60e-3, 0.66e-3, 0.73e-3)
 PAPER_ZERO_FORCE_DISPLACEMENT_M = 0.34e-3  # the paper's lowest level, paired with 0 mN
 REFERENCE_LEVEL = 3  # the fourth level: 6.5 mN / 0.66 mm, the relative MRR's denominator
-PAPER_TABLE3 = {"displacement": {"absolute_hz": 14.66, "relative": 0.77},
-                "force": {"absolute_hz": 3.79, "relative": 0.12}}
+PAPER_TABLE3 = {
+    "displacement": {"absolute_hz": 14.66, "relative": 0.77},
+    "force": {"absolute_hz": 3.79, "relative": 0.12},
+}
 PAPER_FORCE_RANGE_AT_060_N = (2.8e-3, 5.0e-3)  # Fig. 6, at 0.60 mm (the third level)
 PAPER_RATE_AT_7_8_MN_HZ = (22.0, 26.0)  # text on Fig. 7F, across the six specimens
 # Table 3's force row implies specimen 1's rate at 6.5 mN: absolute / relative MRR
@@ -116,16 +118,20 @@ def skin_layers(specimen, modulus: str = "initial") -> list[tuple[float, float, 
     thickness, mu = specimen[0], specimen[1]
     if modulus == "relaxed":
         mu *= relaxation(specimen, 0.5 * sum(WINDOW_S))
-    return [(thickness, young_pa(mu, SKIN_POISSON), SKIN_POISSON),
-            (NYLON[0], young_pa(NYLON[1], NYLON[2]), NYLON[2]),
-            (SYLGARD[0], young_pa(SYLGARD[1], SYLGARD[2]), SYLGARD[2])]
+    return [
+        (thickness, young_pa(mu, SKIN_POISSON), SKIN_POISSON),
+        (NYLON[0], young_pa(NYLON[1], NYLON[2]), NYLON[2]),
+        (SYLGARD[0], young_pa(SYLGARD[1], SYLGARD[2]), SYLGARD[2]),
+    ]
 
 
 def grid_size(pitch_m: float) -> int:
     """Odd n: a cell centred on the axis, sites out to the rim + margin."""
     if not 0 < pitch_m <= FILLET_RADIUS_M / 4:
-        raise ValueError(f"pitch_m = {pitch_m} must be in (0, {FILLET_RADIUS_M / 4}] "
-                         "(at least 4 cells across the fillet)")
+        raise ValueError(
+            f"pitch_m = {pitch_m} must be in (0, {FILLET_RADIUS_M / 4}] "
+            "(at least 4 cells across the fillet)"
+        )
     return 2 * math.ceil((TIP_RADIUS_M + GRID_MARGIN_M) / pitch_m) + 1
 
 
@@ -138,7 +144,7 @@ def tip_gap(n: int, pitch_m: float) -> tuple[np.ndarray, np.ndarray]:
     gap = np.full((n, n), np.inf)
     gap[r <= flat] = 0.0
     fil = (r > flat) & (r <= TIP_RADIUS_M)
-    gap[fil] = FILLET_RADIUS_M - np.sqrt(FILLET_RADIUS_M ** 2 - (r[fil] - flat) ** 2)
+    gap[fil] = FILLET_RADIUS_M - np.sqrt(FILLET_RADIUS_M**2 - (r[fil] - flat) ** 2)
     return gap, r
 
 
@@ -168,8 +174,7 @@ class SpecimenContact:
         c = self.n // 2
         self.site_ij = [(i, c) for i in range(c, self.n)]
         self.site_r_m = r[c, c:]
-        self.engine = core.StressEngine(self.skin, self.n, pitch_m, [MERKEL_DEPTH_M],
-                                        self.site_ij)
+        self.engine = core.StressEngine(self.skin, self.n, pitch_m, [MERKEL_DEPTH_M], self.site_ij)
         self.edge = (self.site_r_m >= EDGE_SITES_M[0]) & (self.site_r_m <= EDGE_SITES_M[1])
 
     def sample(self, pressure_pa: np.ndarray) -> dict:
@@ -177,25 +182,35 @@ class SpecimenContact:
         q = max_compressive_pa(self.engine.stress(pressure_pa))
         c = self.n // 2
         k = int(np.argmax(np.where(self.edge, q, -1.0)))
-        return {"force_n": float(pressure_pa.sum()) * self.pitch_m ** 2,
-                "pressure_pa": pressure_pa, "pressure_centre_pa": float(pressure_pa[c, c]),
-                "pressure_row_pa": pressure_pa[c, c:], "q_row_pa": q, "q_centre_pa": float(q[0]),
-                "q_edge_pa": float(q[k]), "edge_site_r_m": float(self.site_r_m[k])}
+        return {
+            "force_n": float(pressure_pa.sum()) * self.pitch_m**2,
+            "pressure_pa": pressure_pa,
+            "pressure_centre_pa": float(pressure_pa[c, c]),
+            "pressure_row_pa": pressure_pa[c, c:],
+            "q_row_pa": q,
+            "q_centre_pa": float(q[0]),
+            "q_edge_pa": float(q[k]),
+            "edge_site_r_m": float(self.site_r_m[k]),
+        }
 
     def press(self, force_n: float) -> dict:
         """Force control: the rigid tip pressed with force_n."""
-        p, info = core.elastic_pressure(self.gap, self.pitch_m, force_n,
-                                        compliance_m_per_pa=self.table)
+        p, info = core.elastic_pressure(
+            self.gap, self.pitch_m, force_n, compliance_m_per_pa=self.table
+        )
         if not info["converged"]:
             raise RuntimeError(f"contact solve did not converge at {force_n} N: {info}")
         return {**self.sample(p), "force_n": force_n, "approach_m": info["approach_m"]}
 
     def press_to(self, approach_m: float, guess_n: float) -> dict:
         """Displacement control: the force whose approach is approach_m."""
+
         def miss(f):
-            info = core.elastic_pressure(self.gap, self.pitch_m, f,
-                                         compliance_m_per_pa=self.table)[1]
+            info = core.elastic_pressure(self.gap, self.pitch_m, f, compliance_m_per_pa=self.table)[
+                1
+            ]
             return info["approach_m"] - approach_m
+
         lo, hi = 0.5 * guess_n, 2.0 * guess_n
         while miss(lo) > 0:
             lo *= 0.5
@@ -207,8 +222,11 @@ class SpecimenContact:
 def sa1_config(gain_scale: float) -> dict:
     """Wang 2016's SA1 (`sa1_model` wang2016: |dq/dt|, no adaptation) with
     its Table 1 gains k0 and k1 scaled (the same as scaling q)."""
-    return {"sa1_model": "wang2016", "sa1_k0": 1.40e-16 * gain_scale,
-            "sa1_k1": 1.68e-16 * gain_scale}
+    return {
+        "sa1_model": "wang2016",
+        "sa1_k0": 1.40e-16 * gain_scale,
+        "sa1_k1": 1.68e-16 * gain_scale,
+    }
 
 
 def q_trace(q_static_pa: float) -> np.ndarray:
@@ -245,8 +263,11 @@ def mrr(rates_hz: np.ndarray) -> dict:
     r = np.asarray(rates_hz, float)
     absolute = float(np.mean(r.max(axis=0) - r.min(axis=0)))
     ref = float(r[0, REFERENCE_LEVEL])
-    return {"absolute_hz": absolute, "relative": absolute / ref if ref > 0 else None,
-            "reference_rate_hz": ref}
+    return {
+        "absolute_hz": absolute,
+        "relative": absolute / ref if ref > 0 else None,
+        "reference_rate_hz": ref,
+    }
 
 
 def stress_range(q_pa: np.ndarray) -> float:
@@ -256,18 +277,25 @@ def stress_range(q_pa: np.ndarray) -> float:
     return float(np.mean(q.max(axis=0) - q.min(axis=0)) / q[0, REFERENCE_LEVEL])
 
 
-def run(pitch_m: float = 12.5e-6, modulus: str = "initial",
-        calibrate_hz: float = PAPER_REFERENCE_RATE_HZ,
-        specimens=SPECIMENS, forces_n=FORCES_N) -> dict:
+def run(
+    pitch_m: float = 12.5e-6,
+    modulus: str = "initial",
+    calibrate_hz: float = PAPER_REFERENCE_RATE_HZ,
+    specimens=SPECIMENS,
+    forces_n=FORCES_N,
+) -> dict:
     if not calibrate_hz >= 0:
         raise ValueError(f"calibrate_hz = {calibrate_hz} must be >= 0 (0: Table 1 gains only)")
     contacts = [SpecimenContact(skin_layers(s, modulus), pitch_m) for s in specimens]
     force = [[c.press(f) for f in forces_n] for c in contacts]
     levels_m = [r["approach_m"] for r in force[0]]
     disp = [force[0]] + [
-        [c.press_to(d, guess_n=f * fr["approach_m"] / d)
-         for d, f, fr in zip(levels_m, forces_n, force[k + 1])]
-        for k, c in enumerate(contacts[1:])]
+        [
+            c.press_to(d, guess_n=f * fr["approach_m"] / d)
+            for d, f, fr in zip(levels_m, forces_n, force[k + 1])
+        ]
+        for k, c in enumerate(contacts[1:])
+    ]
     # pressure control (the paper's pressure-to-stress transformation): specimen
     # 1's contact pressure at each force, prescribed on every stack
     pres = [[c.sample(r["pressure_pa"]) for r in force[0]] for c in contacts]
@@ -275,13 +303,20 @@ def run(pitch_m: float = 12.5e-6, modulus: str = "initial",
     def field(results, key):
         return np.array([[r[key] for r in row] for row in results])
 
-    out = {"pitch_m": pitch_m, "grid_n": contacts[0].n, "modulus": modulus,
-           "layers": [skin_layers(s, modulus) for s in specimens],
-           "forces_n": list(forces_n), "displacements_m": levels_m,
-           "paper_displacements_m": list(PAPER_DISPLACEMENTS_M),
-           "paper_indentations_m": [d - PAPER_ZERO_FORCE_DISPLACEMENT_M
-                                    for d in PAPER_DISPLACEMENTS_M],
-           "site_r_m": contacts[0].site_r_m.tolist(), "modes": {}}
+    out = {
+        "pitch_m": pitch_m,
+        "grid_n": contacts[0].n,
+        "modulus": modulus,
+        "layers": [skin_layers(s, modulus) for s in specimens],
+        "forces_n": list(forces_n),
+        "displacements_m": levels_m,
+        "paper_displacements_m": list(PAPER_DISPLACEMENTS_M),
+        "paper_indentations_m": [
+            d - PAPER_ZERO_FORCE_DISPLACEMENT_M for d in PAPER_DISPLACEMENTS_M
+        ],
+        "site_r_m": contacts[0].site_r_m.tolist(),
+        "modes": {},
+    }
     q_ref = field(force, "q_centre_pa")[0, REFERENCE_LEVEL]  # specimen 1, centre, 6.5 mN
     gains = {"table1": 1.0}
     if calibrate_hz > 0:
@@ -289,12 +324,14 @@ def run(pitch_m: float = 12.5e-6, modulus: str = "initial",
     out["gain_scale"] = gains
     out["calibrate_hz"] = calibrate_hz
     for mode, res in (("force", force), ("displacement", disp), ("pressure", pres)):
-        m = {"force_n": field(res, "force_n").tolist(),
-             "pressure_centre_pa": field(res, "pressure_centre_pa").tolist(),
-             "edge_site_r_m": field(res, "edge_site_r_m").tolist(),
-             "q_row_pa": [[r["q_row_pa"].tolist() for r in row] for row in res],
-             "pressure_row_pa": [[r["pressure_row_pa"].tolist() for r in row] for row in res],
-             "sites": {}}
+        m = {
+            "force_n": field(res, "force_n").tolist(),
+            "pressure_centre_pa": field(res, "pressure_centre_pa").tolist(),
+            "edge_site_r_m": field(res, "edge_site_r_m").tolist(),
+            "q_row_pa": [[r["q_row_pa"].tolist() for r in row] for row in res],
+            "pressure_row_pa": [[r["pressure_row_pa"].tolist() for r in row] for row in res],
+            "sites": {},
+        }
         if mode != "pressure":
             m["approach_m"] = field(res, "approach_m").tolist()
         for site in ("centre", "edge"):
@@ -307,9 +344,11 @@ def run(pitch_m: float = 12.5e-6, modulus: str = "initial",
         out["modes"][mode] = m
     f_mid = np.array(out["modes"]["displacement"]["force_n"])[:, 2]
     out["force_range_at_level3_n"] = [float(f_mid.min()), float(f_mid.max())]
-    out["paper"] = {"table3_stress": PAPER_TABLE3,
-                    "force_range_at_060mm_n": list(PAPER_FORCE_RANGE_AT_060_N),
-                    "rate_at_7_8mN_hz": list(PAPER_RATE_AT_7_8_MN_HZ)}
+    out["paper"] = {
+        "table3_stress": PAPER_TABLE3,
+        "force_range_at_060mm_n": list(PAPER_FORCE_RANGE_AT_060_N),
+        "rate_at_7_8mN_hz": list(PAPER_RATE_AT_7_8_MN_HZ),
+    }
     return out
 
 
@@ -319,53 +358,74 @@ def _fmt_mrr(m: dict) -> str:
 
 
 def report(r: dict) -> str:
-    lines = [f"Wang et al. 2016, six specimens: pitch {r['pitch_m'] * 1e6:.3g} um, "
-             f"{r['grid_n']} x {r['grid_n']} cells, skin modulus {r['modulus']}",
-             "levels (force mN / our displacement mm / paper's displacement mm, minus 0.34):"]
-    for f, d, pd, pi in zip(r["forces_n"], r["displacements_m"], r["paper_displacements_m"],
-                            r["paper_indentations_m"]):
-        lines.append(f"  {f * 1e3:4.1f} mN   {d * 1e3:6.3f} mm   "
-                     f"{pd * 1e3:.2f} ({pi * 1e3:.2f}) mm")
+    lines = [
+        f"Wang et al. 2016, six specimens: pitch {r['pitch_m'] * 1e6:.3g} um, "
+        f"{r['grid_n']} x {r['grid_n']} cells, skin modulus {r['modulus']}",
+        "levels (force mN / our displacement mm / paper's displacement mm, minus 0.34):",
+    ]
+    for f, d, pd, pi in zip(
+        r["forces_n"], r["displacements_m"], r["paper_displacements_m"], r["paper_indentations_m"]
+    ):
+        lines.append(
+            f"  {f * 1e3:4.1f} mN   {d * 1e3:6.3f} mm   {pd * 1e3:.2f} ({pi * 1e3:.2f}) mm"
+        )
     fd = np.array(r["modes"]["displacement"]["force_n"]) * 1e3
     lines.append("reaction force (mN) under displacement control, specimen x level:")
     for k, row in enumerate(fd):
         lines.append(f"  {k + 1}: " + " ".join(f"{v:6.2f}" for v in row))
     lo, hi = r["force_range_at_level3_n"]
-    lines.append(f"  at the third level: {lo * 1e3:.2f}-{hi * 1e3:.2f} mN (max/min {hi / lo:.2f}); "
-                 "paper at 0.60 mm: 2.8-5.0 mN (1.79)")
+    lines.append(
+        f"  at the third level: {lo * 1e3:.2f}-{hi * 1e3:.2f} mN (max/min {hi / lo:.2f}); "
+        "paper at 0.60 mm: 2.8-5.0 mN (1.79)"
+    )
     for site in ("centre", "edge"):
-        lines.append(f"{site} site (22.5 um deep), q = max compressive stress (kPa), "
-                     "specimen x level:")
+        lines.append(
+            f"{site} site (22.5 um deep), q = max compressive stress (kPa), specimen x level:"
+        )
         for mode in MODES:
             q = np.array(r["modes"][mode]["sites"][site]["q_pa"]) / 1e3
             lines.append(f"  {mode}:")
             for k, row in enumerate(q):
                 lines.append(f"    {k + 1}: " + " ".join(f"{v:6.2f}" for v in row))
     gains = r["gain_scale"]
-    lines.append("static SA1 rate (Hz) and mean response ranges (paper, Table 3 stress row: "
-                 "displacement 14.66 Hz 77%, force 3.79 Hz 12%):")
+    lines.append(
+        "static SA1 rate (Hz) and mean response ranges (paper, Table 3 stress row: "
+        "displacement 14.66 Hz 77%, force 3.79 Hz 12%):"
+    )
     for name, scale in gains.items():
-        label = "Table 1 gains" if name == "table1" else (
-            f"gains x {scale:.3f} (specimen 1 centre at 6.5 mN -> {r['calibrate_hz']:.1f} Hz)")
+        label = (
+            "Table 1 gains"
+            if name == "table1"
+            else (
+                f"gains x {scale:.3f} (specimen 1 centre at 6.5 mN -> {r['calibrate_hz']:.1f} Hz)"
+            )
+        )
         lines.append(f"  {label}:")
         for site in ("centre", "edge"):
             for mode in MODES:
                 e = r["modes"][mode]["sites"][site]
                 rates = np.array(e["rates"][name]["rates_hz"])
-                lines.append(f"    {site:6s} {mode:12s} MRR {_fmt_mrr(e['rates'][name]['mrr'])}   "
-                             f"rates min-max per level: " + " ".join(
-                                 f"{a:.1f}-{b:.1f}" for a, b in zip(rates.min(0), rates.max(0))))
+                lines.append(
+                    f"    {site:6s} {mode:12s} MRR {_fmt_mrr(e['rates'][name]['mrr'])}   "
+                    f"rates min-max per level: "
+                    + " ".join(f"{a:.1f}-{b:.1f}" for a, b in zip(rates.min(0), rates.max(0)))
+                )
     lines.append("stress range (MRR recipe on q, relative to specimen 1 at the fourth level):")
     for site in ("centre", "edge"):
-        lines.append(f"  {site:6s} " + "   ".join(
-            f"{mode} {100 * r['modes'][mode]['sites'][site]['stress_range_relative']:5.1f}%"
-            for mode in MODES))
+        lines.append(
+            f"  {site:6s} "
+            + "   ".join(
+                f"{mode} {100 * r['modes'][mode]['sites'][site]['stress_range_relative']:5.1f}%"
+                for mode in MODES
+            )
+        )
     return "\n".join(lines)
 
 
 def plot(r: dict, path: str) -> None:
     try:
         import matplotlib
+
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
@@ -377,28 +437,37 @@ def plot(r: dict, path: str) -> None:
     fd = np.array(r["modes"]["displacement"]["force_n"]) * 1e3
     for k, row in enumerate(fd):
         ax[0, 0].plot(d_mm, row, "o-", label=f"specimen {k + 1}", lw=2.5 if k == 0 else 1)
-    ax[0, 0].set(xlabel="indentation (mm)", ylabel="reaction force (mN)",
-                 title="displacement control: reaction force")
+    ax[0, 0].set(
+        xlabel="indentation (mm)",
+        ylabel="reaction force (mN)",
+        title="displacement control: reaction force",
+    )
     ax[0, 0].legend(fontsize=8)
-    for a, mode, x, xl in ((ax[0, 1], "force", f_mn, "force (mN)"),
-                           (ax[1, 1], "displacement", d_mm, "indentation (mm)"),
-                           (ax[0, 2], "pressure", f_mn, "force of specimen 1's pressure (mN)")):
+    for a, mode, x, xl in (
+        (ax[0, 1], "force", f_mn, "force (mN)"),
+        (ax[1, 1], "displacement", d_mm, "indentation (mm)"),
+        (ax[0, 2], "pressure", f_mn, "force of specimen 1's pressure (mN)"),
+    ):
         rates = np.array(r["modes"][mode]["sites"]["centre"]["rates"][name]["rates_hz"])
         a.fill_between(x, rates.min(0), rates.max(0), color="0.8", label="6 specimens")
         a.plot(x, rates[0], "k-o", label="specimen 1")
         m = r["modes"][mode]["sites"]["centre"]["rates"][name]["mrr"]
         rel = "n/a" if m["relative"] is None else f"{100 * m['relative']:.0f}%"
-        a.set(xlabel=xl, ylabel="SA1 static rate (Hz)",
-              title=f"{mode} control, centre: MRR {m['absolute_hz']:.1f} Hz, {rel}")
+        a.set(
+            xlabel=xl,
+            ylabel="SA1 static rate (Hz)",
+            title=f"{mode} control, centre: MRR {m['absolute_hz']:.1f} Hz, {rel}",
+        )
         a.legend(fontsize=8)
     rr = np.array(r["site_r_m"]) * 1e3
     for j, f in enumerate(f_mn):
         q = np.array(r["modes"]["force"]["q_row_pa"][0][j]) / 1e3
         p = np.array(r["modes"]["force"]["pressure_row_pa"][0][j]) / 1e3
-        line, = ax[1, 0].plot(rr, q, label=f"{f:.1f} mN")
+        (line,) = ax[1, 0].plot(rr, q, label=f"{f:.1f} mN")
         ax[1, 0].plot(rr, p, ":", color=line.get_color())
-    ax[1, 0].set(xlabel="r (mm)", ylabel="kPa",
-                 title="specimen 1: q at 22.5 um (solid), pressure (dotted)")
+    ax[1, 0].set(
+        xlabel="r (mm)", ylabel="kPa", title="specimen 1: q at 22.5 um (solid), pressure (dotted)"
+    )
     ax[1, 0].legend(fontsize=8)
     labels, ours, paper = [], [], []
     for mode in MODES:
@@ -424,14 +493,26 @@ def _jsonable(r: dict) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--pitch", type=float, default=12.5e-6,
-                   help="taxel pitch (m); 8 cells across the 0.1 mm fillet by default")
-    p.add_argument("--modulus", choices=("initial", "relaxed"), default="initial",
-                   help="skin shear modulus: Ogden mu, or mu x its Prony relaxation at 3.25 s")
-    p.add_argument("--calibrate-hz", type=float, default=PAPER_REFERENCE_RATE_HZ,
-                   help="also scale the SA1 gains so that specimen 1's centre site fires at "
-                        "this rate at 6.5 mN (default: Table 3's 3.79 Hz / 12%%); 0: Table 1 "
-                        "gains only")
+    p.add_argument(
+        "--pitch",
+        type=float,
+        default=12.5e-6,
+        help="taxel pitch (m); 8 cells across the 0.1 mm fillet by default",
+    )
+    p.add_argument(
+        "--modulus",
+        choices=("initial", "relaxed"),
+        default="initial",
+        help="skin shear modulus: Ogden mu, or mu x its Prony relaxation at 3.25 s",
+    )
+    p.add_argument(
+        "--calibrate-hz",
+        type=float,
+        default=PAPER_REFERENCE_RATE_HZ,
+        help="also scale the SA1 gains so that specimen 1's centre site fires at "
+        "this rate at 6.5 mN (default: Table 3's 3.79 Hz / 12%%); 0: Table 1 "
+        "gains only",
+    )
     p.add_argument("--plot", metavar="FILE", help="write a PNG (forces, rates, stress profile)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     args = p.parse_args(argv)

@@ -39,8 +39,11 @@ def _compiled_dirs() -> list[str]:
         files = _metadata.files("mjtouch") or []
     except _metadata.PackageNotFoundError:
         return []
-    found = {str(_pathlib.Path(f.locate()).resolve().parent) for f in files
-             if f.name.startswith("_core.") and f.suffix in (".so", ".pyd")}
+    found = {
+        str(_pathlib.Path(f.locate()).resolve().parent)
+        for f in files
+        if f.name.startswith("_core.") and f.suffix in (".so", ".pyd")
+    }
     return sorted(d for d in found if d != str(here))
 
 
@@ -53,5 +56,11 @@ _load()
 
 from mjtouch.scene.robot import attach, layouts  # noqa: E402  (after the plugin loads)
 
-__all__ = ["PluginNotBuiltError", "attach", "layouts", "library_path", "MUJOCO_VERSION",
-           "__version__"]
+__all__ = [
+    "PluginNotBuiltError",
+    "attach",
+    "layouts",
+    "library_path",
+    "MUJOCO_VERSION",
+    "__version__",
+]

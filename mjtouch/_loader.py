@@ -103,4 +103,3 @@ def _check_versions(lib: ctypes.CDLL) -> None:
 def register() -> None:
     """Entry point for ``mujoco.plugins``: registers ``mjtouch.skin``."""
     load()
-

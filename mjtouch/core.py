@@ -41,8 +41,9 @@ def _config(config: dict | None) -> dict[str, str]:
 
 def _points(x_m, y_m, z_m) -> tuple[tuple[int, ...], np.ndarray]:
     """Broadcast coordinates to (npoint, 3) points and the broadcast shape."""
-    x, y, z = np.broadcast_arrays(np.asarray(x_m, float), np.asarray(y_m, float),
-                                  np.asarray(z_m, float))
+    x, y, z = np.broadcast_arrays(
+        np.asarray(x_m, float), np.asarray(y_m, float), np.asarray(z_m, float)
+    )
     return x.shape, np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1)
 
 
@@ -62,8 +63,9 @@ def _shear_pair(p: np.ndarray, shear_x_pa, shear_y_pa):
     return sx, sy
 
 
-def halfspace_stress(x_m, y_m, z_m, load: str = "pressure", poisson: float = 0.5,
-                     cell_m: float = 0.0) -> np.ndarray:
+def halfspace_stress(
+    x_m, y_m, z_m, load: str = "pressure", poisson: float = 0.5, cell_m: float = 0.0
+) -> np.ndarray:
     """Stress (Pa, Voigt order xx yy zz xy xz yz; z into the solid, tension
     positive) in a homogeneous half-space at points (x, y, z > 0) for a 1 N
     point force (cell_m = 0) or a uniform 1 Pa traction on a square cell of
@@ -72,9 +74,15 @@ def halfspace_stress(x_m, y_m, z_m, load: str = "pressure", poisson: float = 0.5
     return _core.halfspace_stress(pts, load, float(poisson), float(cell_m)).reshape(shape + (6,))
 
 
-def field_stress(pressure_pa: np.ndarray, pitch_m: float, depth_m: float, receptors_ij,
-                 shear_x_pa: np.ndarray | None = None, shear_y_pa: np.ndarray | None = None,
-                 poisson: float = 0.5) -> np.ndarray:
+def field_stress(
+    pressure_pa: np.ndarray,
+    pitch_m: float,
+    depth_m: float,
+    receptors_ij,
+    shear_x_pa: np.ndarray | None = None,
+    shear_y_pa: np.ndarray | None = None,
+    poisson: float = 0.5,
+) -> np.ndarray:
     """Stress (nrec x 6, Pa) at depth under taxel cells receptors_ij (nrec x 2:
     i along x, j along y) from traction fields on an n x n grid (indexed
     [j, i]) of square cells of side pitch_m, homogeneous half-space."""
@@ -91,8 +99,16 @@ def skin_surface(semi_axes_m=(0.008, 0.007, 0.007), config: dict | None = None) 
     return _core.skin_surface(tuple(float(v) for v in semi_axes_m), _config(config))
 
 
-def hfield_box_mean(samples: np.ndarray, half_x_m: float, half_y_m: float, elevation_m: float,
-                    x0: float, x1: float, y0: float, y1: float) -> float:
+def hfield_box_mean(
+    samples: np.ndarray,
+    half_x_m: float,
+    half_y_m: float,
+    elevation_m: float,
+    x0: float,
+    x1: float,
+    y0: float,
+    y1: float,
+) -> float:
     """Exact mean of MuJoCo's bilinear height field over [x0,x1] x [y0,y1]."""
     s = np.ascontiguousarray(samples, dtype=np.float32)
     if s.ndim != 2:
@@ -101,9 +117,15 @@ def hfield_box_mean(samples: np.ndarray, half_x_m: float, half_y_m: float, eleva
     return float(_core.hfield_box_mean(s, half_x_m, half_y_m, elevation_m, box)[0])
 
 
-def winkler_pressure(gap_m: np.ndarray, pitch_m: float, stiffness_pa_per_m: float,
-                     force_n: float, coverage: np.ndarray | None = None,
-                     approach_guess_m: float = math.nan, reference: bool = False):
+def winkler_pressure(
+    gap_m: np.ndarray,
+    pitch_m: float,
+    stiffness_pa_per_m: float,
+    force_n: float,
+    coverage: np.ndarray | None = None,
+    approach_guess_m: float = math.nan,
+    reference: bool = False,
+):
     """Winkler pressure (Pa, n x n) whose integral equals force_n, and the
     solved approach (m). approach_guess_m warm-starts the solve as the plugin
     does from its last step; reference=True runs the unoptimised solve (the
@@ -111,14 +133,26 @@ def winkler_pressure(gap_m: np.ndarray, pitch_m: float, stiffness_pa_per_m: floa
     g = np.ascontiguousarray(gap_m, dtype=np.float64)
     _square(g, "gap_m")
     cov = np.ones_like(g) if coverage is None else np.ascontiguousarray(coverage, np.float64)
-    p, approach = _core.winkler_pressure(g, cov, float(pitch_m), float(stiffness_pa_per_m),
-                                         float(force_n), float(approach_guess_m), bool(reference))
+    p, approach = _core.winkler_pressure(
+        g,
+        cov,
+        float(pitch_m),
+        float(stiffness_pa_per_m),
+        float(force_n),
+        float(approach_guess_m),
+        bool(reference),
+    )
     return p.astype(np.float64), approach
 
 
-def receptor_run(cls: str, quantity_pa: np.ndarray, dt_s: float,
-                 config: dict | None = None, stream: int = 0,
-                 return_rate: bool = False):
+def receptor_run(
+    cls: str,
+    quantity_pa: np.ndarray,
+    dt_s: float,
+    config: dict | None = None,
+    stream: int = 0,
+    return_rate: bool = False,
+):
     """Drive one receptor of class cls with the quantity trace (Pa for the
     stress quantities; one value per step of dt_s), exactly as the plugin
     does: the first value primes the receptor at rest (no output), each
@@ -138,16 +172,25 @@ def surface_compliance(n: int, pitch_m: float, young_pa: float, poisson: float) 
     """Homogeneous half-space surface compliance (m/Pa), (2n-1) x (2n-1),
     indexed [dj + n - 1, di + n - 1]: normal displacement at a cell's centre
     per Pa of uniform pressure on the cell offset by (di, dj)."""
-    return _core.surface_compliance(int(n), float(pitch_m), float(young_pa),
-                                    float(poisson)).astype(np.float64)
+    return _core.surface_compliance(int(n), float(pitch_m), float(young_pa), float(poisson)).astype(
+        np.float64
+    )
 
 
-def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
-                     young_pa: float | None = None, poisson: float | None = None,
-                     periodic: bool = False, tolerance: float = 1e-8,
-                     max_iterations: int = 2000, initial_pa: np.ndarray | None = None,
-                     compliance_m_per_pa: np.ndarray | None = None, method: str = "pcg",
-                     precision: str = "double"):
+def elastic_pressure(
+    gap_m: np.ndarray,
+    pitch_m: float,
+    force_n: float,
+    young_pa: float | None = None,
+    poisson: float | None = None,
+    periodic: bool = False,
+    tolerance: float = 1e-8,
+    max_iterations: int = 2000,
+    initial_pa: np.ndarray | None = None,
+    compliance_m_per_pa: np.ndarray | None = None,
+    method: str = "pcg",
+    precision: str = "double",
+):
     """Boundary-element contact of the skin against the rigid gap field
     (ny x nx, m; inf: cannot touch), total load force_n: a homogeneous
     half-space (young_pa, poisson), or any skin given by its surface
@@ -166,17 +209,37 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
     p0 = np.zeros_like(g) if initial_pa is None else np.ascontiguousarray(initial_pa, np.float64)
     if compliance_m_per_pa is not None:
         if young_pa is not None or poisson is not None or periodic:
-            raise ValueError("give either compliance_m_per_pa or young_pa and poisson (the "
-                             "table's solver is non-periodic)")
+            raise ValueError(
+                "give either compliance_m_per_pa or young_pa and poisson (the "
+                "table's solver is non-periodic)"
+            )
         t = np.ascontiguousarray(compliance_m_per_pa, dtype=np.float32)
-        return _core.elastic_pressure_table(g, p0, float(pitch_m), float(force_n), t,
-                                            float(tolerance), int(max_iterations), method,
-                                            precision)
+        return _core.elastic_pressure_table(
+            g,
+            p0,
+            float(pitch_m),
+            float(force_n),
+            t,
+            float(tolerance),
+            int(max_iterations),
+            method,
+            precision,
+        )
     if young_pa is None or poisson is None:
         raise ValueError("give young_pa and poisson (a half-space), or compliance_m_per_pa")
-    return _core.elastic_pressure(g, p0, float(pitch_m), float(force_n), float(young_pa),
-                                  float(poisson), bool(periodic), float(tolerance),
-                                  int(max_iterations), method, precision)
+    return _core.elastic_pressure(
+        g,
+        p0,
+        float(pitch_m),
+        float(force_n),
+        float(young_pa),
+        float(poisson),
+        bool(periodic),
+        float(tolerance),
+        int(max_iterations),
+        method,
+        precision,
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -185,8 +248,18 @@ def elastic_pressure(gap_m: np.ndarray, pitch_m: float, force_n: float,
 
 SIDES = {None: -1, "upper": 0, "lower": 1}
 STRESS_METHODS = {"auto": 0, "direct": 1, "fft": 2, "tree": 3}
-TRANSFER_NAMES = ("p_xixi", "p_etaeta", "p_zz", "p_xiz", "q_xixi", "q_etaeta", "q_zz", "q_xiz",
-                  "a_etaz", "a_xieta")
+TRANSFER_NAMES = (
+    "p_xixi",
+    "p_etaeta",
+    "p_zz",
+    "p_xiz",
+    "q_xixi",
+    "q_etaeta",
+    "q_zz",
+    "q_xiz",
+    "a_etaz",
+    "a_xieta",
+)
 
 
 def shao_fingertip() -> tuple[list[tuple[float, float, float]], str]:
@@ -214,8 +287,10 @@ class LayeredSkin:
             layers, _ = shao_fingertip()
         arr = np.ascontiguousarray(layers, dtype=np.float64)
         if arr.ndim != 2:
-            raise ValueError("layers must be a non-empty sequence of (thickness_m, young_pa, "
-                             f"poisson) rows, got shape {arr.shape}")
+            raise ValueError(
+                "layers must be a non-empty sequence of (thickness_m, young_pa, "
+                f"poisson) rows, got shape {arr.shape}"
+            )
         if isinstance(base, str):
             if base != "rigid":
                 raise ValueError(f"base {base!r}: valid 'rigid' or (young_pa, poisson)")
@@ -266,14 +341,16 @@ class LayeredSkin:
         """Stress (Pa) at points from a 1 N point force at the origin."""
         return self._stress("point", load, x_m, y_m, z_m, 0.0, side)
 
-    def cell_stress(self, x_m, y_m, z_m, pitch_m: float, load: str = "pressure",
-                    side=None) -> np.ndarray:
+    def cell_stress(
+        self, x_m, y_m, z_m, pitch_m: float, load: str = "pressure", side=None
+    ) -> np.ndarray:
         """Stress (Pa) at points from a unit (1 Pa) traction on a square cell
         of side pitch_m centred at the origin."""
         return self._stress("cell", load, x_m, y_m, z_m, float(pitch_m), side)
 
-    def disc_stress(self, x_m, y_m, z_m, radius_m: float, load: str = "pressure",
-                    side=None) -> np.ndarray:
+    def disc_stress(
+        self, x_m, y_m, z_m, radius_m: float, load: str = "pressure", side=None
+    ) -> np.ndarray:
         """Stress (Pa) at points from a unit traction on a disc at the origin."""
         return self._stress("disc", load, x_m, y_m, z_m, float(radius_m), side)
 
@@ -283,15 +360,28 @@ class LayeredSkin:
         the centre of cell (i, j) from unit traction on cell (i + di, j + dj)."""
         return self._s.lattice_table(float(z_m), float(pitch_m), int(n), side).astype(np.float64)
 
-    def field_stress(self, pressure_pa: np.ndarray, pitch_m: float, depth_m: float,
-                     receptors_ij, shear_x_pa: np.ndarray | None = None,
-                     shear_y_pa: np.ndarray | None = None, method: str = "auto") -> np.ndarray:
+    def field_stress(
+        self,
+        pressure_pa: np.ndarray,
+        pitch_m: float,
+        depth_m: float,
+        receptors_ij,
+        shear_x_pa: np.ndarray | None = None,
+        shear_y_pa: np.ndarray | None = None,
+        method: str = "auto",
+    ) -> np.ndarray:
         """Stress (nrec x 6, Pa) at depth_m under taxel cells receptors_ij
         (nrec x 2: i along x, j along y) from traction fields on an n x n grid
         ([j, i]) of square cells of side pitch_m: the plugin's stress stage
         (direct summation or FFT convolution, ``method``)."""
-        engine = StressEngine(self, np.shape(pressure_pa)[0], pitch_m, [depth_m], receptors_ij,
-                              method="fft" if method == "fft" else "auto")
+        engine = StressEngine(
+            self,
+            np.shape(pressure_pa)[0],
+            pitch_m,
+            [depth_m],
+            receptors_ij,
+            method="fft" if method == "fft" else "auto",
+        )
         return engine.stress(pressure_pa, shear_x_pa, shear_y_pa, method=method)
 
 
@@ -305,14 +395,27 @@ class StressEngine:
     ``"tree"`` builds the hierarchical path with opening angle ``theta``
     (the plugin with stress_method="tree")."""
 
-    def __init__(self, skin, n: int, pitch_m: float, depths_m, receptors_ij, depth_index=None,
-                 components=None, method: str = "auto", theta: float = 0.5):
+    def __init__(
+        self,
+        skin,
+        n: int,
+        pitch_m: float,
+        depths_m,
+        receptors_ij,
+        depth_index=None,
+        components=None,
+        method: str = "auto",
+        theta: float = 0.5,
+    ):
         layered, poisson = (skin._s, 0.0) if isinstance(skin, LayeredSkin) else (None, float(skin))
         depths = np.ascontiguousarray(np.atleast_1d(depths_m), dtype=np.float64)
         ij = np.ascontiguousarray(receptors_ij, dtype=np.int32).reshape(-1, 2)
         nrec = len(ij)
-        di = np.zeros(nrec, np.int32) if depth_index is None else np.ascontiguousarray(
-            depth_index, dtype=np.int32)
+        di = (
+            np.zeros(nrec, np.int32)
+            if depth_index is None
+            else np.ascontiguousarray(depth_index, dtype=np.int32)
+        )
         if di.shape != (nrec,):
             raise ValueError("depth_index must have one entry per receptor")
         # components: None (all six), one list for every site, or one list per site.
@@ -323,27 +426,42 @@ class StressEngine:
             raise ValueError("components: indices in [0, 6), for all sites or one list per site")
         mask = np.array([sum(1 << int(c) for c in set(cc)) for cc in comps], np.int32)
         self._skin = skin
-        self._e = _core.StressEngine(layered, poisson, int(n), float(pitch_m), depths, ij, di,
-                                     mask, method, float(theta))
+        self._e = _core.StressEngine(
+            layered, poisson, int(n), float(pitch_m), depths, ij, di, mask, method, float(theta)
+        )
         self.n = self._e.n
         self.nrec = self._e.nrec
         self.mirror_symmetric = self._e.mirror_symmetric
         self.table_build_s, self.spectra_build_s = self._e.table_build_s, self._e.spectra_build_s
         self.fft_n = self._e.fft_n
         self.table_bytes_per_depth = self._e.table_bytes_per_depth
-        self.tree_build_s, self.tree_terms_per_site = self._e.tree_build_s, self._e.tree_terms_per_site
+        self.tree_build_s, self.tree_terms_per_site = (
+            self._e.tree_build_s,
+            self._e.tree_terms_per_site,
+        )
 
-    def estimated_cost(self, active_cells: int, shear: bool = True,
-                       folded: bool | None = None) -> tuple[float, float]:
+    def estimated_cost(
+        self, active_cells: int, shear: bool = True, folded: bool | None = None
+    ) -> tuple[float, float]:
         """The cost model's (direct, fft) seconds per call. folded: whether the
         direct path is the folded one (default: as stress() without slip, i.e.
         folded when there is no shear)."""
         folded = (not shear) if folded is None else bool(folded)
         return self._e.estimated_cost(int(active_cells), bool(shear), folded)
 
-    def stress(self, pressure_pa, shear_x_pa=None, shear_y_pa=None, method: str = "auto",
-               repeats: int = 1, timing: bool = False, slip=None, fold: bool = True,
-               threads: int = 1, fold_legacy: bool = False):
+    def stress(
+        self,
+        pressure_pa,
+        shear_x_pa=None,
+        shear_y_pa=None,
+        method: str = "auto",
+        repeats: int = 1,
+        timing: bool = False,
+        slip=None,
+        fold: bool = True,
+        threads: int = 1,
+        fold_legacy: bool = False,
+    ):
         """Stress (nrec x 6, Pa). With timing=True also returns (seconds per
         call, method used, active cells). slip = (rx, ry): the shear is
         (rx, ry) x pressure (full slip, as the plugin's winkler and elastic
@@ -362,9 +480,9 @@ class StressEngine:
                 shear_x_pa = (rx * p.astype(np.float64)).astype(np.float32)
                 shear_y_pa = (ry * p.astype(np.float64)).astype(np.float32)
         sx, sy = _shear_pair(p, shear_x_pa, shear_y_pa)
-        out, seconds, used, active = self._e.stress(p, sx, sy, method, int(repeats), slip,
-                                                    bool(fold), int(threads),
-                                                    bool(fold_legacy))
+        out, seconds, used, active = self._e.stress(
+            p, sx, sy, method, int(repeats), slip, bool(fold), int(threads), bool(fold_legacy)
+        )
         return (out, seconds, used, active) if timing else out
 
 
@@ -373,9 +491,16 @@ PAD_SHAPES = ("sphere", "ellipsoid", "capsule", "box")
 RIDGE_PROFILES = ("sine", "triangle", "square")
 
 
-def render_gap(skin_z_m: np.ndarray, pitch_m: float, surfaces: list[dict],
-               pad_pos=(0.0, 0.0, 0.0), pad_mat=None, hfield: np.ndarray | None = None,
-               area_average: bool = True, fast_paths: bool = True):
+def render_gap(
+    skin_z_m: np.ndarray,
+    pitch_m: float,
+    surfaces: list[dict],
+    pad_pos=(0.0, 0.0, 0.0),
+    pad_mat=None,
+    hfield: np.ndarray | None = None,
+    area_average: bool = True,
+    fast_paths: bool = True,
+):
     """Stage 1: gap (m; inf where no surface) and coverage of each taxel cell
     of a skin (skin_z_m: n x n pad-frame heights) at the pad pose, against
     counter-surfaces given as dicts: type (one of SURFACE_TYPES), pos (3),
@@ -401,31 +526,57 @@ def render_gap(skin_z_m: np.ndarray, pitch_m: float, surfaces: list[dict],
     hf = np.ascontiguousarray(np.zeros((2, 2)) if hfield is None else hfield, dtype=np.float32)
     pos = tuple(float(v) for v in np.ravel(pad_pos))
     mat = tuple(float(v) for v in np.ravel(np.eye(3) if pad_mat is None else pad_mat))
-    return _core.render_gap(z, float(pitch_m), desc, pos, mat, hf, bool(area_average),
-                            bool(fast_paths))
+    return _core.render_gap(
+        z, float(pitch_m), desc, pos, mat, hf, bool(area_average), bool(fast_paths)
+    )
 
 
-def ridge_cell_mean(s_m, profile: str = "sine", pitch_m: float = 0.45e-3,
-                    height_m: float = 0.05e-3, angle_deg: float = 0.0,
-                    cell_m: float = 0.0) -> np.ndarray:
+def ridge_cell_mean(
+    s_m,
+    profile: str = "sine",
+    pitch_m: float = 0.45e-3,
+    height_m: float = 0.05e-3,
+    angle_deg: float = 0.0,
+    cell_m: float = 0.0,
+) -> np.ndarray:
     """Ridge relief (m, protrusion positive) at distance s_m along the ridge
     normal, averaged exactly over a square taxel cell of side cell_m (0: the
     point value)."""
     s = np.asarray(s_m, float)
-    out = _core.ridge_cell_mean(np.ascontiguousarray(s.ravel()), profile, float(pitch_m),
-                                float(height_m), math.radians(angle_deg), float(cell_m))
+    out = _core.ridge_cell_mean(
+        np.ascontiguousarray(s.ravel()),
+        profile,
+        float(pitch_m),
+        float(height_m),
+        math.radians(angle_deg),
+        float(cell_m),
+    )
     return out.reshape(s.shape)
 
 
-def pad_surface(shape: str, half_extents_m, n: int, pitch_m: float, profile: str = "sine",
-                ridge_pitch_m: float = 0.45e-3, ridge_height_m: float = 0.0,
-                ridge_angle_deg: float = 0.0) -> np.ndarray:
+def pad_surface(
+    shape: str,
+    half_extents_m,
+    n: int,
+    pitch_m: float,
+    profile: str = "sine",
+    ridge_pitch_m: float = 0.45e-3,
+    ridge_height_m: float = 0.0,
+    ridge_angle_deg: float = 0.0,
+) -> np.ndarray:
     """Cell-averaged skin height (pad frame z, m; inf outside the pad), n x n
     indexed [j, i], for a pad shape in PAD_SHAPES with half extents (x, y, z)
     (capsule: r, r, r + half length); ridge_height_m = 0: smooth skin."""
-    return _core.pad_surface(shape, tuple(float(v) for v in half_extents_m), int(n),
-                             float(pitch_m), profile, float(ridge_pitch_m),
-                             float(ridge_height_m), math.radians(ridge_angle_deg))
+    return _core.pad_surface(
+        shape,
+        tuple(float(v) for v in half_extents_m),
+        int(n),
+        float(pitch_m),
+        profile,
+        float(ridge_pitch_m),
+        float(ridge_height_m),
+        math.radians(ridge_angle_deg),
+    )
 
 
 def slip_shear(pressure_pa: np.ndarray, pitch_m: float, normal_n: float, tangential_n):
@@ -433,8 +584,9 @@ def slip_shear(pressure_pa: np.ndarray, pitch_m: float, normal_n: float, tangent
     contact's normal and tangential (x, y) force."""
     p = np.ascontiguousarray(pressure_pa, dtype=np.float64)
     _square(p, "pressure_pa")
-    return _core.slip_shear(p, float(pitch_m), float(normal_n), float(tangential_n[0]),
-                            float(tangential_n[1]))
+    return _core.slip_shear(
+        p, float(pitch_m), float(normal_n), float(tangential_n[0]), float(tangential_n[1])
+    )
 
 
 def splat_contacts(contacts, n: int, pitch_m: float):

@@ -18,9 +18,12 @@ MODES = ("auto", "on", "off")
 
 def add_argument(parser) -> None:
     """The ``--progress {auto,on,off}`` option of a long command."""
-    parser.add_argument("--progress", choices=MODES, default="auto",
-                        help="progress bar on stderr: auto (default) shows it on a terminal "
-                             "unless --json; on; off")
+    parser.add_argument(
+        "--progress",
+        choices=MODES,
+        default="auto",
+        help="progress bar on stderr: auto (default) shows it on a terminal unless --json; on; off",
+    )
 
 
 def wanted(mode: str = "auto", json_output: bool = False, stream=None) -> bool:
@@ -42,12 +45,26 @@ class Progress:
     counts n (simulation steps, say). ``initial`` items count as done before
     the start (a resumed sweep), so the ETA is over the remaining ones."""
 
-    def __init__(self, total: int, enabled: bool = True, stream=None, desc: str | None = None,
-                 unit: str = "it", initial: int = 0):
+    def __init__(
+        self,
+        total: int,
+        enabled: bool = True,
+        stream=None,
+        desc: str | None = None,
+        unit: str = "it",
+        initial: int = 0,
+    ):
         self.total, self.done, self.enabled = total, initial, enabled
-        self._bar = tqdm(total=total, initial=initial, desc=desc, unit=unit, disable=not enabled,
-                         file=sys.stderr if stream is None else stream, dynamic_ncols=True,
-                         smoothing=0.1)
+        self._bar = tqdm(
+            total=total,
+            initial=initial,
+            desc=desc,
+            unit=unit,
+            disable=not enabled,
+            file=sys.stderr if stream is None else stream,
+            dynamic_ncols=True,
+            smoothing=0.1,
+        )
 
     def step(self, label: str | None = None) -> None:
         self.update(1, label)

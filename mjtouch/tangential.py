@@ -16,7 +16,6 @@ tangential.h):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
@@ -27,19 +26,24 @@ from mjtouch import _core
 class TangentialState:
     """The memory between steps: last tractions (n x n, Pa) and shift (m)."""
 
-    shear_x_pa: Optional[np.ndarray] = None
-    shear_y_pa: Optional[np.ndarray] = None
+    shear_x_pa: np.ndarray | None = None
+    shear_y_pa: np.ndarray | None = None
     shift_x_m: float = 0.0
     shift_y_m: float = 0.0
 
     @classmethod
-    def from_result(cls, result: dict) -> "TangentialState":
-        return cls(result["shear_x_pa"], result["shear_y_pa"], result["shift_x_m"],
-                   result["shift_y_m"])
+    def from_result(cls, result: dict) -> TangentialState:
+        return cls(
+            result["shear_x_pa"], result["shear_y_pa"], result["shift_x_m"], result["shift_y_m"]
+        )
 
     def arguments(self) -> dict:
-        return dict(shear_x_pa=self.shear_x_pa, shear_y_pa=self.shear_y_pa,
-                    shift_x_m=self.shift_x_m, shift_y_m=self.shift_y_m)
+        return dict(
+            shear_x_pa=self.shear_x_pa,
+            shear_y_pa=self.shear_y_pa,
+            shift_x_m=self.shift_x_m,
+            shift_y_m=self.shift_y_m,
+        )
 
 
 def winkler_tangential_stiffness(normal_stiffness_pa_per_m: float, poisson: float) -> float:
@@ -48,15 +52,27 @@ def winkler_tangential_stiffness(normal_stiffness_pa_per_m: float, poisson: floa
     return _core.winkler_tangential_stiffness(normal_stiffness_pa_per_m, poisson)
 
 
-def winkler_partial_slip(pressure_pa, pitch_m: float, mu: float, force_n, stiffness_pa_per_m: float,
-                         state: Optional[TangentialState] = None):
+def winkler_partial_slip(
+    pressure_pa,
+    pitch_m: float,
+    mu: float,
+    force_n,
+    stiffness_pa_per_m: float,
+    state: TangentialState | None = None,
+):
     """One step on a Winkler skin. force_n: (fx, fy) N. Returns (result dict, new state);
     result: shear_x_pa, shear_y_pa, stick (uint8 map), stuck_share, shift_x_m, shift_y_m,
     loaded_cells, stick_cells, full_slip, iterations."""
     state = state or TangentialState()
-    r = _core.tangential_winkler(np.ascontiguousarray(pressure_pa, dtype=np.float64), pitch_m, mu,
-                                 float(force_n[0]), float(force_n[1]), stiffness_pa_per_m,
-                                 **state.arguments())
+    r = _core.tangential_winkler(
+        np.ascontiguousarray(pressure_pa, dtype=np.float64),
+        pitch_m,
+        mu,
+        float(force_n[0]),
+        float(force_n[1]),
+        stiffness_pa_per_m,
+        **state.arguments(),
+    )
     return r, TangentialState.from_result(r)
 
 
@@ -66,17 +82,34 @@ class ElasticPartialSlip:
     def __init__(self, n: int, pitch_m: float, young_pa: float, poisson: float):
         self.compliance = _core.TangentialCompliance(n, pitch_m, young_pa, poisson)
 
-    def solve(self, pressure_pa, mu: float, force_n, state: Optional[TangentialState] = None,
-              tolerance: float = 1e-3, max_iterations: int = 200, precision: str = "float"):
+    def solve(
+        self,
+        pressure_pa,
+        mu: float,
+        force_n,
+        state: TangentialState | None = None,
+        tolerance: float = 1e-3,
+        max_iterations: int = 200,
+        precision: str = "float",
+    ):
         """One step; as winkler_partial_slip, stopping at a relative L1 change of the
         tractions below tolerance; precision of the FFTs 'float' or 'double'."""
         state = state or TangentialState()
-        r = self.compliance.solve(np.ascontiguousarray(pressure_pa, dtype=np.float64), mu,
-                                  float(force_n[0]), float(force_n[1]), tolerance,
-                                  max_iterations, **state.arguments(), precision=precision)
+        r = self.compliance.solve(
+            np.ascontiguousarray(pressure_pa, dtype=np.float64),
+            mu,
+            float(force_n[0]),
+            float(force_n[1]),
+            tolerance,
+            max_iterations,
+            **state.arguments(),
+            precision=precision,
+        )
         return r, TangentialState.from_result(r)
 
     def displacement(self, shear_x_pa, shear_y_pa):
         """Surface tangential displacement (ux, uy, m) under the tractions."""
-        return self.compliance.displacement(np.ascontiguousarray(shear_x_pa, dtype=np.float64),
-                                            np.ascontiguousarray(shear_y_pa, dtype=np.float64))
+        return self.compliance.displacement(
+            np.ascontiguousarray(shear_x_pa, dtype=np.float64),
+            np.ascontiguousarray(shear_y_pa, dtype=np.float64),
+        )

@@ -40,8 +40,7 @@ from mjtouch.scene.sensor import CLASSES, SkinLayout
 
 # GLFW key codes (MuJoCo's mjKEY_*) that MuJoCo's viewer leaves unbound.
 KEY_HOME, KEY_END, KEY_INSERT, KEY_DELETE, KEY_PAGE_DOWN, KEY_F9 = 268, 269, 260, 261, 267, 298
-KEY_HELP = ("Home/End force +-0.1 N   Ins/Del speed +-5 mm/s   "
-            "PgDn texture   F9 ridges")
+KEY_HELP = "Home/End force +-0.1 N   Ins/Del speed +-5 mm/s   PgDn texture   F9 ridges"
 
 TEXTURES: tuple[tuple[str, scenes.Texture], ...] = (
     ("grating D = 1 mm", scenes.Texture(period_m=1.0e-3)),
@@ -63,8 +62,9 @@ def heat_rgb(u: np.ndarray | float) -> np.ndarray:
     """The heatmap's colour at pressure u x the frame's peak (visualize.cc
     HeatColor): dark red, red, orange, yellow, near white."""
     v = 0.2 + 0.8 * np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
-    return np.stack([np.clip(3 * v, 0, 1), np.clip(3 * v - 1, 0, 1), np.clip(3 * v - 2, 0, 1)],
-                    axis=-1)
+    return np.stack(
+        [np.clip(3 * v, 0, 1), np.clip(3 * v - 1, 0, 1), np.clip(3 * v - 2, 0, 1)], axis=-1
+    )
 
 
 def heatmap_peak_pa(pressure: np.ndarray) -> float:
@@ -92,13 +92,17 @@ class ViewSettings:
         if not FORCE_RANGE_N[0] <= self.force_n <= FORCE_RANGE_N[1]:
             raise ValueError(f"force_n = {self.force_n} is out of range; valid {FORCE_RANGE_N} N")
         if not SPEED_RANGE_M_S[0] <= self.speed_m_s <= SPEED_RANGE_M_S[1]:
-            raise ValueError(f"speed_m_s = {self.speed_m_s} is out of range; valid "
-                             f"{SPEED_RANGE_M_S} m/s")
+            raise ValueError(
+                f"speed_m_s = {self.speed_m_s} is out of range; valid {SPEED_RANGE_M_S} m/s"
+            )
         if not 0 <= self.texture < len(TEXTURES):
-            raise ValueError(f"texture = {self.texture} is out of range; valid 0 to "
-                             f"{len(TEXTURES) - 1}")
+            raise ValueError(
+                f"texture = {self.texture} is out of range; valid 0 to {len(TEXTURES) - 1}"
+            )
         if not 1e-4 <= self.timestep_s <= 2e-3:
-            raise ValueError(f"timestep_s = {self.timestep_s} is out of range; valid [1e-4, 2e-3] s")
+            raise ValueError(
+                f"timestep_s = {self.timestep_s} is out of range; valid [1e-4, 2e-3] s"
+            )
 
 
 class SlideSession:
@@ -109,9 +113,13 @@ class SlideSession:
     speed keys drive actuators named ``press`` and ``slide`` if present).
     """
 
-    def __init__(self, settings: ViewSettings | None = None,
-                 scene: str | pathlib.Path | None = None, window_s: float = 0.5,
-                 raster_per_class: int = 5):
+    def __init__(
+        self,
+        settings: ViewSettings | None = None,
+        scene: str | pathlib.Path | None = None,
+        window_s: float = 0.5,
+        raster_per_class: int = 5,
+    ):
         self.settings = settings or ViewSettings()
         self.settings.validate()
         self.scene_path = pathlib.Path(scene) if scene is not None else None
@@ -130,20 +138,28 @@ class SlideSession:
         if self.scene_path is None:
             # interactive preset: exact (folded) stress, as cheap as the tree
             # the pressure output gives the colour scale its units
-            tip = scenes.Fingertip(nx=s.nx, pitch_m=s.pitch_m, ridges=s.ridges,
-                                   skin={"outputs": "spikes stress force pressure"})
+            tip = scenes.Fingertip(
+                nx=s.nx,
+                pitch_m=s.pitch_m,
+                ridges=s.ridges,
+                skin={"outputs": "spikes stress force pressure"},
+            )
             texture = dataclasses.replace(TEXTURES[s.texture][1])
-            protocol = scenes.Protocol(force_n=s.force_n, speed_m_s=s.speed_m_s,
-                                       timestep_s=s.timestep_s)
-            self.model = scenes.scene_spec(tip, texture, protocol,
-                                           model_name="mjtouch_view").compile()
+            protocol = scenes.Protocol(
+                force_n=s.force_n, speed_m_s=s.speed_m_s, timestep_s=s.timestep_s
+            )
+            self.model = scenes.scene_spec(
+                tip, texture, protocol, model_name="mjtouch_view"
+            ).compile()
         else:
             self.model = mujoco.MjModel.from_xml_path(str(self.scene_path))
         self.data = mujoco.MjData(self.model)
         self.layout = SkinLayout.from_model(self.model)
         m = self.model
-        self._act = {name: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
-                     for name in ("slide", "press")}
+        self._act = {
+            name: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+            for name in ("slide", "press")
+        }
         self._pad = self.layout_pad_geom()
         self._direction = 1.0
         self.dt = m.opt.timestep
@@ -158,8 +174,11 @@ class SlideSession:
         for c in CLASSES:
             members = np.nonzero(self.layout.classes == c)[0]
             k = min(self.raster_per_class, len(members))
-            rows.append(members[np.unique(np.linspace(0, len(members) - 1, k).round().astype(int))]
-                        if k else members)
+            rows.append(
+                members[np.unique(np.linspace(0, len(members) - 1, k).round().astype(int))]
+                if k
+                else members
+            )
         self._raster_rows = np.concatenate(rows)
         self._apply_ctrl()
 
@@ -247,9 +266,9 @@ class SlideSession:
             k = self._count % n
             self._time[k] = d.time
             if sp is not None:
-                self._spikes[k] = d.sensordata[adr + sp.start:adr + sp.stop]
+                self._spikes[k] = d.sensordata[adr + sp.start : adr + sp.stop]
             if st is not None:
-                self._stress[k] = d.sensordata[adr + st.start:adr + st.stop]
+                self._stress[k] = d.sensordata[adr + st.start : adr + st.stop]
             self._count += 1
 
     def window(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -293,7 +312,7 @@ class SlideSession:
         # head room above the rows for the legend
         fig.range = [[0.0, self.window_s], [-0.5, len(self._raster_rows) + 7.5]]
         maxpnt = (mujoco.mjMAXLINEPNT - 1) // 3
-        for line, r in enumerate(self._raster_rows[:mujoco.mjMAXLINE]):
+        for line, r in enumerate(self._raster_rows[: mujoco.mjMAXLINE]):
             ts = (t[spikes[:, r] > 0] - t0)[-maxpnt:]
             y = float(line)
             pts = np.zeros((max(1, 3 * len(ts)), 2))
@@ -306,7 +325,7 @@ class SlideSession:
                 pts[2::3, 1] = y
             else:
                 pts[0] = [0.0, y]
-            fig.linedata[line, :2 * len(pts)] = pts.ravel()
+            fig.linedata[line, : 2 * len(pts)] = pts.ravel()
             fig.linepnt[line] = len(pts)
             cls = self.layout.classes[r]
             fig.linergb[line] = CLASS_RGB[cls]
@@ -349,8 +368,9 @@ class SlideSession:
             fig.linergb[k] = heat_rgb((k + 0.5) / SCALE_STEPS)
         return fig
 
-    def spectrum_figure(self, fig: mujoco.MjvFigure | None = None,
-                        fmax_hz: float = 300.0) -> mujoco.MjvFigure:
+    def spectrum_figure(
+        self, fig: mujoco.MjvFigure | None = None, fmax_hz: float = 300.0
+    ) -> mujoco.MjvFigure:
         """log10 stress power vs frequency, with V/D and V/lambda marked."""
         fig = fig or mujoco.MjvFigure()
         mujoco.mjv_defaultFigure(fig)
@@ -362,13 +382,13 @@ class SlideSession:
         sel = (f > 0) & (f <= fmax_hz)
         f, logp = f[sel], np.log10(np.maximum(p[sel], 1e-12))
         if len(f) > mujoco.mjMAXLINEPNT:
-            f, logp = f[:mujoco.mjMAXLINEPNT], logp[:mujoco.mjMAXLINEPNT]
+            f, logp = f[: mujoco.mjMAXLINEPNT], logp[: mujoco.mjMAXLINEPNT]
         lo, hi = (float(logp.min()), float(logp.max())) if len(f) else (0.0, 1.0)
         if hi <= lo:
             hi = lo + 1.0
         fig.range = [[0.0, fmax_hz], [lo, hi]]
         fig.flg_extend = 0
-        fig.linedata[0, :2 * len(f)] = np.column_stack([f, logp]).ravel()
+        fig.linedata[0, : 2 * len(f)] = np.column_stack([f, logp]).ravel()
         fig.linepnt[0] = len(f)
         fig.linergb[0] = (1.0, 1.0, 1.0)
         fig.linename[0] = "stress"
@@ -389,10 +409,12 @@ class SlideSession:
     def status(self) -> str:
         s = self.settings
         r = self.rates_hz()
-        return (f"F = {s.force_n:.2f} N   V = {s.speed_m_s * 1e3:.0f} mm/s   "
-                f"{self.texture_name}   ridges {'on' if s.ridges else 'off'}   "
-                + "   ".join(f"{c} {r[c]:.0f} Hz" for c in CLASSES)
-                + (f"   ({self.message})" if self.message else ""))
+        return (
+            f"F = {s.force_n:.2f} N   V = {s.speed_m_s * 1e3:.0f} mm/s   "
+            f"{self.texture_name}   ridges {'on' if s.ridges else 'off'}   "
+            + "   ".join(f"{c} {r[c]:.0f} Hz" for c in CLASSES)
+            + (f"   ({self.message})" if self.message else "")
+        )
 
     # ----- offscreen -------------------------------------------------------
     def camera(self) -> mujoco.MjvCamera:
@@ -405,13 +427,19 @@ class SlideSession:
     def layout_pad_geom(self) -> int:
         return int(self.model.sensor_objid[self.layout.sensor_id])
 
-    def render(self, width: int = 960, height: int = 600, figures: bool = True,
-               option: mujoco.MjvOption | None = None) -> np.ndarray:
+    def render(
+        self,
+        width: int = 960,
+        height: int = 600,
+        figures: bool = True,
+        option: mujoco.MjvOption | None = None,
+    ) -> np.ndarray:
         """What the viewer shows (scene with the skin's drawing, figures on the
         right, status line), rendered offscreen: (height, width, 3) uint8."""
         if self._gl is None or self._gl_size != (width, height):
             self.close()
             from mujoco.gl_context import GLContext
+
             self._gl = GLContext(width, height)
             self._gl.make_current()
             self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, width)
@@ -422,8 +450,15 @@ class SlideSession:
             mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
         self._gl.make_current()
         opt = option or mujoco.MjvOption()
-        mujoco.mjv_updateScene(self.model, self.data, opt, mujoco.MjvPerturb(), self.camera(),
-                               mujoco.mjtCatBit.mjCAT_ALL, self._scn)
+        mujoco.mjv_updateScene(
+            self.model,
+            self.data,
+            opt,
+            mujoco.MjvPerturb(),
+            self.camera(),
+            mujoco.mjtCatBit.mjCAT_ALL,
+            self._scn,
+        )
         full = mujoco.MjrRect(0, 0, width, height)
         mujoco.mjr_render(full, self._scn, self._con)
         if figures:
@@ -431,14 +466,22 @@ class SlideSession:
             margin = 8
             fw, fh = width // 3 - margin, height // 2 - 20 - margin
             x = width - fw - margin
-            mujoco.mjr_figure(mujoco.MjrRect(x, fh + 20 + margin, fw, fh), self.raster_figure(),
-                              self._con)
+            mujoco.mjr_figure(
+                mujoco.MjrRect(x, fh + 20 + margin, fw, fh), self.raster_figure(), self._con
+            )
             mujoco.mjr_figure(mujoco.MjrRect(x, 20, fw, fh), self.spectrum_figure(), self._con)
             sw, sh = width // 3, 90
-            mujoco.mjr_figure(mujoco.MjrRect(margin, height - sh - margin, sw, sh),
-                              self.scale_figure(), self._con)
-            mujoco.mjr_overlay(mujoco.mjtFont.mjFONT_NORMAL, mujoco.mjtGridPos.mjGRID_BOTTOMLEFT,
-                               full, self.status(), "", self._con)
+            mujoco.mjr_figure(
+                mujoco.MjrRect(margin, height - sh - margin, sw, sh), self.scale_figure(), self._con
+            )
+            mujoco.mjr_overlay(
+                mujoco.mjtFont.mjFONT_NORMAL,
+                mujoco.mjtGridPos.mjGRID_BOTTOMLEFT,
+                full,
+                self.status(),
+                "",
+                self._con,
+            )
         rgb = np.empty((height, width, 3), np.uint8)
         mujoco.mjr_readPixels(rgb, None, full, self._con)
         return np.flipud(rgb).copy()
@@ -484,16 +527,30 @@ def launch(scene: str | None = None, settings: ViewSettings | None = None) -> No
                 vp = handle.viewport
                 if vp is not None and vp.width > 0:
                     fw, fh = vp.width // 3, vp.height // 3
-                    handle.set_figures([
-                        (mujoco.MjrRect(vp.left + vp.width - fw, vp.bottom + fh, fw, fh),
-                         session.raster_figure(raster)),
-                        (mujoco.MjrRect(vp.left + vp.width - fw, vp.bottom, fw, fh),
-                         session.spectrum_figure(spectrum)),
-                        (mujoco.MjrRect(vp.left + vp.width - fw, vp.bottom + 2 * fh, fw, fh // 2),
-                         session.scale_figure(scale))])
-                handle.set_texts([(None, mujoco.mjtGridPos.mjGRID_BOTTOMLEFT, session.status(),
-                                   ""),
-                                  (None, mujoco.mjtGridPos.mjGRID_TOPRIGHT, KEY_HELP, "")])
+                    handle.set_figures(
+                        [
+                            (
+                                mujoco.MjrRect(vp.left + vp.width - fw, vp.bottom + fh, fw, fh),
+                                session.raster_figure(raster),
+                            ),
+                            (
+                                mujoco.MjrRect(vp.left + vp.width - fw, vp.bottom, fw, fh),
+                                session.spectrum_figure(spectrum),
+                            ),
+                            (
+                                mujoco.MjrRect(
+                                    vp.left + vp.width - fw, vp.bottom + 2 * fh, fw, fh // 2
+                                ),
+                                session.scale_figure(scale),
+                            ),
+                        ]
+                    )
+                handle.set_texts(
+                    [
+                        (None, mujoco.mjtGridPos.mjGRID_BOTTOMLEFT, session.status(), ""),
+                        (None, mujoco.mjtGridPos.mjGRID_TOPRIGHT, KEY_HELP, ""),
+                    ]
+                )
             slack = frame_s - (time.perf_counter() - t_frame)
             if slack > 0:
                 time.sleep(slack)
@@ -514,13 +571,17 @@ def offscreen_backend() -> str | None:
     import os
     import subprocess
     import sys
-    probe = ("import mujoco; m = mujoco.MjModel.from_xml_string('<mujoco/>'); "
-             "r = mujoco.Renderer(m, 8, 8); r.render(); print('ok')")
+
+    probe = (
+        "import mujoco; m = mujoco.MjModel.from_xml_string('<mujoco/>'); "
+        "r = mujoco.Renderer(m, 8, 8); r.render(); print('ok')"
+    )
     for backend in ("egl", "osmesa"):
         env = {**os.environ, "MUJOCO_GL": backend, "PYOPENGL_PLATFORM": backend}
         try:
-            out = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True,
-                                 text=True, timeout=120)
+            out = subprocess.run(
+                [sys.executable, "-c", probe], env=env, capture_output=True, text=True, timeout=120
+            )
         except subprocess.TimeoutExpired:
             continue
         if out.returncode == 0 and out.stdout.strip().endswith("ok"):

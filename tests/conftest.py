@@ -41,8 +41,9 @@ def add_geom(parent, kind: str, size, euler_deg=None, **kw):
     return g
 
 
-def pad_spec(skin: dict[str, str] | None = None, pad: dict | None = None,
-             texture: bool = True) -> mujoco.MjSpec:
+def pad_spec(
+    skin: dict[str, str] | None = None, pad: dict | None = None, texture: bool = True
+) -> mujoco.MjSpec:
     """A minimal scene: a free pad resting on a plate (+ optional grating).
     ``pad``: add_geom arguments (kind, size, euler_deg) for the pad geom;
     skin attributes with value "" are left out (their defaults)."""
@@ -50,17 +51,33 @@ def pad_spec(skin: dict[str, str] | None = None, pad: dict | None = None,
     cfg.update(skin or {})
     spec = mujoco.MjSpec()  # angles in degrees (compiler.degree)
     spec.option.timestep = 2e-4
-    spec.worldbody.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX,
-                            size=[0.04, 0.02, 0.002], pos=[0, 0, -0.002])
+    spec.worldbody.add_geom(
+        name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.04, 0.02, 0.002], pos=[0, 0, -0.002]
+    )
     if texture:
-        spec.add_hfield(name="h", nrow=2, ncol=5, size=[0.01, 0.01, 0.0001, 0.001],
-                        userdata=[0, 1, 0, 1, 0, 0, 1, 0, 1, 0])
-        spec.worldbody.add_geom(name="texture", type=mujoco.mjtGeom.mjGEOM_HFIELD,
-                                hfieldname="h", contype=0, conaffinity=0)
+        spec.add_hfield(
+            name="h",
+            nrow=2,
+            ncol=5,
+            size=[0.01, 0.01, 0.0001, 0.001],
+            userdata=[0, 1, 0, 1, 0, 0, 1, 0, 1, 0],
+        )
+        spec.worldbody.add_geom(
+            name="texture",
+            type=mujoco.mjtGeom.mjGEOM_HFIELD,
+            hfieldname="h",
+            contype=0,
+            conaffinity=0,
+        )
     finger = spec.worldbody.add_body(name="finger", pos=[0, 0, 0.0071])
     finger.add_freejoint()
-    add_geom(finger, **(pad or {"kind": "ellipsoid", "size": [0.008, 0.007, 0.007]}),
-             name="pad", mass=0.05, solref=[0.004, 1])
+    add_geom(
+        finger,
+        **(pad or {"kind": "ellipsoid", "size": [0.008, 0.007, 0.007]}),
+        name="pad",
+        mass=0.05,
+        solref=[0.004, 1],
+    )
     scenes.add_skin_sensor(spec, "pad", {k: v for k, v in cfg.items() if v != ""})
     return spec
 
@@ -87,8 +104,11 @@ def registered_attributes() -> list[str]:
     import ctypes
 
     class Plugin(ctypes.Structure):  # the head of mjpPlugin (mjplugin.h)
-        _fields_ = [("name", ctypes.c_char_p), ("nattribute", ctypes.c_int),
-                    ("attributes", ctypes.POINTER(ctypes.c_char_p))]
+        _fields_ = [
+            ("name", ctypes.c_char_p),
+            ("nattribute", ctypes.c_int),
+            ("attributes", ctypes.POINTER(ctypes.c_char_p)),
+        ]
 
     root = pathlib.Path(mujoco.__file__).parent
     lib = ctypes.CDLL(str(sorted(root.glob("libmujoco.so.*"))[0]))
@@ -100,22 +120,27 @@ def registered_attributes() -> list[str]:
     return [plugin.contents.attributes[i].decode() for i in range(plugin.contents.nattribute)]
 
 
-def rollout_and_serial(m_rollout: mujoco.MjModel, m_serial: mujoco.MjModel,
-                       proto: scenes.Protocol, duration_s: float,
-                       speeds=(0.02, 0.04)) -> tuple[np.ndarray, np.ndarray]:
+def rollout_and_serial(
+    m_rollout: mujoco.MjModel,
+    m_serial: mujoco.MjModel,
+    proto: scenes.Protocol,
+    duration_s: float,
+    speeds=(0.02, 0.04),
+) -> tuple[np.ndarray, np.ndarray]:
     """sensordata (len(speeds), nstep, nsensordata) of a press and slide at
     each speed: by mujoco.rollout on two threads (one MjData each) with
     m_rollout, and stepped serially with m_serial from the same state."""
     ctrl = scenes.controls(proto, duration_s)
     speeds = np.asarray(speeds)
     controls = np.repeat(ctrl[None], len(speeds), axis=0)
-    controls[:, int(round(proto.press_s / proto.timestep_s)):, 0] = speeds[:, None]
+    controls[:, int(round(proto.press_s / proto.timestep_s)) :, 0] = speeds[:, None]
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     s0 = np.empty(mujoco.mj_stateSize(m_rollout, spec))
     mujoco.mj_getState(m_rollout, mujoco.MjData(m_rollout), s0, spec)
     s0 = np.repeat(s0[None], len(speeds), axis=0)
-    _, two = mujoco.rollout.rollout(m_rollout, [mujoco.MjData(m_rollout),
-                                                mujoco.MjData(m_rollout)], s0, controls)
+    _, two = mujoco.rollout.rollout(
+        m_rollout, [mujoco.MjData(m_rollout), mujoco.MjData(m_rollout)], s0, controls
+    )
     serial = np.empty_like(two)
     for b in range(len(speeds)):
         d = mujoco.MjData(m_serial)
@@ -132,10 +157,20 @@ def hertz_sphere_press(h, young_pa: float, poisson: float, **skin):
     tolerance 1e-8; skin: extra attributes. Returns (force block, pressure
     (96, 96), pitch m)."""
     from mjtouch.scene.sensor import SkinLayout
+
     pitch, n = h.contact_radius_m / 32, 96
-    attrs = dict(nx=n, pitch=pitch, ridges="false", pressure="elastic", skin="halfspace",
-                 young=young_pa, poisson=poisson, tolerance=1e-8, outputs="force pressure",
-                 **skin)
+    attrs = dict(
+        nx=n,
+        pitch=pitch,
+        ridges="false",
+        pressure="elastic",
+        skin="halfspace",
+        young=young_pa,
+        poisson=poisson,
+        tolerance=1e-8,
+        outputs="force pressure",
+        **skin,
+    )
     m = scenes.sphere_press_spec(h.radius_m, attrs).compile()
     d = mujoco.MjData(m)
     layout = SkinLayout.from_model(m)

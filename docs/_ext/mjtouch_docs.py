@@ -14,7 +14,6 @@ import argparse
 import re
 
 from docutils import nodes
-from docutils.statemachine import StringList
 from sphinx.util.docutils import SphinxDirective
 
 
@@ -23,6 +22,7 @@ class AttributeTable(SphinxDirective):
 
     def run(self):
         from mjtouch import _core
+
         text = _core.attribute_table_markdown()
         # MyST parses the table as if written in the page.
         return self.parse_text_to_nodes(text)
@@ -37,6 +37,7 @@ def cli_parser() -> argparse.ArgumentParser:
     """The CLI's top parser, as ``mjtouch.cli.main`` builds it (captured at
     ``parse_args``, so this works however the CLI assembles it)."""
     from mjtouch import cli
+
     original = argparse.ArgumentParser.parse_args
 
     def capture(self, *args, **kwargs):
@@ -65,8 +66,9 @@ class CliReference(SphinxDirective):
     def run(self):
         parser = cli_parser()
         out = []
-        sections = [("mjtouch", parser)] + [(f"mjtouch {name}", p)
-                                            for name, p in subcommands(parser).items()]
+        sections = [("mjtouch", parser)] + [
+            (f"mjtouch {name}", p) for name, p in subcommands(parser).items()
+        ]
         for title, p in sections:
             section = nodes.section(ids=[nodes.make_id(title)])
             section += nodes.title(text=title)
@@ -90,8 +92,11 @@ def _indent(line: str) -> int:
 
 def _table(rows: list[str], indent: str) -> list[str]:
     """A Markdown pipe table as a reST list-table."""
-    cells = [[c.strip() for c in r.strip().strip("|").split("|")] for r in rows
-             if not set(r.replace("|", "").strip()) <= set("-: ")]
+    cells = [
+        [c.strip() for c in r.strip().strip("|").split("|")]
+        for r in rows
+        if not set(r.replace("|", "").strip()) <= set("-: ")
+    ]
     out = [f"{indent}.. list-table::", f"{indent}   :header-rows: 1", ""]
     for row in cells:
         row = [_LONE_STAR.sub(r"\\*", c) or " " for c in row]
@@ -117,26 +122,36 @@ def markdown_docstring(app, what, name, obj, options, lines: list[str]) -> None:
             out += ["", f"{indent}.. code-block:: {lang}", ""]
             i += 1
             while i < len(lines) and not _FENCE.match(lines[i]):
-                out.append(f"{indent}   {lines[i][len(indent):]}" if lines[i].strip() else "")
+                out.append(f"{indent}   {lines[i][len(indent) :]}" if lines[i].strip() else "")
                 i += 1
             out.append("")
             i += 1
             continue
         stripped = line.strip()
         if stripped.startswith("|") and stripped.endswith("|") and stripped.count("|") > 2:
-            indent = line[:_indent(line)]
+            indent = line[: _indent(line)]
             rows = []
-            while i < len(lines) and lines[i].strip().startswith("|") \
-                    and lines[i].strip().endswith("|"):
+            while (
+                i < len(lines)
+                and lines[i].strip().startswith("|")
+                and lines[i].strip().endswith("|")
+            ):
                 rows.append(lines[i])
                 i += 1
             out += ([""] if prev.strip() else []) + _table(rows, indent)
             continue
         # a Markdown code block: indented under a paragraph after a blank line
-        if (stripped and not prev.strip() and len(out) >= 2 and out[-2].strip()
-                and _indent(line) >= _indent(out[-2]) + 4 and list_indent is None
-                and not out[-2].rstrip().endswith("::") and not _LIST_ITEM.match(out[-2])
-                and not out[-2].lstrip().startswith("..")):
+        if (
+            stripped
+            and not prev.strip()
+            and len(out) >= 2
+            and out[-2].strip()
+            and _indent(line) >= _indent(out[-2]) + 4
+            and list_indent is None
+            and not out[-2].rstrip().endswith("::")
+            and not _LIST_ITEM.match(out[-2])
+            and not out[-2].lstrip().startswith("..")
+        ):
             base = _indent(line)
             out[-1:] = ["", f"{' ' * (base - 4)}::", ""]
             while i < len(lines) and (not lines[i].strip() or _indent(lines[i]) >= base):

@@ -92,8 +92,8 @@ int main(int argc, char** argv) {
       }
     }
     for (int c = 0; c < MJTOUCH_NUM_CLASSES; ++c) {
-      printf("  class %s count %d start %d spikes %.0f\n", mjtouch_class_name(c),
-             l->class_count[c], l->class_start[c], spikes[s][c]);
+      printf("  class %s count %d start %d spikes %.0f\n", mjtouch_class_name(c), l->class_count[c],
+             l->class_start[c], spikes[s][c]);
     }
   }
   free(spikes);

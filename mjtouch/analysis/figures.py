@@ -20,8 +20,10 @@ def _matplotlib_figure():
     try:
         import matplotlib.figure
     except ImportError as e:
-        raise ImportError("mjtouch.analysis.figures needs matplotlib, the optional `plot` extra: "
-                          "pip install 'mjtouch[plot]'") from e
+        raise ImportError(
+            "mjtouch.analysis.figures needs matplotlib, the optional `plot` extra: "
+            "pip install 'mjtouch[plot]'"
+        ) from e
     return matplotlib.figure
 
 
@@ -46,8 +48,14 @@ def plot_raster(spikes: np.ndarray, dt_s: float, classes=None, t0_s: float = 0.0
     return ax
 
 
-def plot_psth(spikes: np.ndarray, dt_s: float, bin_s: float, t0_s: float = 0.0, ax=None,
-              label: str | None = None):
+def plot_psth(
+    spikes: np.ndarray,
+    dt_s: float,
+    bin_s: float,
+    t0_s: float = 0.0,
+    ax=None,
+    label: str | None = None,
+):
     """PSTH (mean rate per receptor, Hz) as a step plot over bins of bin_s."""
     _matplotlib_figure()
     ax = _axes(ax)
@@ -71,8 +79,9 @@ def plot_spectrum(freqs_hz: np.ndarray, power: np.ndarray, ax=None, label: str |
     return ax
 
 
-def plot_tuning(freqs_hz: np.ndarray, thresholds: np.ndarray, ax=None, label: str | None = None,
-                unit: str = ""):
+def plot_tuning(
+    freqs_hz: np.ndarray, thresholds: np.ndarray, ax=None, label: str | None = None, unit: str = ""
+):
     """Threshold vs vibration frequency on log-log axes (a tuning curve)."""
     _matplotlib_figure()
     ax = _axes(ax)

@@ -24,8 +24,10 @@ CLASSES = ("SA1", "RA", "PC")
 def _counts(spikes, ndim_max: int = 2) -> np.ndarray:
     a = np.asarray(spikes)
     if a.ndim == 0 or a.ndim > ndim_max:
-        raise ValueError(f"spikes must be counts per step with time along axis 0 "
-                         f"(1 to {ndim_max} dimensions); got shape {a.shape}")
+        raise ValueError(
+            f"spikes must be counts per step with time along axis 0 "
+            f"(1 to {ndim_max} dimensions); got shape {a.shape}"
+        )
     a = a.astype(np.float64, copy=False)
     if a.size and (not np.all(np.isfinite(a)) or a.min() < 0 or np.any(a != np.round(a))):
         raise ValueError("spikes must be non-negative integer counts per step")
@@ -69,8 +71,9 @@ def raster(spikes: np.ndarray, dt_s: float, t0_s: float = 0.0) -> list[np.ndarra
     return [spike_times(a[:, r], dt_s, t0_s) for r in range(a.shape[1])]
 
 
-def psth(spikes: np.ndarray, dt_s: float, bin_s: float,
-         t0_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def psth(
+    spikes: np.ndarray, dt_s: float, bin_s: float, t0_s: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
     """Peri-stimulus time histogram: the mean rate (Hz) per receptor in bins of
     bin_s (a whole number of steps), pooled over receptors (and over trials
     if spikes is ntrial x nstep x nrec: time is axis 0 otherwise, axis 1 here).
@@ -91,9 +94,10 @@ def psth(spikes: np.ndarray, dt_s: float, bin_s: float,
         raise ValueError(f"bin_s = {bin_s} must be a whole number of steps (dt_s = {dt_s})")
     nbin = a.shape[0] // per_bin
     if nbin == 0:
-        raise ValueError(f"bin_s = {bin_s} s is longer than the spike train "
-                         f"({a.shape[0]} steps of {dt_s} s)")
-    counts = a[:nbin * per_bin].reshape(nbin, per_bin, -1).sum(axis=(1, 2))
+        raise ValueError(
+            f"bin_s = {bin_s} s is longer than the spike train ({a.shape[0]} steps of {dt_s} s)"
+        )
+    counts = a[: nbin * per_bin].reshape(nbin, per_bin, -1).sum(axis=(1, 2))
     rate = counts / (a.shape[1] * bin_s)
     starts = t0_s - dt_s + np.arange(nbin) * bin_s
     return starts, rate
@@ -136,8 +140,9 @@ def rayleigh_p(n: int, vs: float) -> float:
     return float(min(1.0, math.exp(math.sqrt(1 + 4 * n + 4 * (n * n - r * r)) - (1 + 2 * n))))
 
 
-def vector_strength(times_s: np.ndarray, freq_hz: float,
-                    weights: np.ndarray | None = None) -> VectorStrength:
+def vector_strength(
+    times_s: np.ndarray, freq_hz: float, weights: np.ndarray | None = None
+) -> VectorStrength:
     """Vector strength of spike times at freq_hz (Goldberg & Brown 1969):
     vs = |sum w_j exp(i 2 pi f t_j)| / sum w_j, with the Rayleigh statistic
     Z = n vs^2 and its p-value. weights (spike counts at each time) default
@@ -160,18 +165,22 @@ def vector_strength(times_s: np.ndarray, freq_hz: float,
     return VectorStrength(vs, float(np.angle(z)), n_int, n * vs * vs, rayleigh_p(n_int, vs))
 
 
-def vector_strength_counts(counts: np.ndarray, dt_s: float, freq_hz: float,
-                           t0_s: float = 0.0) -> VectorStrength:
+def vector_strength_counts(
+    counts: np.ndarray, dt_s: float, freq_hz: float, t0_s: float = 0.0
+) -> VectorStrength:
     """Vector strength of one receptor's counts per step (spikes at step
     middles, see spike_times). Timing is known to +-dt/2, so a train locked
     to one phase reads vs >= cos(pi f dt) at worst."""
     c = _counts(counts, ndim_max=1)
     k = np.nonzero(c)[0]
-    return vector_strength(t0_s + (k - 0.5) * positive_number("dt_s", dt_s, "seconds"), freq_hz, c[k])
+    return vector_strength(
+        t0_s + (k - 0.5) * positive_number("dt_s", dt_s, "seconds"), freq_hz, c[k]
+    )
 
 
-def spike_spectrum(spikes: np.ndarray, dt_s: float,
-                   segment_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+def spike_spectrum(
+    spikes: np.ndarray, dt_s: float, segment_s: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Power spectral density of spike trains, averaged over receptors.
     Each train is the rate signal counts / dt (Hz); Welch's method with Hann
     windows of segment_s (default: the whole train, one segment), the mean
@@ -183,12 +192,24 @@ def spike_spectrum(spikes: np.ndarray, dt_s: float,
     if a.ndim == 1:
         a = a[:, None]
     n = a.shape[0]
-    nper = n if segment_s is None else int(round(positive_number("segment_s", segment_s, "seconds") / dt_s))
+    nper = (
+        n
+        if segment_s is None
+        else int(round(positive_number("segment_s", segment_s, "seconds") / dt_s))
+    )
     if not 8 <= nper <= n:
-        raise ValueError(f"segment_s must span 8 to {n} steps (the train's length); "
-                         f"got {nper} steps")
-    f, p = scipy.signal.welch(a / dt_s, fs=1.0 / dt_s, window="hann", nperseg=nper,
-                              detrend="constant", scaling="density", axis=0)
+        raise ValueError(
+            f"segment_s must span 8 to {n} steps (the train's length); got {nper} steps"
+        )
+    f, p = scipy.signal.welch(
+        a / dt_s,
+        fs=1.0 / dt_s,
+        window="hann",
+        nperseg=nper,
+        detrend="constant",
+        scaling="density",
+        axis=0,
+    )
     return f, p.mean(axis=1)
 
 
@@ -199,13 +220,20 @@ def stress_spectrum(stress: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.nda
     1 / (nstep * dt)."""
     if stress.ndim == 1:
         stress = stress[:, None]
-    f, p = scipy.signal.periodogram(stress, fs=1.0 / dt_s, window="hann", detrend="linear",
-                                    axis=0, scaling="spectrum")
+    f, p = scipy.signal.periodogram(
+        stress, fs=1.0 / dt_s, window="hann", detrend="linear", axis=0, scaling="spectrum"
+    )
     return f, p.mean(axis=1)
 
 
-def spectral_peaks(freqs: np.ndarray, power: np.ndarray, n: int = 5, fmin_hz: float = 2.0,
-                   fmax_hz: float | None = None, rel_height: float = 1e-6) -> list[float]:
+def spectral_peaks(
+    freqs: np.ndarray,
+    power: np.ndarray,
+    n: int = 5,
+    fmin_hz: float = 2.0,
+    fmax_hz: float | None = None,
+    rel_height: float = 1e-6,
+) -> list[float]:
     """Up to n peak frequencies, strongest first (local maxima above
     rel_height x the strongest, within [fmin_hz, fmax_hz]), each refined by
     parabolic interpolation of log power over the three bins around it."""
@@ -222,8 +250,8 @@ def spectral_peaks(freqs: np.ndarray, power: np.ndarray, n: int = 5, fmin_hz: fl
     out = []
     for k in order:
         i = idx[k]
-        if 0 < i < len(power) - 1 and min(power[i - 1:i + 2]) > 0:
-            a, b, c = np.log(power[i - 1:i + 2])
+        if 0 < i < len(power) - 1 and min(power[i - 1 : i + 2]) > 0:
+            a, b, c = np.log(power[i - 1 : i + 2])
             denom = a - 2 * b + c
             shift = 0.5 * (a - c) / denom if denom != 0 else 0.0
             out.append(float(freqs[i] + np.clip(shift, -0.5, 0.5) * df))
@@ -252,12 +280,18 @@ class BandLine:
     contrast: float
 
 
-def band_line(freqs: np.ndarray, power: np.ndarray, f_hz: float, rel_half_width: float = 0.15,
-              fmin_hz: float = 5.0) -> BandLine:
+def band_line(
+    freqs: np.ndarray,
+    power: np.ndarray,
+    f_hz: float,
+    rel_half_width: float = 0.15,
+    fmin_hz: float = 5.0,
+) -> BandLine:
     """The line near f_hz: power, peak and contrast in f_hz x (1 +- rel_half_width)."""
     if not (f_hz > 0 and 0 < rel_half_width < 1):
-        raise ValueError(f"f_hz = {f_hz} must be > 0 and rel_half_width = {rel_half_width} "
-                         "in (0, 1)")
+        raise ValueError(
+            f"f_hz = {f_hz} must be > 0 and rel_half_width = {rel_half_width} in (0, 1)"
+        )
     lo, hi = f_hz * (1 - rel_half_width), f_hz * (1 + rel_half_width)
     width = hi - lo
 
@@ -273,8 +307,8 @@ def band_line(freqs: np.ndarray, power: np.ndarray, f_hz: float, rel_half_width:
         idx = np.nonzero(sel)[0]
         i = int(idx[np.argmax(power[idx])])
         peak = float(freqs[i])
-        if 0 < i < len(power) - 1 and min(power[i - 1:i + 2]) > 0:
-            a, b, c = np.log(power[i - 1:i + 2])
+        if 0 < i < len(power) - 1 and min(power[i - 1 : i + 2]) > 0:
+            a, b, c = np.log(power[i - 1 : i + 2])
             denom = a - 2 * b + c
             shift = 0.5 * (a - c) / denom if denom != 0 else 0.0
             peak += float(np.clip(shift, -0.5, 0.5) * (freqs[1] - freqs[0]))
@@ -282,7 +316,11 @@ def band_line(freqs: np.ndarray, power: np.ndarray, f_hz: float, rel_half_width:
     flank = float(np.mean(flanks)) if flanks else 0.0
     band_mean = mean_in(lo, hi)
     return BandLine(
-        expected_hz=float(f_hz), lo_hz=lo, hi_hz=hi, peak_hz=peak, power_pa2=band_power,
+        expected_hz=float(f_hz),
+        lo_hz=lo,
+        hi_hz=hi,
+        peak_hz=peak,
+        power_pa2=band_power,
         share=band_power / total if total > 0 else 0.0,
         contrast=band_mean / flank if flank > 0 else float("inf") if band_mean > 0 else 0.0,
     )
@@ -295,8 +333,13 @@ def power_at(freqs: np.ndarray, power: np.ndarray, f_hz: float, half_width_bins:
     return float(power[lo:hi].sum())
 
 
-def spikes_per_cycle(counts: np.ndarray, dt_s: float, freq_hz: float, t0_s: float = 0.0,
-                     origin_s: float | None = None) -> np.ndarray:
+def spikes_per_cycle(
+    counts: np.ndarray,
+    dt_s: float,
+    freq_hz: float,
+    t0_s: float = 0.0,
+    origin_s: float | None = None,
+) -> np.ndarray:
     """Spike count of one receptor in each whole stimulus cycle of period
     1/freq_hz inside the train: cycle m spans [origin + m / f,
     origin + (m + 1) / f), origin_s defaulting to t0_s (row 0's time), each

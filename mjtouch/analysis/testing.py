@@ -60,23 +60,32 @@ def grating(period_m: float = 1e-3, **kw) -> scenes.Texture:
     return scenes.Texture(kind="grating", period_m=period_m, **kw)
 
 
-def random_texture(rms_m: float = 20e-6, corr_length_m: float = 60e-6, seed: int = 0,
-                   **kw) -> scenes.Texture:
+def random_texture(
+    rms_m: float = 20e-6, corr_length_m: float = 60e-6, seed: int = 0, **kw
+) -> scenes.Texture:
     kw.setdefault("width_m", 0.016)  # length: sized to the slide by slide_spectrum
     return scenes.Texture(kind="random", rms_m=rms_m, corr_length_m=corr_length_m, seed=seed, **kw)
 
 
-def slide_spectrum(texture: scenes.Texture | None = None, speed_m_s: float = 0.025,
-                   force_n: float = 0.5, ridges: bool = True, duration_s: float = 0.5,
-                   timestep_s: float = 2e-4, site: str = "all", settle_s: float = 0.05,
-                   tip: scenes.Fingertip | None = None) -> Spectrum:
+def slide_spectrum(
+    texture: scenes.Texture | None = None,
+    speed_m_s: float = 0.025,
+    force_n: float = 0.5,
+    ridges: bool = True,
+    duration_s: float = 0.5,
+    timestep_s: float = 2e-4,
+    site: str = "all",
+    settle_s: float = 0.05,
+    tip: scenes.Fingertip | None = None,
+) -> Spectrum:
     """Slide and return the receptor-stress spectrum of `site` (a receptor
     class, or "all")."""
     if site not in ("all", "SA1", "RA", "PC"):
         raise ValueError(f"site {site!r} is not one of 'all', 'SA1', 'RA', 'PC'")
     tip = tip or scenes.Fingertip(nx=64, pitch_m=1.5e-4, ridges=ridges)
-    proto = scenes.Protocol(force_n=force_n, speed_m_s=speed_m_s, timestep_s=timestep_s,
-                            press_s=0.1)
+    proto = scenes.Protocol(
+        force_n=force_n, speed_m_s=speed_m_s, timestep_s=timestep_s, press_s=0.1
+    )
     texture = texture or grating()
     need = 2 * speed_m_s * duration_s + 0.02  # slide + contact patch margin
     if texture.length_m < need:
@@ -98,13 +107,16 @@ def assert_peak_at(spec: Spectrum, f_hz: float, bins: float = 1.0, rank: int = 0
     got = peaks[rank]
     assert abs(got - f_hz) <= bins * spec.bin_hz, (
         f"peak #{rank} at {got:.2f} Hz, expected {f_hz:.2f} Hz within {bins} bin(s) of "
-        f"{spec.bin_hz:.2f} Hz; peaks: {[round(p, 2) for p in peaks]}")
+        f"{spec.bin_hz:.2f} Hz; peaks: {[round(p, 2) for p in peaks]}"
+    )
 
 
-def assert_power_ratio(a: Spectrum, b: Spectrum, f_hz: float, at_least: float,
-                       bins: int = 1) -> None:
+def assert_power_ratio(
+    a: Spectrum, b: Spectrum, f_hz: float, at_least: float, bins: int = 1
+) -> None:
     """Power at f_hz (+-bins) of spectrum a is at least `at_least` times b's."""
     pa, pb = a.power_at(f_hz, bins), b.power_at(f_hz, bins)
     assert pa >= at_least * pb, (
         f"power at {f_hz:.2f} Hz: {pa:.3g} vs {pb:.3g} (ratio {pa / max(pb, 1e-300):.3g}, "
-        f"needed >= {at_least})")
+        f"needed >= {at_least})"
+    )

@@ -33,8 +33,9 @@ def errors(row: Trace, ref: Trace, basis: str = "receptor", skip_s: float = SKIP
     receptor (same sites); "class mean": the class-mean traces."""
     m = row.dt_s / ref.dt_s
     if m < 1 - 1e-9 or abs(m - round(m)) > 1e-6 * m:
-        raise ValueError(f"row timestep {row.dt_s} s is not a whole multiple of the reference's "
-                         f"{ref.dt_s} s")
+        raise ValueError(
+            f"row timestep {row.dt_s} s is not a whole multiple of the reference's {ref.dt_s} s"
+        )
     m = int(round(m))
     k0 = int(round(skip_s / row.dt_s))
     n = min(row.stress.shape[0], ref.stress.shape[0] // m)
@@ -51,10 +52,14 @@ def errors(row: Trace, ref: Trace, basis: str = "receptor", skip_s: float = SKIP
     elif basis != "receptor" or a.shape != b.shape or not np.array_equal(row.classes, ref.classes):
         raise ValueError("basis 'receptor' needs the same receptors in row and reference")
     diff = np.sqrt(np.mean((a - b) ** 2))
-    scale = np.sqrt(np.mean(b ** 2))
-    out = {"stress_rms_pa": float(diff),
-           "stress_rms_rel": float(diff / scale) if scale > 0 else (0.0 if diff == 0 else None),
-           "peak_freq_hz": None, "peak_amp_rel": None, "ref_peak_hz": None}
+    scale = np.sqrt(np.mean(b**2))
+    out = {
+        "stress_rms_pa": float(diff),
+        "stress_rms_rel": float(diff / scale) if scale > 0 else (0.0 if diff == 0 else None),
+        "peak_freq_hz": None,
+        "peak_amp_rel": None,
+        "ref_peak_hz": None,
+    }
     ref_win = slice(k0 * m, n * m)
     if window_s >= SPECTRAL_MIN_S - 1e-12:
         fmax = min(FMAX_HZ, 0.5 / row.dt_s)
@@ -88,8 +93,10 @@ def pareto_front(costs, errs) -> list[bool]:
         if e is None or c is None:
             out.append(False)
             continue
-        dominated = any(j != i and e2 is not None and c2 <= c and e2 <= e and (c2 < c or e2 < e)
-                        for j, (c2, e2) in enumerate(pts))
+        dominated = any(
+            j != i and e2 is not None and c2 <= c and e2 <= e and (c2 < c or e2 < e)
+            for j, (c2, e2) in enumerate(pts)
+        )
         out.append(not dominated)
     return out
 
@@ -105,8 +112,12 @@ def fit_power_law(x, y) -> dict:
     b, a = np.polyfit(lx, ly, 1)
     res = ly - (a + b * lx)
     ss = np.sum((ly - ly.mean()) ** 2)
-    return {"exponent": float(b), "prefactor": float(math.exp(a)),
-            "r2": float(1 - np.sum(res ** 2) / ss) if ss > 0 else 1.0, "n": int(ok.sum())}
+    return {
+        "exponent": float(b),
+        "prefactor": float(math.exp(a)),
+        "r2": float(1 - np.sum(res**2) / ss) if ss > 0 else 1.0,
+        "n": int(ok.sum()),
+    }
 
 
 def fit_affine(x, y) -> dict:
@@ -117,5 +128,9 @@ def fit_affine(x, y) -> dict:
     slope, intercept = np.polyfit(x, y, 1)
     ss = np.sum((y - y.mean()) ** 2)
     res = y - (intercept + slope * x)
-    return {"intercept": float(intercept), "slope": float(slope),
-            "r2": float(1 - np.sum(res ** 2) / ss) if ss > 0 else 1.0, "n": int(x.size)}
+    return {
+        "intercept": float(intercept),
+        "slope": float(slope),
+        "r2": float(1 - np.sum(res**2) / ss) if ss > 0 else 1.0,
+        "n": int(x.size),
+    }

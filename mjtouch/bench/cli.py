@@ -12,28 +12,58 @@ from mjtouch.bench.runner import Bench, Progress
 
 
 def add_arguments(p) -> None:
-    p.add_argument("--quick", action="store_true",
-                   help="a tiny sweep on small grids (well under a minute; for CI)")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="a tiny sweep on small grids (well under a minute; for CI)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--plot", metavar="FILE", help="write a PNG: error vs cost, baselines, effects")
     p.add_argument("--save-json", metavar="FILE", help="also write the JSON object to FILE")
-    p.add_argument("--from-json", metavar="FILE",
-                   help="run nothing: print the table (and --plot) of a saved --save-json FILE")
-    p.add_argument("--duration", type=float, default=None,
-                   help="sliding seconds per knob row (default 0.25; --quick 0.12)")
-    p.add_argument("--time-steps", type=int, default=None,
-                   help="steps per timed repeat (default 200; --quick 60)")
-    p.add_argument("--repeats", type=int, default=None,
-                   help="timing rounds over every configuration; the minimum is reported "
-                        "(default 8; --quick 3)")
-    p.add_argument("--elastic-steps", type=int, default=None,
-                   help="sliding steps of the pressure knob, whose reference is the slow elastic "
-                        "model (default 300; --quick 120)")
-    p.add_argument("--knob-steps", action="append", default=[], metavar="KNOB=N",
-                   help="sliding steps of one knob's rows (repeatable)")
-    p.add_argument("--knobs", default=None,
-                   help="comma-separated knobs to sweep (default all: pitch, pressure, skin, "
-                        "stress_method, receptors, timestep, presets)")
+    p.add_argument(
+        "--from-json",
+        metavar="FILE",
+        help="run nothing: print the table (and --plot) of a saved --save-json FILE",
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        help="sliding seconds per knob row (default 0.25; --quick 0.12)",
+    )
+    p.add_argument(
+        "--time-steps",
+        type=int,
+        default=None,
+        help="steps per timed repeat (default 200; --quick 60)",
+    )
+    p.add_argument(
+        "--repeats",
+        type=int,
+        default=None,
+        help="timing rounds over every configuration; the minimum is reported "
+        "(default 8; --quick 3)",
+    )
+    p.add_argument(
+        "--elastic-steps",
+        type=int,
+        default=None,
+        help="sliding steps of the pressure knob, whose reference is the slow elastic "
+        "model (default 300; --quick 120)",
+    )
+    p.add_argument(
+        "--knob-steps",
+        action="append",
+        default=[],
+        metavar="KNOB=N",
+        help="sliding steps of one knob's rows (repeatable)",
+    )
+    p.add_argument(
+        "--knobs",
+        default=None,
+        help="comma-separated knobs to sweep (default all: pitch, pressure, skin, "
+        "stress_method, receptors, timestep, presets)",
+    )
     p.add_argument("--no-effects", action="store_true", help="skip the effects table")
     p.add_argument("--no-threads", action="store_true", help="skip the threads measurement")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (--progress off)")
@@ -42,8 +72,12 @@ def add_arguments(p) -> None:
 
 def config_from_args(args) -> BenchConfig:
     kw = {}
-    for name, attr in (("duration", "duration_s"), ("time_steps", "time_steps"),
-                       ("repeats", "repeats"), ("elastic_steps", "elastic_steps")):
+    for name, attr in (
+        ("duration", "duration_s"),
+        ("time_steps", "time_steps"),
+        ("repeats", "repeats"),
+        ("elastic_steps", "elastic_steps"),
+    ):
         v = getattr(args, name)
         if v is not None:
             kw[attr] = v
@@ -76,8 +110,10 @@ def main(args) -> int:
         try:
             import matplotlib  # noqa: F401
         except ImportError:
-            print("mjtouch bench: error: --plot needs matplotlib: pip install 'mjtouch[plot]'",
-                  file=sys.stderr)
+            print(
+                "mjtouch bench: error: --plot needs matplotlib: pip install 'mjtouch[plot]'",
+                file=sys.stderr,
+            )
             return 2
     if args.from_json:
         try:
@@ -85,14 +121,18 @@ def main(args) -> int:
                 out = json.load(f)
             out["rows"], out["baselines"]  # noqa: B018  (a bench JSON object)
         except (OSError, ValueError, KeyError, TypeError) as e:
-            print(f"mjtouch bench: error: --from-json {args.from_json}: not a saved bench "
-                  f"result ({e})", file=sys.stderr)
+            print(
+                f"mjtouch bench: error: --from-json {args.from_json}: not a saved bench "
+                f"result ({e})",
+                file=sys.stderr,
+            )
             return 2
     else:
         bench = Bench(cfg)
         mode = "off" if args.no_progress else args.progress
-        bench.progress = Progress(bench.count_tasks(), desc="bench",
-                                  enabled=progress.wanted(mode, args.json))
+        bench.progress = Progress(
+            bench.count_tasks(), desc="bench", enabled=progress.wanted(mode, args.json)
+        )
         out = bench.run()
         bench.progress.close()
     if args.plot:

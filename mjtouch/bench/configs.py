@@ -59,8 +59,9 @@ class Knob:
 
     def all_settings(self) -> list[tuple[dict, dict, bool]]:
         """(overrides, the setting's own overrides, is reference), reference last."""
-        return [({**self.base, **s}, s, False) for s in self.settings] + \
-               [({**self.base, **self.reference}, self.reference, True)]
+        return [({**self.base, **s}, s, False) for s in self.settings] + [
+            ({**self.base, **self.reference}, self.reference, True)
+        ]
 
 
 def knob(name: str, key: str, values, reference, **kw) -> Knob:
@@ -75,31 +76,65 @@ def default_knobs(cfg: BenchConfig) -> list[Knob]:
     coarse = {"nx": cfg.coarse_nx, "pitch_m": cfg.coarse_pitch_m}
     if cfg.quick:
         return [
-            Knob("pitch", tuple(pitch_grid(p, cfg.extent_m) for p in (200e-6, 150e-6)),
-                 pitch_grid(100e-6, cfg.extent_m)),
-            knob("pressure", "skin.pressure", ("winkler",), "elastic", base=coarse,
-                 steps=cfg.elastic_steps),
+            Knob(
+                "pitch",
+                tuple(pitch_grid(p, cfg.extent_m) for p in (200e-6, 150e-6)),
+                pitch_grid(100e-6, cfg.extent_m),
+            ),
+            knob(
+                "pressure",
+                "skin.pressure",
+                ("winkler",),
+                "elastic",
+                base=coarse,
+                steps=cfg.elastic_steps,
+            ),
             Knob("stress_method", (tree(1.0),), {"skin.stress_method": "direct"}, base=grid),
-            Knob("oversample", ({"timestep_s": 1e-3, "skin.oversample": 2},),
-                 {"timestep_s": 2e-4, "skin.oversample": 1}, base=grid),
+            Knob(
+                "oversample",
+                ({"timestep_s": 1e-3, "skin.oversample": 2},),
+                {"timestep_s": 2e-4, "skin.oversample": 1},
+                base=grid,
+            ),
             knob("receptors", "density_scale", (0.5,), 1.0, base=grid, sites=False),
             knob("timestep", "timestep_s", (4e-4,), 1e-4, base=grid),
         ]
     return [
-        Knob("pitch", tuple(pitch_grid(p) for p in (200e-6, 150e-6, 100e-6, 75e-6, 50e-6)),
-             pitch_grid(37.5e-6)),
-        knob("pressure", "skin.pressure", ("contacts", "winkler"), "elastic", base=coarse,
-             steps=cfg.elastic_steps),
+        Knob(
+            "pitch",
+            tuple(pitch_grid(p) for p in (200e-6, 150e-6, 100e-6, 75e-6, 50e-6)),
+            pitch_grid(37.5e-6),
+        ),
+        knob(
+            "pressure",
+            "skin.pressure",
+            ("contacts", "winkler"),
+            "elastic",
+            base=coarse,
+            steps=cfg.elastic_steps,
+        ),
         knob("skin", "skin.skin", ("halfspace",), "layered", base=grid),
-        Knob("stress_method", ({"skin.stress_method": "fft"}, tree(1.5), tree(1.0), tree(0.5),
-                               tree(0.25)), {"skin.stress_method": "direct"}, base=grid),
+        Knob(
+            "stress_method",
+            ({"skin.stress_method": "fft"}, tree(1.5), tree(1.0), tree(0.5), tree(0.25)),
+            {"skin.stress_method": "direct"},
+            base=grid,
+        ),
         knob("receptors", "density_scale", (0.25, 0.5, 1.0, 2.0), 4.0, base=grid, sites=False),
         knob("timestep", "timestep_s", (1e-3, 5e-4, 2e-4, 1e-4, 5e-5), 2.5e-5, base=grid),
         # physics at 1 ms, the skin K times per step (auto gives K = 2 there)
-        Knob("oversample", tuple({"timestep_s": 1e-3, "skin.oversample": k} for k in (2, 4, 10)),
-             {"timestep_s": 1e-4, "skin.oversample": 1}, base=grid),
-        Knob("presets", (PRESETS["rl"], PRESETS["interactive"]), PRESETS["science"],
-             labels=("rl (fast)", "interactive", "science (accurate)")),
+        Knob(
+            "oversample",
+            tuple({"timestep_s": 1e-3, "skin.oversample": k} for k in (2, 4, 10)),
+            {"timestep_s": 1e-4, "skin.oversample": 1},
+            base=grid,
+        ),
+        Knob(
+            "presets",
+            (PRESETS["rl"], PRESETS["interactive"]),
+            PRESETS["science"],
+            labels=("rl (fast)", "interactive", "science (accurate)"),
+        ),
     ]
 
 
@@ -112,18 +147,34 @@ PRESETS = {
     # tree at theta 1.0, 151 per substep), at 1/20 of its stress error.
     # rl: Winkler contact (stages 1-2 ~10x cheaper than elastic; ridges pressed
     # flat, textures still resolved): speed first.
-    "rl": {"nx": 65, "pitch_m": 200e-6, "timestep_s": 1e-3, "skin.stress_method": "auto",
-           "skin.pressure": "winkler"},
+    "rl": {
+        "nx": 65,
+        "pitch_m": 200e-6,
+        "timestep_s": 1e-3,
+        "skin.stress_method": "auto",
+        "skin.pressure": "winkler",
+    },
     "interactive": {"nx": 85, "pitch_m": 150e-6, "timestep_s": 1e-3, "skin.stress_method": "auto"},
     # science: grid_shift cancels the elastic contact's V / pitch line (PC
     # 164 -> 41 Hz at 50 um on the default slide; README "What accuracy costs").
-    "science": {"nx": 257, "pitch_m": 50e-6, "timestep_s": 1e-4, "skin.stress_method": "auto",
-                "skin.grid_shift": "true"},
+    "science": {
+        "nx": 257,
+        "pitch_m": 50e-6,
+        "timestep_s": 1e-4,
+        "skin.stress_method": "auto",
+        "skin.grid_shift": "true",
+    },
 }
 
 
-MINIMAL = {"ridges": False, "skin.shear": "false", "skin.skin": "halfspace",
-           "skin.pressure": "winkler", "skin.classes": "SA1", "skin.outputs": "spikes"}
+MINIMAL = {
+    "ridges": False,
+    "skin.shear": "false",
+    "skin.skin": "halfspace",
+    "skin.pressure": "winkler",
+    "skin.classes": "SA1",
+    "skin.outputs": "spikes",
+}
 ALL_OUTPUTS = "spikes stress voltage force pressure rate"
 
 
@@ -133,33 +184,47 @@ def default_effects(cfg: BenchConfig) -> list[tuple[str, str, dict]]:
     without each."""
     m = MINIMAL
     if cfg.quick:
-        return [("alone", "minimal", m), ("together", "default (all)", {}),
-                ("without", "outputs force only (stages 1-2)", {"skin.outputs": "force"})]
-    rows = [("alone", "minimal: winkler, half-space, no ridges/shear, SA1, spikes", m),
-            ("alone", "+ ridges", {**m, "ridges": True}),
-            ("alone", "+ shear", {**m, "skin.shear": "true"}),
-            ("alone", "+ layered skin", {**m, "skin.skin": "layered"}),
-            ("alone", "pressure contacts", {**m, "skin.pressure": "contacts"}),
-            ("alone", "pressure elastic", {**m, "skin.pressure": "elastic"}),
-            ("alone", "class RA instead of SA1", {**m, "skin.classes": "RA"}),
-            ("alone", "class PC instead of SA1", {**m, "skin.classes": "PC"})]
-    rows += [("alone", f"+ output {o}", {**m, "skin.outputs": f"spikes {o}"})
-             for o in ("stress", "voltage", "force", "pressure", "rate")]
-    rows += [("together", "default (all: ridges, shear, layered, elastic, SA1 RA PC, "
-                          "spikes stress force)", {})]
-    rows += [("without", "- ridges", {"ridges": False}),
-             ("without", "- shear", {"skin.shear": "false"}),
-             ("without", "half-space skin", {"skin.skin": "halfspace"}),
-             ("without", "pressure contacts", {"skin.pressure": "contacts"}),
-             ("without", "pressure winkler", {"skin.pressure": "winkler"}),
-             ("without", "- SA1", {"skin.classes": "RA PC"}),
-             ("without", "- RA", {"skin.classes": "SA1 PC"}),
-             ("without", "- PC", {"skin.classes": "SA1 RA"}),
-             ("without", "outputs spikes only", {"skin.outputs": "spikes"}),
-             ("without", "outputs force only (stages 1-2)", {"skin.outputs": "force"}),
-             ("without", "+ all outputs", {"skin.outputs": ALL_OUTPUTS}),
-             ("without", "+ grid_shift (cancels the V / pitch line)", {"skin.grid_shift": "true"}),
-             ("without", "threads 2 (wall time; same bits)", {"skin.threads": "2"})]
+        return [
+            ("alone", "minimal", m),
+            ("together", "default (all)", {}),
+            ("without", "outputs force only (stages 1-2)", {"skin.outputs": "force"}),
+        ]
+    rows = [
+        ("alone", "minimal: winkler, half-space, no ridges/shear, SA1, spikes", m),
+        ("alone", "+ ridges", {**m, "ridges": True}),
+        ("alone", "+ shear", {**m, "skin.shear": "true"}),
+        ("alone", "+ layered skin", {**m, "skin.skin": "layered"}),
+        ("alone", "pressure contacts", {**m, "skin.pressure": "contacts"}),
+        ("alone", "pressure elastic", {**m, "skin.pressure": "elastic"}),
+        ("alone", "class RA instead of SA1", {**m, "skin.classes": "RA"}),
+        ("alone", "class PC instead of SA1", {**m, "skin.classes": "PC"}),
+    ]
+    rows += [
+        ("alone", f"+ output {o}", {**m, "skin.outputs": f"spikes {o}"})
+        for o in ("stress", "voltage", "force", "pressure", "rate")
+    ]
+    rows += [
+        (
+            "together",
+            "default (all: ridges, shear, layered, elastic, SA1 RA PC, spikes stress force)",
+            {},
+        )
+    ]
+    rows += [
+        ("without", "- ridges", {"ridges": False}),
+        ("without", "- shear", {"skin.shear": "false"}),
+        ("without", "half-space skin", {"skin.skin": "halfspace"}),
+        ("without", "pressure contacts", {"skin.pressure": "contacts"}),
+        ("without", "pressure winkler", {"skin.pressure": "winkler"}),
+        ("without", "- SA1", {"skin.classes": "RA PC"}),
+        ("without", "- RA", {"skin.classes": "SA1 PC"}),
+        ("without", "- PC", {"skin.classes": "SA1 RA"}),
+        ("without", "outputs spikes only", {"skin.outputs": "spikes"}),
+        ("without", "outputs force only (stages 1-2)", {"skin.outputs": "force"}),
+        ("without", "+ all outputs", {"skin.outputs": ALL_OUTPUTS}),
+        ("without", "+ grid_shift (cancels the V / pitch line)", {"skin.grid_shift": "true"}),
+        ("without", "threads 2 (wall time; same bits)", {"skin.threads": "2"}),
+    ]
     return rows
 
 
@@ -186,9 +251,21 @@ class BenchConfig:
     @classmethod
     def quick_config(cls, **kw) -> BenchConfig:
         """A tiny sweep for CI: small grids, short runs (well under a minute)."""
-        base = dict(quick=True, duration_s=0.11, time_steps=60, repeats=3, elastic_steps=150,
-                    elastic_time_steps=10, cheap_steps=1000, threads_batch=4, nx=48,
-                    pitch_m=2e-4, coarse_nx=48, coarse_pitch_m=2e-4, extent_m=9.6e-3)
+        base = dict(
+            quick=True,
+            duration_s=0.11,
+            time_steps=60,
+            repeats=3,
+            elastic_steps=150,
+            elastic_time_steps=10,
+            cheap_steps=1000,
+            threads_batch=4,
+            nx=48,
+            pitch_m=2e-4,
+            coarse_nx=48,
+            coarse_pitch_m=2e-4,
+            extent_m=9.6e-3,
+        )
         base.update(kw)
         return cls(**base)
 
@@ -197,6 +274,7 @@ class BenchConfig:
             v = getattr(self, name)
             if not (isinstance(v, (int, np.integer)) and lo <= v <= hi):
                 raise ValueError(f"{name} = {v!r} is out of range; valid range [{lo}, {hi}]")
+
         integer("time_steps", 10, 1_000_000)
         integer("repeats", 1, 100)
         integer("elastic_steps", 1, 1_000_000)
@@ -204,22 +282,25 @@ class BenchConfig:
         integer("cheap_steps", 10, 10_000_000)
         integer("threads_batch", 2, 1024)
         if not (math.isfinite(self.duration_s) and 2 * SKIP_S <= self.duration_s <= 5.0):
-            raise ValueError(f"duration_s = {self.duration_s} is out of range; valid range "
-                             f"[{2 * SKIP_S}, 5] s")
+            raise ValueError(
+                f"duration_s = {self.duration_s} is out of range; valid range [{2 * SKIP_S}, 5] s"
+            )
         names = [k.name for k in default_knobs(self)]
         for name, n in self.knob_steps.items():
             if name not in names:
                 raise ValueError(f"knob_steps: unknown knob {name!r}; valid: {', '.join(names)}")
             if not (isinstance(n, (int, np.integer)) and 2 <= n <= 10_000_000):
-                raise ValueError(f"knob_steps[{name!r}] = {n!r} is out of range; valid range "
-                                 "[2, 1e7] steps")
+                raise ValueError(
+                    f"knob_steps[{name!r}] = {n!r} is out of range; valid range [2, 1e7] steps"
+                )
         for name in self.knobs or ():
             if name not in names:
                 raise ValueError(f"unknown knob {name!r}; valid: {', '.join(names)}")
 
 
-def scene_parts(overrides: dict, sites: str | None = None
-                ) -> tuple[scenes.Fingertip, scenes.Protocol]:
+def scene_parts(
+    overrides: dict, sites: str | None = None
+) -> tuple[scenes.Fingertip, scenes.Protocol]:
     """The default scene's fingertip and protocol with overrides applied."""
     tip_kw, skin, proto_kw = {}, {}, {}
     for key, value in overrides.items():
@@ -260,8 +341,10 @@ def lattice_sites(grids: list[tuple[int, float]], radius_m: float = SITE_RADIUS_
     for nx, p in grids:  # each site must be a taxel centre, (k - (nx - 1) / 2) p
         k = np.array([[x, y] for *_, x, y in pts]) / p + (nx - 1) / 2
         if np.abs(k - np.round(k)).max() > 1e-6:
-            raise ValueError(f"the {SITE_SPACING_M} m site lattice (offset {offset} m) is not on "
-                             f"the taxel centres of nx = {nx}, pitch = {p} m")
+            raise ValueError(
+                f"the {SITE_SPACING_M} m site lattice (offset {offset} m) is not on "
+                f"the taxel centres of nx = {nx}, pitch = {p} m"
+            )
     out = []
     for k, (_, _, x, y) in enumerate(pts):
         c = SITE_CLASS_CYCLE[k % len(SITE_CLASS_CYCLE)]

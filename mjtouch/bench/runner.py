@@ -76,9 +76,15 @@ class Bench:
         if self.progress:
             self.progress.step(label)
 
-    def _run(self, overrides: dict, sites: str | None = None, pressed: bool = True,
-             nstep: int = 1, edit: Callable[[mujoco.MjSpec], object] | None = None,
-             disable_sensors: bool = False) -> tuple[Run, scenes.Protocol, scenes.Fingertip]:
+    def _run(
+        self,
+        overrides: dict,
+        sites: str | None = None,
+        pressed: bool = True,
+        nstep: int = 1,
+        edit: Callable[[mujoco.MjSpec], object] | None = None,
+        disable_sensors: bool = False,
+    ) -> tuple[Run, scenes.Protocol, scenes.Fingertip]:
         tip, proto = scene_parts(overrides, sites)
         spec = scenes.scene_spec(tip, self.texture, proto)
         if edit is not None:
@@ -89,8 +95,9 @@ class Bench:
         state0, warm = self.states.initial(model, pressed)
         return Run(model, state0, warm, slide_ctrl(proto, nstep, pressed)), proto, tip
 
-    def _queue(self, run: Run, nstep: int, last: np.ndarray, result: dict,
-               recorded: bool = False) -> None:
+    def _queue(
+        self, run: Run, nstep: int, last: np.ndarray, result: dict, recorded: bool = False
+    ) -> None:
         """Time run later (nstep steps per repeat); the repeats must end on
         sensordata `last`. Fills result["us_per_step"], ["repeats_identical"]."""
         self._items.append((run, nstep, last, recorded, result))
@@ -117,9 +124,17 @@ class Bench:
         self._items = []
 
     # baselines ----------------------------------------------------------------
-    BASELINES = ("bare_mujoco", "native_tactile", "native_tactile_sensors_off", "full_pipeline",
-                 "homogeneous_kernel", "idle_plugin", "bare_mujoco_idle", "idle_plugin_rollout",
-                 "bare_mujoco_idle_rollout")
+    BASELINES = (
+        "bare_mujoco",
+        "native_tactile",
+        "native_tactile_sensors_off",
+        "full_pipeline",
+        "homogeneous_kernel",
+        "idle_plugin",
+        "bare_mujoco_idle",
+        "idle_plugin_rollout",
+        "bare_mujoco_idle_rollout",
+    )
 
     def baselines(self) -> dict:
         """Builds and warms up the baselines; their times come from time_all()."""
@@ -132,8 +147,11 @@ class Bench:
         configs = {  # name: (options, steps per timed repeat, timed through mujoco.rollout)
             "bare_mujoco": (dict(edit=strip_plugin), cheap, False),
             "native_tactile": (dict(edit=tactile), c.time_steps, False),
-            "native_tactile_sensors_off": (dict(edit=tactile, disable_sensors=True),
-                                           c.time_steps, False),
+            "native_tactile_sensors_off": (
+                dict(edit=tactile, disable_sensors=True),
+                c.time_steps,
+                False,
+            ),
             "full_pipeline": ({}, c.time_steps, False),
             "homogeneous_kernel": (dict(extra={"skin.skin": "halfspace"}), c.time_steps, False),
             "idle_plugin": (dict(pressed=False), cheap, False),
@@ -156,7 +174,7 @@ class Bench:
         layout = SkinLayout.from_model(models["full_pipeline"])
         dt = float(models["full_pipeline"].opt.timestep)
         out = {
-            "taxels": layout.nx ** 2,
+            "taxels": layout.nx**2,
             "native_tactile_taxels": int(models["native_tactile"].mesh_vertnum[0]),
             "receptors": int(len(layout.classes)),
             "active_taxels": self.active_taxels(grid),
@@ -164,15 +182,16 @@ class Bench:
             "contacts_pressed": int(self.states.physics(dt, True)[2]),
             "contacts_idle": int(self.states.physics(dt, False)[2]),
         }
-        if out["native_tactile_taxels"] != layout.nx ** 2:
+        if out["native_tactile_taxels"] != layout.nx**2:
             raise RuntimeError("the native tactile mesh does not have one vertex per taxel")
         return out
 
     def finish_baselines(self, out: dict) -> None:
         for name in self.BASELINES:
             out[f"{name}_us_per_step"] = self._baseline_results[name]["us_per_step"]
-        out["repeats_identical"] = all(r["repeats_identical"]
-                                       for r in self._baseline_results.values())
+        out["repeats_identical"] = all(
+            r["repeats_identical"] for r in self._baseline_results.values()
+        )
 
     @staticmethod
     def ratios(b: dict) -> dict:
@@ -189,8 +208,10 @@ class Bench:
             "full_over_native_tactile": full / b["native_tactile_us_per_step"],
             "idle_over_bare_idle": idle,
             "idle_overhead_pct": 100 * (idle - 1),
-            "idle_rollout_overhead_pct": 100 * (b["idle_plugin_rollout_us_per_step"] /
-                                                b["bare_mujoco_idle_rollout_us_per_step"] - 1),
+            "idle_rollout_overhead_pct": 100
+            * (
+                b["idle_plugin_rollout_us_per_step"] / b["bare_mujoco_idle_rollout_us_per_step"] - 1
+            ),
             "layered_over_homogeneous": full / b["homogeneous_kernel_us_per_step"],
             "full_wall_s_per_sim_s": full * 1e-6 / b["timestep_s"],
             "full_over_100us_goal": full / 100.0,
@@ -228,9 +249,11 @@ class Bench:
                 nstep = int(round(c.duration_s / proto.timestep_s))
             need = int(round(SKIP_S / proto.timestep_s)) + MIN_WINDOW_STEPS
             if nstep < need:
-                raise ValueError(f"knob {k.name!r}: {nstep} steps of {proto.timestep_s} s leave "
-                                 f"no error window after the skin's start-up ({SKIP_S} s); "
-                                 f"valid: >= {need} steps")
+                raise ValueError(
+                    f"knob {k.name!r}: {nstep} steps of {proto.timestep_s} s leave "
+                    f"no error window after the skin's start-up ({SKIP_S} s); "
+                    f"valid: >= {need} steps"
+                )
             run, proto, tip = self._run(ov, sites, nstep=nstep)
             layout = SkinLayout.from_model(run.model)
             sd = run.record(nstep)  # the data for the errors, and the warm-up
@@ -238,16 +261,25 @@ class Bench:
             if ov.get("skin.pressure") == "elastic":
                 nt = min(nt, c.elastic_time_steps)
             row = {
-                "knob": k.name, "overrides": dict(ov),
+                "knob": k.name,
+                "overrides": dict(ov),
                 "setting": k.labels[len(rows)] if k.labels else _label(own),
-                "reference": is_ref, "timestep_s": proto.timestep_s,
-                "steps": nstep, "timed_steps": nt, "nx": tip.nx, "pitch_m": tip.pitch_m,
-                "taxels": tip.nx ** 2, "receptors": int(len(layout.classes)),
+                "reference": is_ref,
+                "timestep_s": proto.timestep_s,
+                "steps": nstep,
+                "timed_steps": nt,
+                "nx": tip.nx,
+                "pitch_m": tip.pitch_m,
+                "taxels": tip.nx**2,
+                "receptors": int(len(layout.classes)),
                 "kernel_build_s": layout.kernel_build_s,
                 "stress_basis": "receptor" if k.sites else "class mean",
-                "_trace": Trace(layout.block(sd, "stress").copy(),
-                                layout.block(sd, "spikes").astype(np.int64),
-                                layout.classes, proto.timestep_s),
+                "_trace": Trace(
+                    layout.block(sd, "stress").copy(),
+                    layout.block(sd, "spikes").astype(np.int64),
+                    layout.classes,
+                    proto.timestep_s,
+                ),
             }
             self._queue(run, nt, sd[nt - 1].copy(), row)
             if k.name == "pitch":  # for the scaling fit
@@ -281,9 +313,14 @@ class Bench:
             elastic = ov.get("skin.pressure") == "elastic"
             nt = min(c.time_steps, c.elastic_time_steps) if elastic else c.time_steps
             run, _, _ = self._run(ov, nstep=nt)
-            r = {"group": group, "effect": label, "overrides": ov, "timed_steps": nt,
-                 "receptors": int(len(SkinLayout.from_model(run.model).classes)),
-                 "sensordata": int(run.model.nsensordata)}
+            r = {
+                "group": group,
+                "effect": label,
+                "overrides": ov,
+                "timed_steps": nt,
+                "receptors": int(len(SkinLayout.from_model(run.model).classes)),
+                "sensordata": int(run.model.nsensordata),
+            }
             self._queue(run, nt, run.step(nt)[1], r)  # warm-up
             out.append(r)
             self._tick(f"effect: {label}")
@@ -315,9 +352,15 @@ class Bench:
             for r in range(c.repeats + 1):
                 for n in (1, 2):
                     t0 = time.perf_counter()
-                    pools[n].rollout(run.model, datas[n], states, run.ctrl[None, :nt],
-                                     initial_warmstart=warm, state=state_buf,
-                                     sensordata=sd_buf[n])
+                    pools[n].rollout(
+                        run.model,
+                        datas[n],
+                        states,
+                        run.ctrl[None, :nt],
+                        initial_warmstart=warm,
+                        state=state_buf,
+                        sensordata=sd_buf[n],
+                    )
                     wall = time.perf_counter() - t0
                     if r:  # the first is the warm-up
                         best[n] = min(best[n], wall)
@@ -326,11 +369,14 @@ class Bench:
             for pool in pools.values():
                 pool.close()
         return {
-            "nbatch": nb, "steps": nt,
-            "wall_s_1_thread": best[1], "wall_s_2_thread": best[2],
+            "nbatch": nb,
+            "steps": nt,
+            "wall_s_1_thread": best[1],
+            "wall_s_2_thread": best[2],
             "us_per_step_1_thread": best[1] / (nb * nt) * 1e6,
             "us_per_step_2_thread": best[2] / (nb * nt) * 1e6,
-            "speedup_2_threads": best[1] / best[2], "cpu_count": os.cpu_count(),
+            "speedup_2_threads": best[1] / best[2],
+            "cpu_count": os.cpu_count(),
             "identical_across_threads": bool(np.array_equal(sd_buf[1], sd_buf[2])),
         }
 
@@ -364,13 +410,20 @@ class Bench:
         self.finish_rows(rows)
         out = {
             "machine": _machine(),
-            "config": {k: (list(v) if isinstance(v, tuple) else v)
-                       for k, v in dataclasses.asdict(self.cfg).items()},
-            "scene": {"texture": "grating", "period_m": self.texture.period_m,
-                      "force_n": scenes.Protocol().force_n,
-                      "speed_m_s": scenes.Protocol().speed_m_s,
-                      "skip_s": SKIP_S, "lead_in_s": LEAD_IN_S,
-                      "spectral_min_s": SPECTRAL_MIN_S, "site_spacing_m": SITE_SPACING_M},
+            "config": {
+                k: (list(v) if isinstance(v, tuple) else v)
+                for k, v in dataclasses.asdict(self.cfg).items()
+            },
+            "scene": {
+                "texture": "grating",
+                "period_m": self.texture.period_m,
+                "force_n": scenes.Protocol().force_n,
+                "speed_m_s": scenes.Protocol().speed_m_s,
+                "skip_s": SKIP_S,
+                "lead_in_s": LEAD_IN_S,
+                "spectral_min_s": SPECTRAL_MIN_S,
+                "site_spacing_m": SITE_SPACING_M,
+            },
             "baselines": base,
             "ratios": self.ratios(base),
             "rows": rows,
@@ -393,13 +446,18 @@ def _profile(base: dict, effects: list[dict]) -> dict | None:
     """Per-step cost split of the default skin: MuJoCo, stages 1-2 (surface
     and pressure: outputs force only), stages 3-4 (stress and receptors)."""
     full = next((r["us_per_step"] for r in effects if r["group"] == "together"), None)
-    force = next((r["us_per_step"] for r in effects if r["effect"].startswith("outputs force")),
-                 None)
+    force = next(
+        (r["us_per_step"] for r in effects if r["effect"].startswith("outputs force")), None
+    )
     if full is None or force is None:
         return None
     bare = base["bare_mujoco_us_per_step"]
-    return {"mujoco_us": bare, "surface_pressure_us": force - bare,
-            "stress_receptors_us": full - force, "total_us": full}
+    return {
+        "mujoco_us": bare,
+        "surface_pressure_us": force - bare,
+        "stress_receptors_us": full - force,
+        "total_us": full,
+    }
 
 
 def _scaling(rows: list[dict], base: dict) -> dict:
@@ -411,23 +469,29 @@ def _scaling(rows: list[dict], base: dict) -> dict:
     if pitch:
         x = [r["active_taxels"] for r in pitch]
         y = [r["us_per_step"] - bare for r in pitch]
-        out["active_taxels"] = {"points": [[a, b] for a, b in zip(x, y)],
-                                "power_law": fit_power_law(x, y), "affine": fit_affine(x, y),
-                                "grid_taxels": [r["taxels"] for r in pitch],
-                                "power_law_vs_grid_taxels":
-                                    fit_power_law([r["taxels"] for r in pitch], y)}
+        out["active_taxels"] = {
+            "points": [[a, b] for a, b in zip(x, y)],
+            "power_law": fit_power_law(x, y),
+            "affine": fit_affine(x, y),
+            "grid_taxels": [r["taxels"] for r in pitch],
+            "power_law_vs_grid_taxels": fit_power_law([r["taxels"] for r in pitch], y),
+        }
     rec = [r for r in rows if r["knob"] == "receptors"]
     if rec:
         x = [r["receptors"] for r in rec]
         y = [r["us_per_step"] - bare for r in rec]
-        out["receptors"] = {"points": [[a, b] for a, b in zip(x, y)],
-                            "power_law": fit_power_law(x, y), "affine": fit_affine(x, y)}
+        out["receptors"] = {
+            "points": [[a, b] for a, b in zip(x, y)],
+            "power_law": fit_power_law(x, y),
+            "affine": fit_affine(x, y),
+        }
     return out
 
 
 def _peak_rss_mb():
     try:
         import resource
+
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
     except (ImportError, OSError):
         return None
@@ -441,6 +505,10 @@ def _loadavg():
 
 
 def _machine() -> dict:
-    return {"platform": platform.platform(), "processor": platform.processor(),
-            "python": platform.python_version(), "mujoco": mujoco.__version__,
-            "cpu_count": os.cpu_count()}
+    return {
+        "platform": platform.platform(),
+        "processor": platform.processor(),
+        "python": platform.python_version(),
+        "mujoco": mujoco.__version__,
+        "cpu_count": os.cpu_count(),
+    }

@@ -23,8 +23,7 @@ def strip_plugin(spec: mujoco.MjSpec) -> mujoco.MjSpec:
     return scenes.remove_skin(spec)
 
 
-def add_native_tactile(spec: mujoco.MjSpec, nx: int, pitch_m: float,
-                       semi_axes_m) -> mujoco.MjSpec:
+def add_native_tactile(spec: mujoco.MjSpec, nx: int, pitch_m: float, semi_axes_m) -> mujoco.MjSpec:
     """The bare scene plus MuJoCo's native tactile sensor on an nx x nx
     vertex plate mesh (non-colliding, on the finger body at the pad's pole,
     the plugin grid's extent): it reports at every vertex while the pad
@@ -35,11 +34,22 @@ def add_native_tactile(spec: mujoco.MjSpec, nx: int, pitch_m: float,
     mesh.make_plate([nx, nx])
     mesh.scale = [half, half, 0.0005]
     spec.geom("pad").parent.add_geom(
-        name="tactile_surface", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="tactile_plate",
-        pos=[0, 0, -semi_axes_m[2]], contype=0, conaffinity=0, group=4)
-    spec.add_sensor(name="tactile", type=mujoco.mjtSensor.mjSENS_TACTILE,
-                    objtype=mujoco.mjtObj.mjOBJ_MESH, objname="tactile_plate",
-                    reftype=mujoco.mjtObj.mjOBJ_GEOM, refname="tactile_surface")
+        name="tactile_surface",
+        type=mujoco.mjtGeom.mjGEOM_MESH,
+        meshname="tactile_plate",
+        pos=[0, 0, -semi_axes_m[2]],
+        contype=0,
+        conaffinity=0,
+        group=4,
+    )
+    spec.add_sensor(
+        name="tactile",
+        type=mujoco.mjtSensor.mjSENS_TACTILE,
+        objtype=mujoco.mjtObj.mjOBJ_MESH,
+        objname="tactile_plate",
+        reftype=mujoco.mjtObj.mjOBJ_GEOM,
+        refname="tactile_surface",
+    )
     return spec
 
 
@@ -74,8 +84,10 @@ class States:
         """(full state with a fresh skin, solver warm start) for model."""
         phys, warm, _ = self.physics(float(model.opt.timestep), pressed)
         if mujoco.mj_stateSize(model, _PHYSICS_SPEC) != phys.size:
-            raise RuntimeError("configuration changes the physics state size; it must differ "
-                               "from the default scene in the skin only")
+            raise RuntimeError(
+                "configuration changes the physics state size; it must differ "
+                "from the default scene in the skin only"
+            )
         data = mujoco.MjData(model)
         mujoco.mj_setState(model, data, phys, _PHYSICS_SPEC)
         full = np.empty(mujoco.mj_stateSize(model, _FULL_SPEC))
@@ -149,7 +161,13 @@ class Run:
         """(wall seconds, sensordata (nstep, nsensordata), a view of the buffer)."""
         self._buffers()
         t0 = time.perf_counter()
-        mujoco.rollout.rollout(self.model, self.data, self.state0[None], self.ctrl[None, :nstep],
-                               initial_warmstart=self.warm[None], state=self._state[:, :nstep],
-                               sensordata=self._sensordata[:, :nstep])
+        mujoco.rollout.rollout(
+            self.model,
+            self.data,
+            self.state0[None],
+            self.ctrl[None, :nstep],
+            initial_warmstart=self.warm[None],
+            state=self._state[:, :nstep],
+            sensordata=self._sensordata[:, :nstep],
+        )
         return time.perf_counter() - t0, self._sensordata[0, :nstep]

@@ -37,15 +37,25 @@ from mjtouch.envs.vector import RolloutVectorEnv
 ENV_IDS = {
     "mjtouch/TextureExplore-v0": dict(
         entry_point="mjtouch.envs.texture_explore:TextureExploreEnv",
-        vector_entry_point="mjtouch.envs.vector:texture_explore_vec", max_episode_steps=50),
+        vector_entry_point="mjtouch.envs.vector:texture_explore_vec",
+        max_episode_steps=50,
+    ),
     "mjtouch/SlipHold-v0": dict(
         entry_point="mjtouch.envs.slip_hold:SlipHoldEnv",
-        vector_entry_point="mjtouch.envs.vector:slip_hold_vec", max_episode_steps=100),
+        vector_entry_point="mjtouch.envs.vector:slip_hold_vec",
+        max_episode_steps=100,
+    ),
 }
 
 for _id, _kw in ENV_IDS.items():
     if _id not in gym.registry:
         gym.register(id=_id, **_kw)
 
-__all__ = ["ENV_IDS", "TOUCH_MODES", "RolloutVectorEnv", "SlipHoldEnv", "TextureExploreEnv",
-           "TouchEnv"]
+__all__ = [
+    "ENV_IDS",
+    "TOUCH_MODES",
+    "RolloutVectorEnv",
+    "SlipHoldEnv",
+    "TextureExploreEnv",
+    "TouchEnv",
+]

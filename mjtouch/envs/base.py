@@ -87,10 +87,20 @@ class TouchEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
 
-    def __init__(self, model_spec: mujoco.MjSpec, *, touch: str, pressure_image: int, frame_skip: int,
-                 user_spec: int, render_mode: str | None, render_size: tuple[int, int],
-                 max_force_n: float, max_friction: float,
-                 refractory_s: float = REFRACTORY_DEFAULT_S):
+    def __init__(
+        self,
+        model_spec: mujoco.MjSpec,
+        *,
+        touch: str,
+        pressure_image: int,
+        frame_skip: int,
+        user_spec: int,
+        render_mode: str | None,
+        render_size: tuple[int, int],
+        max_force_n: float,
+        max_friction: float,
+        refractory_s: float = REFRACTORY_DEFAULT_S,
+    ):
         choice("touch", touch, TOUCH_MODES)
         if render_mode is not None:
             choice("render_mode", render_mode, tuple(self.metadata["render_modes"]))
@@ -114,8 +124,10 @@ class TouchEnv(gym.Env):
                 if "pressure" not in self.layout.blocks:
                     raise ValueError("pressure_image needs the skin's `pressure` output block")
                 if self.pressure_image < 0 or nx % self.pressure_image:
-                    raise ValueError(f"pressure_image = {pressure_image} must divide the skin's "
-                                     f"nx = {nx} (e.g. {nx // 4}, {nx // 8})")
+                    raise ValueError(
+                        f"pressure_image = {pressure_image} must divide the skin's "
+                        f"nx = {nx} (e.g. {nx // 4}, {nx // 8})"
+                    )
         elif self.pressure_image:
             raise ValueError('pressure_image needs touch; with touch="none" it must be 0')
         self._runner = mujoco.rollout.Rollout(nthread=0)
@@ -133,9 +145,12 @@ class TouchEnv(gym.Env):
         if self.touch == "none":
             return []
         unit = "spikes" if self.touch == "counts" else "Hz"
-        what = ("spike count per class (SA1, RA, PC), summed over the class's receptors and the "
-                "control step" if self.touch == "counts" else
-                "mean firing rate per receptor of each class (SA1, RA, PC) over the control step")
+        what = (
+            "spike count per class (SA1, RA, PC), summed over the class's receptors and the "
+            "control step"
+            if self.touch == "counts"
+            else "mean firing rate per receptor of each class (SA1, RA, PC) over the control step"
+        )
         per_receptor = max_spikes_per_receptor(self.control_dt_s, self.refractory_s)
         if self.touch == "counts":
             touch_high = tuple(float(per_receptor * m.sum()) for m in self._class_masks)
@@ -143,18 +158,33 @@ class TouchEnv(gym.Env):
             touch_high = per_receptor / self.control_dt_s
         f = self.force_full_scale_n
         ft = self.max_friction * f  # Coulomb: tangential <= mu x normal
-        blocks = [ObsBlock("touch", 3, unit, what, low=0.0, high=touch_high),
-                  ObsBlock("contact", 3, "N", "skin force, mean over the control step: normal, "
-                           "tangential along pad x, along pad y", low=(0.0, -ft, -ft),
-                           high=(f, ft, ft))]
+        blocks = [
+            ObsBlock("touch", 3, unit, what, low=0.0, high=touch_high),
+            ObsBlock(
+                "contact",
+                3,
+                "N",
+                "skin force, mean over the control step: normal, "
+                "tangential along pad x, along pad y",
+                low=(0.0, -ft, -ft),
+                high=(f, ft, ft),
+            ),
+        ]
         if self.pressure_image:
             p = self.pressure_image
             # pressure x area sums to the normal force, so a block's mean is
             # at most the force over the block's area
             block_area_m2 = (self.layout.nx // p * self.layout.pitch_m) ** 2
-            blocks.append(ObsBlock("pressure", p * p, "kPa",
-                                   f"taxel pressure at the end of the step, {p} x {p} block means",
-                                   low=0.0, high=f / block_area_m2 * 1e-3))
+            blocks.append(
+                ObsBlock(
+                    "pressure",
+                    p * p,
+                    "kPa",
+                    f"taxel pressure at the end of the step, {p} x {p} block means",
+                    low=0.0,
+                    high=f / block_area_m2 * 1e-3,
+                )
+            )
         return blocks
 
     def _set_blocks(self, blocks: list[ObsBlock]) -> None:
@@ -167,8 +197,7 @@ class TouchEnv(gym.Env):
         bounds = [b.bounds() for b in blocks]
         self._obs_low = np.concatenate([lo for lo, _ in bounds])
         self._obs_high = np.concatenate([hi for _, hi in bounds])
-        self.observation_space = gym.spaces.Box(self._obs_low, self._obs_high, (start,),
-                                                np.float64)
+        self.observation_space = gym.spaces.Box(self._obs_low, self._obs_high, (start,), np.float64)
 
     def _bounded(self, obs: np.ndarray) -> np.ndarray:
         """Saturate at the full-scale range (see the module docstring)."""
@@ -184,8 +213,10 @@ class TouchEnv(gym.Env):
                 rng = f"[{lo[0]:.3g}, {hi[0]:.3g}]"
             else:
                 rng = " ".join(f"[{a:.3g}, {z:.3g}]" for a, z in zip(lo, hi))
-            rows.append(f"{b.name:10s} {f'{s.start}:{s.stop}':>9s}  {b.units:10s} {b.meaning}\n"
-                        f"{'':33s}range {rng}")
+            rows.append(
+                f"{b.name:10s} {f'{s.start}:{s.stop}':>9s}  {b.units:10s} {b.meaning}\n"
+                f"{'':33s}range {rng}"
+            )
         return "\n".join(rows)
 
     def split_observation(self, obs: np.ndarray) -> dict[str, np.ndarray]:
@@ -198,7 +229,7 @@ class TouchEnv(gym.Env):
         if sensordata is None:  # before the first step: no spikes, no force yet
             out = [np.zeros(3), np.zeros(3)]
             if self.pressure_image:
-                out.append(np.zeros(self.pressure_image ** 2))
+                out.append(np.zeros(self.pressure_image**2))
             return out
         per_receptor = lay.block(sensordata, "spikes").sum(axis=0)
         counts = np.array([per_receptor[m].sum() for m in self._class_masks])
@@ -231,8 +262,13 @@ class TouchEnv(gym.Env):
 
     def _advance(self, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         states, sensordata = self._runner.rollout(
-            self.model, self.data, self._state[None], inputs[None], control_spec=self.user_spec,
-            initial_warmstart=self._zero_warmstart)
+            self.model,
+            self.data,
+            self._state[None],
+            inputs[None],
+            control_spec=self.user_spec,
+            initial_warmstart=self._zero_warmstart,
+        )
         return states[0], sensordata[0]
 
     def _qpos(self, state: np.ndarray, joint: str) -> float:
@@ -248,8 +284,9 @@ class TouchEnv(gym.Env):
     def _inputs(self, action: np.ndarray) -> np.ndarray | None:
         raise NotImplementedError
 
-    def _outcome(self, states: np.ndarray | None, sensordata: np.ndarray | None,
-                 action: np.ndarray) -> tuple[np.ndarray, float, bool, dict]:
+    def _outcome(
+        self, states: np.ndarray | None, sensordata: np.ndarray | None, action: np.ndarray
+    ) -> tuple[np.ndarray, float, bool, dict]:
         raise NotImplementedError
 
     def _observe(self, states: np.ndarray | None, sensordata: np.ndarray | None) -> np.ndarray:

@@ -52,8 +52,9 @@ def single_steps_per_s(env_id: str, steps: int, seed: int = 0, **kwargs) -> floa
     return steps / wall
 
 
-def vector_steps_per_s(env_id: str, num_envs: int, steps: int, mode: str, seed: int = 0,
-                       **kwargs) -> float:
+def vector_steps_per_s(
+    env_id: str, num_envs: int, steps: int, mode: str, seed: int = 0, **kwargs
+) -> float:
     """Env steps per second (num_envs x vector steps / wall)."""
     venv = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode=mode, **kwargs)
     actions = _actions(venv.action_space, steps, env_id, seed)
@@ -66,8 +67,9 @@ def vector_steps_per_s(env_id: str, num_envs: int, steps: int, mode: str, seed: 
     return num_envs * steps / wall
 
 
-def benchmark(env_id: str = "mjtouch/TextureExplore-v0", num_envs: int = 4, steps: int = 200,
-              seed: int = 0) -> dict:
+def benchmark(
+    env_id: str = "mjtouch/TextureExplore-v0", num_envs: int = 4, steps: int = 200, seed: int = 0
+) -> dict:
     if steps < 1 or num_envs < 1:
         raise ValueError(f"steps = {steps} and num_envs = {num_envs} must be >= 1")
     touch = single_steps_per_s(env_id, steps, seed)
@@ -88,13 +90,21 @@ def benchmark(env_id: str = "mjtouch/TextureExplore-v0", num_envs: int = 4, step
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m mjtouch.envs.bench", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--env", default="mjtouch/TextureExplore-v0", choices=sorted(mjtouch.envs.ENV_IDS))
+    p = argparse.ArgumentParser(
+        prog="python -m mjtouch.envs.bench",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument(
+        "--env", default="mjtouch/TextureExplore-v0", choices=sorted(mjtouch.envs.ENV_IDS)
+    )
     p.add_argument("--num-envs", type=int, default=4)
     p.add_argument("--steps", type=int, default=200, help="env steps per measurement")
-    p.add_argument("--quick", action="store_true",
-                   help="a smoke run: 20 steps, 2 environments (overrides --steps, --num-envs)")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="a smoke run: 20 steps, 2 environments (overrides --steps, --num-envs)",
+    )
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
     if args.quick:
@@ -107,11 +117,15 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     print(f"{r['env']}: env steps per second (control step 10 ms, {args.steps} steps each)")
     print(f"  single env, touch      {r['single_touch_steps_per_s']:10.1f}")
-    print(f"  single env, no touch   {r['single_no_touch_steps_per_s']:10.1f}   "
-          f"(touch / no touch = {r['touch_over_no_touch']:.4f})")
+    print(
+        f"  single env, no touch   {r['single_no_touch_steps_per_s']:10.1f}   "
+        f"(touch / no touch = {r['touch_over_no_touch']:.4f})"
+    )
     print(f"  {r['num_envs']} envs, rollout      {r['rollout_vector_steps_per_s']:10.1f}")
-    print(f"  {r['num_envs']} envs, sync         {r['sync_vector_steps_per_s']:10.1f}   "
-          f"(rollout / sync = {r['rollout_over_sync']:.2f})")
+    print(
+        f"  {r['num_envs']} envs, sync         {r['sync_vector_steps_per_s']:10.1f}   "
+        f"(rollout / sync = {r['rollout_over_sync']:.2f})"
+    )
     return 0
 
 

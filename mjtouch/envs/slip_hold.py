@@ -60,8 +60,9 @@ def _euler_deg(element, *angles_deg: float) -> None:
     element.alt.euler = angles_deg
 
 
-def slip_hold_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3,
-                   skin: bool = True) -> mujoco.MjSpec:
+def slip_hold_spec(
+    tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3, skin: bool = True
+) -> mujoco.MjSpec:
     """A block between the fingertip pad (pressing along +x) and a wall."""
     tip = tip or env_fingertip()
     tip.validate()
@@ -83,26 +84,53 @@ def slip_hold_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3
     scenes.add_grating_hfield(spec, "face", tex, by)
     world = spec.worldbody
     world.add_light(pos=[0, -0.3, 0.3], dir=[0, 1, -1])
-    world.add_geom(name="wall", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.005, 0.03, 0.04],
-                   pos=q(bx + 0.005, 0, 0), priority=2, condim=1, rgba=[0.55, 0.6, 0.65, 1])
+    world.add_geom(
+        name="wall",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[0.005, 0.03, 0.04],
+        pos=q(bx + 0.005, 0, 0),
+        priority=2,
+        condim=1,
+        rgba=[0.55, 0.6, 0.65, 1],
+    )
     block = world.add_body(name="object")
     block.add_joint(name="object_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0], damping=0.1)
     block.add_joint(name="object_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
-    block.add_geom(name="object", type=mujoco.mjtGeom.mjGEOM_BOX, size=q(bx, by, bz),
-                   mass=BLOCK_MASS_KG, friction=[0.5, 0.005, 0.0001], rgba=[0.3, 0.5, 0.8, 1])
-    face = block.add_geom(name="face", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="face",
-                          pos=q(-bx, 0, 0), contype=0, conaffinity=0, group=scenes.TEXTURE_GROUP,
-                          rgba=[0.25, 0.4, 0.7, 1])
+    block.add_geom(
+        name="object",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=q(bx, by, bz),
+        mass=BLOCK_MASS_KG,
+        friction=[0.5, 0.005, 0.0001],
+        rgba=[0.3, 0.5, 0.8, 1],
+    )
+    face = block.add_geom(
+        name="face",
+        type=mujoco.mjtGeom.mjGEOM_HFIELD,
+        hfieldname="face",
+        pos=q(-bx, 0, 0),
+        contype=0,
+        conaffinity=0,
+        group=scenes.TEXTURE_GROUP,
+        rgba=[0.25, 0.4, 0.7, 1],
+    )
     _euler_deg(face, 0, -90, 0)
     # The finger's frame: pad -z (the skin) along world +x, pad x along world +z.
     finger = world.add_body(name="finger", pos=q(-(bx + c + 3e-4), 0, 0), gravcomp=1)
     _euler_deg(finger, 0, -90, 0)
-    finger.add_joint(name="grip", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, -1],
-                     damping=GRIP_DAMPING_N_S_M)
-    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, size=q(a, b, c),
-                    mass=scenes.quantize(tip.mass_kg), friction=[PAD_FRICTION, 0.005, 0.0001],
-                    solref=scenes.CONTACT_SOLREF, solimp=scenes.CONTACT_SOLIMP,
-                    rgba=[0.93, 0.72, 0.62, 1])
+    finger.add_joint(
+        name="grip", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, -1], damping=GRIP_DAMPING_N_S_M
+    )
+    finger.add_geom(
+        name="pad",
+        type=mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+        size=q(a, b, c),
+        mass=scenes.quantize(tip.mass_kg),
+        friction=[PAD_FRICTION, 0.005, 0.0001],
+        solref=scenes.CONTACT_SOLREF,
+        solimp=scenes.CONTACT_SOLIMP,
+        rgba=[0.93, 0.72, 0.62, 1],
+    )
     grip = spec.add_actuator(name="grip", target="grip", trntype=mujoco.mjtTrn.mjTRN_JOINT)
     grip.set_to_motor()
     grip.ctrlrange = [0, 5]
@@ -114,18 +142,33 @@ def slip_hold_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3
 class SlipHoldEnv(TouchEnv):
     __doc__ = __doc__
 
-    def __init__(self, *, touch: str = "counts", pressure_image: int = 0,
-                 force_range_n=(0.05, 2.0), friction_range=(0.5, 1.0),
-                 base_load_range_n=(0.0, 0.1), rise_load_range_n=(0.1, 0.4),
-                 rise_start_range_s=(0.2, 0.6), rise_time_range_s=(0.1, 0.3), control_dt_s: float = 0.01,
-                 timestep_s: float = 1e-3, force_cost: float = 0.01, slip_cost: float = 0.1,
-                 drop_m: float = 5e-3, drop_penalty: float = 5.0, settle_force_n: float = 1.5,
-                 render_mode: str | None = None, render_size=(480, 640)):
+    def __init__(
+        self,
+        *,
+        touch: str = "counts",
+        pressure_image: int = 0,
+        force_range_n=(0.05, 2.0),
+        friction_range=(0.5, 1.0),
+        base_load_range_n=(0.0, 0.1),
+        rise_load_range_n=(0.1, 0.4),
+        rise_start_range_s=(0.2, 0.6),
+        rise_time_range_s=(0.1, 0.3),
+        control_dt_s: float = 0.01,
+        timestep_s: float = 1e-3,
+        force_cost: float = 0.01,
+        slip_cost: float = 0.1,
+        drop_m: float = 5e-3,
+        drop_penalty: float = 5.0,
+        settle_force_n: float = 1.5,
+        render_mode: str | None = None,
+        render_size=(480, 640),
+    ):
         def pair(name, v, lo, hi, units):
             v0, v1 = (float(x) for x in v)
             in_range(f"{name}[0]", v0, lo, hi, units)
             in_range(f"{name}[1]", v1, v0, hi, units)
             return v0, v1
+
         self.force_range_n = pair("force_range_n", force_range_n, 0.0, 5.0, "N")
         self.friction_range = pair("friction_range", friction_range, 2 * PAD_FRICTION, 2.0, "")
         self.base_load_range_n = pair("base_load_range_n", base_load_range_n, 0.0, 2.0, "N")
@@ -141,14 +184,25 @@ class SlipHoldEnv(TouchEnv):
         in_range("settle_force_n", settle_force_n, 0.1, 5.0, "N")
         frame_skip = round(control_dt_s / timestep_s)
         if not math.isclose(frame_skip * timestep_s, control_dt_s, rel_tol=1e-9):
-            raise ValueError(f"control_dt_s = {control_dt_s} must be a multiple of timestep_s = "
-                             f"{timestep_s}")
+            raise ValueError(
+                f"control_dt_s = {control_dt_s} must be a multiple of timestep_s = {timestep_s}"
+            )
         outputs = "spikes force pressure" if pressure_image else "spikes force"
-        model_spec = slip_hold_spec(env_fingertip(outputs=outputs), timestep_s, skin=touch != "none")
+        model_spec = slip_hold_spec(
+            env_fingertip(outputs=outputs), timestep_s, skin=touch != "none"
+        )
         spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED
-        super().__init__(model_spec, touch=touch, pressure_image=pressure_image, frame_skip=frame_skip,
-                         user_spec=int(spec), render_mode=render_mode, render_size=render_size,
-                         max_force_n=self.force_range_n[1], max_friction=self.friction_range[1])
+        super().__init__(
+            model_spec,
+            touch=touch,
+            pressure_image=pressure_image,
+            frame_skip=frame_skip,
+            user_spec=int(spec),
+            render_mode=render_mode,
+            render_size=render_size,
+            max_force_n=self.force_range_n[1],
+            max_friction=self.friction_range[1],
+        )
         self.force_cost, self.slip_cost = float(force_cost), float(slip_cost)
         self.drop_m, self.drop_penalty = float(drop_m), float(drop_penalty)
         self.settle_force_n = float(settle_force_n)
@@ -158,11 +212,20 @@ class SlipHoldEnv(TouchEnv):
         self.action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
         lo, hi = self.force_range_n
         v_fs = 2 * max(hi, 0.1) / GRIP_DAMPING_N_S_M
-        self._set_blocks([ObsBlock("grip", 3, "m, m/s, N", "fingertip position towards the wall "
-                                   "(from its start), velocity, grip force applied",
-                                   low=(-GRIP_X_FULL_SCALE_M, -v_fs, lo),
-                                   high=(GRIP_X_FULL_SCALE_M, v_fs, hi))]
-                         + self._touch_blocks())
+        self._set_blocks(
+            [
+                ObsBlock(
+                    "grip",
+                    3,
+                    "m, m/s, N",
+                    "fingertip position towards the wall "
+                    "(from its start), velocity, grip force applied",
+                    low=(-GRIP_X_FULL_SCALE_M, -v_fs, lo),
+                    high=(GRIP_X_FULL_SCALE_M, v_fs, hi),
+                )
+            ]
+            + self._touch_blocks()
+        )
         self._settled = self._settle()
         self._z0 = self._qpos(np.concatenate([[0.0], self._settled]), "object_z")
         self._x0 = self._qpos(np.concatenate([[0.0], self._settled]), "grip")
@@ -190,10 +253,12 @@ class SlipHoldEnv(TouchEnv):
             raise ValueError(f"unknown reset options {sorted(options)}; SlipHold takes none")
         rng = self.np_random
         self.friction = float(rng.uniform(*self.friction_range))
-        self._load = (float(rng.uniform(*self.base_load_range_n)),
-                      float(rng.uniform(*self.rise_load_range_n)),
-                      float(rng.uniform(*self.rise_start_range_s)),
-                      float(rng.uniform(*self.rise_time_range_s)))
+        self._load = (
+            float(rng.uniform(*self.base_load_range_n)),
+            float(rng.uniform(*self.rise_load_range_n)),
+            float(rng.uniform(*self.rise_start_range_s)),
+            float(rng.uniform(*self.rise_time_range_s)),
+        )
         self.model.geom_friction[self._object_geom, 0] = self.friction
         self._state = self._initial_state(self._settled)
         self._grip = self.settle_force_n
@@ -204,10 +269,14 @@ class SlipHoldEnv(TouchEnv):
 
     def _info(self, slip_m: float) -> dict:
         t = float(self._state[0])
-        return {"friction": self.friction, "load_n": float(self.load_n(t)),
-                "total_load_n": float(self.load_n(t)) + BLOCK_MASS_KG * -self.model.opt.gravity[2],
-                "grip_force_n": self._grip, "slip_m": slip_m,
-                "object_drop_m": self._z0 - self._qpos(self._state, "object_z")}
+        return {
+            "friction": self.friction,
+            "load_n": float(self.load_n(t)),
+            "total_load_n": float(self.load_n(t)) + BLOCK_MASS_KG * -self.model.opt.gravity[2],
+            "grip_force_n": self._grip,
+            "slip_m": slip_m,
+            "object_drop_m": self._z0 - self._qpos(self._state, "object_z"),
+        }
 
     def _inputs(self, a: np.ndarray) -> np.ndarray:
         lo, hi = self.force_range_n

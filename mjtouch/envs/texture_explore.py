@@ -60,20 +60,27 @@ FINGER_X_FULL_SCALE_M = TRAVEL_M + 5e-3
 FINGER_SPEED_MARGIN_M_S = 0.01
 
 
-def env_fingertip(nx: int = 48, pitch_m: float = 2e-4, radius_m: float = 4e-3,
-                  outputs: str = "spikes force") -> scenes.Fingertip:
+def env_fingertip(
+    nx: int = 48, pitch_m: float = 2e-4, radius_m: float = 4e-3, outputs: str = "spikes force"
+) -> scenes.Fingertip:
     """The environments' skin: 48 x 48 taxels at 0.2 mm (9.6 mm, the whole
     contact up to ~0.8 N), receptors within 4 mm of the pole; exact stress
     and Winkler contact, as the RL preset (README "What accuracy costs":
     the elastic contact costs ~10x in stages 1-2; pass a tip with
     skin={"pressure": "elastic"} where fingerprint filtering matters)."""
-    return scenes.Fingertip(nx=nx, pitch_m=pitch_m,
-                            skin={"radius": f"{radius_m:.9g}", "outputs": outputs,
-                                  "pressure": "winkler"})
+    return scenes.Fingertip(
+        nx=nx,
+        pitch_m=pitch_m,
+        skin={"radius": f"{radius_m:.9g}", "outputs": outputs, "pressure": "winkler"},
+    )
 
 
-def texture_explore_spec(classes=DEFAULT_CLASSES, tip: scenes.Fingertip | None = None,
-                         timestep_s: float = 1e-3, skin: bool = True) -> mujoco.MjSpec:
+def texture_explore_spec(
+    classes=DEFAULT_CLASSES,
+    tip: scenes.Fingertip | None = None,
+    timestep_s: float = 1e-3,
+    skin: bool = True,
+) -> mujoco.MjSpec:
     """Fingertip over a flat colliding plate; one non-colliding grating per
     textured class on a mocap body (placed under the pad, or parked)."""
     tip = tip or env_fingertip()
@@ -83,8 +90,14 @@ def texture_explore_spec(classes=DEFAULT_CLASSES, tip: scenes.Fingertip | None =
     spec.visual.global_.offwidth, spec.visual.global_.offheight = 640, 480
     world = spec.worldbody
     world.add_light(pos=[0, 0, 0.3], dir=[0, 0, -1])
-    world.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.04, 0.015, 0.002],
-                   pos=[0, 0, -0.002], friction=[0.5, 0.005, 0.0001], rgba=[0.55, 0.6, 0.65, 1])
+    world.add_geom(
+        name="plate",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[0.04, 0.015, 0.002],
+        pos=[0, 0, -0.002],
+        friction=[0.5, 0.005, 0.0001],
+        rgba=[0.55, 0.6, 0.65, 1],
+    )
     res = 5e-5  # height-field spacing: >= 12 samples per period for D >= 0.6 mm
     for k, period in enumerate(classes):
         if period == 0:
@@ -92,24 +105,41 @@ def texture_explore_spec(classes=DEFAULT_CLASSES, tip: scenes.Fingertip | None =
         tex = scenes.Texture(period_m=period, length_m=TEXTURE_LENGTH_M, resolution_m=res)
         scenes.add_grating_hfield(spec, f"tex{k}", tex, 0.012)
         body = world.add_body(name=f"tex{k}", mocap=True, pos=[0, PARK_Y_M, 0])
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname=f"tex{k}", contype=0,
-                      conaffinity=0, group=scenes.TEXTURE_GROUP, rgba=[0.45, 0.5, 0.55, 1])
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_HFIELD,
+            hfieldname=f"tex{k}",
+            contype=0,
+            conaffinity=0,
+            group=scenes.TEXTURE_GROUP,
+            rgba=[0.45, 0.5, 0.55, 1],
+        )
     scenes.add_fingertip(spec, tip, start_x_m=0.0, travel_m=TRAVEL_M, skin=skin)
     # The project's pad-plate contact, its friction tuned to a mid exploration
     # (0.5 N, 25 mm/s): Coulomb friction with a steady normal force.
-    scenes.add_pad_plate_contact(spec, tip, scenes.Protocol(force_n=0.5, speed_m_s=0.025,
-                                                            timestep_s=timestep_s))
+    scenes.add_pad_plate_contact(
+        spec, tip, scenes.Protocol(force_n=0.5, speed_m_s=0.025, timestep_s=timestep_s)
+    )
     return spec
 
 
 class TextureExploreEnv(TouchEnv):
     __doc__ = __doc__
 
-    def __init__(self, classes=DEFAULT_CLASSES, *, touch: str = "counts",
-                 pressure_image: int = 0, force_range_n=(0.1, 1.0), max_speed_m_s: float = 0.05,
-                 control_dt_s: float = 0.01, timestep_s: float = 1e-3, step_cost: float = 0.01,
-                 settle_force_n: float = 0.5, render_mode: str | None = None,
-                 render_size=(480, 640)):
+    def __init__(
+        self,
+        classes=DEFAULT_CLASSES,
+        *,
+        touch: str = "counts",
+        pressure_image: int = 0,
+        force_range_n=(0.1, 1.0),
+        max_speed_m_s: float = 0.05,
+        control_dt_s: float = 0.01,
+        timestep_s: float = 1e-3,
+        step_cost: float = 0.01,
+        settle_force_n: float = 0.5,
+        render_mode: str | None = None,
+        render_size=(480, 640),
+    ):
         classes = tuple(float(c) for c in classes)
         if not 2 <= len(classes) <= 16:
             raise ValueError(f"classes has {len(classes)} entries; valid 2 to 16")
@@ -128,31 +158,56 @@ class TextureExploreEnv(TouchEnv):
         in_range("settle_force_n", settle_force_n, lo, hi, "N")
         frame_skip = round(control_dt_s / timestep_s)
         if not math.isclose(frame_skip * timestep_s, control_dt_s, rel_tol=1e-9):
-            raise ValueError(f"control_dt_s = {control_dt_s} must be a multiple of timestep_s = "
-                             f"{timestep_s}")
+            raise ValueError(
+                f"control_dt_s = {control_dt_s} must be a multiple of timestep_s = {timestep_s}"
+            )
         outputs = "spikes force pressure" if pressure_image else "spikes force"
         tip = env_fingertip(outputs=outputs)
         model_spec = texture_explore_spec(classes, tip, timestep_s, skin=touch != "none")
         spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_POS
-        super().__init__(model_spec, touch=touch, pressure_image=pressure_image, frame_skip=frame_skip,
-                         user_spec=int(spec), render_mode=render_mode, render_size=render_size,
-                         max_force_n=hi, max_friction=tip.friction)
+        super().__init__(
+            model_spec,
+            touch=touch,
+            pressure_image=pressure_image,
+            frame_skip=frame_skip,
+            user_spec=int(spec),
+            render_mode=render_mode,
+            render_size=render_size,
+            max_force_n=hi,
+            max_friction=tip.friction,
+        )
         self.classes = classes
         self.force_range_n = (lo, hi)
         self.max_speed_m_s = float(max_speed_m_s)
         self.step_cost = float(step_cost)
         m = self.model
-        self._mocap = {k: m.body_mocapid[m.body(f"tex{k}").id]
-                       for k, c in enumerate(classes) if c != 0}
+        self._mocap = {
+            k: m.body_mocapid[m.body(f"tex{k}").id] for k, c in enumerate(classes) if c != 0
+        }
         self._x0 = self._qpos_model("slide_x")
         self.action_space = gym.spaces.Box(-1.0, 1.0, (3 + len(classes),), np.float32)
         v_fs = 2 * self.max_speed_m_s + FINGER_SPEED_MARGIN_M_S
-        self._set_blocks([ObsBlock("finger", 2, "m, m/s", "fingertip x from its start, x velocity",
-                                   low=(-FINGER_X_FULL_SCALE_M, -v_fs),
-                                   high=(FINGER_X_FULL_SCALE_M, v_fs)),
-                          ObsBlock("command", 2, "N, m/s", "normal force and sliding speed applied",
-                                   low=(lo, -self.max_speed_m_s), high=(hi, self.max_speed_m_s))]
-                         + self._touch_blocks())
+        self._set_blocks(
+            [
+                ObsBlock(
+                    "finger",
+                    2,
+                    "m, m/s",
+                    "fingertip x from its start, x velocity",
+                    low=(-FINGER_X_FULL_SCALE_M, -v_fs),
+                    high=(FINGER_X_FULL_SCALE_M, v_fs),
+                ),
+                ObsBlock(
+                    "command",
+                    2,
+                    "N, m/s",
+                    "normal force and sliding speed applied",
+                    low=(lo, -self.max_speed_m_s),
+                    high=(hi, self.max_speed_m_s),
+                ),
+            ]
+            + self._touch_blocks()
+        )
         self.settle_force_n = float(settle_force_n)
         self._settled = self._settle(self.settle_force_n)
         self.label = 0
@@ -208,8 +263,9 @@ class TextureExploreEnv(TouchEnv):
     def _observe(self, states, sensordata) -> np.ndarray:
         s = self._state
         finger = [self._qpos(s, "slide_x") - self._x0, self._qvel(s, "slide_x")]
-        return self._bounded(np.concatenate([finger, self._command,
-                                             *self._touch_features(sensordata)]))
+        return self._bounded(
+            np.concatenate([finger, self._command, *self._touch_features(sensordata)])
+        )
 
     def _outcome(self, states, sensordata, a):
         info = {"texture": self.label, "period_m": self.classes[self.label]}

@@ -29,8 +29,15 @@ from mjtouch.envs.base import TouchEnv
 
 
 class RolloutVectorEnv(gym.vector.VectorEnv):
-    def __init__(self, env_cls: type[TouchEnv], num_envs: int, *,
-                 max_episode_steps: int | None = None, nthread: int | None = None, **env_kwargs):
+    def __init__(
+        self,
+        env_cls: type[TouchEnv],
+        num_envs: int,
+        *,
+        max_episode_steps: int | None = None,
+        nthread: int | None = None,
+        **env_kwargs,
+    ):
         if not (isinstance(num_envs, int) and num_envs >= 1):
             raise ValueError(f"num_envs = {num_envs!r} must be a positive integer")
         if max_episode_steps is not None and max_episode_steps < 1:
@@ -104,9 +111,13 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
         if batch:
             envs = [self.envs[i] for i, _, _ in batch]
             states, sensordata = self._pool.rollout(
-                [e.model for e in envs], self._datas, np.stack([e._state for e in envs]),
-                np.stack([u for _, u, _ in batch]), control_spec=envs[0].user_spec,
-                initial_warmstart=np.zeros((len(batch), envs[0].model.nv)))
+                [e.model for e in envs],
+                self._datas,
+                np.stack([e._state for e in envs]),
+                np.stack([u for _, u, _ in batch]),
+                control_spec=envs[0].user_spec,
+                initial_warmstart=np.zeros((len(batch), envs[0].model.nv)),
+            )
             for k, (i, _, a) in enumerate(batch):
                 results[i] = self.envs[i]._finish(states[k], sensordata[k], a)
         for i, (o, r, term, trunc, info) in results.items():
@@ -128,9 +139,11 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
 
 def texture_explore_vec(num_envs: int = 1, **kwargs) -> RolloutVectorEnv:
     from mjtouch.envs.texture_explore import TextureExploreEnv
+
     return RolloutVectorEnv(TextureExploreEnv, num_envs, **kwargs)
 
 
 def slip_hold_vec(num_envs: int = 1, **kwargs) -> RolloutVectorEnv:
     from mjtouch.envs.slip_hold import SlipHoldEnv
+
     return RolloutVectorEnv(SlipHoldEnv, num_envs, **kwargs)

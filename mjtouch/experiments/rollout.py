@@ -40,9 +40,13 @@ class SlideResult:
         return slice(min(start, len(self.time_s) - 1), len(self.time_s))
 
 
-def run_slide(tip: scenes.Fingertip | None = None, texture: scenes.Texture | None = None,
-              protocol: scenes.Protocol | None = None, duration_s: float = 1.0,
-              progress: Callable[[int], object] | None = None) -> SlideResult:
+def run_slide(
+    tip: scenes.Fingertip | None = None,
+    texture: scenes.Texture | None = None,
+    protocol: scenes.Protocol | None = None,
+    duration_s: float = 1.0,
+    progress: Callable[[int], object] | None = None,
+) -> SlideResult:
     """Press the fingertip onto the plate, then slide it for duration_s.
     progress, if given, is called with the number of steps simulated since its
     last call (about 100 calls per run; the result is bit-identical)."""
@@ -53,9 +57,11 @@ def run_slide(tip: scenes.Fingertip | None = None, texture: scenes.Texture | Non
         raise ValueError(f"duration_s = {duration_s} is out of range; valid range (0, 60] s")
     travel = protocol.speed_m_s * duration_s
     if travel > texture.length_m / 2:
-        raise ValueError(f"sliding {travel * 1e3:.1f} mm exceeds the plate's usable half length "
-                         f"({texture.length_m / 2 * 1e3:.1f} mm); lengthen the texture or shorten "
-                         "the run")
+        raise ValueError(
+            f"sliding {travel * 1e3:.1f} mm exceeds the plate's usable half length "
+            f"({texture.length_m / 2 * 1e3:.1f} mm); lengthen the texture or shorten "
+            "the run"
+        )
     model = scenes.build_model(tip, texture, protocol)
     data = mujoco.MjData(model)
     layout = SkinLayout.from_model(model)
@@ -63,8 +69,16 @@ def run_slide(tip: scenes.Fingertip | None = None, texture: scenes.Texture | Non
     return _collect(model, data, layout, ctrl, tip, texture, protocol, progress)
 
 
-def chunked_rollout(model, data, state0, ctrl, progress=None, min_chunk: int = 50,
-                    max_chunk: int = 200, control_spec: int | None = None):
+def chunked_rollout(
+    model,
+    data,
+    state0,
+    ctrl,
+    progress=None,
+    min_chunk: int = 50,
+    max_chunk: int = 200,
+    control_spec: int | None = None,
+):
     """mujoco.rollout in consecutive chunks (about 100, at most max_chunk
     steps each), reporting each to progress: every chunk starts from the
     previous one's last full physics state (plugin state included) and solver
@@ -78,8 +92,9 @@ def chunked_rollout(model, data, state0, ctrl, progress=None, min_chunk: int = 5
     spec = {} if control_spec is None else {"control_spec": control_spec}
     states, sensordata, warmstart = [], [], None
     for i in range(0, n, size):
-        st, sd = mujoco.rollout.rollout(model, data, state0[None], ctrl[None, i:i + size],
-                                        initial_warmstart=warmstart, **spec)
+        st, sd = mujoco.rollout.rollout(
+            model, data, state0[None], ctrl[None, i : i + size], initial_warmstart=warmstart, **spec
+        )
         states.append(st[0, :, :keep].copy())
         sensordata.append(sd[0])
         state0, warmstart = st[0, -1].copy(), data.qacc_warmstart.copy()[None]
@@ -95,6 +110,7 @@ def _collect(model, data, layout, ctrl, tip, texture, protocol, progress=None) -
     state, sensordata = chunked_rollout(model, data, state0, ctrl, progress)
     # state: time, qpos (slide_x, press_z)
     time = state[:, 0]
+
     def block(name):
         return layout.block(sensordata, name) if name in layout.blocks else None
 
@@ -102,7 +118,14 @@ def _collect(model, data, layout, ctrl, tip, texture, protocol, progress=None) -
     spikes = None if spikes is None else spikes.astype(np.int32)
     stress, force = block("stress"), block("force")
     return SlideResult(
-        time_s=time, spikes=spikes, stress=stress, force=force,
-        finger_x_m=state[:, 1].copy(), layout=layout, tip=tip, texture=texture,
-        protocol=protocol, slide_start_s=protocol.press_s)
-
+        time_s=time,
+        spikes=spikes,
+        stress=stress,
+        force=force,
+        finger_x_m=state[:, 1].copy(),
+        layout=layout,
+        tip=tip,
+        texture=texture,
+        protocol=protocol,
+        slide_start_s=protocol.press_s,
+    )

@@ -71,8 +71,13 @@ def _envelope(t: np.ndarray, duration_s: float, ramp_s: float) -> np.ndarray:
     return 0.5 - 0.5 * np.cos(np.pi * np.minimum(up, down))
 
 
-def ramp_and_hold(depth_m: float, ramp_s: float = 0.05, hold_s: float = 0.5,
-                  release: bool = True, rest_s: float = 0.05) -> Waveform:
+def ramp_and_hold(
+    depth_m: float,
+    ramp_s: float = 0.05,
+    hold_s: float = 0.5,
+    release: bool = True,
+    rest_s: float = 0.05,
+) -> Waveform:
     """Linear ramp to depth_m over ramp_s, hold, then (release) ramp back to 0
     and rest_s at 0."""
     depth = in_range("depth_m", depth_m, 0, 5e-3, "m", lo_open=True)
@@ -82,30 +87,44 @@ def ramp_and_hold(depth_m: float, ramp_s: float = 0.05, hold_s: float = 0.5,
     knots = [0, ramp, ramp + hold] + ([2 * ramp + hold] if release else [])
     values = [0, depth, depth] + ([0] if release else [])
     dur = knots[-1] + (rest if release else 0.0)
-    return Waveform("ramp_and_hold", dur, lambda t: np.interp(t, knots, values),
-                    dict(depth_m=depth, ramp_s=ramp, hold_s=hold, release=release,
-                         rest_s=rest), (ramp, ramp + hold))
+    return Waveform(
+        "ramp_and_hold",
+        dur,
+        lambda t: np.interp(t, knots, values),
+        dict(depth_m=depth, ramp_s=ramp, hold_s=hold, release=release, rest_s=rest),
+        (ramp, ramp + hold),
+    )
 
 
-def sine(amplitude_m: float, freq_hz: float, duration_s: float = 1.0,
-         ramp_s: float = 0.05) -> Waveform:
+def sine(
+    amplitude_m: float, freq_hz: float, duration_s: float = 1.0, ramp_s: float = 0.05
+) -> Waveform:
     """amplitude sin(2 pi f t) under raised-cosine ramps of ramp_s at both ends
     (about the probe's pre-indentation or the plate's rest position)."""
     return sum_of_sines([amplitude_m], [freq_hz], duration_s, ramp_s, kind="sine")
 
 
-def sum_of_sines(amplitudes_m: Sequence[float], freqs_hz: Sequence[float],
-                 duration_s: float = 1.0, ramp_s: float = 0.05,
-                 phases_rad: Sequence[float] | None = None, kind: str = "sum_of_sines"
-                 ) -> Waveform:
+def sum_of_sines(
+    amplitudes_m: Sequence[float],
+    freqs_hz: Sequence[float],
+    duration_s: float = 1.0,
+    ramp_s: float = 0.05,
+    phases_rad: Sequence[float] | None = None,
+    kind: str = "sum_of_sines",
+) -> Waveform:
     """sum_i a_i sin(2 pi f_i t + phi_i) under the ramps of :func:`sine`."""
     amps = np.atleast_1d(np.asarray(amplitudes_m, dtype=float))
     freqs = np.atleast_1d(np.asarray(freqs_hz, dtype=float))
     if amps.ndim != 1 or amps.shape != freqs.shape or amps.size == 0:
-        raise ValueError(f"amplitudes_m (shape {amps.shape}) and freqs_hz (shape "
-                         f"{freqs.shape}) must be 1-D of the same non-zero length")
-    phases = (np.zeros_like(freqs) if phases_rad is None
-              else np.atleast_1d(np.asarray(phases_rad, dtype=float)))
+        raise ValueError(
+            f"amplitudes_m (shape {amps.shape}) and freqs_hz (shape "
+            f"{freqs.shape}) must be 1-D of the same non-zero length"
+        )
+    phases = (
+        np.zeros_like(freqs)
+        if phases_rad is None
+        else np.atleast_1d(np.asarray(phases_rad, dtype=float))
+    )
     if phases.shape != freqs.shape:
         raise ValueError(f"phases_rad has shape {phases.shape}; expected {freqs.shape}")
     for a in amps:
@@ -122,16 +141,27 @@ def sum_of_sines(amplitudes_m: Sequence[float], freqs_hz: Sequence[float],
             s += a * np.sin(wi * t + p)
         return _envelope(t, dur, ramp) * s
 
-    params = dict(amplitudes_m=amps.tolist(), freqs_hz=freqs.tolist(),
-                  phases_rad=phases.tolist(), duration_s=dur, ramp_s=ramp)
+    params = dict(
+        amplitudes_m=amps.tolist(),
+        freqs_hz=freqs.tolist(),
+        phases_rad=phases.tolist(),
+        duration_s=dur,
+        ramp_s=ramp,
+    )
     if kind == "sine":
-        params = dict(amplitude_m=float(amps[0]), freq_hz=float(freqs[0]), duration_s=dur,
-                      ramp_s=ramp)
+        params = dict(
+            amplitude_m=float(amps[0]), freq_hz=float(freqs[0]), duration_s=dur, ramp_s=ramp
+        )
     return Waveform(kind, dur, fn, params, (ramp, dur - ramp))
 
 
-def noise(rms_m: float, band_hz: tuple[float, float] = (10.0, 500.0), duration_s: float = 1.0,
-          seed: int = 0, ramp_s: float = 0.05) -> Waveform:
+def noise(
+    rms_m: float,
+    band_hz: tuple[float, float] = (10.0, 500.0),
+    duration_s: float = 1.0,
+    seed: int = 0,
+    ramp_s: float = 0.05,
+) -> Waveform:
     """Band-limited Gaussian-like noise: every multiple of 1/duration_s inside
     band_hz with equal amplitude and a seeded random phase (a flat spectrum;
     the sum of many random-phase sines is close to Gaussian), scaled to
@@ -148,15 +178,31 @@ def noise(rms_m: float, band_hz: tuple[float, float] = (10.0, 500.0), duration_s
     freqs = np.arange(math.ceil(lo * dur), math.floor(hi * dur) + 1) / dur
     freqs = freqs[freqs > 0]
     if freqs.size == 0:
-        raise ValueError(f"band_hz = {tuple(band_hz)} holds no multiple of 1/duration_s = "
-                         f"{1 / dur:g} Hz; widen the band or lengthen the stimulus")
+        raise ValueError(
+            f"band_hz = {tuple(band_hz)} holds no multiple of 1/duration_s = "
+            f"{1 / dur:g} Hz; widen the band or lengthen the stimulus"
+        )
     phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, freqs.size)
     a = rms * math.sqrt(2.0 / freqs.size)  # each sine carries a^2/2 of the power
-    w = sum_of_sines(np.full(freqs.size, a), freqs, dur, in_range(
-        "ramp_s", ramp_s, 0, dur / 2, "s"), phases, kind="noise")
-    return dataclasses.replace(w, params=dict(rms_m=rms, band_hz=[lo, hi], duration_s=dur,
-                                              seed=int(seed), ramp_s=ramp_s,
-                                              components=int(freqs.size)))
+    w = sum_of_sines(
+        np.full(freqs.size, a),
+        freqs,
+        dur,
+        in_range("ramp_s", ramp_s, 0, dur / 2, "s"),
+        phases,
+        kind="noise",
+    )
+    return dataclasses.replace(
+        w,
+        params=dict(
+            rms_m=rms,
+            band_hz=[lo, hi],
+            duration_s=dur,
+            seed=int(seed),
+            ramp_s=ramp_s,
+            components=int(freqs.size),
+        ),
+    )
 
 
 def trace(values_m: Sequence[float], dt_s: float) -> Waveform:
@@ -164,14 +210,20 @@ def trace(values_m: Sequence[float], dt_s: float) -> Waveform:
     interpolated (held at its last value past its end)."""
     v = np.asarray(values_m, dtype=float)
     if v.ndim != 1 or v.size < 2 or not np.all(np.isfinite(v)):
-        raise ValueError(f"values_m must be a 1-D finite array of >= 2 samples, got shape "
-                         f"{v.shape}")
+        raise ValueError(
+            f"values_m must be a 1-D finite array of >= 2 samples, got shape {v.shape}"
+        )
     if np.abs(v).max() > 5e-3:
         raise ValueError(f"values_m reaches {np.abs(v).max():g} m; valid range [-5e-3, 5e-3] m")
     dt = in_range("dt_s", dt_s, 0, 1, "s", lo_open=True)
     tk = np.arange(v.size) * dt
-    return Waveform("trace", float(tk[-1]), lambda t: np.interp(t, tk, v),
-                    dict(samples=int(v.size), dt_s=dt), (0.0, float(tk[-1])))
+    return Waveform(
+        "trace",
+        float(tk[-1]),
+        lambda t: np.interp(t, tk, v),
+        dict(samples=int(v.size), dt_s=dt),
+        (0.0, float(tk[-1])),
+    )
 
 
 # --- force control -------------------------------------------------------------------------
@@ -217,10 +269,16 @@ class PressTrace:
     landed_s: float  # first time the contact force stays within 5% of target (inf if never)
 
 
-def press_force_controls(spec: mujoco.MjSpec, target_n: np.ndarray, pad: str = "pad",
-                         counter: str = "plate", actuator: str = "press",
-                         joint: str = "press_z", other_ctrl: np.ndarray | None = None,
-                         mocap_pos: np.ndarray | None = None) -> PressTrace:
+def press_force_controls(
+    spec: mujoco.MjSpec,
+    target_n: np.ndarray,
+    pad: str = "pad",
+    counter: str = "plate",
+    actuator: str = "press",
+    joint: str = "press_z",
+    other_ctrl: np.ndarray | None = None,
+    mocap_pos: np.ndarray | None = None,
+) -> PressTrace:
     """Controls of the motor ``actuator`` (ctrl = force along the joint's +z,
     so pressing down is negative) that make MuJoCo's normal force on ``pad``
     follow ``target_n`` (N, one value per step). Computed closed loop on the
@@ -232,16 +290,21 @@ def press_force_controls(spec: mujoco.MjSpec, target_n: np.ndarray, pad: str = "
     if target.ndim != 1 or target.size == 0 or not np.all(np.isfinite(target)):
         raise ValueError("target_n must be a 1-D finite array (N per step)")
     if target.min() < 0 or target.max() > 100:
-        raise ValueError(f"target_n spans [{target.min():g}, {target.max():g}] N; valid range "
-                         "[0, 100] N")
+        raise ValueError(
+            f"target_n spans [{target.min():g}, {target.max():g}] N; valid range [0, 100] N"
+        )
     bare = scenes.remove_skin(spec.copy()).compile()
     d = mujoco.MjData(bare)
     aid = mujoco.mj_name2id(bare, mujoco.mjtObj.mjOBJ_ACTUATOR, actuator)
     jid = mujoco.mj_name2id(bare, mujoco.mjtObj.mjOBJ_JOINT, joint)
     pid = mujoco.mj_name2id(bare, mujoco.mjtObj.mjOBJ_GEOM, pad)
     cid = mujoco.mj_name2id(bare, mujoco.mjtObj.mjOBJ_GEOM, counter)
-    for name, i in ((f"actuator {actuator!r}", aid), (f"joint {joint!r}", jid),
-                    (f"geom {pad!r}", pid), (f"geom {counter!r}", cid)):
+    for name, i in (
+        (f"actuator {actuator!r}", aid),
+        (f"joint {joint!r}", jid),
+        (f"geom {pad!r}", pid),
+        (f"geom {counter!r}", cid),
+    ):
         if i < 0:
             raise ValueError(f"the scene has no {name}")
     dof = bare.jnt_dofadr[jid]
@@ -265,8 +328,11 @@ def press_force_controls(spec: mujoco.MjSpec, target_n: np.ndarray, pad: str = "
             in_contact = True
         if not in_contact:
             gap = mujoco.mj_geomDistance(bare, d, pid, cid, 0.05, None)
-            v_des = -min(APPROACH_SPEED_M_S, LANDING_SPEED_M_S
-                         + (APPROACH_SPEED_M_S - LANDING_SPEED_M_S) * max(gap, 0) / LANDING_ZONE_M)
+            v_des = -min(
+                APPROACH_SPEED_M_S,
+                LANDING_SPEED_M_S
+                + (APPROACH_SPEED_M_S - LANDING_SPEED_M_S) * max(gap, 0) / LANDING_ZONE_M,
+            )
             u = damping * v + mass * (v_des - v) / VELOCITY_LOOP_S
         else:
             err = target[k] - fc
@@ -288,9 +354,13 @@ HOLD_KP = 1e6  # N/m: the held finger's servo; ~1 um per N of probe force
 PROBE_TIP = scenes.Fingertip(nx=48, pitch_m=1.5e-4, ridges=False)  # 7.2 mm of skin, smooth
 OUTPUTS = "spikes stress force"  # the blocks every runner needs
 ProbeShape = Literal["pin", "sphere", "geom"]
-_GEOM_TYPES = {"sphere": mujoco.mjtGeom.mjGEOM_SPHERE, "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
-               "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID, "box": mujoco.mjtGeom.mjGEOM_BOX,
-               "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER}
+_GEOM_TYPES = {
+    "sphere": mujoco.mjtGeom.mjGEOM_SPHERE,
+    "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
+    "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+    "box": mujoco.mjtGeom.mjGEOM_BOX,
+    "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
+}
 
 
 @dataclasses.dataclass
@@ -315,28 +385,38 @@ class Probe:
         in_range("radius_m", self.radius_m, 0, 5e-3, "m", lo_open=True)
         if self.shape == "geom":
             if self.geom_type not in _GEOM_TYPES:
-                raise ValueError(f"geom_type = {self.geom_type!r} is not one of "
-                                 f"{sorted(_GEOM_TYPES)}")
+                raise ValueError(
+                    f"geom_type = {self.geom_type!r} is not one of {sorted(_GEOM_TYPES)}"
+                )
             for s in self.geom_size:
                 in_range("geom_size", s, 0, 0.02, "m", lo_open=True)
         a, b, _ = tip.semi_axes_m
         if (self.x_m / a) ** 2 + (self.y_m / b) ** 2 > 0.25:
-            raise ValueError(f"probe at (x_m, y_m) = ({self.x_m:g}, {self.y_m:g}) m is outside "
-                             f"the pad's central half (semi-axes {a:g}, {b:g} m)")
+            raise ValueError(
+                f"probe at (x_m, y_m) = ({self.x_m:g}, {self.y_m:g}) m is outside "
+                f"the pad's central half (semi-axes {a:g}, {b:g} m)"
+            )
 
     def geom(self) -> dict:
         """add_geom arguments with the top of the geom at the body origin."""
         if self.shape == "pin":  # half-length 2 mm: the face is flat, the side never touches
-            return dict(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[self.radius_m, 2e-3, 0],
-                        pos=[0, 0, -2e-3])
+            return dict(
+                type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                size=[self.radius_m, 2e-3, 0],
+                pos=[0, 0, -2e-3],
+            )
         if self.shape == "sphere":
-            return dict(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[self.radius_m, 0, 0],
-                        pos=[0, 0, -self.radius_m])
+            return dict(
+                type=mujoco.mjtGeom.mjGEOM_SPHERE,
+                size=[self.radius_m, 0, 0],
+                pos=[0, 0, -self.radius_m],
+            )
         t = _GEOM_TYPES[self.geom_type]
         size = list(self.geom_size) + [0.0] * (3 - len(self.geom_size))
-        top = {mujoco.mjtGeom.mjGEOM_SPHERE: size[0], mujoco.mjtGeom.mjGEOM_CAPSULE:
-               size[0] + size[1]}.get(t, size[2] if t != mujoco.mjtGeom.mjGEOM_CYLINDER
-                                      else size[1])
+        top = {
+            mujoco.mjtGeom.mjGEOM_SPHERE: size[0],
+            mujoco.mjtGeom.mjGEOM_CAPSULE: size[0] + size[1],
+        }.get(t, size[2] if t != mujoco.mjtGeom.mjGEOM_CYLINDER else size[1])
         return dict(type=t, size=size, pos=[0, 0, -top])
 
 
@@ -362,8 +442,12 @@ def _actuator(spec: mujoco.MjSpec, name: str):
     return next(a for a in spec.actuators if a.name == name)
 
 
-def probe_spec(probe: Probe | None = None, tip: scenes.Fingertip | None = None,
-               timestep_s: float = 1e-4, skin: dict | None = None) -> mujoco.MjSpec:
+def probe_spec(
+    probe: Probe | None = None,
+    tip: scenes.Fingertip | None = None,
+    timestep_s: float = 1e-4,
+    skin: dict | None = None,
+) -> mujoco.MjSpec:
     """The fingertip held still by a stiff servo (press target 0) and a mocap
     probe under it, its top touching the pad's surface at mocap z =
     :func:`probe_contact_z` (the probe body's initial z). Controls: (slide, press) = (0, 0); mocap_pos =
@@ -380,13 +464,19 @@ def probe_spec(probe: Probe | None = None, tip: scenes.Fingertip | None = None,
     press = _actuator(spec, "press")
     press.set_to_position(kp=HOLD_KP, kv=2 * math.sqrt(HOLD_KP * tip.mass_kg))
     # placed by probe_contact_z once the scene is whole
-    body = spec.worldbody.add_body(name="probe", mocap=True,
-                                   pos=[probe.x_m, probe.y_m, scenes.PAD_CLEARANCE_M])
+    body = spec.worldbody.add_body(
+        name="probe", mocap=True, pos=[probe.x_m, probe.y_m, scenes.PAD_CLEARANCE_M]
+    )
     body.add_geom(name="probe", rgba=[0.7, 0.7, 0.75, 1], **probe.geom())
     mu = tip.friction
-    spec.add_pair(geomname1="pad", geomname2="probe", condim=3,
-                  friction=[mu, mu, 0.005, 0.0001, 0.0001], solref=scenes.CONTACT_SOLREF,
-                  solimp=scenes.PAIR_SOLIMP)
+    spec.add_pair(
+        geomname1="pad",
+        geomname2="probe",
+        condim=3,
+        friction=[mu, mu, 0.005, 0.0001, 0.0001],
+        solref=scenes.CONTACT_SOLREF,
+        solimp=scenes.PAIR_SOLIMP,
+    )
     scenes.add_light(spec)
     body.pos = [probe.x_m, probe.y_m, probe_contact_z(spec)]
     return spec
@@ -409,8 +499,9 @@ def probe_contact_z(spec: mujoco.MjSpec) -> float:
     return z
 
 
-def vibrating_plate_spec(tip: scenes.Fingertip | None = None, timestep_s: float = 1e-4,
-                         skin: dict | None = None) -> mujoco.MjSpec:
+def vibrating_plate_spec(
+    tip: scenes.Fingertip | None = None, timestep_s: float = 1e-4, skin: dict | None = None
+) -> mujoco.MjSpec:
     """A fingertip pressed by its `press` motor (ctrl = -force, N) onto a flat
     plate on a mocap body (mocap_pos = the plate's offset, m), which vibrates."""
     tip = _skin(tip or PROBE_TIP, skin)
@@ -427,6 +518,7 @@ def vibrating_plate_spec(tip: scenes.Fingertip | None = None, timestep_s: float 
 
 
 # --- runners ---------------------------------------------------------------------------------
+
 
 @dataclasses.dataclass
 class StimulusResult:
@@ -457,8 +549,9 @@ class StimulusResult:
         if part != "steady":
             raise ValueError(f"part = {part!r} is not one of 'steady', 'all'")
         a, b = self.waveform.steady_s
-        return slice(int(round(a / self.dt_s)), max(int(round(b / self.dt_s)),
-                                                     int(round(a / self.dt_s)) + 1))
+        return slice(
+            int(round(a / self.dt_s)), max(int(round(b / self.dt_s)), int(round(a / self.dt_s)) + 1)
+        )
 
     def centred_units(self) -> dict[str, int]:
         """Per class, the receptor nearest the stimulus centre (the afferent
@@ -490,14 +583,16 @@ class StimulusResult:
         """JSON-ready description: waveform, rates, displacement and force."""
         w = self.window("steady")
         err = np.abs(self.achieved_m - self.commanded_m)
-        return dict(waveform=dict(kind=self.waveform.kind, **self.waveform.params),
-                    dt_s=self.dt_s, rates_hz=self.rates_hz(),
-                    peak_commanded_m=float(np.abs(self.commanded_m).max()),
-                    max_displacement_error_m=float(err.max()),
-                    finger_motion_max_m=float(np.abs(self.finger_m).max()),
-                    force_steady_mean_n=float(self.force_n[w].mean()),
-                    receptors={c: int((self.layout.classes == c).sum()) for c in
-                               ("SA1", "RA", "PC")})
+        return dict(
+            waveform=dict(kind=self.waveform.kind, **self.waveform.params),
+            dt_s=self.dt_s,
+            rates_hz=self.rates_hz(),
+            peak_commanded_m=float(np.abs(self.commanded_m).max()),
+            max_displacement_error_m=float(err.max()),
+            finger_motion_max_m=float(np.abs(self.finger_m).max()),
+            force_steady_mean_n=float(self.force_n[w].mean()),
+            receptors={c: int((self.layout.classes == c).sum()) for c in ("SA1", "RA", "PC")},
+        )
 
 
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -525,8 +620,10 @@ class _Scene:
         self.rest_mocap = np.array(d.mocap_pos).ravel()
         self.state = np.empty(mujoco.mj_stateSize(self.model, _FULL))
         mujoco.mj_getState(self.model, d, self.state, _FULL)
-        self._qadr = [int(self.model.jnt_qposadr[mujoco.mj_name2id(
-            self.model, mujoco.mjtObj.mjOBJ_JOINT, j)]) for j in ("slide_x", "press_z")]
+        self._qadr = [
+            int(self.model.jnt_qposadr[mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, j)])
+            for j in ("slide_x", "press_z")
+        ]
 
     def _mocap_rows(self, w: np.ndarray) -> np.ndarray:
         raise NotImplementedError
@@ -534,8 +631,9 @@ class _Scene:
     def _commanded(self, w: np.ndarray) -> np.ndarray:
         raise NotImplementedError
 
-    def run(self, waveforms: Waveform | Sequence[Waveform], threads: int = 1
-            ) -> StimulusResult | list[StimulusResult]:
+    def run(
+        self, waveforms: Waveform | Sequence[Waveform], threads: int = 1
+    ) -> StimulusResult | list[StimulusResult]:
         """Run each waveform from the settled state (one mujoco.rollout batch,
         ``threads`` threads). One waveform in, one result out."""
         single = isinstance(waveforms, Waveform)
@@ -547,9 +645,10 @@ class _Scene:
         ctrls = []
         for s in samples:
             c = np.zeros((s.size, self.model.nu + 3 * self.model.nmocap))
-            c[:, :self.model.nu] = self.hold_ctrl
-            c[:, self.model.nu:] = self._mocap_rows(s)
+            c[:, : self.model.nu] = self.hold_ctrl
+            c[:, self.model.nu :] = self._mocap_rows(s)
             ctrls.append(c)
+
         # Each waveform in bounded chunks (rollout.chunked_rollout: the full
         # state, with the elastic warm start, is too large to keep for every
         # step), waveforms on `threads` Python threads (mujoco.rollout
@@ -557,8 +656,14 @@ class _Scene:
         # batch padded to its longest waveform simulated every short one that
         # long: 4 s for each 0.26 s sine of a tuning round).
         def one(i):
-            return chunked_rollout(self.model, mujoco.MjData(self.model), self.state, ctrls[i],
-                                   control_spec=_CTRL_MOCAP)
+            return chunked_rollout(
+                self.model,
+                mujoco.MjData(self.model),
+                self.state,
+                ctrls[i],
+                control_spec=_CTRL_MOCAP,
+            )
+
         nworker = min(nthread, len(ws))
         if nworker > 1:
             with concurrent.futures.ThreadPoolExecutor(nworker) as pool:
@@ -571,16 +676,23 @@ class _Scene:
         for i, s in enumerate(samples):
             m = s.size
             state, sd = runs[i]
-            q = np.vstack([q0[None], state[:m - 1][:, 1 + np.array(self._qadr)]])
+            q = np.vstack([q0[None], state[: m - 1][:, 1 + np.array(self._qadr)]])
             finger = q - q0
             commanded = self._commanded(s)
-            out.append(StimulusResult(
-                waveform=ws[i], dt_s=self.dt_s, commanded_m=commanded,
-                achieved_m=commanded - finger[:, 1], finger_m=finger,
-                force_n=self.layout.block(sd[:m], "force")[:, 0].copy(),
-                spikes=self.layout.block(sd[:m], "spikes").astype(np.int32),
-                stress=self.layout.block(sd[:m], "stress").copy(), layout=self.layout,
-                centre_m=self.centre_m))
+            out.append(
+                StimulusResult(
+                    waveform=ws[i],
+                    dt_s=self.dt_s,
+                    commanded_m=commanded,
+                    achieved_m=commanded - finger[:, 1],
+                    finger_m=finger,
+                    force_n=self.layout.block(sd[:m], "force")[:, 0].copy(),
+                    spikes=self.layout.block(sd[:m], "spikes").astype(np.int32),
+                    stress=self.layout.block(sd[:m], "stress").copy(),
+                    layout=self.layout,
+                    centre_m=self.centre_m,
+                )
+            )
         return out[0] if single else out
 
 
@@ -590,9 +702,15 @@ class ProbeScene(_Scene):
     sines and noise start in contact. ``run(waveform)`` then moves the probe
     by the waveform (m, positive into the skin) about the pre-indentation."""
 
-    def __init__(self, probe: Probe | None = None, tip: scenes.Fingertip | None = None,
-                 preindent_m: float = 0.0, settle_s: float = 0.1, timestep_s: float = 1e-4,
-                 skin: dict | None = None):
+    def __init__(
+        self,
+        probe: Probe | None = None,
+        tip: scenes.Fingertip | None = None,
+        preindent_m: float = 0.0,
+        settle_s: float = 0.1,
+        timestep_s: float = 1e-4,
+        skin: dict | None = None,
+    ):
         self.probe = probe or Probe()
         self.tip = tip or PROBE_TIP
         self.preindent_m = in_range("preindent_m", preindent_m, 0, 3e-3, "m")
@@ -625,8 +743,14 @@ class PlateScene(_Scene):
     keeps its last press control (a constant force) while ``run(waveform)``
     moves the plate up (+) and down by the waveform (m)."""
 
-    def __init__(self, press_n: float = 0.5, tip: scenes.Fingertip | None = None,
-                 settle_s: float = 0.1, timestep_s: float = 1e-4, skin: dict | None = None):
+    def __init__(
+        self,
+        press_n: float = 0.5,
+        tip: scenes.Fingertip | None = None,
+        settle_s: float = 0.1,
+        timestep_s: float = 1e-4,
+        skin: dict | None = None,
+    ):
         self.press_n = in_range("press_n", press_n, 0, 20, "N", lo_open=True)
         settle = in_range("settle_s", settle_s, 0.02, 10, "s")
         self.tip = tip or PROBE_TIP
@@ -648,8 +772,9 @@ class PlateScene(_Scene):
         return w.copy()
 
 
-def run_probe(waveform: Waveform, probe: Probe | None = None, preindent_m: float = 0.0,
-              **kwargs) -> StimulusResult:
+def run_probe(
+    waveform: Waveform, probe: Probe | None = None, preindent_m: float = 0.0, **kwargs
+) -> StimulusResult:
     """One probe stimulus (builds a :class:`ProbeScene`; reuse the scene for many)."""
     return ProbeScene(probe, preindent_m=preindent_m, **kwargs).run(waveform)
 

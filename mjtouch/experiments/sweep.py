@@ -62,8 +62,9 @@ def _needs_pyarrow():
         import pyarrow
         import pyarrow.parquet  # noqa: F401
     except ImportError:
-        raise ImportError("mjtouch sweep writes Parquet and needs pyarrow: "
-                          "pip install 'mjtouch[ray]'") from None
+        raise ImportError(
+            "mjtouch sweep writes Parquet and needs pyarrow: pip install 'mjtouch[ray]'"
+        ) from None
     return pyarrow
 
 
@@ -111,8 +112,14 @@ def _expand_range(name: str, token: str, where: str) -> list:
     if k >= 10_000:
         raise ValueError(f"{where} {token!r}: {k + 1} values; valid up to 10000")
     # 12 significant digits: 0.02 + 3 * 0.01 is the parameter 0.05, not 0.05000000000000001
-    return [slide.parse(name, repr(float(f"{start + i * step:.12g}")) if kind == "float"
-                        else str(start + i * step), where) for i in range(k + 1)]
+    return [
+        slide.parse(
+            name,
+            repr(float(f"{start + i * step:.12g}")) if kind == "float" else str(start + i * step),
+            where,
+        )
+        for i in range(k + 1)
+    ]
 
 
 def _tokens(value) -> list[str]:
@@ -139,8 +146,9 @@ def parse_values(values: Mapping[str, Any], where: str = "") -> dict[str, list]:
     out = {}
     for key, value in values.items():
         if key not in names:
-            raise ValueError(f"{where}unknown sweep parameter {key!r}; valid: "
-                             f"{', '.join(parameters())}")
+            raise ValueError(
+                f"{where}unknown sweep parameter {key!r}; valid: {', '.join(parameters())}"
+            )
         name = names[key]
         label = f"{where}{key}" if where else slide.flag(name)
         tokens = _tokens(value)
@@ -148,8 +156,7 @@ def parse_values(values: Mapping[str, Any], where: str = "") -> dict[str, list]:
             raise ValueError(f"{label}: no values")
         vals = []
         for t in tokens:
-            vals += (_expand_range(name, t, label) if ":" in t
-                     else [slide.parse(name, t, label)])
+            vals += _expand_range(name, t, label) if ":" in t else [slide.parse(name, t, label)]
         out[name] = list(dict.fromkeys(vals))  # repeated values run once
     return out
 
@@ -158,6 +165,7 @@ def read_config(path: str | os.PathLike) -> dict[str, list]:
     """A TOML sweep file: ``period = [0.8e-3, 1.2e-3]``, ``speed = "0.02:0.04:0.01"``,
     ``force = {start = 0.25, stop = 1.0, step = 0.25}``, ``texture = "grating"``."""
     import tomllib
+
     try:
         with open(path, "rb") as f:
             data = tomllib.load(f)
@@ -205,23 +213,25 @@ def run_one(params: Mapping[str, Any]) -> dict:
         row[f"{key}_receptors"] = int((classes == c).sum())
     peaks = out["peaks_hz"]
     expected, power = out["expected_hz"], out["power_at_expected"]
-    row.update({
-        "peaks_hz": list(peaks),
-        "strongest_peak_hz": peaks[0] if peaks else None,
-        "expected_texture_hz": expected["texture"],
-        "expected_ridges_hz": expected["ridges"],
-        "power_at_texture_pa2": power["texture"],
-        "power_at_ridges_pa2": power["ridges"],
-        "fft_bin_hz": out["fft_bin_hz"],
-        "window_start_s": float(res.time_s[w.start]),
-        "normal_force_mean_n": out["normal_force_mean_n"],
-        "receptor_class": classes.tolist(),
-        "receptor_x_m": res.layout.positions_m[:, 0].tolist(),
-        "receptor_y_m": res.layout.positions_m[:, 1].tolist(),
-        "receptor_depth_m": res.layout.positions_m[:, 2].tolist(),
-        "spike_times_s": spike_trains(res.spikes, res.time_s),
-        "wall_s": out["wall_s"],
-    })
+    row.update(
+        {
+            "peaks_hz": list(peaks),
+            "strongest_peak_hz": peaks[0] if peaks else None,
+            "expected_texture_hz": expected["texture"],
+            "expected_ridges_hz": expected["ridges"],
+            "power_at_texture_pa2": power["texture"],
+            "power_at_ridges_pa2": power["ridges"],
+            "fft_bin_hz": out["fft_bin_hz"],
+            "window_start_s": float(res.time_s[w.start]),
+            "normal_force_mean_n": out["normal_force_mean_n"],
+            "receptor_class": classes.tolist(),
+            "receptor_x_m": res.layout.positions_m[:, 0].tolist(),
+            "receptor_y_m": res.layout.positions_m[:, 1].tolist(),
+            "receptor_depth_m": res.layout.positions_m[:, 2].tolist(),
+            "spike_times_s": spike_trains(res.spikes, res.time_s),
+            "wall_s": out["wall_s"],
+        }
+    )
     return row
 
 
@@ -281,17 +291,29 @@ class SweepResult:
     startup_s: float  # starting or joining Ray (0 serially)
 
     def summary(self) -> dict:
-        return {"runs": self.table.num_rows + len(self.failed), "ran": self.ran,
-                "skipped": self.skipped, "failed": [{"params": dict(p), "error": e}
-                                                    for p, e in self.failed],
-                "backend": self.backend, "workers": len(self.workers),
-                "wall_s": self.wall_s, "startup_s": self.startup_s, "table": str(self.path)}
+        return {
+            "runs": self.table.num_rows + len(self.failed),
+            "ran": self.ran,
+            "skipped": self.skipped,
+            "failed": [{"params": dict(p), "error": e} for p, e in self.failed],
+            "backend": self.backend,
+            "workers": len(self.workers),
+            "wall_s": self.wall_s,
+            "startup_s": self.startup_s,
+            "table": str(self.path),
+        }
 
 
-def run(values: Mapping[str, Any] | None = None, out: str | os.PathLike = "sweep", *,
-        config: str | os.PathLike | None = None, serial: bool = False,
-        address: str | None = None, num_cpus: int | None = None,
-        progress: bool = False) -> SweepResult:
+def run(
+    values: Mapping[str, Any] | None = None,
+    out: str | os.PathLike = "sweep",
+    *,
+    config: str | os.PathLike | None = None,
+    serial: bool = False,
+    address: str | None = None,
+    num_cpus: int | None = None,
+    progress: bool = False,
+) -> SweepResult:
     """Run the product of ``values`` (see :func:`parse_values`; ``config``, a
     TOML file, supplies the parameters ``values`` does not) into directory
     ``out``; runs already there are skipped. ``serial`` runs here without
@@ -312,8 +334,9 @@ def run(values: Mapping[str, Any] | None = None, out: str | os.PathLike = "sweep
         # Ray starts (seconds) before the bar, so its rate and ETA are the runs'
         ray = None if serial or not todo else stack.enter_context(_ray_session(address, num_cpus))
         startup = time.perf_counter() - t0
-        bar = stack.enter_context(Progress(len(runs), progress, desc="sweep", unit="run",
-                                           initial=len(runs) - len(todo)))
+        bar = stack.enter_context(
+            Progress(len(runs), progress, desc="sweep", unit="run", initial=len(runs) - len(todo))
+        )
         if ray is None:
             workers.add(f"{socket.gethostname()}:{os.getpid()}")
             for _, p in todo:
@@ -330,13 +353,25 @@ def run(values: Mapping[str, Any] | None = None, out: str | os.PathLike = "sweep
     table = pa.concat_tables(tables, promote_options="default") if tables else pa.table({})
     path = out / TABLE
     pa.parquet.write_table(table, path)
-    return SweepResult(table, path, len(todo) - len(failed), len(runs) - len(todo), failed,
-                       "serial" if serial else "ray", workers, wall, startup)
+    return SweepResult(
+        table,
+        path,
+        len(todo) - len(failed),
+        len(runs) - len(todo),
+        failed,
+        "serial" if serial else "ray",
+        workers,
+        wall,
+        startup,
+    )
 
 
 def _label(p: Mapping[str, Any]) -> str:
-    return " ".join(f"{k}={v}" for k, v in p.items()
-                    if k in ("texture", "period_m", "speed_m_s", "force_n", "seed"))
+    return " ".join(
+        f"{k}={v}"
+        for k, v in p.items()
+        if k in ("texture", "period_m", "speed_m_s", "force_n", "seed")
+    )
 
 
 def _run_ray(ray, todo, runs_dir, bar, failed, workers) -> None:
@@ -370,21 +405,25 @@ def _ray_session(address: str | None, num_cpus: int | None):
     try:
         import ray
     except ImportError:
-        raise ImportError("Ray is not installed: pip install 'mjtouch[ray]', or run with "
-                          "--serial (serial=True)") from None
+        raise ImportError(
+            "Ray is not installed: pip install 'mjtouch[ray]', or run with --serial (serial=True)"
+        ) from None
     if ray.is_initialized():
         yield ray
         return
     import logging
+
     kw = dict(logging_level=logging.WARNING, include_dashboard=False)
     if address:
         _check_reachable(address)
         try:
             ray.init(address=address, **kw)
         except (ConnectionError, RuntimeError) as e:  # no cluster, wrong token, ...
-            raise ConnectionError(f"could not join the Ray cluster at --address {address}: "
-                                  f"{str(e).splitlines()[0]} (see `ray status` on the head "
-                                  "node; Ray's token authentication: README, Sweeps)") from e
+            raise ConnectionError(
+                f"could not join the Ray cluster at --address {address}: "
+                f"{str(e).splitlines()[0]} (see `ray status` on the head "
+                "node; Ray's token authentication: README, Sweeps)"
+            ) from e
     else:
         # Ray renices its workers by +15 to keep its control plane responsive;
         # here the runs are the cluster's only work, and on a shared machine
@@ -408,6 +447,8 @@ def _check_reachable(address: str, timeout_s: float = 5.0) -> None:
     try:
         socket.create_connection((host, int(port)), timeout=timeout_s).close()
     except OSError as e:
-        raise ConnectionError(f"could not join the Ray cluster at --address {address}: nothing "
-                              f"answers there ({e}); start one with `ray start --head --port "
-                              f"{port}`") from None
+        raise ConnectionError(
+            f"could not join the Ray cluster at --address {address}: nothing "
+            f"answers there ({e}); start one with `ray start --head --port "
+            f"{port}`"
+        ) from None

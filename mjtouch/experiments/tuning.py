@@ -83,18 +83,40 @@ CRITERIA = ("absolute", "entrainment")
 # PC 0.04-1.9 um at 250 Hz (median 0.3 um): inside or near the RA and PC
 # boxes (RA's box sits up to 2x below TouchSim's units).
 PUBLISHED_THRESHOLDS = {
-    "SA1": [dict(band_hz=(5, 20), amplitude_m=(10e-6, 100e-6), criterion="absolute",
-                 source="Johansson et al. 1982 (human SA I, most sensitive at low frequencies); "
-                        "Muniak et al. 2007 (macaque SA1)"),
-            dict(band_hz=(100, 400), amplitude_m=(50e-6, 1e-3), criterion="absolute",
-                 source="Johansson et al. 1982: SA I thresholds rise above ~100 Hz")],
-    "RA": [dict(band_hz=(20, 80), amplitude_m=(2e-6, 30e-6), criterion="absolute",
-                source="Johansson et al. 1982 (FA I most easily excited at 8-64 Hz); Muniak et "
-                       "al. 2007; TouchSim's RA fits under this protocol: 14-41 um at 40 Hz")],
-    "PC": [dict(band_hz=(150, 400), amplitude_m=(0.02e-6, 1e-6), criterion="absolute",
-                source="Johansson et al. 1982 (FA II most easily excited above 64 Hz); Muniak "
-                       "et al. 2007; Saal et al. 2017 (tens of nm to ~0.3 um at 200-300 Hz); "
-                       "TouchSim's PC fits under this protocol: 0.04-1.9 um at 250 Hz")],
+    "SA1": [
+        dict(
+            band_hz=(5, 20),
+            amplitude_m=(10e-6, 100e-6),
+            criterion="absolute",
+            source="Johansson et al. 1982 (human SA I, most sensitive at low frequencies); "
+            "Muniak et al. 2007 (macaque SA1)",
+        ),
+        dict(
+            band_hz=(100, 400),
+            amplitude_m=(50e-6, 1e-3),
+            criterion="absolute",
+            source="Johansson et al. 1982: SA I thresholds rise above ~100 Hz",
+        ),
+    ],
+    "RA": [
+        dict(
+            band_hz=(20, 80),
+            amplitude_m=(2e-6, 30e-6),
+            criterion="absolute",
+            source="Johansson et al. 1982 (FA I most easily excited at 8-64 Hz); Muniak et "
+            "al. 2007; TouchSim's RA fits under this protocol: 14-41 um at 40 Hz",
+        )
+    ],
+    "PC": [
+        dict(
+            band_hz=(150, 400),
+            amplitude_m=(0.02e-6, 1e-6),
+            criterion="absolute",
+            source="Johansson et al. 1982 (FA II most easily excited above 64 Hz); Muniak "
+            "et al. 2007; Saal et al. 2017 (tens of nm to ~0.3 um at 200-300 Hz); "
+            "TouchSim's PC fits under this protocol: 0.04-1.9 um at 250 Hz",
+        )
+    ],
 }
 # Entrainment over absolute threshold: issue 14 asks > 1.5x for RA and PC.
 # TouchSim's fits under this pin (0.5 mm pre-indentation, its noise on, this
@@ -103,8 +125,9 @@ PUBLISHED_THRESHOLDS = {
 # 40-80 Hz and >= 13x at 150-400 Hz (some fits never entrain below 0.4 mm).
 # Those TouchSim ratios predate min_cycles (5 cycles at 5-10 Hz, 0.2 s above
 # 25 Hz) and were not recomputed; ours under both windows are in README.
-PUBLISHED_ENTRAINMENT_RATIO = dict(RA=(1.5, 10.0), PC=(1.5, 10.0),
-                                   source="Saal et al. 2017; Muniak et al. 2007")
+PUBLISHED_ENTRAINMENT_RATIO = dict(
+    RA=(1.5, 10.0), PC=(1.5, 10.0), source="Saal et al. 2017; Muniak et al. 2007"
+)
 # Rate-intensity under a ramp-and-hold with this pin (1 mm diameter, finger
 # still), hold rate of the unit under the probe. The band is TouchSim's
 # (Saal et al. 2017) four SA1 fits under the same pin, computed from
@@ -116,13 +139,20 @@ PUBLISHED_ENTRAINMENT_RATIO = dict(RA=(1.5, 10.0), PC=(1.5, 10.0),
 # only (Johansson & Vallbo 1983; Knibestol 1973, J Physiol 232:427: human RA
 # and PC respond to the indentation's velocity, not its hold).
 PUBLISHED_RATE_INTENSITY = dict(
-    SA1=dict(depth_m=(0.7e-3, 1.0e-3), hold_rate_hz=(22.0, 61.0),
-             source="TouchSim SA1 fits (Saal et al. 2017; hsaal/touchsim constants.affparamsSA) "
-                    "under a 1 mm pin, noise-free: 22-44 Hz at 0.7 mm, 35-61 Hz at 1.0 mm"),
-    RA=dict(hold_rate_hz=(0.0, 0.0), source="Johansson & Vallbo 1983; Knibestol 1973 (FA I: "
-                                            "ramps only)"),
-    PC=dict(hold_rate_hz=(0.0, 0.0), source="Johansson & Vallbo 1983; Knibestol 1973 (FA II: "
-                                            "transients only)"))
+    SA1=dict(
+        depth_m=(0.7e-3, 1.0e-3),
+        hold_rate_hz=(22.0, 61.0),
+        source="TouchSim SA1 fits (Saal et al. 2017; hsaal/touchsim constants.affparamsSA) "
+        "under a 1 mm pin, noise-free: 22-44 Hz at 0.7 mm, 35-61 Hz at 1.0 mm",
+    ),
+    RA=dict(
+        hold_rate_hz=(0.0, 0.0), source="Johansson & Vallbo 1983; Knibestol 1973 (FA I: ramps only)"
+    ),
+    PC=dict(
+        hold_rate_hz=(0.0, 0.0),
+        source="Johansson & Vallbo 1983; Knibestol 1973 (FA II: transients only)",
+    ),
+)
 
 
 @dataclasses.dataclass
@@ -146,20 +176,42 @@ class TuningConfig:
     @classmethod
     def quick(cls) -> TuningConfig:
         """A few seconds: 2 frequencies, a coarse grid, a small skin."""
-        return cls(freqs_hz=(40.0, 250.0), grid_points=6, refine=2, steady_s=0.06, min_cycles=5,
-                   ramp_s=0.01, depths_m=(0.1e-3, 0.4e-3, 1.0e-3), hold_s=0.1,
-                   timestep_s=2e-4, nx=24, pitch_m=3e-4)
+        return cls(
+            freqs_hz=(40.0, 250.0),
+            grid_points=6,
+            refine=2,
+            steady_s=0.06,
+            min_cycles=5,
+            ramp_s=0.01,
+            depths_m=(0.1e-3, 0.4e-3, 1.0e-3),
+            hold_s=0.1,
+            timestep_s=2e-4,
+            nx=24,
+            pitch_m=3e-4,
+        )
 
     def validate(self) -> None:
         if not len(self.freqs_hz):
             raise ValueError("freqs_hz must hold at least one frequency")
         for f in self.freqs_hz:
-            in_range("freqs_hz", f, 0, 0.25 / self.timestep_s, "Hz (a quarter of the "
-                           "sampling rate)", lo_open=True)
+            in_range(
+                "freqs_hz",
+                f,
+                0,
+                0.25 / self.timestep_s,
+                "Hz (a quarter of the sampling rate)",
+                lo_open=True,
+            )
         lo, hi = self.amp_range_m
         in_range("amp_range_m[0]", lo, 0, 1e-3, "m", lo_open=True)
-        in_range("amp_range_m[1]", hi, lo, min(1e-3, self.preindent_m), "m (at most the "
-                       "pre-indentation, so the pin stays in contact)", lo_open=True)
+        in_range(
+            "amp_range_m[1]",
+            hi,
+            lo,
+            min(1e-3, self.preindent_m),
+            "m (at most the pre-indentation, so the pin stays in contact)",
+            lo_open=True,
+        )
         in_range("grid_points", self.grid_points, 2, 100, "")
         in_range("refine", self.refine, 0, 30, "")
         # >= 5: a Rayleigh p < 0.01 needs >= 4-5 locked spikes
@@ -168,8 +220,9 @@ class TuningConfig:
             in_range("depths_m", d, 0, 3e-3, "m", lo_open=True)
 
 
-def _responses(result: stimuli.StimulusResult, freq_hz: float, cycles: float,
-               base: np.ndarray) -> dict[str, np.ndarray]:
+def _responses(
+    result: stimuli.StimulusResult, freq_hz: float, cycles: float, base: np.ndarray
+) -> dict[str, np.ndarray]:
     """Per criterion, (nrec,) bool: does each receptor meet it in this run?
     base: the unstimulated spike counts in the same window."""
     sp = result.spikes[result.window("steady")]
@@ -177,12 +230,22 @@ def _responses(result: stimuli.StimulusResult, freq_hz: float, cycles: float,
     extra = count - base
     # locked at f or at 2f: a unit driven by rectified velocity fires on both
     # half-cycles, and its phases then cancel at f
-    locked = np.array([count[r] > 0 and min(signals.vector_strength_counts(
-        sp[:, r], result.dt_s, h * freq_hz).p_value for h in (1, 2)) < LOCK_P
-        for r in range(sp.shape[1])])
+    locked = np.array(
+        [
+            count[r] > 0
+            and min(
+                signals.vector_strength_counts(sp[:, r], result.dt_s, h * freq_hz).p_value
+                for h in (1, 2)
+            )
+            < LOCK_P
+            for r in range(sp.shape[1])
+        ]
+    )
     least = ABSOLUTE_SPIKES_PER_CYCLE * cycles
-    return dict(absolute=(extra >= max(2.0, least)) | (locked & (count >= max(1.0, least))),
-                entrainment=(extra >= cycles) | (locked & (count >= cycles)))
+    return dict(
+        absolute=(extra >= max(2.0, least)) | (locked & (count >= max(1.0, least))),
+        entrainment=(extra >= cycles) | (locked & (count >= cycles)),
+    )
 
 
 def threshold_curves(cfg: TuningConfig, scene: stimuli.ProbeScene) -> dict:
@@ -201,11 +264,9 @@ def threshold_curves(cfg: TuningConfig, scene: stimuli.ProbeScene) -> dict:
     # round 0: the grid (and amplitude 0: the unstimulated counts)
     runs = [(f, a) for f in freqs for a in [0.0, *grid]]
     res = scene.run([wave(a, f) for f, a in runs], threads=cfg.threads)
-    base = {f: r.spikes[r.window("steady")].sum(axis=0) for (f, a), r in zip(runs, res)
-            if a == 0.0}
+    base = {f: r.spikes[r.window("steady")].sum(axis=0) for (f, a), r in zip(runs, res) if a == 0.0}
     cen = res[0].centred_units()
-    unit_of = {c: dict(centred=np.arange(classes.size) == cen[c], best=classes == c)
-               for c in cen}
+    unit_of = {c: dict(centred=np.arange(classes.size) == cen[c], best=classes == c) for c in cen}
     meets = {}
     rates = {c: {str(f): [] for f in freqs} for c in cen}
     for (f, a), r in zip(runs, res):
@@ -241,25 +302,37 @@ def threshold_curves(cfg: TuningConfig, scene: stimuli.ProbeScene) -> dict:
             break
         todo = sorted({(k[3], mid) for k, mid in open_})
         res = scene.run([wave(mid, f) for f, mid in todo], threads=cfg.threads)
-        meets_mid = {(f, mid): _responses(r, f, steady(f) * f, base[f])
-                     for (f, mid), r in zip(todo, res)}
+        meets_mid = {
+            (f, mid): _responses(r, f, steady(f) * f, base[f]) for (f, mid), r in zip(todo, res)
+        }
         for k, mid in open_:
             c, unit, crit, f = k
             lo, hi = tasks[k]
             tasks[k] = (lo, mid) if hit(c, unit, crit, f, meets_mid[(f, mid)]) else (mid, hi)
-    thresholds = {c: {unit: {crit: [tasks[(c, unit, crit, f)][1] for f in freqs]
-                             for crit in CRITERIA} for unit in UNITS} for c in cen}
-    return dict(freqs_hz=freqs, thresholds_m=thresholds, grid_m=grid.tolist(),
-                grid_rates_centred_hz=rates, floor_m=cfg.amp_range_m[0],
-                precision=float((grid[1] / grid[0]) ** (0.5 ** cfg.refine)))
+    thresholds = {
+        c: {
+            unit: {crit: [tasks[(c, unit, crit, f)][1] for f in freqs] for crit in CRITERIA}
+            for unit in UNITS
+        }
+        for c in cen
+    }
+    return dict(
+        freqs_hz=freqs,
+        thresholds_m=thresholds,
+        grid_m=grid.tolist(),
+        grid_rates_centred_hz=rates,
+        floor_m=cfg.amp_range_m[0],
+        precision=float((grid[1] / grid[0]) ** (0.5**cfg.refine)),
+    )
 
 
 def rate_intensity(cfg: TuningConfig, scene: stimuli.ProbeScene) -> dict:
     """Ramp-and-hold indentations from first touch: per class, the centred
     unit's rate on the ramps (on + off) and in the hold's last 80%."""
     ramp = 0.05 if cfg.hold_s > 0.15 else 0.02
-    waves = [stimuli.ramp_and_hold(d, ramp_s=ramp, hold_s=cfg.hold_s, rest_s=0.05)
-             for d in cfg.depths_m]
+    waves = [
+        stimuli.ramp_and_hold(d, ramp_s=ramp, hold_s=cfg.hold_s, rest_s=0.05) for d in cfg.depths_m
+    ]
     res = scene.run(waves, threads=cfg.threads)
     out = {c: dict(hold_hz=[], ramp_hz=[]) for c in CLASSES}
     dt = scene.dt_s
@@ -268,26 +341,36 @@ def rate_intensity(cfg: TuningConfig, scene: stimuli.ProbeScene) -> dict:
         n_ramp = int(round(ramp / dt))
         n_hold = int(round(cfg.hold_s / dt))
         hold = slice(n_ramp + int(0.2 * n_hold), n_ramp + n_hold)
-        ramps = np.r_[0:n_ramp, n_ramp + n_hold:2 * n_ramp + n_hold]
+        ramps = np.r_[0:n_ramp, n_ramp + n_hold : 2 * n_ramp + n_hold]
         for c in CLASSES:
             if c in cen:
                 u = cen[c]
-                out[c]["hold_hz"].append(float(r.spikes[hold, u].sum() / ((hold.stop - hold.start)
-                                                                           * dt)))
+                out[c]["hold_hz"].append(
+                    float(r.spikes[hold, u].sum() / ((hold.stop - hold.start) * dt))
+                )
                 out[c]["ramp_hz"].append(float(r.spikes[ramps, u].sum() / (ramps.size * dt)))
-    return dict(depths_m=[float(d) for d in cfg.depths_m], ramp_s=ramp, hold_s=cfg.hold_s,
-                rates=out)
+    return dict(
+        depths_m=[float(d) for d in cfg.depths_m], ramp_s=ramp, hold_s=cfg.hold_s, rates=out
+    )
 
 
 def _vibration_scene(cfg: TuningConfig) -> stimuli.ProbeScene:
     tip = scenes.Fingertip(nx=int(cfg.nx), pitch_m=cfg.pitch_m, ridges=False)
-    return stimuli.ProbeScene(stimuli.Probe("pin", radius_m=cfg.pin_radius_m), tip,
-                              preindent_m=cfg.preindent_m, settle_s=0.1,
-                              timestep_s=cfg.timestep_s)
+    return stimuli.ProbeScene(
+        stimuli.Probe("pin", radius_m=cfg.pin_radius_m),
+        tip,
+        preindent_m=cfg.preindent_m,
+        settle_s=0.1,
+        timestep_s=cfg.timestep_s,
+    )
 
 
-def pin_sine_stress(cfg: TuningConfig, freqs_hz: Sequence[float],
-                    amplitudes_m: Sequence[float] = (0.0, 10e-6), threads: int = 2) -> dict:
+def pin_sine_stress(
+    cfg: TuningConfig,
+    freqs_hz: Sequence[float],
+    amplitudes_m: Sequence[float] = (0.0, 10e-6),
+    threads: int = 2,
+) -> dict:
     """Per frequency, the receptor stress of :func:`run`'s pin under sines of
     ``amplitudes_m`` (the first 0), with the counting window, its cycles, the
     centred units and dt: input of :func:`atonal_ratio`."""
@@ -295,16 +378,27 @@ def pin_sine_stress(cfg: TuningConfig, freqs_hz: Sequence[float],
     out = {}
     for f in freqs_hz:
         steady = max(cfg.steady_s, cfg.min_cycles / f)
-        res = scene.run([stimuli.sine(a, f, duration_s=2 * cfg.ramp_s + steady, ramp_s=cfg.ramp_s)
-                         for a in amplitudes_m], threads=threads)
-        out[float(f)] = dict(stress=[r.stress for r in res], amplitudes_m=list(amplitudes_m),
-                             window=res[0].window("steady"), cycles=steady * f,
-                             units=res[0].centred_units(), dt_s=res[0].dt_s)
+        res = scene.run(
+            [
+                stimuli.sine(a, f, duration_s=2 * cfg.ramp_s + steady, ramp_s=cfg.ramp_s)
+                for a in amplitudes_m
+            ],
+            threads=threads,
+        )
+        out[float(f)] = dict(
+            stress=[r.stress for r in res],
+            amplitudes_m=list(amplitudes_m),
+            window=res[0].window("steady"),
+            cycles=steady * f,
+            units=res[0].centred_units(),
+            dt_s=res[0].dt_s,
+        )
     return out
 
 
-def atonal_ratio(run: dict, cls: str, seed: int = 0, scale_range=(1e-4, 20.0),
-                 iters: int = 14) -> float:
+def atonal_ratio(
+    run: dict, cls: str, seed: int = 0, scale_range=(1e-4, 20.0), iters: int = 14
+) -> float:
     """Entrainment over absolute threshold of the centred ``cls`` unit of one
     :func:`pin_sine_stress` entry, with this module's count criteria, by
     bisection on s in q0 + s (q1 - q0) (the stress is linear in amplitude;
@@ -319,8 +413,10 @@ def atonal_ratio(run: dict, cls: str, seed: int = 0, scale_range=(1e-4, 20.0),
     rest = core.receptor_run(cls, q0, run["dt_s"], cfg, stream=u)[0][w].sum()
 
     def extra(s):  # stimulated minus unstimulated spikes in the window
-        return core.receptor_run(cls, q0 + s * (q1 - q0), run["dt_s"], cfg,
-                                 stream=u)[0][w].sum() - rest
+        return (
+            core.receptor_run(cls, q0 + s * (q1 - q0), run["dt_s"], cfg, stream=u)[0][w].sum()
+            - rest
+        )
 
     def threshold(need):
         lo, hi = scale_range
@@ -340,27 +436,35 @@ def run(cfg: TuningConfig | None = None) -> dict:
     cfg = cfg or TuningConfig()
     cfg.validate()
     vib = _vibration_scene(cfg)
-    touch = stimuli.ProbeScene(vib.probe, vib.tip, preindent_m=0.0, settle_s=0.0,
-                               timestep_s=cfg.timestep_s)
+    touch = stimuli.ProbeScene(
+        vib.probe, vib.tip, preindent_m=0.0, settle_s=0.0, timestep_s=cfg.timestep_s
+    )
     return dict(
-        config={k: (list(v) if isinstance(v, (tuple, list)) else v)
-                for k, v in dataclasses.asdict(cfg).items()},
-        definitions=dict(absolute=f">= max(2, {ABSOLUTE_SPIKES_PER_CYCLE}/cycle) spikes more "
-                                  "than unstimulated in the steady window, or >= max(1, "
-                                  f"{ABSOLUTE_SPIKES_PER_CYCLE}/cycle) spikes phase-locked at "
-                                  f"f or 2f (Rayleigh p < {LOCK_P})",
-                         window=f"the sine's steady part: max(steady_s, min_cycles / f) = "
-                                f"max({cfg.steady_s}, {cfg.min_cycles} / f) s",
-                         entrainment=">= 1 spike per cycle more than unstimulated, or >= 1 "
-                                     "phase-locked spike per cycle",
-                         centred="the unit nearest the probe's axis",
-                         best="the class's most sensitive unit"),
+        config={
+            k: (list(v) if isinstance(v, (tuple, list)) else v)
+            for k, v in dataclasses.asdict(cfg).items()
+        },
+        definitions=dict(
+            absolute=f">= max(2, {ABSOLUTE_SPIKES_PER_CYCLE}/cycle) spikes more "
+            "than unstimulated in the steady window, or >= max(1, "
+            f"{ABSOLUTE_SPIKES_PER_CYCLE}/cycle) spikes phase-locked at "
+            f"f or 2f (Rayleigh p < {LOCK_P})",
+            window=f"the sine's steady part: max(steady_s, min_cycles / f) = "
+            f"max({cfg.steady_s}, {cfg.min_cycles} / f) s",
+            entrainment=">= 1 spike per cycle more than unstimulated, or >= 1 "
+            "phase-locked spike per cycle",
+            centred="the unit nearest the probe's axis",
+            best="the class's most sensitive unit",
+        ),
         receptors={c: int((vib.layout.classes == c).sum()) for c in CLASSES},
         thresholds=threshold_curves(cfg, vib),
         rate_intensity=rate_intensity(cfg, touch),
-        published=dict(thresholds=PUBLISHED_THRESHOLDS,
-                       entrainment_ratio=PUBLISHED_ENTRAINMENT_RATIO,
-                       rate_intensity=PUBLISHED_RATE_INTENSITY))
+        published=dict(
+            thresholds=PUBLISHED_THRESHOLDS,
+            entrainment_ratio=PUBLISHED_ENTRAINMENT_RATIO,
+            rate_intensity=PUBLISHED_RATE_INTENSITY,
+        ),
+    )
 
 
 def plot(result: dict, path: str) -> None:
@@ -368,6 +472,7 @@ def plot(result: dict, path: str) -> None:
     published ranges as shaded boxes."""
     try:
         import matplotlib
+
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
@@ -378,8 +483,12 @@ def plot(result: dict, path: str) -> None:
     f = np.array(th["freqs_hz"])
     for c in CLASSES:
         for crit, ls in (("absolute", "-o"), ("entrainment", "--s")):
-            y = np.array([np.nan if not np.isfinite(v) else v * 1e6
-                          for v in th["thresholds_m"][c]["centred"][crit]])
+            y = np.array(
+                [
+                    np.nan if not np.isfinite(v) else v * 1e6
+                    for v in th["thresholds_m"][c]["centred"][crit]
+                ]
+            )
             a.loglog(f, y, ls, c=colors[c], ms=4, label=f"{c} {crit}")
         for box in result["published"]["thresholds"].get(c, []):
             (f0, f1), (y0, y1) = box["band_hz"], box["amplitude_m"]
@@ -396,8 +505,9 @@ def plot(result: dict, path: str) -> None:
             b.plot(d, r["hold_hz"], "-o", c=colors[c], label=f"{c} hold")
             b.plot(d, r["ramp_hz"], ":^", c=colors[c], label=f"{c} ramps")
     pub = result["published"]["rate_intensity"]["SA1"]
-    b.fill_between(np.array(pub["depth_m"]) * 1e3, *pub["hold_rate_hz"], color=colors["SA1"],
-                   alpha=0.15, lw=0)
+    b.fill_between(
+        np.array(pub["depth_m"]) * 1e3, *pub["hold_rate_hz"], color=colors["SA1"], alpha=0.15, lw=0
+    )
     b.set_xlabel("indentation (mm)")
     b.set_ylabel("rate of the centred unit (Hz)")
     b.set_title("rate-intensity, ramp-and-hold pin")

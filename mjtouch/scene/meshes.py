@@ -62,11 +62,18 @@ class MeshTexture:
         ``width_m`` widens a profile (its rows are all equal) to any plate
         width, so a narrow crop of a long grating serves a whole pad."""
         if width_m is not None and not self.is_profile:
-            raise ValueError(f"width_m = {width_m}: only a profile (a surface that does not "
-                             "vary along y) can be widened; crop the mesh instead")
-        return Texture(kind="mesh", mesh=self, length_m=self.length_m,
-                       width_m=width_m or self.width_m, resolution_m=self.resolution_m,
-                       height_m=self.relief_m)
+            raise ValueError(
+                f"width_m = {width_m}: only a profile (a surface that does not "
+                "vary along y) can be widened; crop the mesh instead"
+            )
+        return Texture(
+            kind="mesh",
+            mesh=self,
+            length_m=self.length_m,
+            width_m=width_m or self.width_m,
+            resolution_m=self.resolution_m,
+            height_m=self.relief_m,
+        )
 
 
 def _up_rotation(up: str) -> np.ndarray:
@@ -87,6 +94,7 @@ def _up_rotation(up: str) -> np.ndarray:
 
 def _load(mesh) -> tuple[object, str]:
     import trimesh
+
     if isinstance(mesh, trimesh.Trimesh):
         return mesh, "trimesh.Trimesh"
     path = pathlib.Path(mesh)
@@ -101,9 +109,16 @@ def _load(mesh) -> tuple[object, str]:
     return loaded, str(path)
 
 
-def from_mesh(mesh, *, scale: float = 1.0, up: str = "+z", rotate_deg: float = 0.0,
-              resolution_m: float = 2e-5, length_m: float | None = None,
-              width_m: float | None = None) -> MeshTexture:
+def from_mesh(
+    mesh,
+    *,
+    scale: float = 1.0,
+    up: str = "+z",
+    rotate_deg: float = 0.0,
+    resolution_m: float = 2e-5,
+    length_m: float | None = None,
+    width_m: float | None = None,
+) -> MeshTexture:
     """The top surface of ``mesh`` (a file trimesh reads: STL, OBJ, PLY, GLB,
     ...; or a ``trimesh.Trimesh``) as a height map of exact cell means.
 
@@ -123,8 +138,10 @@ def from_mesh(mesh, *, scale: float = 1.0, up: str = "+z", rotate_deg: float = 0
     v = np.asarray(tm.vertices, float)
     bad = ~np.isfinite(v).all(axis=1)
     if bad.any():
-        raise ValueError(f"mesh {source!r} has {int(bad.sum())} non-finite vertices "
-                         f"(first: index {int(np.argmax(bad))}, {v[np.argmax(bad)].tolist()})")
+        raise ValueError(
+            f"mesh {source!r} has {int(bad.sum())} non-finite vertices "
+            f"(first: index {int(np.argmax(bad))}, {v[np.argmax(bad)].tolist()})"
+        )
     c, s = math.cos(math.radians(rotate_deg)), math.sin(math.radians(rotate_deg))
     R = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]]) @ _up_rotation(up)
     v = scale * v @ R.T
@@ -133,9 +150,11 @@ def from_mesh(mesh, *, scale: float = 1.0, up: str = "+z", rotate_deg: float = 0
     area_scale = float(np.ptp(v[:, :2], axis=0).prod()) or 1.0
     top = tri[n_z > 1e-12 * area_scale]
     if len(top) == 0:
-        raise ValueError(f"mesh {source!r} has no top surface: no triangle faces +z after "
-                         f"placement (up = {up!r}); pick the axis that points out of the "
-                         f"textured face (one of {UP_AXES})")
+        raise ValueError(
+            f"mesh {source!r} has no top surface: no triangle faces +z after "
+            f"placement (up = {up!r}); pick the axis that points out of the "
+            f"textured face (one of {UP_AXES})"
+        )
     lo, hi = top[:, :, :2].reshape(-1, 2).min(0), top[:, :, :2].reshape(-1, 2).max(0)
     extent = hi - lo
     relief_all = float(np.ptp(top[:, :, 2]))
@@ -144,11 +163,14 @@ def from_mesh(mesh, *, scale: float = 1.0, up: str = "+z", rotate_deg: float = 0
         raise ValueError(
             f"mesh {source!r} top surface is {extent[0]:.3g} x {extent[1]:.3g} m after scale = "
             f"{scale:g}; valid footprint [{lo_f:g}, {hi_f:g}] m per side (a fingertip is ~0.02 m; "
-            "a file in mm needs scale = 1e-3)")
+            "a file in mm needs scale = 1e-3)"
+        )
     if relief_all > RELIEF_RANGE_M[1]:
-        raise ValueError(f"mesh {source!r} top surface relief is {relief_all:.3g} m after "
-                         f"scale = {scale:g}; valid up to {RELIEF_RANGE_M[1]:g} m (a texture, not "
-                         "an object: collide with objects as mesh geoms instead)")
+        raise ValueError(
+            f"mesh {source!r} top surface relief is {relief_all:.3g} m after "
+            f"scale = {scale:g}; valid up to {RELIEF_RANGE_M[1]:g} m (a texture, not "
+            "an object: collide with objects as mesh geoms instead)"
+        )
     # Whole cells inside the footprint (a cell is centred on each sample).
     ncol_max = int(math.floor(extent[0] / resolution_m + 1e-9))
     nrow_max = int(math.floor(extent[1] / resolution_m + 1e-9))
@@ -158,42 +180,53 @@ def from_mesh(mesh, *, scale: float = 1.0, up: str = "+z", rotate_deg: float = 0
         raise ValueError(
             f"length_m x width_m = {length_m} x {width_m} m needs {ncol} x {nrow} cells of "
             f"resolution_m = {resolution_m:g}; valid: 2 to {ncol_max} x {nrow_max} (the top "
-            f"surface's footprint, {extent[0]:.4g} x {extent[1]:.4g} m)")
+            f"surface's footprint, {extent[0]:.4g} x {extent[1]:.4g} m)"
+        )
     if ncol * nrow > MAX_SAMPLES:
-        raise ValueError(f"the height map needs {nrow} x {ncol} samples; valid up to "
-                         f"{MAX_SAMPLES:g} (coarsen resolution_m = {resolution_m:g} or crop)")
+        raise ValueError(
+            f"the height map needs {nrow} x {ncol} samples; valid up to "
+            f"{MAX_SAMPLES:g} (coarsen resolution_m = {resolution_m:g} or crop)"
+        )
     L, W = (ncol - 1) * resolution_m, (nrow - 1) * resolution_m
     centre = 0.5 * (lo + hi)
     # Grid units: cell (r, c) is [c, c + 1] x [r, r + 1].
-    uv = (top[:, :, :2] - centre + [0.5 * L + 0.5 * resolution_m,
-                                     0.5 * W + 0.5 * resolution_m]) / resolution_m
+    uv = (
+        top[:, :, :2] - centre + [0.5 * L + 0.5 * resolution_m, 0.5 * W + 0.5 * resolution_m]
+    ) / resolution_m
     integral, cover = cell_integrals(uv, top[:, :, 2], nrow, ncol)
     bad_cover = np.abs(cover - 1.0) > 1e-6
     if bad_cover.any():
         r, col = np.argwhere(bad_cover)[0]
         x, y = -L / 2 + col * resolution_m, -W / 2 + r * resolution_m
-        what = ("covered more than once by upward triangles (overlapping shells or an "
-                "overhang: merge the shells, e.g. trimesh.boolean.union)" if cover[r, col] > 1
-                else "not covered (a hole, or outside a non-rectangular top: crop with "
-                     "length_m / width_m)")
-        raise ValueError(f"mesh {source!r} top surface is not a single-valued height map: "
-                         f"{int(bad_cover.sum())} cells, the first at x = {x:.4g}, y = {y:.4g} m "
-                         f"(coverage {cover[r, col]:.4g}), {what}")
+        what = (
+            "covered more than once by upward triangles (overlapping shells or an "
+            "overhang: merge the shells, e.g. trimesh.boolean.union)"
+            if cover[r, col] > 1
+            else "not covered (a hole, or outside a non-rectangular top: crop with "
+            "length_m / width_m)"
+        )
+        raise ValueError(
+            f"mesh {source!r} top surface is not a single-valued height map: "
+            f"{int(bad_cover.sum())} cells, the first at x = {x:.4g}, y = {y:.4g} m "
+            f"(coverage {cover[r, col]:.4g}), {what}"
+        )
     h = integral / cover
     h -= h.min()
     relief = float(h.max())
     if relief < RELIEF_RANGE_M[0]:
-        raise ValueError(f"mesh {source!r} top surface is flat (relief {relief:.3g} m after "
-                         f"scale = {scale:g}; valid from {RELIEF_RANGE_M[0]:g} m): use a flat "
-                         "texture")
+        raise ValueError(
+            f"mesh {source!r} top surface is flat (relief {relief:.3g} m after "
+            f"scale = {scale:g}; valid from {RELIEF_RANGE_M[0]:g} m): use a flat "
+            "texture"
+        )
     if np.abs(h - h[0]).max() <= 1e-9 * relief:  # a profile along x: 2 rows
         h = np.stack([h.mean(0)] * 2)
-    return MeshTexture(heights=h, length_m=L, width_m=W, resolution_m=resolution_m,
-                       source=source)
+    return MeshTexture(heights=h, length_m=L, width_m=W, resolution_m=resolution_m, source=source)
 
 
-def _clip(poly: np.ndarray, count: np.ndarray, axis: int, bound: np.ndarray,
-          keep_below: bool) -> tuple[np.ndarray, np.ndarray]:
+def _clip(
+    poly: np.ndarray, count: np.ndarray, axis: int, bound: np.ndarray, keep_below: bool
+) -> tuple[np.ndarray, np.ndarray]:
     """Sutherland-Hodgman clip of each convex polygon (n, M, 2; ``count``
     vertices used) by the half-plane coordinate[axis] <= bound (or >=)."""
     n, M, _ = poly.shape
@@ -215,11 +248,12 @@ def _clip(poly: np.ndarray, count: np.ndarray, axis: int, bound: np.ndarray,
     out = np.zeros((n, 2 * M, 2))
     rows = np.nonzero(emit)
     out[rows[0], pos[rows]] = pts[rows]
-    return out[:, :M + 1], emit.sum(1)
+    return out[:, : M + 1], emit.sum(1)
 
 
-def cell_integrals(uv: np.ndarray, z: np.ndarray, nrow: int, ncol: int,
-                   chunk: int = 400_000) -> tuple[np.ndarray, np.ndarray]:
+def cell_integrals(
+    uv: np.ndarray, z: np.ndarray, nrow: int, ncol: int, chunk: int = 400_000
+) -> tuple[np.ndarray, np.ndarray]:
     """Exact integrals over each unit cell [c, c+1] x [r, r+1] of the linear
     heights of triangles (uv: (nt, 3, 2) grid units, z: (nt, 3)), and each
     cell's covered area. Cells a triangle contains whole are the plane at the
@@ -260,16 +294,19 @@ def cell_integrals(uv: np.ndarray, z: np.ndarray, nrow: int, ncol: int,
             A, B = uv[t, i], uv[t, (i + 1) % 3]
             out_all = np.ones(len(t), bool)
             for du, dv in ((0, 0), (1, 0), (0, 1), (1, 1)):
-                side = ((B[:, 0] - A[:, 0]) * (row + dv - A[:, 1]) -
-                        (B[:, 1] - A[:, 1]) * (col + du - A[:, 0])) * det[t]
+                side = (
+                    (B[:, 0] - A[:, 0]) * (row + dv - A[:, 1])
+                    - (B[:, 1] - A[:, 1]) * (col + du - A[:, 0])
+                ) * det[t]
                 inside &= side >= 0
                 out_all &= side < 0
             outside |= out_all
         cell = row * ncol + col
         w = inside
         N = nrow * ncol
-        integral += np.bincount(cell[w], a[t[w]] * (col[w] + 0.5) + b[t[w]] * (row[w] + 0.5)
-                                + c0[t[w]], minlength=N)
+        integral += np.bincount(
+            cell[w], a[t[w]] * (col[w] + 0.5) + b[t[w]] * (row[w] + 0.5) + c0[t[w]], minlength=N
+        )
         cover += np.bincount(cell[w], minlength=N)
         e = ~inside & ~outside
         if not e.any():
@@ -278,8 +315,12 @@ def cell_integrals(uv: np.ndarray, z: np.ndarray, nrow: int, ncol: int,
         poly = np.zeros((len(te), 8, 2))
         poly[:, :3] = uv[te]
         count = np.full(len(te), 3)
-        for axis, bound, below in ((0, ce, False), (0, ce + 1, True),
-                                   (1, re, False), (1, re + 1, True)):
+        for axis, bound, below in (
+            (0, ce, False),
+            (0, ce + 1, True),
+            (1, re, False),
+            (1, re + 1, True),
+        ):
             poly, count = _clip(poly, count, axis, bound, below)
             poly = poly[:, :8]
         # shoelace area and centroid of each clipped polygon
@@ -315,14 +356,16 @@ def profile_mesh(x_m: np.ndarray, z_m: np.ndarray, width_m: float, base_m: float
     ``base_m`` below z = 0: a grating to export as STL. Vertical steps are
     repeated x values."""
     import trimesh
+
     x, z = np.asarray(x_m, float), np.asarray(z_m, float)
     hw = width_m / 2
     # the cross-section polygon: the profile, then down and back along the base
     px = np.concatenate([x, [x[-1], x[0]]])
     pz = np.concatenate([z, [-base_m, -base_m]])
     m = len(px)
-    verts = np.concatenate([np.stack([px, np.full(m, -hw), pz], 1),
-                            np.stack([px, np.full(m, hw), pz], 1)])
+    verts = np.concatenate(
+        [np.stack([px, np.full(m, -hw), pz], 1), np.stack([px, np.full(m, hw), pz], 1)]
+    )
     i = np.arange(m)
     j = (i + 1) % m
     faces = np.concatenate([np.stack([i, j, m + j], 1), np.stack([i, m + j, m + i], 1)])
@@ -338,14 +381,17 @@ def profile_mesh(x_m: np.ndarray, z_m: np.ndarray, width_m: float, base_m: float
             if x[k + 1] == x[k]:
                 continue
             b = len(cv)
-            cv += [[x[k], y, -base_m], [x[k + 1], y, -base_m], [x[k + 1], y, z[k + 1]],
-                   [x[k], y, z[k]]]
+            cv += [
+                [x[k], y, -base_m],
+                [x[k + 1], y, -base_m],
+                [x[k + 1], y, z[k + 1]],
+                [x[k], y, z[k]],
+            ]
             cf += [[b, b + 1, b + 2], [b, b + 2, b + 3]]
             co += [[0, np.sign(y), 0]] * 2
     cv, cf = np.array(cv), np.array(cf)
     cf = _orient(cv, cf, np.array(co, float)) + len(verts)
-    return trimesh.Trimesh(np.concatenate([verts, cv]), np.concatenate([faces, cf]),
-                           process=False)
+    return trimesh.Trimesh(np.concatenate([verts, cv]), np.concatenate([faces, cf]), process=False)
 
 
 def heightmap_mesh(x_m: np.ndarray, y_m: np.ndarray, h_m: np.ndarray, base_m: float = 1e-3):
@@ -353,6 +399,7 @@ def heightmap_mesh(x_m: np.ndarray, y_m: np.ndarray, h_m: np.ndarray, base_m: fl
     h_m[row(y), col(x)] (two triangles per grid square), on a base
     ``base_m`` below z = 0: dot plates, knurls or scans to export."""
     import trimesh
+
     x, y, h = np.asarray(x_m, float), np.asarray(y_m, float), np.asarray(h_m, float)
     ny, nx = h.shape
     X, Y = np.meshgrid(x, y)

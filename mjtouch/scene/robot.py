@@ -18,8 +18,12 @@ import mujoco
 from mjtouch.scene import scenes
 from mjtouch.scene.sensor import SkinLayout
 
-PAD_TYPES = {mujoco.mjtGeom.mjGEOM_SPHERE: "sphere", mujoco.mjtGeom.mjGEOM_ELLIPSOID: "ellipsoid",
-             mujoco.mjtGeom.mjGEOM_CAPSULE: "capsule", mujoco.mjtGeom.mjGEOM_BOX: "box"}
+PAD_TYPES = {
+    mujoco.mjtGeom.mjGEOM_SPHERE: "sphere",
+    mujoco.mjtGeom.mjGEOM_ELLIPSOID: "ellipsoid",
+    mujoco.mjtGeom.mjGEOM_CAPSULE: "capsule",
+    mujoco.mjtGeom.mjGEOM_BOX: "box",
+}
 
 
 def _value(key: str, v) -> str:
@@ -34,8 +38,9 @@ def _value(key: str, v) -> str:
     raise ValueError(f"attribute {key} = {v!r}: give a str, number, bool or a list of them")
 
 
-def attach(spec: mujoco.MjSpec, geom: str, name: str | None = None,
-           **attributes) -> mujoco.MjsPlugin:
+def attach(
+    spec: mujoco.MjSpec, geom: str, name: str | None = None, **attributes
+) -> mujoco.MjsPlugin:
     """Add an ``mjtouch.skin`` sensor named ``name`` (default ``skin_<geom>``)
     on ``geom`` with the given plugin attributes (``nx=48, pitch=2e-4,
     ridges=True, outputs="spikes stress force"``, ...; values as Python
@@ -52,12 +57,15 @@ def attach(spec: mujoco.MjSpec, geom: str, name: str | None = None,
         names = [x.name for x in spec.geoms if x.name]
         raise ValueError(f"geom = {geom!r} is not in the spec; named geoms: {names}")
     if g.type not in PAD_TYPES:
-        raise ValueError(f"geom {geom!r} is a {g.type.name}; a skin needs a pad geom of type "
-                         f"{', '.join(PAD_TYPES.values())}")
+        raise ValueError(
+            f"geom {geom!r} is a {g.type.name}; a skin needs a pad geom of type "
+            f"{', '.join(PAD_TYPES.values())}"
+        )
     name = name or f"skin_{geom}"
     if any(s.name == name for s in spec.sensors) or any(p.name == name for p in spec.plugins):
-        raise ValueError(f"name = {name!r} is taken by a sensor or plugin of the spec; pass "
-                         "another name")
+        raise ValueError(
+            f"name = {name!r} is taken by a sensor or plugin of the spec; pass another name"
+        )
     # Textures: named ones only when named (a skin would otherwise also feel
     # the group's textures on the far side of an object, seen from behind as
     # deep overlap); else the non-colliding geoms of scenes.TEXTURE_GROUP.
@@ -66,8 +74,12 @@ def attach(spec: mujoco.MjSpec, geom: str, name: str | None = None,
     spec.activate_plugin(scenes.SKIN_PLUGIN)  # the <extension> entry
     plugin = spec.add_plugin(name=name, plugin_name=scenes.SKIN_PLUGIN, active=True)
     plugin.config = config
-    sensor = spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_PLUGIN,
-                             objtype=mujoco.mjtObj.mjOBJ_GEOM, objname=geom)
+    sensor = spec.add_sensor(
+        name=name,
+        type=mujoco.mjtSensor.mjSENS_PLUGIN,
+        objtype=mujoco.mjtObj.mjOBJ_GEOM,
+        objname=geom,
+    )
     # the sensor keeps a copy of the reference: assign after naming the plugin
     sensor.plugin = plugin
     return plugin

@@ -85,9 +85,13 @@ class Protocol:
         if not 0 < self.force_n <= 100:
             raise ValueError(f"force_n = {self.force_n} is out of range; valid range (0, 100] N")
         if not 0 <= self.speed_m_s <= 2:
-            raise ValueError(f"speed_m_s = {self.speed_m_s} is out of range; valid range [0, 2] m/s")
+            raise ValueError(
+                f"speed_m_s = {self.speed_m_s} is out of range; valid range [0, 2] m/s"
+            )
         if not 1e-6 <= self.timestep_s <= 5e-3:
-            raise ValueError(f"timestep_s = {self.timestep_s} is out of range; valid [1e-6, 5e-3] s")
+            raise ValueError(
+                f"timestep_s = {self.timestep_s} is out of range; valid [1e-6, 5e-3] s"
+            )
         if not 0.02 <= self.press_s <= 10:
             raise ValueError(f"press_s = {self.press_s} is out of range; valid [0.02, 10] s")
 
@@ -121,6 +125,7 @@ def friction_timeconst(tip: Fingertip, protocol: Protocol) -> float:
     """solreffriction time constant (s) for sliding at protocol speed/force."""
     tau = FRICTION_TAU_PER_MV_F * tip.mass_kg * protocol.speed_m_s / protocol.force_n
     return max(tau, 2 * protocol.timestep_s)
+
 
 # Non-colliding geoms in this group are textures that the skin renders.
 TEXTURE_GROUP = 3
@@ -162,8 +167,9 @@ PAD_CLEARANCE_M = 3e-4  # the pad's pole starts this far above the plate
 SKIN_PLUGIN = "mjtouch.skin"
 
 
-def add_skin_sensor(spec: mujoco.MjSpec, geom: str, config: dict[str, str],
-                    name: str = "skin") -> mujoco.MjsPlugin:
+def add_skin_sensor(
+    spec: mujoco.MjSpec, geom: str, config: dict[str, str], name: str = "skin"
+) -> mujoco.MjsPlugin:
     """An ``mjtouch.skin`` sensor on ``geom`` with attributes ``config``
     (key -> value string). Returns its plugin instance: edit the attributes
     through ``plugin.config`` (MuJoCo 4.0.0's ``sensor.plugin.config`` of a
@@ -171,8 +177,12 @@ def add_skin_sensor(spec: mujoco.MjSpec, geom: str, config: dict[str, str],
     spec.activate_plugin(SKIN_PLUGIN)
     plugin = spec.add_plugin(plugin_name=SKIN_PLUGIN, active=True)
     plugin.config = {str(k): str(v) for k, v in config.items()}
-    sensor = spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_PLUGIN,
-                             objtype=mujoco.mjtObj.mjOBJ_GEOM, objname=geom)
+    sensor = spec.add_sensor(
+        name=name,
+        type=mujoco.mjtSensor.mjSENS_PLUGIN,
+        objtype=mujoco.mjtObj.mjOBJ_GEOM,
+        objname=geom,
+    )
     sensor.plugin = plugin
     return plugin
 
@@ -188,8 +198,11 @@ def set_skin(spec: mujoco.MjSpec, **attributes: str) -> mujoco.MjSpec:
     if not targets:
         # A spec read from MJCF with the instance inline in <sensor><plugin>
         # (the shipped scenes) names the plugin on the sensor's copy only.
-        targets = [s.plugin for s in spec.sensors
-                   if s.type == mujoco.mjtSensor.mjSENS_PLUGIN and s.plugin.plugin_name == SKIN_PLUGIN]
+        targets = [
+            s.plugin
+            for s in spec.sensors
+            if s.type == mujoco.mjtSensor.mjSENS_PLUGIN and s.plugin.plugin_name == SKIN_PLUGIN
+        ]
     if not targets:
         raise ValueError("set_skin: the spec has no mjtouch.skin instance or sensor to edit")
     for p in targets:
@@ -214,9 +227,14 @@ def remove_skin(spec: mujoco.MjSpec) -> mujoco.MjSpec:
     return spec
 
 
-def add_fingertip(spec: mujoco.MjSpec, tip: Fingertip, start_x_m: float = -0.02,
-                  travel_m: float = 0.04, control: str = "force",
-                  skin: bool = True) -> mujoco.MjsBody:
+def add_fingertip(
+    spec: mujoco.MjSpec,
+    tip: Fingertip,
+    start_x_m: float = -0.02,
+    travel_m: float = 0.04,
+    control: str = "force",
+    skin: bool = True,
+) -> mujoco.MjsBody:
     """The fingertip: slide joints in x (sliding) and z (pressing), the pad
     geom, its actuators and (``skin``) the skin sensor plugin instance. The
     `press` actuator is a motor (ctrl = -force, N) or, for
@@ -228,12 +246,23 @@ def add_fingertip(spec: mujoco.MjSpec, tip: Fingertip, start_x_m: float = -0.02,
     a, b, c = tip.semi_axes_m
     z0 = c + PAD_CLEARANCE_M
     finger = spec.worldbody.add_body(name="finger", pos=quantize_all(start_x_m, 0, z0), gravcomp=1)
-    finger.add_joint(name="slide_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
-                     damping=quantize(2 * math.sqrt(SLIDE_KP * tip.mass_kg)))
+    finger.add_joint(
+        name="slide_x",
+        type=mujoco.mjtJoint.mjJNT_SLIDE,
+        axis=[1, 0, 0],
+        damping=quantize(2 * math.sqrt(SLIDE_KP * tip.mass_kg)),
+    )
     finger.add_joint(name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], damping=2)
-    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, size=quantize_all(a, b, c),
-                    mass=quantize(tip.mass_kg), friction=[quantize(tip.friction), 0.005, 0.0001],
-                    solref=CONTACT_SOLREF, solimp=CONTACT_SOLIMP, rgba=[0.93, 0.72, 0.62, 1])
+    finger.add_geom(
+        name="pad",
+        type=mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+        size=quantize_all(a, b, c),
+        mass=quantize(tip.mass_kg),
+        friction=[quantize(tip.friction), 0.005, 0.0001],
+        solref=CONTACT_SOLREF,
+        solimp=CONTACT_SOLIMP,
+        rgba=[0.93, 0.72, 0.62, 1],
+    )
     # intvelocity: ctrl is the sliding speed (m/s), integrated into a
     # position setpoint, so the mean speed is exact despite friction;
     # stiff and critically damped (joint damping) so it does not ring.
@@ -253,20 +282,28 @@ def add_fingertip(spec: mujoco.MjSpec, tip: Fingertip, start_x_m: float = -0.02,
     return finger
 
 
-def add_grating_hfield(spec: mujoco.MjSpec, name: str, texture: Texture, half_width_m: float,
-                       x_m: np.ndarray | None = None) -> mujoco.MjsHField:
+def add_grating_hfield(
+    spec: mujoco.MjSpec,
+    name: str,
+    texture: Texture,
+    half_width_m: float,
+    x_m: np.ndarray | None = None,
+) -> mujoco.MjsHField:
     """A 2-row height field of a grating's profile, ``texture.height_m`` tall
     (samples at 4 digits, as the committed MJCF carries them)."""
     if x_m is None:
         x_m = np.linspace(-texture.length_m / 2, texture.length_m / 2, texture.ncol)
     row = texture.profile(x_m) / texture.height_m
-    return spec.add_hfield(name=name, nrow=2, ncol=len(x_m),
-                           size=quantize_all(texture.length_m / 2, half_width_m, texture.height_m, 0.001),
-                           userdata=[float(f"{v:.4g}") for v in np.concatenate([row, row])])
+    return spec.add_hfield(
+        name=name,
+        nrow=2,
+        ncol=len(x_m),
+        size=quantize_all(texture.length_m / 2, half_width_m, texture.height_m, 0.001),
+        userdata=[float(f"{v:.4g}") for v in np.concatenate([row, row])],
+    )
 
 
-def add_plate(spec: mujoco.MjSpec, texture: Texture,
-              parent: mujoco.MjsBody | None = None) -> None:
+def add_plate(spec: mujoco.MjSpec, texture: Texture, parent: mujoco.MjsBody | None = None) -> None:
     """A plate on ``parent`` (default: the world): a colliding flat box proxy
     (MuJoCo's contact) and a non-colliding geom named ``texture`` that the
     skin renders against."""
@@ -274,27 +311,52 @@ def add_plate(spec: mujoco.MjSpec, texture: Texture,
     L, W = texture.length_m, texture.width_m
     # 1 cm thick: a hard press (50 N) sinks ~3 mm into MuJoCo's soft contact
     world = parent or spec.worldbody
-    world.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=quantize_all(L / 2, W / 2, 0.01),
-                   pos=[0, 0, -0.01], friction=[0.5, 0.005, 0.0001], rgba=[0.55, 0.6, 0.65, 1])
+    world.add_geom(
+        name="plate",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=quantize_all(L / 2, W / 2, 0.01),
+        pos=[0, 0, -0.01],
+        friction=[0.5, 0.005, 0.0001],
+        rgba=[0.55, 0.6, 0.65, 1],
+    )
     hidden = dict(contype=0, conaffinity=0, group=TEXTURE_GROUP)
     if texture.kind == "flat":
-        world.add_geom(name="texture", type=mujoco.mjtGeom.mjGEOM_BOX,
-                       size=quantize_all(L / 2, W / 2, 0.01), pos=[0, 0, -0.01], rgba=[0, 0, 0, 0], **hidden)
+        world.add_geom(
+            name="texture",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=quantize_all(L / 2, W / 2, 0.01),
+            pos=[0, 0, -0.01],
+            rgba=[0, 0, 0, 0],
+            **hidden,
+        )
         return
     if texture.kind == "mesh":  # exact cell means of the mesh (meshes.from_mesh)
         h = texture.heights()
-        spec.add_hfield(name="texture", nrow=texture.nrow, ncol=texture.ncol,
-                        size=quantize_all(L / 2, W / 2, _relief(texture), 0.001),
-                        userdata=(h.ravel() / (h.max() - h.min())).tolist())
+        spec.add_hfield(
+            name="texture",
+            nrow=texture.nrow,
+            ncol=texture.ncol,
+            size=quantize_all(L / 2, W / 2, _relief(texture), 0.001),
+            userdata=(h.ravel() / (h.max() - h.min())).tolist(),
+        )
     elif texture.nrow == 2:
         add_grating_hfield(spec, "texture", texture, W / 2)
     else:  # a million samples: exact values, no 4-digit rounding
         h = texture.heights()
-        spec.add_hfield(name="texture", nrow=texture.nrow, ncol=texture.ncol,
-                        size=quantize_all(L / 2, W / 2, _relief(texture), 0.001),
-                        userdata=(h.ravel() / (h.max() - h.min())).tolist())
-    world.add_geom(name="texture", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="texture",
-                   rgba=[0.45, 0.5, 0.55, 1], **hidden)
+        spec.add_hfield(
+            name="texture",
+            nrow=texture.nrow,
+            ncol=texture.ncol,
+            size=quantize_all(L / 2, W / 2, _relief(texture), 0.001),
+            userdata=(h.ravel() / (h.max() - h.min())).tolist(),
+        )
+    world.add_geom(
+        name="texture",
+        type=mujoco.mjtGeom.mjGEOM_HFIELD,
+        hfieldname="texture",
+        rgba=[0.45, 0.5, 0.55, 1],
+        **hidden,
+    )
 
 
 def _relief(texture: Texture) -> float:
@@ -308,9 +370,15 @@ def _relief(texture: Texture) -> float:
 def add_pad_plate_contact(spec: mujoco.MjSpec, tip: Fingertip, protocol: Protocol) -> None:
     """The pad-plate contact pair, its friction tuned to the protocol."""
     mu = quantize(tip.friction)
-    spec.add_pair(geomname1="pad", geomname2="plate", condim=3,
-                  friction=[mu, mu, 0.005, 0.0001, 0.0001], solref=CONTACT_SOLREF,
-                  solimp=PAIR_SOLIMP, solreffriction=[quantize(friction_timeconst(tip, protocol)), 1])
+    spec.add_pair(
+        geomname1="pad",
+        geomname2="plate",
+        condim=3,
+        friction=[mu, mu, 0.005, 0.0001, 0.0001],
+        solref=CONTACT_SOLREF,
+        solimp=PAIR_SOLIMP,
+        solreffriction=[quantize(friction_timeconst(tip, protocol)), 1],
+    )
 
 
 def set_options(spec: mujoco.MjSpec, protocol: Protocol) -> None:
@@ -323,8 +391,9 @@ def add_light(spec: mujoco.MjSpec) -> None:
     spec.worldbody.add_light(pos=[0, 0, 0.3], dir=[0, 0, -1])
 
 
-def fingertip_spec(tip: Fingertip, start_x_m: float = -0.02, travel_m: float = 0.04,
-                   model_name: str = "fingertip") -> mujoco.MjSpec:
+def fingertip_spec(
+    tip: Fingertip, start_x_m: float = -0.02, travel_m: float = 0.04, model_name: str = "fingertip"
+) -> mujoco.MjSpec:
     """The fingertip alone (the part file models/fingertip.xml)."""
     spec = mujoco.MjSpec()
     spec.modelname = model_name
@@ -340,9 +409,13 @@ def plate_spec(texture: Texture, model_name: str = "plate") -> mujoco.MjSpec:
     return spec
 
 
-def scene_spec(tip: Fingertip | None = None, texture: Texture | None = None,
-               protocol: Protocol | None = None, model_name: str = "mjtouch_slide",
-               skin: bool = True) -> mujoco.MjSpec:
+def scene_spec(
+    tip: Fingertip | None = None,
+    texture: Texture | None = None,
+    protocol: Protocol | None = None,
+    model_name: str = "mjtouch_slide",
+    skin: bool = True,
+) -> mujoco.MjSpec:
     """The sliding scene, fingertip over a plate, as an MjSpec to edit
     (:func:`set_skin`, attach, ...) and compile.
     ``skin=False``: the bare MuJoCo scene without the plugin."""
@@ -354,21 +427,27 @@ def scene_spec(tip: Fingertip | None = None, texture: Texture | None = None,
     spec.modelname = model_name
     set_options(spec, protocol)
     add_plate(spec, texture)
-    add_fingertip(spec, tip, start_x(texture.length_m), texture.length_m, protocol.control,
-                  skin=skin)
+    add_fingertip(
+        spec, tip, start_x(texture.length_m), texture.length_m, protocol.control, skin=skin
+    )
     add_light(spec)
     add_pad_plate_contact(spec, tip, protocol)
     return spec
 
 
-def scene_xml(tip: Fingertip | None = None, texture: Texture | None = None,
-              protocol: Protocol | None = None, model_name: str = "mjtouch_slide") -> str:
+def scene_xml(
+    tip: Fingertip | None = None,
+    texture: Texture | None = None,
+    protocol: Protocol | None = None,
+    model_name: str = "mjtouch_slide",
+) -> str:
     """A complete single-file MJCF scene: fingertip over a plate."""
     return scene_spec(tip, texture, protocol, model_name).to_xml()
 
 
-def build_model(tip: Fingertip | None = None, texture: Texture | None = None,
-                protocol: Protocol | None = None) -> mujoco.MjModel:
+def build_model(
+    tip: Fingertip | None = None, texture: Texture | None = None, protocol: Protocol | None = None
+) -> mujoco.MjModel:
     """Compile the sliding scene (:func:`scene_spec`)."""
     return scene_spec(tip, texture, protocol).compile()
 
@@ -388,8 +467,9 @@ def controls(protocol: Protocol, duration_s: float) -> np.ndarray:
     return ctrl
 
 
-def sphere_press_spec(radius_m: float, skin: dict[str, str],
-                      timestep_s: float = 1e-3) -> mujoco.MjSpec:
+def sphere_press_spec(
+    radius_m: float, skin: dict[str, str], timestep_s: float = 1e-3
+) -> mujoco.MjSpec:
     """A rigid-plate oracle scene: a sphere pad (the skin) on a slide joint,
     pushed down onto a flat box plate by the motor `press` (ctrl = force, N),
     no gravity. The Hertz set-up of mjtouch.analysis.reference_solutions."""
@@ -398,12 +478,18 @@ def sphere_press_spec(radius_m: float, skin: dict[str, str],
     spec.modelname = "sphere_press"
     spec.option.timestep = quantize(timestep_s)
     spec.option.gravity = [0, 0, 0]
-    spec.worldbody.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_BOX,
-                            size=[0.05, 0.05, 0.002], pos=[0, 0, -0.002])
+    spec.worldbody.add_geom(
+        name="plate", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.05, 0.05, 0.002], pos=[0, 0, -0.002]
+    )
     finger = spec.worldbody.add_body(name="finger", pos=[0, 0, quantize(radius_m)])
     finger.add_joint(name="press_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], damping=5)
-    finger.add_geom(name="pad", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[quantize(radius_m), 0, 0],
-                    mass=0.01, solref=[0.01, 1])
+    finger.add_geom(
+        name="pad",
+        type=mujoco.mjtGeom.mjGEOM_SPHERE,
+        size=[quantize(radius_m), 0, 0],
+        mass=0.01,
+        solref=[0.01, 1],
+    )
     press = spec.add_actuator(name="press", target="press_z", trntype=mujoco.mjtTrn.mjTRN_JOINT)
     press.set_to_motor()
     press.gear[0] = -1
@@ -425,13 +511,15 @@ def write_models(directory: str | pathlib.Path) -> list[pathlib.Path]:
     x0 = start_x(texture.length_m)
     specs = {
         "fingertip.xml": fingertip_spec(Fingertip(), x0, texture.length_m, "fingertip"),
-        "fingertip_smooth.xml": fingertip_spec(Fingertip(ridges=False), x0, texture.length_m,
-                                               "fingertip_smooth"),
+        "fingertip_smooth.xml": fingertip_spec(
+            Fingertip(ridges=False), x0, texture.length_m, "fingertip_smooth"
+        ),
         "plate_grating.xml": plate_spec(texture, "plate_grating"),
         "plate_flat.xml": plate_spec(Texture(kind="flat"), "plate_flat"),
         "slide_grating.xml": scene_spec(texture=texture, model_name="slide_grating"),
-        "slide_grating_smooth.xml": scene_spec(Fingertip(ridges=False), texture,
-                                               model_name="slide_grating_smooth"),
+        "slide_grating_smooth.xml": scene_spec(
+            Fingertip(ridges=False), texture, model_name="slide_grating_smooth"
+        ),
         "slide_flat.xml": scene_spec(texture=Texture(kind="flat"), model_name="slide_flat"),
     }
     paths = []

@@ -68,10 +68,12 @@ class SkinLayout:
     def block(self, sensordata: np.ndarray, name: str) -> np.ndarray:
         """View of block `name` in sensordata (last axis = model.nsensordata)."""
         if name not in self.blocks:
-            raise KeyError(f"output block {name!r} is not enabled; enabled: {sorted(self.blocks)} "
-                           "(set the plugin's `outputs` attribute)")
+            raise KeyError(
+                f"output block {name!r} is not enabled; enabled: {sorted(self.blocks)} "
+                "(set the plugin's `outputs` attribute)"
+            )
         s = self.blocks[name]
-        return sensordata[..., self.sensor_adr + s.start:self.sensor_adr + s.stop]
+        return sensordata[..., self.sensor_adr + s.start : self.sensor_adr + s.stop]
 
     def last_evaluation(self, data: mujoco.MjData) -> dict:
         """Diagnostics of this instance's last evaluation in ``data`` (the
@@ -87,8 +89,9 @@ class SkinLayout:
 
 
 def _find_instance(model: mujoco.MjModel, instance: int | str | None) -> int:
-    plugin_sensors = [i for i in range(model.nsensor)
-                      if model.sensor_type[i] == mujoco.mjtSensor.mjSENS_PLUGIN]
+    plugin_sensors = [
+        i for i in range(model.nsensor) if model.sensor_type[i] == mujoco.mjtSensor.mjSENS_PLUGIN
+    ]
     instances = [int(model.sensor_plugin[i]) for i in plugin_sensors]
     if instance is None:
         if not instances:

@@ -39,12 +39,15 @@ def grid(length_m: float, width_m: float, resolution_m: float) -> tuple[np.ndarr
     positive("resolution_m", resolution_m)
     ncol = int(round(length_m / resolution_m)) + 1
     nrow = int(round(width_m / resolution_m)) + 1
-    return (np.linspace(-length_m / 2, length_m / 2, ncol),
-            np.linspace(-width_m / 2, width_m / 2, nrow))
+    return (
+        np.linspace(-length_m / 2, length_m / 2, ncol),
+        np.linspace(-width_m / 2, width_m / 2, nrow),
+    )
 
 
-def grating(x_m: np.ndarray, period_m: float, plateau_m: float, height_m: float,
-            edge_m: float = 0.0) -> np.ndarray:
+def grating(
+    x_m: np.ndarray, period_m: float, plateau_m: float, height_m: float, edge_m: float = 0.0
+) -> np.ndarray:
     """Height along x of plateaux centred on x = k * period."""
     positive("period_m", period_m)
     positive("plateau_m", plateau_m)
@@ -52,8 +55,10 @@ def grating(x_m: np.ndarray, period_m: float, plateau_m: float, height_m: float,
     if not plateau_m < period_m:
         raise ValueError(f"plateau_m = {plateau_m} must be < period_m = {period_m}")
     if not 0 <= edge_m <= min(plateau_m, period_m - plateau_m) / 2:
-        raise ValueError(f"edge_m = {edge_m} is out of range; valid range "
-                         f"[0, {min(plateau_m, period_m - plateau_m) / 2}]")
+        raise ValueError(
+            f"edge_m = {edge_m} is out of range; valid range "
+            f"[0, {min(plateau_m, period_m - plateau_m) / 2}]"
+        )
     D, w, e = period_m, plateau_m, edge_m
     u = np.abs((np.asarray(x_m, float) + 0.5 * D) % D - 0.5 * D)
     h = np.where(u <= w / 2 - e, 1.0, 0.0)
@@ -64,10 +69,18 @@ def grating(x_m: np.ndarray, period_m: float, plateau_m: float, height_m: float,
     return height_m * h
 
 
-def random_rough(nrow: int, ncol: int, resolution_m: float, rms_m: float, *,
-                 corr_length_m: float | None = None, hurst: float | None = None,
-                 rolloff_m: float | None = None, cutoff_m: float | None = None,
-                 seed: int = 0) -> np.ndarray:
+def random_rough(
+    nrow: int,
+    ncol: int,
+    resolution_m: float,
+    rms_m: float,
+    *,
+    corr_length_m: float | None = None,
+    hurst: float | None = None,
+    rolloff_m: float | None = None,
+    cutoff_m: float | None = None,
+    seed: int = 0,
+) -> np.ndarray:
     """Isotropic Gaussian random height map with RMS height rms_m.
 
     Spectrum: either Gaussian ``C(q) ~ exp(-(q l)^2 / 4)`` (autocorrelation
@@ -89,9 +102,11 @@ def random_rough(nrow: int, ncol: int, resolution_m: float, rms_m: float, *,
     if corr_length_m is not None:
         positive("corr_length_m", corr_length_m)
         if corr_length_m < 2 * resolution_m:
-            raise ValueError(f"corr_length_m = {corr_length_m} must be >= 2 x resolution_m "
-                             f"({2 * resolution_m}) to be resolved")
-        amplitude = np.exp(-(q * corr_length_m) ** 2 / 8)  # sqrt of the spectrum
+            raise ValueError(
+                f"corr_length_m = {corr_length_m} must be >= 2 x resolution_m "
+                f"({2 * resolution_m}) to be resolved"
+            )
+        amplitude = np.exp(-((q * corr_length_m) ** 2) / 8)  # sqrt of the spectrum
     else:
         if not 0 < hurst <= 1:
             raise ValueError(f"hurst = {hurst} is out of range; valid range (0, 1]")
@@ -110,8 +125,14 @@ def random_rough(nrow: int, ncol: int, resolution_m: float, rms_m: float, *,
     return h * (rms_m / h.std())
 
 
-def dots(x_m: np.ndarray, y_m: np.ndarray, spacing_m: float, radius_m: float, height_m: float,
-         lattice: str = "hex") -> np.ndarray:
+def dots(
+    x_m: np.ndarray,
+    y_m: np.ndarray,
+    spacing_m: float,
+    radius_m: float,
+    height_m: float,
+    lattice: str = "hex",
+) -> np.ndarray:
     """Raised dots (spherical caps of base radius radius_m and height
     height_m) on a square or hexagonal lattice of the given spacing."""
     positive("spacing_m", spacing_m)
@@ -177,8 +198,10 @@ class Texture:
 
     def validate(self) -> None:
         if self.kind not in ("grating", "flat", "random", "dots", "mesh"):
-            raise ValueError(f"texture kind {self.kind!r} is not one of "
-                             "'grating', 'random', 'dots', 'flat', 'mesh'")
+            raise ValueError(
+                f"texture kind {self.kind!r} is not one of "
+                "'grating', 'random', 'dots', 'flat', 'mesh'"
+            )
         if self.kind == "mesh" and self.mesh is None:
             raise ValueError("texture kind 'mesh' needs `mesh` (mjtouch.scene.meshes.from_mesh)")
         positive("height_m", self.height_m)
@@ -189,14 +212,20 @@ class Texture:
             positive("period_m", self.period_m)
             plateau = self.plateau
             if not 0 < plateau < self.period_m:
-                raise ValueError(f"plateau_m = {plateau} is out of range; valid range "
-                                 f"(0, period_m = {self.period_m})")
+                raise ValueError(
+                    f"plateau_m = {plateau} is out of range; valid range "
+                    f"(0, period_m = {self.period_m})"
+                )
             if not 0 <= self.edge_m <= min(plateau, self.period_m - plateau) / 2:
-                raise ValueError(f"edge_m = {self.edge_m} is out of range; valid range "
-                                 f"[0, {min(plateau, self.period_m - plateau) / 2}]")
+                raise ValueError(
+                    f"edge_m = {self.edge_m} is out of range; valid range "
+                    f"[0, {min(plateau, self.period_m - plateau) / 2}]"
+                )
             if self.period_m < 4 * self.resolution_m:
-                raise ValueError(f"period_m = {self.period_m} needs at least 4 height-field "
-                                 f"samples; lower resolution_m (now {self.resolution_m})")
+                raise ValueError(
+                    f"period_m = {self.period_m} needs at least 4 height-field "
+                    f"samples; lower resolution_m (now {self.resolution_m})"
+                )
         if self.kind == "random":
             positive("rms_m", self.rms_m)
             positive("corr_length_m", self.corr_length_m)
@@ -204,8 +233,10 @@ class Texture:
             positive("dot_spacing_m", self.dot_spacing_m)
             positive("dot_radius_m", self.dot_radius_m)
         if self.kind != "flat" and self.nrow * self.ncol > 8_000_000:
-            raise ValueError(f"texture needs {self.nrow} x {self.ncol} height-field samples; "
-                             "valid up to 8e6 (shrink the plate or coarsen resolution_m)")
+            raise ValueError(
+                f"texture needs {self.nrow} x {self.ncol} height-field samples; "
+                "valid up to 8e6 (shrink the plate or coarsen resolution_m)"
+            )
 
     @property
     def plateau(self) -> float:
@@ -241,8 +272,14 @@ class Texture:
         if self.kind in ("grating", "flat"):
             return np.tile(self.profile(x), (2, 1))
         if self.kind == "random":
-            h = random_rough(self.nrow, self.ncol, self.resolution_m, self.rms_m,
-                                      corr_length_m=self.corr_length_m, seed=self.seed)
+            h = random_rough(
+                self.nrow,
+                self.ncol,
+                self.resolution_m,
+                self.rms_m,
+                corr_length_m=self.corr_length_m,
+                seed=self.seed,
+            )
             return h - h.min()
         y = np.linspace(-self.width_m / 2, self.width_m / 2, self.nrow)
         return dots(x, y, self.dot_spacing_m, self.dot_radius_m, self.height_m)

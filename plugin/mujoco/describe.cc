@@ -23,8 +23,9 @@ extern "C" __attribute__((visibility("default"))) int mjtouch_instance_abi_versi
 
 static_assert(MJTOUCH_NUM_CLASSES == mjtouch::kNumClasses, "mjtouch.h: classes");
 static_assert(MJTOUCH_NUM_BLOCKS == mjtouch::kNumOutputs, "mjtouch.h: output blocks");
-static_assert(MJTOUCH_BLOCK_PRESSURE == mjtouch::kOutPressure && MJTOUCH_BLOCK_RATE ==
-              mjtouch::kOutRate, "mjtouch.h: output block order");
+static_assert(MJTOUCH_BLOCK_PRESSURE == mjtouch::kOutPressure &&
+                  MJTOUCH_BLOCK_RATE == mjtouch::kOutRate,
+              "mjtouch.h: output block order");
 
 #define MJTOUCH_EXPORT extern "C" __attribute__((visibility("default")))
 
@@ -115,16 +116,16 @@ MJTOUCH_EXPORT int mjtouch_describe(const mjModel* m, int instance, char* buf, i
     for (int b = 0; b < kNumOutputs; ++b) {
       const int size = SkinModel::BlockSize(cfg, nrec, b);
       if (!size) continue;
-      js << (first ? "" : ", ") << "{\"name\": \"" << OutputName(b) << "\", \"offset\": "
-         << offset << ", \"size\": " << size << "}";
+      js << (first ? "" : ", ") << "{\"name\": \"" << OutputName(b) << "\", \"offset\": " << offset
+         << ", \"size\": " << size << "}";
       offset += size;
       first = false;
     }
     js << "], \"receptors\": [";
     for (int r = 0; r < nrec; ++r) {
       const auto& s = sites[r];
-      js << (r ? ", " : "") << "[\"" << ClassName(s.cls) << "\", " << s.x_m << ", " << s.y_m
-         << ", " << s.depth_m << "]";
+      js << (r ? ", " : "") << "[\"" << ClassName(s.cls) << "\", " << s.x_m << ", " << s.y_m << ", "
+         << s.depth_m << "]";
     }
     js << "], \"oversample\": " << cfg.oversample << ", \"quantity\": [";
     for (int c = 0; c < kNumClasses; ++c)
@@ -150,8 +151,9 @@ MJTOUCH_EXPORT int mjtouch_describe(const mjModel* m, int instance, char* buf, i
 // out8 = stress path (1 direct, 2 fft, 3 tree), elastic iterations,
 // converged, last relative change, contact cells, FFT size x, y, active
 // traction cells. Returns 0, or 1 if the instance has no plugin data.
-extern "C" __attribute__((visibility("default"))) int mjtouch_last_evaluation(
-    const mjData* d, int instance, double* out8) {
+extern "C" __attribute__((visibility("default"))) int mjtouch_last_evaluation(const mjData* d,
+                                                                              int instance,
+                                                                              double* out8) {
   using namespace mjtouch;
   const SkinPlugin* p = SkinPlugin::Owned(d, instance);
   if (!p) return 1;

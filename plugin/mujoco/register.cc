@@ -12,9 +12,10 @@ extern "C" __attribute__((visibility("default"))) int mjtouch_built_mujoco_versi
 // editable build next to an installed one) must not register twice.
 mjPLUGIN_LIB_INIT(mjtouch) {
   if (mj_version() != mjVERSION_HEADER) {
-    mju_warning("mjtouch: plugin built for MuJoCo %d but running MuJoCo %d; not registered. "
-                "Reinstall mjtouch (pip install .) against this mujoco.",
-                mjVERSION_HEADER, mj_version());
+    mju_warning(
+        "mjtouch: plugin built for MuJoCo %d but running MuJoCo %d; not registered. "
+        "Reinstall mjtouch (pip install .) against this mujoco.",
+        mjVERSION_HEADER, mj_version());
     return;
   }
   if (mjp_getPlugin(mjtouch::SkinPlugin::kName, nullptr) == nullptr) {

@@ -70,7 +70,10 @@ CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mj
       mjtNum best = -1;
       for (int a = 0; a < 3; ++a) {
         const mjtNum score = std::abs(loc[a]) / size[a];
-        if (score > best) { best = score; axis = a; }
+        if (score > best) {
+          best = score;
+          axis = a;
+        }
       }
       const mjtNum sign = loc[axis] >= 0 ? 1 : -1;
       // Face frame columns (x', y', z') in box coordinates, right-handed,
@@ -166,8 +169,7 @@ std::string CheckHeightFieldSamples(const mjModel* m, int geom) {
                     "mjtouch.skin: height field '%s' (geom '%s') has sample %g at row %d, col %d "
                     "of %d x %d (mjModel.hfield_data); valid: finite (MuJoCo normalises "
                     "elevation to [0, 1])",
-                    hname ? hname : "(unnamed)", gname ? gname : "(unnamed)", v, r, c, nrow,
-                    ncol);
+                    hname ? hname : "(unnamed)", gname ? gname : "(unnamed)", v, r, c, nrow, ncol);
       return buf;
     }
   return "";
@@ -199,8 +201,7 @@ SkinPlugin* SkinPlugin::OwnedOrRebuilt(const mjModel* m, mjData* d, int instance
   return p;
 }
 
-bool SkinPlugin::ParseConfig(const mjModel* m, int instance, SkinConfig* cfg,
-                             std::string* error) {
+bool SkinPlugin::ParseConfig(const mjModel* m, int instance, SkinConfig* cfg, std::string* error) {
   return ParseSkinConfig([&](const char* key) { return Config(m, instance, key); }, cfg, error);
 }
 
@@ -226,14 +227,16 @@ bool SkinPlugin::ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int
       const char* b = mj_id2name(m, mjOBJ_SENSOR, i);
       *error = std::string("mjtouch.skin: plugin instance '") + (iname ? iname : "(unnamed)") +
                "' is used by two sensors, '" + (a ? a : "(unnamed)") + "' and '" +
-               (b ? b : "(unnamed)") + "'; valid: one sensor per instance (give each sensor "
+               (b ? b : "(unnamed)") +
+               "'; valid: one sensor per instance (give each sensor "
                "its own <instance>)";
       return false;
     }
   }
   if (m->sensor_objtype[*sensor_id] != mjOBJ_GEOM) {
-    *error = "mjtouch.skin: the sensor must name the fingertip pad with objtype=\"geom\" "
-             "objname=\"...\"";
+    *error =
+        "mjtouch.skin: the sensor must name the fingertip pad with objtype=\"geom\" "
+        "objname=\"...\"";
     return false;
   }
   *pad_geom = m->sensor_objid[*sensor_id];
@@ -291,14 +294,18 @@ bool SkinPlugin::ResolveTextures(const mjModel* m, int instance, const SkinConfi
       return false;
     }
     if (!renderable(g)) {
-      *error = Fmt("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: an "
-                   "sdf geom; valid: plane, hfield, sphere, capsule, ellipsoid, cylinder, box, "
-                   "mesh", name.c_str());
+      *error =
+          Fmt("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: an "
+              "sdf geom; valid: plane, hfield, sphere, capsule, ellipsoid, cylinder, box, "
+              "mesh",
+              name.c_str());
       return false;
     }
     if (on_pad(g)) {
-      *error = Fmt("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: it "
-                   "moves with the pad (same body)", name.c_str());
+      *error =
+          Fmt("mjtouch.skin: attribute `texture` geom '%s' cannot be rendered against: it "
+              "moves with the pad (same body)",
+              name.c_str());
       return false;
     }
     textures->push_back(g);
@@ -306,17 +313,19 @@ bool SkinPlugin::ResolveTextures(const mjModel* m, int instance, const SkinConfi
   if (cfg.texture_group >= 0) {
     for (int g = 0; g < m->ngeom; ++g) {
       // Geoms on the pad's own body (e.g. its visual meshes) are not textures->
-      if (m->geom_group[g] != cfg.texture_group || m->geom_contype[g] ||
-          m->geom_conaffinity[g] || on_pad(g))
+      if (m->geom_group[g] != cfg.texture_group || m->geom_contype[g] || m->geom_conaffinity[g] ||
+          on_pad(g))
         continue;
       if (!renderable(g)) {
         const char* gname = mj_id2name(m, mjOBJ_GEOM, g);
-        *error = Fmt("mjtouch.skin: geom '%s' in `texture_group` %d cannot be rendered against "
-                     "(an sdf geom; move it to another group)", gname ? gname : "(unnamed)",
-                     cfg.texture_group);
+        *error =
+            Fmt("mjtouch.skin: geom '%s' in `texture_group` %d cannot be rendered against "
+                "(an sdf geom; move it to another group)",
+                gname ? gname : "(unnamed)", cfg.texture_group);
         return false;
       }
-      if (std::find(textures->begin(), textures->end(), g) == textures->end()) textures->push_back(g);
+      if (std::find(textures->begin(), textures->end(), g) == textures->end())
+        textures->push_back(g);
     }
   }
   // Height fields the skin renders (textures, and hfields that can collide
@@ -400,8 +409,7 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
 void SkinPlugin::Reset(const mjModel* m, mjtNum* plugin_state, int instance) {
   ResetState(*model_, plugin_state);
   touching_ = false;
-  last_spike_time_s_.assign(model_->receptors().size(),
-                            -std::numeric_limits<double>::infinity());
+  last_spike_time_s_.assign(model_->receptors().size(), -std::numeric_limits<double>::infinity());
 }
 
 void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
@@ -419,9 +427,12 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     const mjContact& c = d->contact[i];
     if (c.exclude || c.efc_address < 0) continue;
     int other;
-    if (c.geom[0] == pad) other = c.geom[1];
-    else if (c.geom[1] == pad) other = c.geom[0];
-    else continue;
+    if (c.geom[0] == pad)
+      other = c.geom[1];
+    else if (c.geom[1] == pad)
+      other = c.geom[0];
+    else
+      continue;
     if (other < 0) continue;
     // mj_contactForce: contact frame (normal first); the normal points from
     // geom[0] to geom[1], so the force on geom[1] is +frame^T f.
@@ -449,8 +460,8 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     for (const auto& s : in.surfaces) seen = seen || s.id == other;
     const HeightFieldCache* field = HeightField(m, other);
     if (!seen && !(field && field->bad)) {
-      in.surfaces.push_back(SurfaceForGeom(m, d, other, ppos, c.pos, n_into, field,
-                                           MeshCaster(m, other)));
+      in.surfaces.push_back(
+          SurfaceForGeom(m, d, other, ppos, c.pos, n_into, field, MeshCaster(m, other)));
     }
   }
   if (in.in_contact) {
@@ -472,9 +483,10 @@ const MeshRayCaster* SkinPlugin::MeshCaster(const mjModel* m, int geom) {
   if (id < 0) return nullptr;
   auto it = meshes_.find(id);
   if (it == meshes_.end()) {
-    it = meshes_.emplace(id, std::make_unique<MeshRayCaster>(
-                                 m->mesh_vert + 3 * m->mesh_vertadr[id], m->mesh_vertnum[id],
-                                 m->mesh_face + 3 * m->mesh_faceadr[id], m->mesh_facenum[id]))
+    it = meshes_
+             .emplace(id, std::make_unique<MeshRayCaster>(
+                              m->mesh_vert + 3 * m->mesh_vertadr[id], m->mesh_vertnum[id],
+                              m->mesh_face + 3 * m->mesh_faceadr[id], m->mesh_facenum[id]))
              .first;
   }
   return it->second.get();
@@ -498,8 +510,10 @@ const HeightFieldCache* SkinPlugin::HeightField(const mjModel* m, int geom) {
   if (c.bad) {
     // Checked at init; an edit since: warned once, the field left out.
     if (!warned_height_field_)
-      mju_warning("%s; it was edited after the MjData was made: the skin leaves this height "
-                  "field out until its samples are finite (warned once)", bad.c_str());
+      mju_warning(
+          "%s; it was edited after the MjData was made: the skin leaves this height "
+          "field out until its samples are finite (warned once)",
+          bad.c_str());
     warned_height_field_ = true;
     return &c;
   }
@@ -519,12 +533,13 @@ void SkinPlugin::WarnOnce(const mjModel* m, const double* state) {
     warned_beyond_skin_ = true;
     const SkinConfig& cfg = model_->config();
     const bool stack = cfg.layered && cfg.base.rigid;
-    mju_warning("mjtouch.skin: the indentation %g m at time %g s exceeds %s (%g m): the linear "
-                "skin is past its range there (the bone or the pad would carry the load); the "
-                "force block's last column flags such steps (warned once)",
-                state[kStContactDepth], state[kStLastTime],
-                stack ? "the skin stack over the rigid base" : "the pad's half-height",
-                IndentationLimit(cfg));
+    mju_warning(
+        "mjtouch.skin: the indentation %g m at time %g s exceeds %s (%g m): the linear "
+        "skin is past its range there (the bone or the pad would carry the load); the "
+        "force block's last column flags such steps (warned once)",
+        state[kStContactDepth], state[kStLastTime],
+        stack ? "the skin stack over the rigid base" : "the pad's half-height",
+        IndentationLimit(cfg));
   }
 }
 
@@ -621,11 +636,11 @@ void SkinPlugin::RegisterPlugin() {
   plugin.compute = +[](const mjModel* m, mjData* d, int instance, int capability_bit) {
     if (SkinPlugin* p = OwnedOrRebuilt(m, d, instance)) p->Compute(m, d, instance);
   };
-  plugin.visualize = +[](const mjModel* m, mjData* d, const mjvOption* opt, mjvScene* scn,
-                         int instance) {
-    if (const SkinPlugin* p = OwnedOrRebuilt(m, d, instance))
-      p->Visualize(m, d, opt, scn, instance);
-  };
+  plugin.visualize =
+      +[](const mjModel* m, mjData* d, const mjvOption* opt, mjvScene* scn, int instance) {
+        if (const SkinPlugin* p = OwnedOrRebuilt(m, d, instance))
+          p->Visualize(m, d, opt, scn, instance);
+      };
   mjp_registerPlugin(&plugin);
 }
 

@@ -80,7 +80,7 @@ class SkinPlugin {
   StepInput input_;
   Workspace workspace_;
   bool warned_beyond_skin_ = false, warned_height_field_ = false;
-    std::map<int, HeightFieldCache> hfields_;  // by hfield id, built on first use
+  std::map<int, HeightFieldCache> hfields_;               // by hfield id, built on first use
   std::map<int, std::unique_ptr<MeshRayCaster>> meshes_;  // by mesh id, built on first use
   // Drawing only (never read by the physics): the `visual` attribute, the
   // contact state of the last evaluation and each receptor's last spike time.

@@ -13,13 +13,13 @@
 namespace mjtouch {
 namespace {
 
-constexpr int kMaxTilesPerSide = 32;       // finer grids are drawn in binned tiles
-constexpr double kMinRelPressure = 0.02;   // tiles under 2% of the peak are not drawn
-constexpr double kFlashS = 0.03;           // s a spike stays lit (~2 frames at 60 Hz)
-constexpr double kTileHalfThickM = 2e-5;   // m
-constexpr double kAboveGapM = 2e-3;        // m: the `above` copy floats this far over the pad
-constexpr double kLitRadiusM = 1.2e-4;     // m, a receptor that just fired
-constexpr double kIdleRadiusM = 4e-5;      // m, a quiet receptor site
+constexpr int kMaxTilesPerSide = 32;      // finer grids are drawn in binned tiles
+constexpr double kMinRelPressure = 0.02;  // tiles under 2% of the peak are not drawn
+constexpr double kFlashS = 0.03;          // s a spike stays lit (~2 frames at 60 Hz)
+constexpr double kTileHalfThickM = 2e-5;  // m
+constexpr double kAboveGapM = 2e-3;       // m: the `above` copy floats this far over the pad
+constexpr double kLitRadiusM = 1.2e-4;    // m, a receptor that just fired
+constexpr double kIdleRadiusM = 4e-5;     // m, a quiet receptor site
 
 // Heat ramp (low -> high): dark red, red, orange, yellow, near white.
 void HeatColor(double u, float rgba[4]) {
@@ -36,7 +36,7 @@ constexpr float kClassRgba[kNumClasses][4] = {
 constexpr float kIdleRgba[4] = {0.35f, 0.35f, 0.38f, 1.0f};
 constexpr float kBackingRgba[4] = {0.08f, 0.08f, 0.1f, 0.55f};
 constexpr float kRidgeRgba[4] = {0.85f, 0.85f, 0.9f, 0.6f};  // ridge crests, `above` copy
-constexpr double kRidgeLineWidthPx = 1.5;                     // ridge crest lines, pixels
+constexpr double kRidgeLineWidthPx = 1.5;                    // ridge crest lines, pixels
 
 bool AddGeom(mjvScene* scn, int type, const mjtNum size[3], const mjtNum pos[3],
              const mjtNum mat[9], const float rgba[4], int sensor_id) {

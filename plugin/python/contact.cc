@@ -17,9 +17,9 @@
 #include "contact/compliance.h"
 #include "contact/contact_solver.h"
 #include "contact/pressure.h"
+#include "python/convert.h"
 #include "substrate/substrate.h"
 #include "surface/surface.h"
-#include "python/convert.h"
 
 namespace mjtouch::py {
 namespace {
@@ -33,8 +33,8 @@ std::string Num(double v) {
 }
 
 void RequirePositive(double v, const char* what, const char* name) {
-  if (!(v > 0)) Fail(std::string(what) + ": invalid arguments: " + name + " = " + Num(v) +
-                     " must be > 0");
+  if (!(v > 0))
+    Fail(std::string(what) + ": invalid arguments: " + name + " = " + Num(v) + " must be > 0");
 }
 
 RidgeProfile ParseProfile(const std::string& profile) {
@@ -76,8 +76,7 @@ Out<float> HalfSpaceComplianceTable(int n, double pitch_m, double young_pa, doub
 std::tuple<Out<double>, nb::dict> Solved(const mjtouch::SurfaceCompliance& K, const F64_2& gap_m,
                                          const F64_2& initial_pa, int nx, int ny, double force_n,
                                          double tolerance, int max_iterations,
-                                         const std::string& method,
-                                         const std::string& precision) {
+                                         const std::string& method, const std::string& precision) {
   if (precision != "double" && precision != "float")
     Fail("elastic_pressure: invalid arguments: precision = '" + precision +
          "' is not one of 'double' (the reference), 'float' (the plugin's default FFTs)");
@@ -118,10 +117,9 @@ void CheckSolve(const F64_2& gap_m, const F64_2& initial_pa, double pitch_m, dou
 }
 
 std::tuple<Out<double>, nb::dict> ElasticHalfSpace(const F64_2& gap_m, const F64_2& initial_pa,
-                                                   double pitch_m, double force_n,
-                                                   double young_pa, double poisson, bool periodic,
-                                                   double tolerance, int max_iterations,
-                                                   const std::string& method,
+                                                   double pitch_m, double force_n, double young_pa,
+                                                   double poisson, bool periodic, double tolerance,
+                                                   int max_iterations, const std::string& method,
                                                    const std::string& precision) {
   CheckSolve(gap_m, initial_pa, pitch_m, tolerance, max_iterations);
   RequirePositive(young_pa, "elastic_pressure", "young_pa");
@@ -140,8 +138,7 @@ std::tuple<Out<double>, nb::dict> ElasticHalfSpace(const F64_2& gap_m, const F64
   }
   if (nx != ny) Fail("non-periodic grids must be square, got shape " + ShapeOf(gap_m));
   return Solved(*HalfSpaceCompliance(young_pa, poisson, pitch_m, nx), gap_m, initial_pa, nx, nx,
-                force_n, tolerance, max_iterations, method,
-                  precision);
+                force_n, tolerance, max_iterations, method, precision);
 }
 
 std::tuple<Out<double>, nb::dict> ElasticTable(const F64_2& gap_m, const F64_2& initial_pa,
@@ -160,8 +157,7 @@ std::tuple<Out<double>, nb::dict> ElasticTable(const F64_2& gap_m, const F64_2& 
          ShapeOf(table));
   const mjtouch::SurfaceCompliance K(n, pitch_m,
                                      std::vector<float>(table.data(), table.data() + L * L));
-  return Solved(K, gap_m, initial_pa, n, n, force_n, tolerance, max_iterations, method,
-                  precision);
+  return Solved(K, gap_m, initial_pa, n, n, force_n, tolerance, max_iterations, method, precision);
 }
 
 // surfaces: one row of 20 per counter-surface: type (CounterSurface::Type),
@@ -190,8 +186,8 @@ std::tuple<Out<double>, Out<double>> Render(const F64_2& skin_z_m, double pitch_
   return {ToNumpy(std::move(g), {N, N}), ToNumpy(std::move(c), {N, N})};
 }
 
-Out<double> RidgeMean(const F64_1& s_m, const std::string& profile, double pitch_m,
-                      double height_m, double angle_rad, double cell_m) {
+Out<double> RidgeMean(const F64_1& s_m, const std::string& profile, double pitch_m, double height_m,
+                      double angle_rad, double cell_m) {
   Ridges r;
   r.profile = ParseProfile(profile);
   r.pitch_m = pitch_m;
@@ -268,8 +264,8 @@ std::tuple<Out<double>, Out<double>, Out<double>> Splat(const F64_2& contacts, i
 
 }  // namespace
 
-void DecodeSurfaces(const F64_2& surfaces, const F32_2& hfield,
-                    std::vector<CounterSurface>* out, std::vector<std::vector<double>>* out_prefixes) {
+void DecodeSurfaces(const F64_2& surfaces, const F32_2& hfield, std::vector<CounterSurface>* out,
+                    std::vector<std::vector<double>>* out_prefixes) {
   if (surfaces.shape(1) != 20)
     Fail("surfaces must have shape (nsurface, 20), got shape " + ShapeOf(surfaces));
   const size_t ns = surfaces.shape(0);
@@ -294,8 +290,10 @@ void DecodeSurfaces(const F64_2& surfaces, const F32_2& hfield,
     s.max_height_m = d[19];
     if (s.type == CounterSurface::Type::kHeightField) {
       if (hfield.shape(0) < 2 || hfield.shape(1) < 2)
-        Fail("surface " + std::to_string(k) + ": a height field needs hfield with at least 2 x 2 "
-             "samples, got shape " + ShapeOf(hfield));
+        Fail("surface " + std::to_string(k) +
+             ": a height field needs hfield with at least 2 x 2 "
+             "samples, got shape " +
+             ShapeOf(hfield));
       s.nrow = static_cast<int>(hfield.shape(0));
       s.ncol = static_cast<int>(hfield.shape(1));
       s.samples = hfield.data();
@@ -308,10 +306,9 @@ void DecodeSurfaces(const F64_2& surfaces, const F32_2& hfield,
   }
 }
 
-
 void BindContact(nb::module_& m) {
-  m.def("winkler_pressure", &Winkler, nb::arg("gap_m").noconvert(), nb::arg("coverage").noconvert(), nb::arg("pitch_m"),
-        nb::arg("stiffness_pa_per_m"), nb::arg("force_n"),
+  m.def("winkler_pressure", &Winkler, nb::arg("gap_m").noconvert(), nb::arg("coverage").noconvert(),
+        nb::arg("pitch_m"), nb::arg("stiffness_pa_per_m"), nb::arg("force_n"),
         nb::arg("approach_guess_m") = std::numeric_limits<double>::quiet_NaN(),
         nb::arg("reference") = false,
         "Winkler pressure (n x n float32, Pa) whose integral equals force_n on the\n"
@@ -322,36 +319,37 @@ void BindContact(nb::module_& m) {
         nb::arg("young_pa"), nb::arg("poisson"),
         "Homogeneous half-space surface compliance table ((2n-1) x (2n-1) float32,\n"
         "m/Pa), indexed [dj + n - 1, di + n - 1].");
-  m.def("elastic_pressure", &ElasticHalfSpace, nb::arg("gap_m").noconvert(), nb::arg("initial_pa").noconvert(),
-        nb::arg("pitch_m"), nb::arg("force_n"), nb::arg("young_pa"), nb::arg("poisson"),
-        nb::arg("periodic"), nb::arg("tolerance"), nb::arg("max_iterations"),
-        nb::arg("method") = "pcg", nb::arg("precision") = "double",
+  m.def("elastic_pressure", &ElasticHalfSpace, nb::arg("gap_m").noconvert(),
+        nb::arg("initial_pa").noconvert(), nb::arg("pitch_m"), nb::arg("force_n"),
+        nb::arg("young_pa"), nb::arg("poisson"), nb::arg("periodic"), nb::arg("tolerance"),
+        nb::arg("max_iterations"), nb::arg("method") = "pcg", nb::arg("precision") = "double",
         "Boundary-element contact of a homogeneous half-space skin (young_pa, poisson)\n"
         "against the gap field (ny x nx, m; inf: cannot touch) under force_n,\n"
         "warm-started from initial_pa. Non-periodic grids square; periodic sizes\n"
         "products of 2, 3, 5. method: 'pcg' (preconditioned CG) or 'pk' (Polonsky &\n"
         "Keer, the reference). precision: of the operator's FFTs, 'double' (the\n"
         "reference) or 'float' (the plugin's default). Returns (pressure Pa, stats dict).");
-  m.def("elastic_pressure_table", &ElasticTable, nb::arg("gap_m").noconvert(), nb::arg("initial_pa").noconvert(),
-        nb::arg("pitch_m"), nb::arg("force_n"), nb::arg("compliance_m_per_pa").noconvert(),
-        nb::arg("tolerance"), nb::arg("max_iterations"), nb::arg("method") = "pcg",
-        nb::arg("precision") = "double",
+  m.def("elastic_pressure_table", &ElasticTable, nb::arg("gap_m").noconvert(),
+        nb::arg("initial_pa").noconvert(), nb::arg("pitch_m"), nb::arg("force_n"),
+        nb::arg("compliance_m_per_pa").noconvert(), nb::arg("tolerance"), nb::arg("max_iterations"),
+        nb::arg("method") = "pcg", nb::arg("precision") = "double",
         "The same on an n x n non-periodic grid for any skin given by its surface\n"
         "compliance table ((2n-1) x (2n-1) float32, m/Pa).");
-  m.def("render_gap", &Render, nb::arg("skin_z_m").noconvert(), nb::arg("pitch_m"), nb::arg("surfaces").noconvert(),
-        nb::arg("pad_pos"), nb::arg("pad_mat"), nb::arg("hfield").noconvert(), nb::arg("area_average"), nb::arg("fast_paths") = true,
+  m.def("render_gap", &Render, nb::arg("skin_z_m").noconvert(), nb::arg("pitch_m"),
+        nb::arg("surfaces").noconvert(), nb::arg("pad_pos"), nb::arg("pad_mat"),
+        nb::arg("hfield").noconvert(), nb::arg("area_average"), nb::arg("fast_paths") = true,
         "Stage 1: (gap m, inf where no surface; coverage) of each cell of an n x n\n"
         "skin (pad-frame heights skin_z_m) at the pad pose (pad_pos, pad_mat row-major)\n"
         "against surfaces (nsurface x 20: type code, pos 3, mat 9, size 3, half 2,\n"
         "elevation, max height); height fields read hfield (nrow x ncol float32).\n"
         "fast_paths=False: the general per-cell code (bit-identical reference).");
-  m.def("ridge_cell_mean", &RidgeMean, nb::arg("s_m").noconvert(), nb::arg("profile"), nb::arg("pitch_m"),
-        nb::arg("height_m"), nb::arg("angle_rad"), nb::arg("cell_m"),
+  m.def("ridge_cell_mean", &RidgeMean, nb::arg("s_m").noconvert(), nb::arg("profile"),
+        nb::arg("pitch_m"), nb::arg("height_m"), nb::arg("angle_rad"), nb::arg("cell_m"),
         "Ridge relief (m, protrusion positive) at distances s_m (1D) along the ridge\n"
         "normal, averaged exactly over a square cell of side cell_m (0: point value).");
   m.def("pad_surface", &PadSurface, nb::arg("shape"), nb::arg("half_extents_m"), nb::arg("n"),
-        nb::arg("pitch_m"), nb::arg("profile"), nb::arg("ridge_pitch_m"),
-        nb::arg("ridge_height_m"), nb::arg("ridge_angle_rad"),
+        nb::arg("pitch_m"), nb::arg("profile"), nb::arg("ridge_pitch_m"), nb::arg("ridge_height_m"),
+        nb::arg("ridge_angle_rad"),
         "Cell-averaged skin height (pad frame z, m; inf outside the pad), n x n [j, i],\n"
         "of a pad shape ('sphere', 'ellipsoid', 'capsule', 'box'); ridges off when\n"
         "ridge_height_m <= 0.");

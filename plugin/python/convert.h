@@ -98,8 +98,8 @@ inline std::pair<const float*, const float*> ShearFields(const std::optional<F32
 // (type, pos 3, mat 9, size 3, half_x, half_y, elevation, max_height) and the
 // height field's samples; *prefixes holds the height fields' row integrals
 // that the surfaces point into. Errors name the surface and its valid range.
-void DecodeSurfaces(const F64_2& surfaces, const F32_2& hfield,
-                    std::vector<CounterSurface>* list, std::vector<std::vector<double>>* prefixes);
+void DecodeSurfaces(const F64_2& surfaces, const F32_2& hfield, std::vector<CounterSurface>* list,
+                    std::vector<std::vector<double>>* prefixes);
 
 void BindStages(nb::module_& m);
 void BindContact(nb::module_& m);

@@ -28,14 +28,16 @@ using LastEvaluationFn = int (*)(const void* data, int instance, double* out8);
 // `name` in the already-loaded library at `library` (never loads it).
 void* Symbol(const std::string& library, const char* name) {
   void* handle = dlopen(library.c_str(), RTLD_NOW | RTLD_NOLOAD);
-  if (!handle)
-    Fail("mjtouch's plugin library " + library + " is not loaded; import mjtouch first");
+  if (!handle) Fail("mjtouch's plugin library " + library + " is not loaded; import mjtouch first");
   auto abi = reinterpret_cast<AbiFn>(dlsym(handle, "mjtouch_instance_abi_version"));
   void* symbol = dlsym(handle, name);
   dlclose(handle);  // only drops our reference: the loader keeps the library loaded
   if (!abi || !symbol || abi() != kInstanceAbiVersion)
-    Fail("mjtouch's plugin library " + library + " does not match this mjtouch._core (instance "
-         "interface version " + std::to_string(kInstanceAbiVersion) + " needed); was the "
+    Fail("mjtouch's plugin library " + library +
+         " does not match this mjtouch._core (instance "
+         "interface version " +
+         std::to_string(kInstanceAbiVersion) +
+         " needed); was the "
          "package built? run pip install .");
   return symbol;
 }

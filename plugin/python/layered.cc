@@ -16,11 +16,11 @@
 #include <nanobind/stl/vector.h>
 
 #include "common/thread_pool.h"
+#include "python/convert.h"
 #include "stress/kernel_tables.h"
 #include "stress/stress_field.h"
 #include "stress/stress_tree.h"
 #include "substrate/layered.h"
-#include "python/convert.h"
 
 namespace mjtouch::py {
 namespace {
@@ -49,8 +49,10 @@ void CheckDepth(const LayeredSubstrate& s, double z_m, InterfaceSide side) {
 std::unique_ptr<LayeredSubstrate> Create(const F64_2& layers, bool base_rigid, double base_young,
                                          double base_poisson, const std::string& interface_side) {
   if (layers.shape(1) != 3 || layers.shape(0) == 0)
-    Fail("layers must be a non-empty sequence of (thickness_m, young_pa, poisson) rows, got "
-         "shape " + ShapeOf(layers));
+    Fail(
+        "layers must be a non-empty sequence of (thickness_m, young_pa, poisson) rows, got "
+        "shape " +
+        ShapeOf(layers));
   if (interface_side != "upper" && interface_side != "lower")
     Fail("interface_side '" + interface_side + "' is not one of 'upper', 'lower'");
   std::vector<ElasticLayer> stack;
@@ -78,8 +80,8 @@ Out<double> Transfer(const LayeredSubstrate& s, const F64_1& k_per_m, double z_m
   std::vector<double> out(10 * nk);
   for (size_t i = 0; i < nk; ++i) {
     const LayerTransfer t = s.TransferAt(k_per_m(i), z_m, sd);
-    const double v[10] = {t.p_xixi, t.p_etaeta, t.p_zz, t.p_xiz, t.q_xixi,
-                          t.q_etaeta, t.q_zz, t.q_xiz, t.a_etaz, t.a_xieta};
+    const double v[10] = {t.p_xixi,   t.p_etaeta, t.p_zz,  t.p_xiz,  t.q_xixi,
+                          t.q_etaeta, t.q_zz,     t.q_xiz, t.a_etaz, t.a_xieta};
     std::copy(v, v + 10, out.begin() + 10 * i);
   }
   return ToNumpy(std::move(out), {nk, 10});
@@ -118,7 +120,7 @@ Out<double> StressAt(const LayeredSubstrate& s, const std::string& kind, const s
   std::vector<double> out(6 * np);
   for (size_t i = 0; i < np; ++i) {
     const double x = points_m(i, 0), y = points_m(i, 1), z = points_m(i, 2);
-    const Stress6 v = k == 0 ? s.PointStress(l, x, y, z, sd)
+    const Stress6 v = k == 0   ? s.PointStress(l, x, y, z, sd)
                       : k == 1 ? s.CellStress(l, x, y, z, size_m, sd)
                                : s.DiscStress(l, x, y, z, size_m, sd);
     for (int c = 0; c < 6; ++c) out[6 * i + c] = v[c];
@@ -126,8 +128,7 @@ Out<double> StressAt(const LayeredSubstrate& s, const std::string& kind, const s
   return ToNumpy(std::move(out), {np, 6});
 }
 
-Out<float> Lattice(const LayeredSubstrate& s, double z_m, double pitch_m, int n,
-                   const Side& side) {
+Out<float> Lattice(const LayeredSubstrate& s, double z_m, double pitch_m, int n, const Side& side) {
   const InterfaceSide sd = ParseSide(s, side);
   CheckDepth(s, z_m, sd);
   if (!(pitch_m > 0) || n < 1 || n > 512) Fail("need pitch_m > 0 and 1 <= n <= 512");
@@ -155,13 +156,11 @@ class StressEngine {
       Fail("receptors_ij must have shape (nrec, 2), got shape " + ShapeOf(receptors_ij));
     const size_t nsite = receptors_ij.shape(0);
     if (depth_index.shape(0) != nsite || want_mask.shape(0) != nsite)
-      Fail("depth_index and want_mask need one entry per receptor (" + std::to_string(nsite) +
-           ")");
+      Fail("depth_index and want_mask need one entry per receptor (" + std::to_string(nsite) + ")");
     const int ndepth = static_cast<int>(depths_m.shape(0));
     const Substrate* sub = layered;
     if (!sub) {
-      if (!(poisson > -1 && poisson <= 0.5))
-        Fail("poisson is out of range; valid range (-1, 0.5]");
+      if (!(poisson > -1 && poisson <= 0.5)) Fail("poisson is out of range; valid range (-1, 0.5]");
       halfspace_ = std::make_unique<HalfSpace>(poisson);
       sub = halfspace_.get();
     }
@@ -218,14 +217,10 @@ class StressEngine {
   // (stress nrec x 6 Pa, mean seconds per call over `repeats`, path used,
   // cells with traction). The active cells are found once, outside the
   // timing, as the pressure stage gives them.
-  std::tuple<Out<double>, double, std::string, int> Stress(const F32_2& pressure_pa,
-                                                          std::optional<F32_2> shear_x_pa,
-                                                          std::optional<F32_2> shear_y_pa,
-                                                          const std::string& method,
-                                                          int repeats,
-                                                          std::optional<std::pair<double, double>> slip,
-                                                          bool fold, int threads,
-                                                          bool fold_legacy) {
+  std::tuple<Out<double>, double, std::string, int> Stress(
+      const F32_2& pressure_pa, std::optional<F32_2> shear_x_pa, std::optional<F32_2> shear_y_pa,
+      const std::string& method, int repeats, std::optional<std::pair<double, double>> slip,
+      bool fold, int threads, bool fold_legacy) {
     const StressMethod m = ParseMethod(method);
     if (threads < 1 || threads > ThreadPool::kMaxThreads)
       Fail("threads = " + std::to_string(threads) + " is out of range; valid range [1, " +
@@ -254,8 +249,7 @@ class StressEngine {
     for (int k = 0; k < repeats; ++k)
       used = ComputeStresses(*tables_, spectra_.get(), tree_.get(), m, sites_, runs_,
                              pressure_pa.data(), sx, sy, &scratch_, out_.data(), opt);
-    const double dt =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::vector<double> out(6 * sites_.size());
     for (size_t s = 0; s < sites_.size(); ++s)
       for (int c = 0; c < kNumStress; ++c) out[6 * s + c] = out_[s][c];
@@ -335,9 +329,9 @@ void BindLayered(nb::module_& m) {
       .def(nb::init<const LayeredSubstrate*, double, int, double, const F64_1&, const I32_2&,
                     const I32_1&, const I32_1&, const std::string&, double>(),
            nb::arg("layered").none(), nb::arg("poisson"), nb::arg("n"), nb::arg("pitch_m"),
-           nb::arg("depths_m").noconvert(), nb::arg("receptors_ij").noconvert(), nb::arg("depth_index").noconvert(),
-           nb::arg("want_mask").noconvert(), nb::arg("method"), nb::arg("theta"),
-           nb::keep_alive<1, 2>(),
+           nb::arg("depths_m").noconvert(), nb::arg("receptors_ij").noconvert(),
+           nb::arg("depth_index").noconvert(), nb::arg("want_mask").noconvert(), nb::arg("method"),
+           nb::arg("theta"), nb::keep_alive<1, 2>(),
            "layered: a LayeredSubstrate, or None for a homogeneous half-space of\n"
            "poisson. Sites: cells receptors_ij (nrec x 2), depth_index into depths_m,\n"
            "want_mask bit c for Voigt component c. method 'auto' (FFT spectra where\n"
@@ -359,10 +353,10 @@ void BindLayered(nb::module_& m) {
            nb::arg("folded") = false,
            "The cost model's (direct, fft) seconds per call; folded: the folded direct path.")
       .def("stress", &StressEngine::Stress, nb::arg("pressure_pa").noconvert(),
-           nb::arg("shear_x_pa").noconvert().none() = nb::none(), nb::arg("shear_y_pa").noconvert().none() = nb::none(),
-           nb::arg("method") = "auto", nb::arg("repeats") = 1,
-           nb::arg("slip").none() = nb::none(), nb::arg("fold") = true, nb::arg("threads") = 1,
-           nb::arg("fold_legacy") = false,
+           nb::arg("shear_x_pa").noconvert().none() = nb::none(),
+           nb::arg("shear_y_pa").noconvert().none() = nb::none(), nb::arg("method") = "auto",
+           nb::arg("repeats") = 1, nb::arg("slip").none() = nb::none(), nb::arg("fold") = true,
+           nb::arg("threads") = 1, nb::arg("fold_legacy") = false,
            "(stress nrec x 6 Pa, seconds per call, path used, active cells) from float32\n"
            "traction fields (n x n, [j, i]); shear both or neither. slip = (rx, ry): the\n"
            "shear is (rx, ry) x pressure, so the direct path folds its tables; fold=False:\n"

@@ -20,11 +20,11 @@
 
 #include "afferents/receptors.h"
 #include "pipeline/skin.h"
+#include "python/convert.h"
 #include "stress/kernel_tables.h"
 #include "stress/stress_field.h"
 #include "substrate/substrate.h"
 #include "surface/surface.h"
-#include "python/convert.h"
 
 namespace mjtouch::py {
 namespace {
@@ -85,7 +85,7 @@ Out<double> HalfspaceStress(const F64_2& points_m, const std::string& load, doub
     } else {
       s = l == kLoadPressure ? hs.Boussinesq(x, y, z)
           : l == kLoadShearX ? hs.CerrutiX(x, y, z)
-                                      : hs.CerrutiY(x, y, z);
+                             : hs.CerrutiY(x, y, z);
     }
     for (int c = 0; c < 6; ++c) out[6 * k + c] = s[c];
   }
@@ -157,8 +157,8 @@ Out<double> HfieldBoxMean(const F32_2& samples, double half_x_m, double half_y_m
 }
 
 std::tuple<Out<double>, Out<double>, Out<double>> ReceptorRun(const std::string& cls,
-                                                              const F64_1& quantity_pa,
-                                                              double dt_s, const Config& config,
+                                                              const F64_1& quantity_pa, double dt_s,
+                                                              const Config& config,
                                                               uint64_t stream) {
   const SkinConfig cfg = ParseConfig(config);
   int c = -1;
@@ -191,8 +191,8 @@ std::tuple<Out<double>, Out<double>, Out<double>> ReceptorRun(const std::string&
 
 // Stages 1-2 (ComputeTraction) over a recorded sequence of steps, from a
 // fresh state: the per-step CPU time of the whole of stages 1-2 and of its
-// rendering (TractionRunOptions::render_time_s), and each step's pressure. `reference`: the general (reference) code paths.
-// surfaces: rows as render_gap's; height-field rows read `hfield`.
+// rendering (TractionRunOptions::render_time_s), and each step's pressure. `reference`: the general
+// (reference) code paths. surfaces: rows as render_gap's; height-field rows read `hfield`.
 std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
     std::array<double, 3> semi_axes_m, const Config& config, const F64_2& pad_pos,
     const F64_2& pad_mat, const F64_2& forces_n, const F64_2& surfaces, const F32_2& hfield,
@@ -206,9 +206,10 @@ std::tuple<Out<double>, Out<double>, Out<double>, Out<double>> TractionSteps(
   const size_t T = pad_pos.shape(0);
   if (pad_pos.shape(1) != 3 || pad_mat.shape(0) != T || pad_mat.shape(1) != 9 ||
       forces_n.shape(0) != T || forces_n.shape(1) != 3)
-    Fail("pad_pos (T, 3), pad_mat (T, 9) and forces_n (T, 3: normal, shear x, shear y) must "
-         "agree, got shapes " + ShapeOf(pad_pos) + ", " + ShapeOf(pad_mat) + ", " +
-         ShapeOf(forces_n));
+    Fail(
+        "pad_pos (T, 3), pad_mat (T, 9) and forces_n (T, 3: normal, shear x, shear y) must "
+        "agree, got shapes " +
+        ShapeOf(pad_pos) + ", " + ShapeOf(pad_mat) + ", " + ShapeOf(forces_n));
   StepInput in;
   std::vector<std::vector<double>> prefixes;
   DecodeSurfaces(surfaces, hfield, &in.surfaces, &prefixes);
@@ -284,22 +285,24 @@ void BindStages(nb::module_& m) {
         "(m, NaN: no contact) and the pressure (T x n x n, Pa); fields=True: T x 7 x n x n,\n"
         "the planes pressure, shear x, shear y (Pa), their float32 copies, and the\n"
         "active cells (1) the stress stage sums over.");
-  m.def("halfspace_stress", &HalfspaceStress, nb::arg("points_m").noconvert(), nb::arg("load") = "pressure",
-        nb::arg("poisson") = 0.5, nb::arg("cell_m") = 0.0,
+  m.def("halfspace_stress", &HalfspaceStress, nb::arg("points_m").noconvert(),
+        nb::arg("load") = "pressure", nb::arg("poisson") = 0.5, nb::arg("cell_m") = 0.0,
         "Stress (npoint x 6, Pa, Voigt xx yy zz xy xz yz; z into the solid, tension\n"
         "positive) in a homogeneous half-space at points_m (npoint x 3: x, y, z > 0)\n"
         "for a 1 N point force (cell_m = 0) or a uniform 1 Pa traction on a square\n"
         "cell of side cell_m at the origin. load: 'pressure', 'shear_x', 'shear_y'.");
   m.def("field_stress", &FieldStress, nb::arg("pressure_pa").noconvert(), nb::arg("pitch_m"),
-        nb::arg("depth_m"), nb::arg("receptors_ij").noconvert(), nb::arg("shear_x_pa").noconvert().none() = nb::none(),
+        nb::arg("depth_m"), nb::arg("receptors_ij").noconvert(),
+        nb::arg("shear_x_pa").noconvert().none() = nb::none(),
         nb::arg("shear_y_pa").noconvert().none() = nb::none(), nb::arg("poisson") = 0.5,
         "Stress (nrec x 6, Pa) at depth_m under the taxel cells receptors_ij (nrec x 2\n"
         "int32: i along x, j along y) from float32 traction fields on an n x n grid\n"
         "(indexed [j, i]) of square cells of side pitch_m; homogeneous half-space.\n"
         "Shear fields: both or neither.");
-  m.def("check_config", [](const Config& config) { ParseConfig(config); }, nb::arg("config"),
-        "Validate plugin attributes (dict attribute -> value string) as the plugin\n"
-        "does at model compile time; ValueError with the plugin's message.");
+  m.def(
+      "check_config", [](const Config& config) { ParseConfig(config); }, nb::arg("config"),
+      "Validate plugin attributes (dict attribute -> value string) as the plugin\n"
+      "does at model compile time; ValueError with the plugin's message.");
   m.def("skin_surface", &SkinSurfaceOf, nb::arg("semi_axes_m"), nb::arg("config"),
         "Cell-averaged skin height (pad frame z, m; +inf outside the pad) on the\n"
         "nx x nx taxel grid, indexed [j, i], for a pad with semi-axes semi_axes_m and\n"
@@ -308,8 +311,8 @@ void BindStages(nb::module_& m) {
         nb::arg("half_y_m"), nb::arg("elevation_m"), nb::arg("boxes").noconvert(),
         "Exact mean of MuJoCo's bilinear height field (samples: nrow x ncol float32\n"
         "in [0, 1]) over each box (nbox x 4: x0, x1, y0, y1, m); returns (nbox,).");
-  m.def("receptor_run", &ReceptorRun, nb::arg("cls"), nb::arg("quantity_pa").noconvert(), nb::arg("dt_s"),
-        nb::arg("config"), nb::arg("stream") = 0,
+  m.def("receptor_run", &ReceptorRun, nb::arg("cls"), nb::arg("quantity_pa").noconvert(),
+        nb::arg("dt_s"), nb::arg("config"), nb::arg("stream") = 0,
         "Drive one receptor of class cls ('SA1', 'RA', 'PC') with the quantity trace\n"
         "(one value per step of dt_s) as the plugin does; afferent parameters from\n"
         "config (dict attribute -> value string), stream = the receptor's noise\n"

@@ -28,8 +28,8 @@ std::string Num(double v) {
 // The state from Python: both previous traction fields (n x n, Pa) or
 // neither, and the shift (m).
 TangentialState StateOf(const std::optional<F64_2>& shear_x_pa,
-                        const std::optional<F64_2>& shear_y_pa, double shift_x_m,
-                        double shift_y_m, size_t n) {
+                        const std::optional<F64_2>& shear_y_pa, double shift_x_m, double shift_y_m,
+                        size_t n) {
   if (shear_x_pa.has_value() != shear_y_pa.has_value())
     Fail("give both shear_x_pa and shear_y_pa (the previous step's), or neither");
   TangentialState s;
@@ -63,8 +63,7 @@ nb::dict Outputs(TangentialState&& s, TangentialResult&& r, size_t n) {
 
 std::vector<double> Pressure(const F64_2& pressure_pa, int* n) {
   *n = SquareSide(pressure_pa, "pressure_pa");
-  return std::vector<double>(pressure_pa.data(),
-                             pressure_pa.data() + static_cast<size_t>(*n) * *n);
+  return std::vector<double>(pressure_pa.data(), pressure_pa.data() + static_cast<size_t>(*n) * *n);
 }
 
 nb::dict Winkler(const F64_2& pressure_pa, double pitch_m, double mu, double fx_n, double fy_n,
@@ -75,8 +74,8 @@ nb::dict Winkler(const F64_2& pressure_pa, double pitch_m, double mu, double fx_
   TangentialState s = StateOf(shear_x_pa, shear_y_pa, shift_x_m, shift_y_m, n);
   TangentialResult r;
   std::string error;
-  if (!SolveTangentialWinkler(TaxelGrid{n, pitch_m}, p, mu, fx_n, fy_n, stiffness_pa_per_m, &s,
-                              &r, &error))
+  if (!SolveTangentialWinkler(TaxelGrid{n, pitch_m}, p, mu, fx_n, fy_n, stiffness_pa_per_m, &s, &r,
+                              &error))
     Fail(error);
   return Outputs(std::move(s), std::move(r), n);
 }
@@ -89,7 +88,8 @@ std::shared_ptr<TangentialCompliance> MakeCompliance(int n, double pitch_m, doub
     Fail("TangentialCompliance: poisson = " + Num(poisson) + " must be in (-1, 0.5]");
   if (!(pitch_m > 0 && std::isfinite(pitch_m)))
     Fail("TangentialCompliance: pitch_m = " + Num(pitch_m) + " must be > 0");
-  if (n < 1 || n > 4096) Fail("TangentialCompliance: n = " + std::to_string(n) + " must be in [1, 4096]");
+  if (n < 1 || n > 4096)
+    Fail("TangentialCompliance: n = " + std::to_string(n) + " must be in [1, 4096]");
   return std::make_shared<TangentialCompliance>(young_pa, poisson, pitch_m, n);
 }
 
@@ -100,10 +100,14 @@ Out<double> Table(const TangentialCompliance& K, const std::string& component) {
   for (int dj = -(n - 1); dj <= n - 1; ++dj)
     for (int di = -(n - 1); di <= n - 1; ++di) {
       const size_t k = static_cast<size_t>(dj + n - 1) * L + (di + n - 1);
-      if (component == "xx") t[k] = K.Kxx(di, dj);
-      else if (component == "yy") t[k] = K.Kyy(di, dj);
-      else if (component == "xy") t[k] = K.Kxy(di, dj);
-      else Fail("component '" + component + "' is not one of ('xx', 'yy', 'xy')");
+      if (component == "xx")
+        t[k] = K.Kxx(di, dj);
+      else if (component == "yy")
+        t[k] = K.Kyy(di, dj);
+      else if (component == "xy")
+        t[k] = K.Kxy(di, dj);
+      else
+        Fail("component '" + component + "' is not one of ('xx', 'yy', 'xy')");
     }
   return ToNumpy(std::move(t), {L, L});
 }
@@ -112,8 +116,9 @@ std::tuple<Out<double>, Out<double>> Displacement(const TangentialCompliance& K,
                                                   const F64_2& shear_x_pa,
                                                   const F64_2& shear_y_pa) {
   const int n = SquareSide(shear_x_pa, "shear_x_pa");
-  if (n != K.n()) Fail("shear_x_pa is " + ShapeOf(shear_x_pa) + ", the compliance's grid " +
-                       std::to_string(K.n()) + " x " + std::to_string(K.n()));
+  if (n != K.n())
+    Fail("shear_x_pa is " + ShapeOf(shear_x_pa) + ", the compliance's grid " +
+         std::to_string(K.n()) + " x " + std::to_string(K.n()));
   RequireShape(shear_y_pa, "shear_y_pa", n, n, "(shear_x_pa's)");
   const auto s = K.SpectraFor(n, n);
   std::vector<double> ux(static_cast<size_t>(n) * n), uy(ux.size());
@@ -134,10 +139,9 @@ nb::dict Elastic(const TangentialCompliance& K, const F64_2& pressure_pa, double
   TangentialState s = StateOf(shear_x_pa, shear_y_pa, shift_x_m, shift_y_m, n);
   TangentialResult r;
   std::string error;
-  if (!SolveTangentialElastic(TaxelGrid{n, K.pitch_m()}, p, mu, fx_n, fy_n, K, tolerance,
-                              max_iterations, &s, &r, &error,
-                              precision == "float" ? ApplyPrecision::kFloat
-                                                   : ApplyPrecision::kDouble))
+  if (!SolveTangentialElastic(
+          TaxelGrid{n, K.pitch_m()}, p, mu, fx_n, fy_n, K, tolerance, max_iterations, &s, &r,
+          &error, precision == "float" ? ApplyPrecision::kFloat : ApplyPrecision::kDouble))
     Fail(error);
   return Outputs(std::move(s), std::move(r), n);
 }

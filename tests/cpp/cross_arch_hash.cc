@@ -32,8 +32,10 @@ static uint64_t Fnv(uint64_t h, const void* p, size_t n) {
 // extrema): mismatches and a hash of the fast results and the scan's minimum.
 static bool Adversarial() {
   uint64_t rng = 12345, h = 1469598103934665603ull;
-  auto uni = [&] { rng = rng * 6364136223846793005ull + 1442695040888963407ull;
-                   return (rng >> 11) * (1.0 / 9007199254740992.0); };
+  auto uni = [&] {
+    rng = rng * 6364136223846793005ull + 1442695040888963407ull;
+    return (rng >> 11) * (1.0 / 9007199254740992.0);
+  };
   const double inf = std::numeric_limits<double>::infinity(), nan = std::nan("");
   int mismatch = 0, solves = 0;
   for (int trial = 0; trial < 400; ++trial) {
@@ -44,10 +46,14 @@ static bool Adversarial() {
       for (int i = 0; i < n; ++i) {
         const double x = (i - (n - 1) / 2.0) * 1e-4, y = (j - (n - 1) / 2.0) * 1e-4;
         double g = (x * x + y * y) / 1e-2 + 2e-6 * (uni() - 0.5), u = uni();
-        if (u < 0.05) g = inf;
-        else if (u < 0.07 && trial % 2) g = -inf;
-        else if (u < 0.10 && trial % 5 == 1) g = nan;
-        else if (u < 0.15 && trial % 4 == 0) g = (u < 0.125) ? 0.0 : -0.0;
+        if (u < 0.05)
+          g = inf;
+        else if (u < 0.07 && trial % 2)
+          g = -inf;
+        else if (u < 0.10 && trial % 5 == 1)
+          g = nan;
+        else if (u < 0.15 && trial % 4 == 0)
+          g = (u < 0.125) ? 0.0 : -0.0;
         double w = uni() < 0.2 ? uni() : 1.0;
         if (uni() < 0.1) w = 0.0;
         if (trial % 7 == 3 && uni() < 0.02) w = nan;
@@ -80,8 +86,10 @@ static bool Adversarial() {
 template <typename T>
 static void FftHash() {
   uint64_t rng = 777, h = 1469598103934665603ull;
-  auto uni = [&] { rng = rng * 6364136223846793005ull + 1442695040888963407ull;
-                   return (rng >> 11) * (1.0 / 9007199254740992.0); };
+  auto uni = [&] {
+    rng = rng * 6364136223846793005ull + 1442695040888963407ull;
+    return (rng >> 11) * (1.0 / 9007199254740992.0);
+  };
   const int grids[][2] = {{160, 150}, {180, 150}, {160, 160}};
   for (const auto& g : grids) {
     const Fft2D fft(g[0], g[1]);
@@ -111,9 +119,15 @@ int main() {
     cfg.layered = false;
     cfg.oversample = 1;
     std::string err;
-    if (!FinalizeSkinConfig(&cfg, &err)) { std::printf("finalize: %s\n", err.c_str()); return 1; }
+    if (!FinalizeSkinConfig(&cfg, &err)) {
+      std::printf("finalize: %s\n", err.c_str());
+      return 1;
+    }
     auto model = SkinModel::Build(cfg, &err);
-    if (!model) { std::printf("build: %s\n", err.c_str()); return 1; }
+    if (!model) {
+      std::printf("build: %s\n", err.c_str());
+      return 1;
+    }
     std::vector<double> state(model->state_size()), out(model->output_size());
     ResetState(*model, state.data());
     Workspace ws;

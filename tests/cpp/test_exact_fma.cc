@@ -31,10 +31,11 @@ void Check(float a, float b, float c) {
   vc[lane] = c;
   const float got_v = FmaFromDouble(va, vb, vc)[lane];
   ++checked;
-  if ((std::memcmp(&want, &got, sizeof want) != 0 || std::memcmp(&want, &got_v, sizeof want) != 0)
-      && ++bad <= 10)
-    std::printf("FAIL: fma(%a, %a, %a) = %a, FmaFromDouble gives %a (vector: %a)\n", a, b, c,
-                want, got, got_v);
+  if ((std::memcmp(&want, &got, sizeof want) != 0 ||
+       std::memcmp(&want, &got_v, sizeof want) != 0) &&
+      ++bad <= 10)
+    std::printf("FAIL: fma(%a, %a, %a) = %a, FmaFromDouble gives %a (vector: %a)\n", a, b, c, want,
+                got, got_v);
 }
 
 }  // namespace
@@ -72,8 +73,10 @@ int main() {
             Check(-a, b, -c);
           }
         }
-  std::printf("%ld triples checked; %d of the midpoint cases are ones that double rounding "
-              "gets wrong\n", checked, midpoints);
+  std::printf(
+      "%ld triples checked; %d of the midpoint cases are ones that double rounding "
+      "gets wrong\n",
+      checked, midpoints);
   if (midpoints == 0) {
     std::printf("FAIL: no midpoint case exercises the rounding to odd\n");
     ++bad;

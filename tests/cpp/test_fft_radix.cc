@@ -38,8 +38,8 @@ void Check(bool ok, const char* what, int n, const char* prec, bool inverse, dou
 
 // X[k] = sum_j x[j] exp(-+2 pi i j k / n), long double, the exponent's
 // j k reduced mod n (exact angles).
-void NaiveDft(const std::vector<long double>& xr, const std::vector<long double>& xi,
-              bool inverse, std::vector<long double>* yr, std::vector<long double>* yi) {
+void NaiveDft(const std::vector<long double>& xr, const std::vector<long double>& xi, bool inverse,
+              std::vector<long double>* yr, std::vector<long double>* yi) {
   const int n = static_cast<int>(xr.size());
   const long double pi = 3.141592653589793238462643383279502884L;
   yr->assign(n, 0.0L);
@@ -102,8 +102,9 @@ void CheckSize(int n, bool inverse, bool half, std::mt19937_64* rng, const char*
   plan.Transform(r1.data(), i1.data(), 1, 8, inverse, sre.data(), sim.data(), nonzero);
   bool same = true;
   for (int e = 0; e < n; ++e)
-    same = same && std::memcmp(&r1[static_cast<size_t>(e) * 8], &re[static_cast<size_t>(e) * stride],
-                               sizeof(T)) == 0 &&
+    same = same &&
+           std::memcmp(&r1[static_cast<size_t>(e) * 8], &re[static_cast<size_t>(e) * stride],
+                       sizeof(T)) == 0 &&
            std::memcmp(&i1[static_cast<size_t>(e) * 8], &im[static_cast<size_t>(e) * stride],
                        sizeof(T)) == 0;
   Check(same, "batch 1 != lane 0 of batch 13", n, prec, inverse);

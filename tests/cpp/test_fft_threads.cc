@@ -44,8 +44,8 @@ void CheckShape(int bx, int by, int rows, int cols, std::mt19937_64* rng, const 
   std::vector<double> kr(static_cast<size_t>(mx) * my);
   for (int y = 0; y < my; ++y)
     for (int x = 0; x < mx; ++x)
-      kr[static_cast<size_t>(y) * mx + x] = Kernel(x <= mx / 2 ? x : x - mx,
-                                                   y <= my / 2 ? y : y - my);
+      kr[static_cast<size_t>(y) * mx + x] =
+          Kernel(x <= mx / 2 ? x : x - mx, y <= my / 2 ? y : y - my);
   std::vector<double> sre(fft.spectrum_size()), sim(fft.spectrum_size()), scratch;
   fft.ForwardReal(kr.data(), mx, my, mx, sre.data(), sim.data(), &scratch);
   std::vector<T> k_hat(fft.spectrum_size());
@@ -62,8 +62,9 @@ void CheckShape(int bx, int by, int rows, int cols, std::mt19937_64* rng, const 
                      spec_re.data(), spec_im.data(), &work, threads);
   for (int threads = 2; threads <= 4; ++threads)
     Check(std::memcmp(out[1].data(), out[threads].data(), in.size() * sizeof(double)) == 0,
-          threads == 2 ? "threads 2 != threads 1" : threads == 3 ? "threads 3 != threads 1"
-                                                                 : "threads 4 != threads 1",
+          threads == 2   ? "threads 2 != threads 1"
+          : threads == 3 ? "threads 3 != threads 1"
+                         : "threads 4 != threads 1",
           bx, by, rows, cols, prec);
   // The direct sum.
   double worst = 0.0, scale = 0.0;

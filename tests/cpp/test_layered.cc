@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "substrate/substrate.h"
-#include "substrate/layered.h"
 #include "stress/kernel_tables.h"
+#include "substrate/layered.h"
+#include "substrate/substrate.h"
 
 using namespace mjtouch;
 
@@ -37,8 +37,7 @@ std::string F(const char* fmt, Args... args) {
 }
 
 double Seconds(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 std::unique_ptr<LayeredSubstrate> Make(const std::vector<ElasticLayer>& layers,
@@ -54,11 +53,9 @@ std::unique_ptr<LayeredSubstrate> Make(const std::vector<ElasticLayer>& layers,
 
 const std::array<bool, kNumStress> kAll = {true, true, true, true, true, true};
 
-float TableAt(const std::vector<float>& t, int n, int load, int comp, int di,
-              int dj) {
+float TableAt(const std::vector<float>& t, int n, int load, int comp, int di, int dj) {
   const int L = 2 * n - 1;
-  return t[(static_cast<size_t>(load * kNumStress + comp) * L + (dj + n - 1)) *
-               L + (di + n - 1)];
+  return t[(static_cast<size_t>(load * kNumStress + comp) * L + (dj + n - 1)) * L + (di + n - 1)];
 }
 
 // Max |a - b| over a lattice table, relative to max |b| per field, and the
@@ -66,14 +63,12 @@ float TableAt(const std::vector<float>& t, int n, int load, int comp, int di,
 struct TableErr {
   double norm_rel = 0, entry_rel = 0;
 };
-TableErr CompareTables(const std::vector<float>& a, const std::vector<float>& b,
-                       int n) {
+TableErr CompareTables(const std::vector<float>& a, const std::vector<float>& b, int n) {
   const int L = 2 * n - 1;
   TableErr e;
   for (int f = 0; f < kNumLoads * kNumStress; ++f) {
     double bmax = 0;
-    for (int i = 0; i < L * L; ++i)
-      bmax = std::max(bmax, std::abs(double(b[f * L * L + i])));
+    for (int i = 0; i < L * L; ++i) bmax = std::max(bmax, std::abs(double(b[f * L * L + i])));
     if (bmax == 0) continue;
     for (int i = 0; i < L * L; ++i) {
       const double d = std::abs(double(a[f * L * L + i]) - b[f * L * L + i]);
@@ -94,23 +89,20 @@ void TestTransferIdentical() {
   bool finite = true;
   for (double nu : {0.3, 0.48, 0.5}) {
     const double E = 50e3;
-    auto s = Make({{0.1e-3, E, nu}, {0.6e-3, E, nu}, {20e-3, E, nu}},
-                  LayeredBase{false, E, nu});
+    auto s = Make({{0.1e-3, E, nu}, {0.6e-3, E, nu}, {20e-3, E, nu}}, LayeredBase{false, E, nu});
     for (double z : {0.05e-3, 0.1e-3, 0.3e-3, 0.7e-3, 2e-3, 25e-3}) {
       for (double kh : {0.0, 1e-6, 1e-2, 1.0, 10.0, 100.0, 1e3, 1e4}) {
         const double k = kh / 1e-3;  // k h with h = 1 mm
         for (InterfaceSide side : {InterfaceSide::kUpper, InterfaceSide::kLower}) {
           const LayerTransfer t = s->TransferAt(k, z, side);
           const double kz = k * z, e = std::exp(-kz);
-          const double ref[10] = {-(1 - kz) * e, -2 * nu * e, -(1 + kz) * e,
-                                  kz * e,        (2 - kz) * e, 2 * nu * e,
-                                  kz * e,        (1 - kz) * e, -e, e};
+          const double ref[10] = {-(1 - kz) * e, -2 * nu * e, -(1 + kz) * e, kz * e, (2 - kz) * e,
+                                  2 * nu * e,    kz * e,      (1 - kz) * e,  -e,     e};
           const double* got = &t.p_xixi;
           for (int i = 0; i < 10; ++i) {
             if (!std::isfinite(got[i])) finite = false;
             // Error relative to the load (1) scaled by the decay at depth.
-            worst = std::max(worst, std::abs(got[i] - ref[i]) /
-                                        std::max(e * (1 + kz), 1e-300));
+            worst = std::max(worst, std::abs(got[i] - ref[i]) / std::max(e * (1 + kz), 1e-300));
           }
         }
       }
@@ -127,8 +119,7 @@ void TestLargeKh() {
   for (double nu : {0.3, 0.48, 0.5}) {
     for (bool rigid : {true, false}) {
       const double E = 80e3, h = 0.7e-3;
-      auto s = Make({{h, E, nu}, {0.8e-3, 20e3, 0.45}},
-                    LayeredBase{rigid, 30e3, 0.4});
+      auto s = Make({{h, E, nu}, {0.8e-3, 20e3, 0.45}}, LayeredBase{rigid, 30e3, 0.4});
       for (double kh : {1e2, 1e3, 1e4}) {
         const double k = kh / h;
         const double c = s->SurfaceCompliance(k);
@@ -171,8 +162,8 @@ void TestRigidLayerCompliance() {
       // Relative error, floored at 1e-6 of the half-space compliance: for
       // nu = 0.5, C ~ (k h)^3 x that as k h -> 0 and the solve's round-off
       // (~1e-16 of the half-space value) dominates below k h ~ 1e-3.
-      const double scale = std::max(
-          std::abs(ref), kh > 0 ? 1e-6 * 2 * (1 - nu * nu) / (E * k) : 0.0);
+      const double scale =
+          std::max(std::abs(ref), kh > 0 ? 1e-6 * 2 * (1 - nu * nu) / (E * k) : 0.0);
       worst = std::max(worst, std::abs(c - ref) / scale);
     }
   }
@@ -189,16 +180,15 @@ void TestComplianceTable() {
     auto s = Make({{0.5e-3, E, nu}, {1e-3, E, nu}}, LayeredBase{false, E, nu});
     std::vector<float> t;
     s->SurfaceComplianceTable(h, 16, &t);
-    const double ref =
-        (1 - nu * nu) / (M_PI * E) * 4 * h * std::log(1 + std::sqrt(2.0));
+    const double ref = (1 - nu * nu) / (M_PI * E) * 4 * h * std::log(1 + std::sqrt(2.0));
     const double c = t[15 * 31 + 15];
     // Far entry vs the point-force field (1 - nu^2) / (pi E r) h^2.
     const double far = t[15 * 31 + 0];
     const double far_ref = (1 - nu * nu) / (M_PI * E * 15 * h) * h * h;
     Report(std::abs(c / ref - 1) < 1e-6 && std::abs(far / far_ref - 1) < 1e-3,
            "compliance table: half-space = Love",
-           F("centre rel err %.2e, 15 cells away %.2e (vs point force)",
-             c / ref - 1, far / far_ref - 1));
+           F("centre rel err %.2e, 15 cells away %.2e (vs point force)", c / ref - 1,
+             far / far_ref - 1));
   }
   for (double nu1 : {0.3, 0.5}) {
     const double H = 1e-3;
@@ -213,12 +203,11 @@ void TestComplianceTable() {
     const double ref = s->SurfaceCompliance(0.0);
     // nu = 0.5: C(0) = 0, compare with the centre value instead.
     const int L = 2 * n - 1;
-    const double scale =
-        nu1 < 0.5 ? std::abs(ref) : std::abs(t[(n - 1) * L + (n - 1)]);
+    const double scale = nu1 < 0.5 ? std::abs(ref) : std::abs(t[(n - 1) * L + (n - 1)]);
     Report(std::abs(sum - ref) / scale < 1e-4,
            "compliance table: layer on bone, uniform load = C(0)",
-           F("nu %.2f: sum %.6e vs %.6e m/Pa (rel %.2e), %.3f s", nu1,
-             sum, ref, std::abs(sum - ref) / scale, dt));
+           F("nu %.2f: sum %.6e vs %.6e m/Pa (rel %.2e), %.3f s", nu1, sum, ref,
+             std::abs(sum - ref) / scale, dt));
   }
 }
 
@@ -233,7 +222,7 @@ void TestComplianceLimit() {
     const double Cb = rigid ? 0 : 2 * (1 - 0.45 * 0.45) / 10e3;
     for (double k : {1e-3, 1e-2, 1e-1}) {
       const double c = s->SurfaceCompliance(k) - Cb / k;
-      worst = std::max(worst, std::abs(c - C0) / std::abs(C0) / (k * 3e-3) );
+      worst = std::max(worst, std::abs(c - C0) / std::abs(C0) / (k * 3e-3));
     }
   }
   // The difference is O(k H): report it per unit k H.
@@ -246,8 +235,7 @@ void TestLatticeIdentical() {
   for (double nu : {0.3, 0.48, 0.5}) {
     const double E = 50e3, h = 0.1e-3;
     const int n = 32;
-    auto s = Make({{0.3e-3, E, nu}, {0.6e-3, E, nu}, {1.1e-3, E, nu}},
-                  LayeredBase{false, E, nu});
+    auto s = Make({{0.3e-3, E, nu}, {0.6e-3, E, nu}, {1.1e-3, E, nu}}, LayeredBase{false, E, nu});
     HalfSpace hs(nu);
     for (double z : {0.05e-3, 0.3e-3, 0.6e-3, 1.2e-3, 2e-3, 3e-3}) {
       std::vector<float> a, b;
@@ -256,7 +244,8 @@ void TestLatticeIdentical() {
       const TableErr e = CompareTables(a, b, n);
       Report(e.norm_rel < 1e-5, "lattice identical layers = HalfSpace",
              F("nu %.2f z %.2f mm: max err %.2e of peak (entries > 1e-3 peak: "
-               "%.2e)", nu, z * 1e3, e.norm_rel, e.entry_rel));
+               "%.2e)",
+               nu, z * 1e3, e.norm_rel, e.entry_rel));
     }
   }
 }
@@ -276,8 +265,7 @@ void TestLatticeHugeKh() {
   hs.Substrate::LatticeTable(z, h, n, kAll, &b);
   const TableErr e = CompareTables(a, b, n);
   Report(e.norm_rel < 1e-4, "lattice at k h = 1.7e4 (nu 0.5, z 0.06 mm)",
-         F("max err %.2e of peak, entries %.2e (%.2f s)", e.norm_rel,
-           e.entry_rel, dt));
+         F("max err %.2e of peak, entries %.2e (%.2f s)", e.norm_rel, e.entry_rel, dt));
 }
 
 // Radial (Hankel) route vs the half-space closed forms.
@@ -292,13 +280,11 @@ void TestRadialIdentical() {
                {0, 0}, {0.3e-3, 0}, {0.25e-3, -0.4e-3}, {3e-3, 1e-3}}) {
         for (int load = 0; load < kNumLoads; ++load) {
           const auto L = static_cast<SurfaceLoad>(load);
-          const Stress6 p = s->PointStress(L, xy.first, xy.second, z,
-                                           InterfaceSide::kLower);
-          const Stress6 q = load == 0 ? hs.Boussinesq(xy.first, xy.second, z)
+          const Stress6 p = s->PointStress(L, xy.first, xy.second, z, InterfaceSide::kLower);
+          const Stress6 q = load == 0   ? hs.Boussinesq(xy.first, xy.second, z)
                             : load == 1 ? hs.CerrutiX(xy.first, xy.second, z)
                                         : hs.CerrutiY(xy.first, xy.second, z);
-          const Stress6 c = s->CellStress(L, xy.first, xy.second, z, 0.2e-3,
-                                          InterfaceSide::kLower);
+          const Stress6 c = s->CellStress(L, xy.first, xy.second, z, 0.2e-3, InterfaceSide::kLower);
           const Stress6 d = hs.CellStress(L, xy.first, xy.second, z, 0.2e-3);
           double pm = 1 / (2 * M_PI * z * z), cm = 0.04 * pm * 0.2e-3 * 0.2e-3;
           for (int i = 0; i < 6; ++i) {
@@ -317,19 +303,21 @@ void TestRadialIdentical() {
          F("max err %.2e of the largest component (point and cell)", worst));
 }
 
-
 // Shao fingertip: LatticeTable (radial tables) vs CellStress (direct Hankel
 // integrals at each quadrature point) at sampled offsets, both interface
 // sides, and s_zz / s_xz / s_yz continuous across the interface while s_xx
 // jumps.
 void TestShaoLatticeVsCell() {
-  auto s = Make(LayeredSubstrate::ShaoFingertipLayers(),
-                LayeredSubstrate::ShaoFingertipBase());
+  auto s = Make(LayeredSubstrate::ShaoFingertipLayers(), LayeredSubstrate::ShaoFingertipBase());
   const double h = 0.1e-3;
   const int n = 48;
-  const int offsets[][2] = {{0, 0}, {1, 0}, {0, 1}, {2, -3}, {-5, 4},
+  const int offsets[][2] = {{0, 0},  {1, 0},     {0, 1},  {2, -3}, {-5, 4},
                             {10, 0}, {-17, -23}, {40, 3}, {47, 47}};
-  struct Case { double z; InterfaceSide side; const char* name; };
+  struct Case {
+    double z;
+    InterfaceSide side;
+    const char* name;
+  };
   const Case cases[] = {{0.05e-3, InterfaceSide::kUpper, "0.05 mm"},
                         {0.3e-3, InterfaceSide::kUpper, "0.3 mm"},
                         {0.7e-3, InterfaceSide::kUpper, "0.7 mm upper"},
@@ -345,17 +333,15 @@ void TestShaoLatticeVsCell() {
     const size_t LL = static_cast<size_t>(2 * n - 1) * (2 * n - 1);
     for (int load = 0; load < kNumLoads; ++load)
       for (size_t i = 0; i < kNumStress * LL; ++i)
-        peak[load] = std::max(peak[load],
-                              std::abs(double(t[load * kNumStress * LL + i])));
+        peak[load] = std::max(peak[load], std::abs(double(t[load * kNumStress * LL + i])));
     for (const auto& o : offsets)
       for (int load = 0; load < kNumLoads; ++load) {
         // Receptor at (-di h, -dj h) from the source.
-        const Stress6 ref = s->CellStress(static_cast<SurfaceLoad>(load),
-                                          -o[0] * h, -o[1] * h, c.z, h, c.side);
+        const Stress6 ref =
+            s->CellStress(static_cast<SurfaceLoad>(load), -o[0] * h, -o[1] * h, c.z, h, c.side);
         for (int comp = 0; comp < kNumStress; ++comp)
-          worst = std::max(worst,
-                           std::abs(TableAt(t, n, load, comp, o[0], o[1]) -
-                                    ref[comp]) / peak[load]);
+          worst = std::max(
+              worst, std::abs(TableAt(t, n, load, comp, o[0], o[1]) - ref[comp]) / peak[load]);
       }
     Report(worst < 1e-6, "Shao lattice = direct cell integrals",
            F("z %s: max err %.2e of peak", c.name, worst));
@@ -376,8 +362,8 @@ void TestShaoLatticeVsCell() {
       }
   Report(cont < 1e-6 * peak && jump > 1e-2 * peak,
          "interface 0.7 mm: s_zz, s_xz, s_yz continuous, s_xx jumps",
-         F("max |traction jump| %.2e, max in-plane jump %.2e (of peak %.2e)",
-           cont / peak, jump / peak, peak));
+         F("max |traction jump| %.2e, max in-plane jump %.2e (of peak %.2e)", cont / peak,
+           jump / peak, peak));
 }
 
 // Integral of s_zz over a plane (lattice sum x pitch^2) = -1 x cell area at
@@ -389,8 +375,7 @@ void TestLoadIntegral() {
   {
     const double h = 0.4e-3;
     const int n = 256;
-    auto s = Make(LayeredSubstrate::ShaoFingertipLayers(),
-                  LayeredSubstrate::ShaoFingertipBase());
+    auto s = Make(LayeredSubstrate::ShaoFingertipLayers(), LayeredSubstrate::ShaoFingertipBase());
     double worst = 0;
     for (double z : {0.05e-3, 0.3e-3, 0.7e-3, 1.0e-3, 1.5e-3, 2.0e-3, 3.0e-3}) {
       std::vector<float> t;
@@ -405,7 +390,8 @@ void TestLoadIntegral() {
     }
     Report(worst < 1e-5, "load integral, bone at 4 mm",
            F("max |sum s_zz + 1|, |sum s_xz + 1|, |sum s_yz + 1| = %.2e "
-             "(z 0.05..3 mm, table +-100 mm)", worst));
+             "(z 0.05..3 mm, table +-100 mm)",
+             worst));
   }
   // Over a half-space the tails (s_zz ~ 1/r^5, s_xz ~ 1/r^3) reach past any
   // table; the plane integral is the k = 0 transfer function, which must be
@@ -419,8 +405,7 @@ void TestLoadIntegral() {
         if (!s->CheckDepth(z, side).empty()) continue;
         const LayerTransfer t = s->TransferAt(0.0, z, side);
         worst = std::max({worst, std::abs(t.p_zz + 1), std::abs(t.q_xiz - 1),
-                          std::abs(t.a_etaz + 1), std::abs(t.p_xiz),
-                          std::abs(t.q_zz)});
+                          std::abs(t.a_etaz + 1), std::abs(t.p_xiz), std::abs(t.q_zz)});
       }
   }
   Report(worst < 1e-14, "load integral = k -> 0 transfer (any base, depth)",
@@ -438,8 +423,7 @@ void TestThinTopLayer() {
   bool monotone = true;
   std::string detail;
   for (double t_m : {10e-6, 1e-6, 0.1e-6, 0.01e-6}) {
-    auto s = Make({{t_m, 5 * E_b, 0.3}, {1e-3, E_b, nu_b}},
-                  LayeredBase{false, E_b, nu_b});
+    auto s = Make({{t_m, 5 * E_b, 0.3}, {1e-3, E_b, nu_b}}, LayeredBase{false, E_b, nu_b});
     std::vector<float> tab;
     s->LatticeTable(z, h, n, kAll, &tab);
     const double e = CompareTables(tab, ref, n).norm_rel;
@@ -453,10 +437,8 @@ void TestThinTopLayer() {
 // Build time of the plugin's tables: Shao fingertip, n = 128, pitch 0.1 mm,
 // receptor depths 0.3, 0.7, 2.0 mm, all components, one core.
 void TestBuildTime() {
-  auto s = Make(LayeredSubstrate::ShaoFingertipLayers(),
-                LayeredSubstrate::ShaoFingertipBase());
-  const auto kt = BuildKernelTables(*s, 128, 0.1e-3, {0.3e-3, 0.7e-3, 2.0e-3},
-                                    kAll);
+  auto s = Make(LayeredSubstrate::ShaoFingertipLayers(), LayeredSubstrate::ShaoFingertipBase());
+  const auto kt = BuildKernelTables(*s, 128, 0.1e-3, {0.3e-3, 0.7e-3, 2.0e-3}, kAll);
   bool finite = true;
   for (const auto& t : kt->tables)
     for (float v : t)
@@ -477,13 +459,11 @@ void TestBuildTime() {
 void TestValidation() {
   std::string err;
   bool ok = true;
-  auto expect = [&](const std::vector<ElasticLayer>& l, const LayeredBase& b,
-                    const char* needle) {
+  auto expect = [&](const std::vector<ElasticLayer>& l, const LayeredBase& b, const char* needle) {
     auto s = LayeredSubstrate::Create(l, b, InterfaceSide::kUpper, &err);
     if (s || err.find(needle) == std::string::npos) {
       ok = false;
-      std::printf("  validation: expected '%s', got '%s'\n", needle,
-                  err.c_str());
+      std::printf("  validation: expected '%s', got '%s'\n", needle, err.c_str());
     }
   };
   expect({}, LayeredBase{}, "at least one layer");
@@ -504,13 +484,12 @@ void TestValidation() {
   st[kSxx] = 1;
   const Stress6 e = StrainFromStress(st, {2.0, 0.25});
   const double sed = StrainEnergyDensity(st, {2.0, 0.25});
-  ok = ok && std::abs(e[kSxx] - 0.5) < 1e-15 &&
-       std::abs(e[kSyy] + 0.125) < 1e-15 && std::abs(sed - 0.25) < 1e-15;
+  ok = ok && std::abs(e[kSxx] - 0.5) < 1e-15 && std::abs(e[kSyy] + 0.125) < 1e-15 &&
+       std::abs(sed - 0.25) < 1e-15;
   st = Stress6{};
   st[kSxy] = 1;  // pure shear: SED = tau^2 / (2 mu), mu = E / (2 (1 + nu))
   ok = ok && std::abs(StrainEnergyDensity(st, {2.0, 0.25}) - 1.25 / 2) < 1e-15;
-  Report(ok, "validation, depth checks, material, strain and SED",
-         "last message: " + err);
+  Report(ok, "validation, depth checks, material, strain and SED", "last message: " + err);
 }
 
 // Values for tests/layered_oracle.py (independent numpy/scipy computation):
@@ -527,8 +506,7 @@ void Dump(const char* path) {
     LayeredBase base;
   };
   const Stack stacks[] = {
-      {"shao_bone", LayeredSubstrate::ShaoFingertipLayers(),
-       LayeredSubstrate::ShaoFingertipBase()},
+      {"shao_bone", LayeredSubstrate::ShaoFingertipLayers(), LayeredSubstrate::ShaoFingertipBase()},
       {"two_layers_halfspace",
        {{0.4e-3, 100e3, 0.3}, {0.3e-3, 20e3, 0.49}},
        LayeredBase{false, 40e3, 0.35}}};
@@ -537,35 +515,33 @@ void Dump(const char* path) {
   for (size_t c = 0; c < 2; ++c) {
     const Stack& st = stacks[c];
     auto s = Make(st.layers, st.base);
-    std::fprintf(f, "%s{\"name\": \"%s\", \"layers\": [", c ? ",\n" : "",
-                 st.name);
+    std::fprintf(f, "%s{\"name\": \"%s\", \"layers\": [", c ? ",\n" : "", st.name);
     for (size_t i = 0; i < st.layers.size(); ++i)
-      std::fprintf(f, "%s[%.17g, %.17g, %.17g]", i ? ", " : "",
-                   st.layers[i].thickness_m, st.layers[i].young_pa,
-                   st.layers[i].poisson);
+      std::fprintf(f, "%s[%.17g, %.17g, %.17g]", i ? ", " : "", st.layers[i].thickness_m,
+                   st.layers[i].young_pa, st.layers[i].poisson);
     if (st.base.rigid)
       std::fprintf(f, "], \"base\": null,\n \"disc\": [");
     else
-      std::fprintf(f, "], \"base\": [%.17g, %.17g],\n \"disc\": [",
-                   st.base.young_pa, st.base.poisson);
+      std::fprintf(f, "], \"base\": [%.17g, %.17g],\n \"disc\": [", st.base.young_pa,
+                   st.base.poisson);
     const double zi = st.layers[0].thickness_m;
-    const struct { double z; bool upper; } depths[] = {
-        {0.2e-3, true}, {zi, true}, {zi, false}, {2.5e-3, true}};
+    const struct {
+      double z;
+      bool upper;
+    } depths[] = {{0.2e-3, true}, {zi, true}, {zi, false}, {2.5e-3, true}};
     const double pts[][2] = {{0, 0}, {0.5e-3, 0.3e-3}, {-2e-3, 1e-3}};
     bool first = true;
     for (const auto& d : depths)
       for (const auto& p : pts)
         for (int load = 0; load < kNumLoads; ++load) {
-          const Stress6 v = s->DiscStress(
-              static_cast<SurfaceLoad>(load), p[0], p[1], d.z, 1e-3,
-              d.upper ? InterfaceSide::kUpper : InterfaceSide::kLower);
+          const Stress6 v = s->DiscStress(static_cast<SurfaceLoad>(load), p[0], p[1], d.z, 1e-3,
+                                          d.upper ? InterfaceSide::kUpper : InterfaceSide::kLower);
           std::fprintf(f,
                        "%s\n  {\"load\": \"%s\", \"x\": %.17g, \"y\": %.17g, "
                        "\"z\": %.17g, \"radius\": 1e-3, \"upper\": %s, "
                        "\"stress\": [%.17g, %.17g, %.17g, %.17g, %.17g, %.17g]}",
                        first ? "" : ",", load_names[load], p[0], p[1], d.z,
-                       d.upper ? "true" : "false", v[0], v[1], v[2], v[3], v[4],
-                       v[5]);
+                       d.upper ? "true" : "false", v[0], v[1], v[2], v[3], v[4], v[5]);
           first = false;
         }
     std::fprintf(f, "],\n \"cell\": [");
@@ -579,17 +555,15 @@ void Dump(const char* path) {
           const int dj = -static_cast<int>(std::lround(p[1] / 0.2e-3));
           std::vector<float> t;
           s->LatticeTable(d.z, 0.2e-3, 16, kAll,
-                          d.upper ? InterfaceSide::kUpper : InterfaceSide::kLower,
-                          &t);
+                          d.upper ? InterfaceSide::kUpper : InterfaceSide::kLower, &t);
           std::fprintf(f,
                        "%s\n  {\"load\": \"%s\", \"x\": %.17g, \"y\": %.17g, "
                        "\"z\": %.17g, \"pitch\": 2e-4, \"upper\": %s, "
                        "\"stress\": [",
-                       first ? "" : ",", load_names[load], -di * 0.2e-3,
-                       -dj * 0.2e-3, d.z, d.upper ? "true" : "false");
+                       first ? "" : ",", load_names[load], -di * 0.2e-3, -dj * 0.2e-3, d.z,
+                       d.upper ? "true" : "false");
           for (int comp = 0; comp < kNumStress; ++comp)
-            std::fprintf(f, "%s%.9g", comp ? ", " : "",
-                         TableAt(t, 16, load, comp, di, dj));
+            std::fprintf(f, "%s%.9g", comp ? ", " : "", TableAt(t, 16, load, comp, di, dj));
           std::fprintf(f, "]}");
           first = false;
         }
@@ -597,18 +571,16 @@ void Dump(const char* path) {
     first = true;
     for (const auto& d : depths)
       for (double k : {10.0, 1e3, 1e4, 1e5}) {
-        const LayerTransfer t = s->TransferAt(
-            k, d.z, d.upper ? InterfaceSide::kUpper : InterfaceSide::kLower);
-        std::fprintf(
-            f,
-            "%s\n  {\"k\": %.17g, \"z\": %.17g, \"upper\": %s, \"values\": "
-            "{\"p_xixi\": %.17g, \"p_etaeta\": %.17g, \"p_zz\": %.17g, "
-            "\"p_xiz\": %.17g, \"q_xixi\": %.17g, \"q_etaeta\": %.17g, "
-            "\"q_zz\": %.17g, \"q_xiz\": %.17g, \"a_etaz\": %.17g, "
-            "\"a_xieta\": %.17g}}",
-            first ? "" : ",", k, d.z, d.upper ? "true" : "false", t.p_xixi,
-            t.p_etaeta, t.p_zz, t.p_xiz, t.q_xixi, t.q_etaeta, t.q_zz, t.q_xiz,
-            t.a_etaz, t.a_xieta);
+        const LayerTransfer t =
+            s->TransferAt(k, d.z, d.upper ? InterfaceSide::kUpper : InterfaceSide::kLower);
+        std::fprintf(f,
+                     "%s\n  {\"k\": %.17g, \"z\": %.17g, \"upper\": %s, \"values\": "
+                     "{\"p_xixi\": %.17g, \"p_etaeta\": %.17g, \"p_zz\": %.17g, "
+                     "\"p_xiz\": %.17g, \"q_xixi\": %.17g, \"q_etaeta\": %.17g, "
+                     "\"q_zz\": %.17g, \"q_xiz\": %.17g, \"a_etaz\": %.17g, "
+                     "\"a_xieta\": %.17g}}",
+                     first ? "" : ",", k, d.z, d.upper ? "true" : "false", t.p_xixi, t.p_etaeta,
+                     t.p_zz, t.p_xiz, t.q_xixi, t.q_etaeta, t.q_zz, t.q_xiz, t.a_etaz, t.a_xieta);
         first = false;
       }
     std::fprintf(f, "]}");
@@ -634,7 +606,6 @@ int main(int argc, char** argv) {
   TestValidation();
   TestBuildTime();
   if (argc > 2 && std::strcmp(argv[1], "--dump") == 0) Dump(argv[2]);
-  std::printf("%s: %d failure(s), %.1f s\n", g_failures ? "FAIL" : "PASS",
-              g_failures, Seconds(t0));
+  std::printf("%s: %d failure(s), %.1f s\n", g_failures ? "FAIL" : "PASS", g_failures, Seconds(t0));
   return g_failures ? 1 : 0;
 }

@@ -60,14 +60,15 @@ int main() {
       const Adaptation adapt{0.0, tau_a};
       const MembraneSpan pre = PrecomputeSpan(span, tau, adapt);
       double u2 = u0, w2 = c, refractory2 = 0.0, first2 = -1.0;
-      const int spikes2 = LinearDriveLIF(1, &u2, &a, &b, span, tau, 1e-3, &refractory2, adapt,
-                                         &w2, OnSpike, &first2, &pre);
-      if (spikes2 != spikes || !SameBits(u2, u) || !SameBits(w2, w) ||
-          !SameBits(first2, first) || !SameBits(refractory2, refractory_left)) {
+      const int spikes2 = LinearDriveLIF(1, &u2, &a, &b, span, tau, 1e-3, &refractory2, adapt, &w2,
+                                         OnSpike, &first2, &pre);
+      if (spikes2 != spikes || !SameBits(u2, u) || !SameBits(w2, w) || !SameBits(first2, first) ||
+          !SameBits(refractory2, refractory_left)) {
         if (bad_pre < 5)
-          std::printf("  interval %d: u0 %.17g a %.17g b %.17g c %.17g span %.17g: precomputed "
-                      "spans give spike %.17g, u %.17g (direct %.17g, %.17g)\n",
-                      it, u0, a, b, c, span, first2, u2, first, u);
+          std::printf(
+              "  interval %d: u0 %.17g a %.17g b %.17g c %.17g span %.17g: precomputed "
+              "spans give spike %.17g, u %.17g (direct %.17g, %.17g)\n",
+              it, u0, a, b, c, span, first2, u2, first, u);
         ++bad_pre;
       }
     }
@@ -82,15 +83,16 @@ int main() {
     // A spike is at threshold, no later than the first sample over it and
     // within one sample of it (a crossing and return between samples may
     // give a spike without a sample over threshold).
-    const bool at_threshold =
-        first >= 0.0 && Excess(u0, a, b, c, tau, tau_a, first) >= -1e-9;
+    const bool at_threshold = first >= 0.0 && Excess(u0, a, b, c, tau, tau_a, first) >= -1e-9;
     const bool ok = brute < 0.0 ? (first < 0.0 || at_threshold)
                                 : at_threshold && first <= brute + 1e-12 &&
                                       first > brute - span / kSamples - 1e-12;
     if (!ok) {
       if (bad < 5)
-        std::printf("  interval %d: u0 %.17g a %.17g b %.17g c %.17g span %.17g: spike %.9g, "
-                    "sampled crossing %.9g\n", it, u0, a, b, c, span, first, brute);
+        std::printf(
+            "  interval %d: u0 %.17g a %.17g b %.17g c %.17g span %.17g: spike %.9g, "
+            "sampled crossing %.9g\n",
+            it, u0, a, b, c, span, first, brute);
       ++bad;
       if (first >= 0.0 && brute >= 0.0) worst = std::max(worst, (first - brute) / span);
     }

@@ -45,12 +45,11 @@ int main() {
     const double dt = stepper.dt();
     // three class runs, as the model lays the receptors out
     std::vector<ReceptorClass> cls(kReceptors);
-    std::vector<double> amp(kReceptors), freq(kReceptors), phase(kReceptors),
-        offset(kReceptors);
+    std::vector<double> amp(kReceptors), freq(kReceptors), phase(kReceptors), offset(kReceptors);
     for (int r = 0; r < kReceptors; ++r) {
       cls[r] = static_cast<ReceptorClass>(r * 3 / kReceptors);
       amp[r] = std::pow(10.0, 1.0 + 4.5 * U(rng));  // Pa
-      freq[r] = std::pow(10.0, 3.0 * U(rng));      // Hz
+      freq[r] = std::pow(10.0, 3.0 * U(rng));       // Hz
       phase[r] = 6.28 * U(rng);
       offset[r] = (U(rng) - 0.3) * amp[r];
     }
@@ -75,12 +74,13 @@ int main() {
         kinds[static_cast<int>(cls[r])] += k;
         bool same = k == k_batch[r] && SameBits(v, v_batch[r]);
         for (int i = 0; i < kReceptorStateSize; ++i)
-          same = same && SameBits(st_one[r * kReceptorStateSize + i],
-                                  st_batch[r * kReceptorStateSize + i]);
+          same = same &&
+                 SameBits(st_one[r * kReceptorStateSize + i], st_batch[r * kReceptorStateSize + i]);
         if (!same && ++bad <= 5)
-          std::printf("FAIL: scenario %d step %d receptor %d (%s): spikes %d / %g, voltage "
-                      "%.17g / %.17g\n",
-                      sc, s, r, ClassName(cls[r]), k, k_batch[r], v, v_batch[r]);
+          std::printf(
+              "FAIL: scenario %d step %d receptor %d (%s): spikes %d / %g, voltage "
+              "%.17g / %.17g\n",
+              sc, s, r, ClassName(cls[r]), k, k_batch[r], v, v_batch[r]);
       }
     }
   }
@@ -113,8 +113,8 @@ int main() {
       ReceptorQuantities(q, n, stress.data(), batch.data());
       for (int i = 0; i < n; ++i)
         if (!SameBits(batch[i], ReceptorQuantity(q, &stress[6 * i])) && ++bad_q <= 5)
-          std::printf("FAIL: %s of tensor %d: %.17g, ReceptorQuantity %.17g\n", QuantityName(q),
-                      i, batch[i], ReceptorQuantity(q, &stress[6 * i]));
+          std::printf("FAIL: %s of tensor %d: %.17g, ReceptorQuantity %.17g\n", QuantityName(q), i,
+                      batch[i], ReceptorQuantity(q, &stress[6 * i]));
     }
     std::printf("ReceptorQuantities: %d tensors x 4 quantities, %d differ\n", n, bad_q);
     bad += bad_q;

@@ -45,15 +45,32 @@ def c_host(tmp_path_factory) -> pathlib.Path:
     mujoco_dir = pathlib.Path(mujoco.__file__).parent
     libmujoco = sorted(mujoco_dir.glob("libmujoco.so.*"))
     assert libmujoco, f"no libmujoco.so.* in {mujoco_dir}"
-    include = subprocess.run([sys.executable, "-m", "mjtouch", "--include"], check=True,
-                             capture_output=True, text=True).stdout.strip()
+    include = subprocess.run(
+        [sys.executable, "-m", "mjtouch", "--include"], check=True, capture_output=True, text=True
+    ).stdout.strip()
     assert (pathlib.Path(include) / "mjtouch.h").is_file(), include
     lib = pathlib.Path(mjtouch.library_path())
     exe = tmp_path_factory.mktemp("c_host") / "c_host"
-    subprocess.run([cc, "-std=c11", "-Wall", "-Wextra", "-Werror", "-O2", "-o", str(exe),
-                    str(ROOT / "examples" / "c_host" / "main.c"),
-                    f"-I{mujoco_dir / 'include'}", f"-I{include}", str(lib), str(libmujoco[-1]),
-                    f"-Wl,-rpath,{lib.parent}", f"-Wl,-rpath,{mujoco_dir}"], check=True)
+    subprocess.run(
+        [
+            cc,
+            "-std=c11",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-O2",
+            "-o",
+            str(exe),
+            str(ROOT / "examples" / "c_host" / "main.c"),
+            f"-I{mujoco_dir / 'include'}",
+            f"-I{include}",
+            str(lib),
+            str(libmujoco[-1]),
+            f"-Wl,-rpath,{lib.parent}",
+            f"-Wl,-rpath,{mujoco_dir}",
+        ],
+        check=True,
+    )
     return exe
 
 
@@ -78,11 +95,15 @@ def test_shipped_scenes_found():
 
 @pytest.mark.parametrize("scene", shipped_scenes(), ids=lambda p: p.stem)
 def test_c_host_layout_and_spikes_match_python(c_host, scene):
-    out = subprocess.run([str(c_host), str(scene), str(STEPS), str(PRESS_N), str(SPEED_M_S)],
-                         check=True, capture_output=True, text=True,
-                         env={**os.environ, "MUJOCO_GL": "disable"}).stdout
+    out = subprocess.run(
+        [str(c_host), str(scene), str(STEPS), str(PRESS_N), str(SPEED_M_S)],
+        check=True,
+        capture_output=True,
+        text=True,
+        env={**os.environ, "MUJOCO_GL": "disable"},
+    ).stdout
     model = mujoco.MjModel.from_xml_path(str(scene))
-    (name, layout), = mjtouch.layouts(model).items()
+    ((name, layout),) = mjtouch.layouts(model).items()
     assert f"skin {name}: {len(layout.classes)} receptors" in out, out
 
     rows = {m[0]: tuple(int(x) for x in m[1:]) for m in LINE.findall(out)}
@@ -91,12 +112,13 @@ def test_c_host_layout_and_spikes_match_python(c_host, scene):
     for cls in sensor.CLASSES:
         count = int(layout.mask(cls).sum())
         assert rows[cls][:2] == (count, start), (cls, rows[cls], out)
-        assert layout.mask(cls)[start:start + count].all(), cls  # one run per class
+        assert layout.mask(cls)[start : start + count].all(), cls  # one run per class
         start += count
 
     blocks = {m[0]: (int(m[1]), int(m[2])) for m in BLOCK.findall(out)}
-    assert blocks == {b: (layout.sensor_adr + s.start, s.stop - s.start)
-                      for b, s in layout.blocks.items()}, out
+    assert blocks == {
+        b: (layout.sensor_adr + s.start, s.stop - s.start) for b, s in layout.blocks.items()
+    }, out
 
     spikes = python_spikes(model, layout)
     if scene.stem.startswith("slide_"):

@@ -9,17 +9,39 @@ import pytest
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "mjtouch", *args], capture_output=True,
-                          text=True, timeout=600)
+    return subprocess.run(
+        [sys.executable, "-m", "mjtouch", *args], capture_output=True, text=True, timeout=600
+    )
 
 
 def test_slide_json_keys_and_peak():
-    out = run("slide", "--json", "--duration", "0.4", "--nx", "64", "--pitch", "1.5e-4",
-              "--dt", "2e-4", "--speed", "0.03", "--period", "1e-3")
+    out = run(
+        "slide",
+        "--json",
+        "--duration",
+        "0.4",
+        "--nx",
+        "64",
+        "--pitch",
+        "1.5e-4",
+        "--dt",
+        "2e-4",
+        "--speed",
+        "0.03",
+        "--period",
+        "1e-3",
+    )
     assert out.returncode == 0, out.stderr
     o = json.loads(out.stdout)
-    for key in ("rates_hz", "peaks_hz", "expected_hz", "speed_m_s", "period_m",
-                "ridge_pitch_m", "duration_s"):
+    for key in (
+        "rates_hz",
+        "peaks_hz",
+        "expected_hz",
+        "speed_m_s",
+        "period_m",
+        "ridge_pitch_m",
+        "duration_s",
+    ):
         assert key in o
     assert set(o["rates_hz"]) == {"SA1", "RA", "PC"}
     assert o["expected_hz"]["texture"] == pytest.approx(30.0)
@@ -45,8 +67,23 @@ def test_slide_json_keys_and_peak():
 def test_slide_json_reports_ridge_line_power_for_smooth_skin():
     # smooth skin: no expected ridge line, but the power at V/lambda of the
     # configured pitch is reported for comparison with a ridged run
-    out = run("slide", "--json", "--no-ridges", "--duration", "0.2", "--nx", "48",
-              "--pitch", "1.5e-4", "--dt", "2e-4", "--speed", "0.03", "--ridge-pitch", "6e-4")
+    out = run(
+        "slide",
+        "--json",
+        "--no-ridges",
+        "--duration",
+        "0.2",
+        "--nx",
+        "48",
+        "--pitch",
+        "1.5e-4",
+        "--dt",
+        "2e-4",
+        "--speed",
+        "0.03",
+        "--ridge-pitch",
+        "6e-4",
+    )
     assert out.returncode == 0, out.stderr
     o = json.loads(out.stdout)
     assert o["expected_hz"]["ridges"] is None
@@ -58,33 +95,62 @@ def test_slide_json_reports_ridge_line_power_for_smooth_skin():
 
 def test_slide_human_output_and_plot(tmp_path):
     png = tmp_path / "s.png"
-    out = run("slide", "--duration", "0.2", "--nx", "48", "--pitch", "1.5e-4", "--dt", "2e-4",
-              "--no-ridges", "--plot", str(png))
+    out = run(
+        "slide",
+        "--duration",
+        "0.2",
+        "--nx",
+        "48",
+        "--pitch",
+        "1.5e-4",
+        "--dt",
+        "2e-4",
+        "--no-ridges",
+        "--plot",
+        str(png),
+    )
     assert out.returncode == 0, out.stderr
     assert "V/D band" in out.stdout and "firing rates" in out.stdout
     assert "pressure model: elastic" in out.stdout
     assert png.stat().st_size > 10_000
 
 
-@pytest.mark.parametrize("args,msg", [
-    (["--speed", "-1"], "argument --speed: -1.0 is out of range; valid range (0, 2] m/s"),
-    (["--nx", "2"], "argument --nx: 2 is out of range; valid range [4, 512]"),
-    (["--texture", "wood"], "invalid choice"),
-    (["--pressure", "foam"], "invalid choice"),
-    (["--dt", "0.1"], "argument --dt: 0.1 is out of range; valid range [1e-06, 0.005] s"),
-])
+@pytest.mark.parametrize(
+    "args,msg",
+    [
+        (["--speed", "-1"], "argument --speed: -1.0 is out of range; valid range (0, 2] m/s"),
+        (["--nx", "2"], "argument --nx: 2 is out of range; valid range [4, 512]"),
+        (["--texture", "wood"], "invalid choice"),
+        (["--pressure", "foam"], "invalid choice"),
+        (["--dt", "0.1"], "argument --dt: 0.1 is out of range; valid range [1e-06, 0.005] s"),
+    ],
+)
 def test_slide_bad_arguments(args, msg):
     out = run("slide", "--duration", "0.2", *args)
     assert out.returncode != 0
     assert msg in out.stderr
 
 
-
 def test_slide_grid_shift_option():
     # --grid-shift sets the skin's grid_shift: the V/pitch line is cancelled,
     # so no grid line is reported; the texture line stays at V/D
-    out = run("slide", "--json", "--grid-shift", "--duration", "0.2", "--nx", "48",
-              "--pitch", "1.5e-4", "--dt", "2e-4", "--speed", "0.03", "--period", "1e-3")
+    out = run(
+        "slide",
+        "--json",
+        "--grid-shift",
+        "--duration",
+        "0.2",
+        "--nx",
+        "48",
+        "--pitch",
+        "1.5e-4",
+        "--dt",
+        "2e-4",
+        "--speed",
+        "0.03",
+        "--period",
+        "1e-3",
+    )
     assert out.returncode == 0, out.stderr
     o = json.loads(out.stdout)
     assert o["grid_shift"] is True and o["grid_line_hz"] is None

@@ -65,7 +65,7 @@ def test_rollout_one_and_two_threads_bit_identical():
     ctrl = scenes.controls(proto, 0.06)
     speeds = np.array([0.02, 0.03, 0.04, 0.05])
     controls = np.repeat(ctrl[None], len(speeds), axis=0)
-    controls[:, int(round(proto.press_s / proto.timestep_s)):, 0] = speeds[:, None]
+    controls[:, int(round(proto.press_s / proto.timestep_s)) :, 0] = speeds[:, None]
     d = mujoco.MjData(m)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     s0 = np.empty(mujoco.mj_stateSize(m, spec))
@@ -86,8 +86,14 @@ def test_rollout_one_and_two_threads_bit_identical():
 
 def _threads_model(threads: int, pressure: str = "winkler"):
     proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
-    tip = fast_tip(skin={"threads": str(threads), "pressure": pressure,
-                         "outputs": "spikes stress force", "stress_method": "direct"})
+    tip = fast_tip(
+        skin={
+            "threads": str(threads),
+            "pressure": pressure,
+            "outputs": "spikes stress force",
+            "stress_method": "direct",
+        }
+    )
     return scenes.build_model(tip, scenes.Texture(period_m=0.6e-3), proto)
 
 
@@ -120,9 +126,14 @@ def _elastic_model(solver: str, precision: str = "float"):
     # the elastic contact's warm start lives in plugin_state (p(n-1), and
     # p(n-2) for pcg's extrapolation): copies and resets must carry it
     proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
-    tip = fast_tip(skin={"pressure": "elastic", "contact_solver": solver,
-                         "elastic_precision": precision,
-                         "outputs": "force pressure stress"})
+    tip = fast_tip(
+        skin={
+            "pressure": "elastic",
+            "contact_solver": solver,
+            "elastic_precision": precision,
+            "outputs": "force pressure stress",
+        }
+    )
     return scenes.build_model(tip, scenes.Texture(period_m=0.6e-3), proto)
 
 
@@ -147,6 +158,7 @@ def test_elastic_pcg_matches_the_reference_solver_in_the_plugin():
     # Both stop at tolerance 1e-4 (about their error), so their pressures
     # differ by about that much, not more
     from mjtouch.scene.sensor import SkinLayout
+
     runs = {}
     for solver, precision in (("pcg", "float"), ("pk", "double")):
         m = _elastic_model(solver, precision)
@@ -207,10 +219,16 @@ def test_grid_shift_copy_reset_and_rollout_are_bit_identical():
     # threads must reproduce it bit for bit, and it must change the
     # pressure (it is on)
     proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
-    models = {gs: scenes.build_model(fast_tip(skin={"pressure": "elastic", "grid_shift": gs,
-                                                    "outputs": "force pressure stress"}),
-                                     scenes.Texture(period_m=0.6e-3), proto)
-              for gs in ("false", "true")}
+    models = {
+        gs: scenes.build_model(
+            fast_tip(
+                skin={"pressure": "elastic", "grid_shift": gs, "outputs": "force pressure stress"}
+            ),
+            scenes.Texture(period_m=0.6e-3),
+            proto,
+        )
+        for gs in ("false", "true")
+    }
     m = models["true"]
     d = mujoco.MjData(m)
     first = _run(m, d, 320)
@@ -227,6 +245,7 @@ def test_grid_shift_copy_reset_and_rollout_are_bit_identical():
     mujoco.mj_getState(m, d, s0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
     controls = np.tile([0.03, -0.5], (2, 40, 1))
     _, one = mujoco.rollout.rollout(m, mujoco.MjData(m), np.tile(s0, (2, 1)), controls)
-    _, two = mujoco.rollout.rollout(m, [mujoco.MjData(m), mujoco.MjData(m)],
-                                    np.tile(s0, (2, 1)), controls)
+    _, two = mujoco.rollout.rollout(
+        m, [mujoco.MjData(m), mujoco.MjData(m)], np.tile(s0, (2, 1)), controls
+    )
     assert np.array_equal(one, two) and np.abs(two).max() > 0

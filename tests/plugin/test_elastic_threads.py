@@ -17,9 +17,16 @@ PROTO = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
 
 
 def _model(threads: int, solver: str = "pcg", precision: str = "float", shift: bool = False):
-    tip = fast_tip(skin={"pressure": "elastic", "threads": str(threads),
-                         "contact_solver": solver, "elastic_precision": precision,
-                         "grid_shift": str(shift).lower(), "outputs": "force pressure stress"})
+    tip = fast_tip(
+        skin={
+            "pressure": "elastic",
+            "threads": str(threads),
+            "contact_solver": solver,
+            "elastic_precision": precision,
+            "grid_shift": str(shift).lower(),
+            "outputs": "force pressure stress",
+        }
+    )
     return scenes.build_model(tip, scenes.Texture(period_m=0.6e-3), PROTO)
 
 
@@ -33,9 +40,10 @@ def _run(m, n, speed=0.03):
     return out
 
 
-@pytest.mark.parametrize("solver, precision, shift",
-                         [("pcg", "float", False), ("pk", "double", False),
-                          ("pcg", "float", True)])  # grid_shift: its shifted solve too
+@pytest.mark.parametrize(
+    "solver, precision, shift",
+    [("pcg", "float", False), ("pk", "double", False), ("pcg", "float", True)],
+)  # grid_shift: its shifted solve too
 def test_elastic_sensordata_identical_for_threads_1_2_3(solver, precision, shift):
     runs = {t: _run(_model(t, solver, precision, shift), 320) for t in (1, 2, 3)}
     m = _model(1, solver, precision, shift)

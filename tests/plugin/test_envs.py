@@ -60,10 +60,18 @@ def rollout(env, seed, actions):
 
 # ----- API ---------------------------------------------------------------
 
-@pytest.mark.parametrize("env_id,kw", [
-    (TEX, {}), (TEX, {"touch": "rates", "pressure_image": 6}), (TEX, {"touch": "none"}),
-    (SLIP, {}), (SLIP, {"touch": "rates", "pressure_image": 4}), (SLIP, {"touch": "none"}),
-])
+
+@pytest.mark.parametrize(
+    "env_id,kw",
+    [
+        (TEX, {}),
+        (TEX, {"touch": "rates", "pressure_image": 6}),
+        (TEX, {"touch": "none"}),
+        (SLIP, {}),
+        (SLIP, {"touch": "rates", "pressure_image": 4}),
+        (SLIP, {"touch": "none"}),
+    ],
+)
 def test_check_env_passes_without_warnings(env_id, kw):
     # pytest's filterwarnings=error turns any gymnasium warning into a failure
     env = make(env_id, **kw)
@@ -100,7 +108,7 @@ def test_full_scale_ranges_do_not_saturate(env_id):
     blocks = u.observation_blocks
     motion = blocks["finger" if env_id == TEX else "grip"]
     saturating = np.zeros(u.observation_space.shape, bool)
-    saturating[motion.start:motion.start + 2] = True  # position, velocity
+    saturating[motion.start : motion.start + 2] = True  # position, velocity
     saturating[blocks["contact"]] = True
     saturating[blocks["pressure"]] = True
     low, high = u.observation_space.low, u.observation_space.high
@@ -124,6 +132,7 @@ def test_full_scale_ranges_do_not_saturate(env_id):
 
 # ----- seeding -----------------------------------------------------------
 
+
 @pytest.mark.parametrize("env_id", [TEX, SLIP])
 def test_same_seed_gives_bit_identical_episodes(env_id):
     env_a, env_b = make(env_id), make(env_id)
@@ -146,8 +155,10 @@ def test_different_seeds_give_different_episodes(env_id):
     if env_id == TEX:
         # precondition: the seeds draw episodes touch can tell apart (two
         # flat plates would rightly feel the same; flat has no phase)
-        drawn = [(r["info"][0]["texture"], env.unwrapped.classes[r["info"][0]["texture"]])
-                 for r in runs.values()]
+        drawn = [
+            (r["info"][0]["texture"], env.unwrapped.classes[r["info"][0]["texture"]])
+            for r in runs.values()
+        ]
         assert sum(period == 0 for _, period in drawn) <= 1, drawn
     else:
         frictions = [r["info"][0]["friction"] for r in runs.values()]
@@ -160,6 +171,7 @@ def test_different_seeds_give_different_episodes(env_id):
 
 
 # ----- batched stepping --------------------------------------------------
+
 
 def reference_vector(env_id, seeds, actions, max_episode_steps):
     """Single environments stepped one by one with Gymnasium's next-step
@@ -200,8 +212,9 @@ def test_rollout_vector_env_equals_single_envs_bit_for_bit(env_id):
     n, steps, limit = 3, 10, 6
     seeds = [21, 22, 23]
     probe = make(env_id)
-    actions = np.stack([random_actions(probe, steps, seed=40 + i, commit=False)
-                        for i in range(n)], axis=1)
+    actions = np.stack(
+        [random_actions(probe, steps, seed=40 + i, commit=False) for i in range(n)], axis=1
+    )
     if env_id == TEX:
         actions[3, 0, 2] = 1.0  # env 0 commits at step 4: terminates, resets at step 5
     else:
@@ -209,8 +222,11 @@ def test_rollout_vector_env_equals_single_envs_bit_for_bit(env_id):
     probe.close()
     ref = reference_vector(env_id, seeds, actions, limit)
     fast = run_vector(gym.make_vec(env_id, num_envs=n, max_episode_steps=limit), seeds, actions)
-    sync = run_vector(gym.make_vec(env_id, num_envs=n, vectorization_mode="sync",
-                                   max_episode_steps=limit), seeds, actions)
+    sync = run_vector(
+        gym.make_vec(env_id, num_envs=n, vectorization_mode="sync", max_episode_steps=limit),
+        seeds,
+        actions,
+    )
     assert isinstance(gym.make_vec(env_id, num_envs=1), mjtouch.envs.RolloutVectorEnv)
     # the sequence exercises both episode ends and the autoreset after them
     assert ref["truncated"].any()
@@ -221,6 +237,7 @@ def test_rollout_vector_env_equals_single_envs_bit_for_bit(env_id):
 
 
 # ----- task logic (the docstrings) ---------------------------------------
+
 
 def texture_action(env, force_n=0.5, speed_m_s=0.03, commit=False, guess=0):
     u = env.unwrapped
@@ -342,8 +359,13 @@ def test_slip_hold_holds_while_load_is_under_friction_times_grip(margin, holds):
     load plus its weight (by 20%), and drops (terminates) if it is 20% short."""
     mu, load = 0.7, 0.1
     weight = BLOCK_MASS_KG * 9.81
-    env = make(SLIP, touch="none", friction_range=(mu, mu), base_load_range_n=(load, load),
-               rise_load_range_n=(0.0, 0.0))
+    env = make(
+        SLIP,
+        touch="none",
+        friction_range=(mu, mu),
+        base_load_range_n=(load, load),
+        rise_load_range_n=(0.0, 0.0),
+    )
     grip = margin * (load + weight) / mu
     a = np.array([force_action(env, grip)], np.float32)
     run = rollout(env, 0, [a] * 100)
@@ -362,8 +384,12 @@ def test_slip_hold_touch_signals_slip():
     weight = BLOCK_MASS_KG * 9.81
     pc = {}
     for margin in (1.2, 0.8):
-        env = make(SLIP, friction_range=(mu, mu), base_load_range_n=(load, load),
-                   rise_load_range_n=(0.0, 0.0))
+        env = make(
+            SLIP,
+            friction_range=(mu, mu),
+            base_load_range_n=(load, load),
+            rise_load_range_n=(0.0, 0.0),
+        )
         a = np.array([force_action(env, margin * (load + weight) / mu)], np.float32)
         run = rollout(env, 0, [a] * 100)
         touch = run["obs"][1:, env.unwrapped.observation_blocks["touch"]]
@@ -380,12 +406,15 @@ def test_slip_hold_touch_signals_slip():
 
 # ----- benchmark ---------------------------------------------------------
 
+
 def test_bench_quick_prints_finite_positive_rates_and_ratio(capsys):
     assert bench.main(["--quick"]) == 0
     text = capsys.readouterr().out
     number = r"([0-9]+(?:\.[0-9]*)?(?:[eE][+-]?[0-9]+)?)"
-    rates = [float(re.search(label + r"\s+" + number, text).group(1)) for label in
-             ("single env, touch", "single env, no touch", "envs, rollout", "envs, sync")]
+    rates = [
+        float(re.search(label + r"\s+" + number, text).group(1))
+        for label in ("single env, touch", "single env, no touch", "envs, rollout", "envs, sync")
+    ]
     ratio = float(re.search(r"touch / no touch = " + number, text).group(1))
     assert all(math.isfinite(v) and v > 0 for v in rates + [ratio]), text
     # the printed ratio is the printed single-env rates' (4 decimals, rates

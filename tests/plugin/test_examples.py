@@ -69,7 +69,7 @@ def test_spectral_rollout_lines_and_ridge_filtering(tmp_path, capsys):
 
 def binomial_tail(n: int, k: int, p: float) -> float:
     """P(X >= k) for X ~ Binomial(n, p)."""
-    return sum(math.comb(n, i) * p ** i * (1 - p) ** (n - i) for i in range(k, n + 1))
+    return sum(math.comb(n, i) * p**i * (1 - p) ** (n - i) for i in range(k, n + 1))
 
 
 def test_texture_classification_beats_chance_with_touch_only(capsys):
@@ -95,10 +95,27 @@ def test_texture_classification_beats_chance_with_touch_only(capsys):
 def test_viewer_demo_writes_offscreen_frames(tmp_path):
     out = tmp_path / "frames"
     env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
-    proc = subprocess.run([sys.executable, str(EXAMPLES / "viewer_demo.py"), "--offscreen",
-                           str(out), "--frames", "3", "--every", "0.02", "--settle", "0.3",
-                           "--size", "480", "300"], env=env, capture_output=True, text=True,
-                          timeout=300)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            str(EXAMPLES / "viewer_demo.py"),
+            "--offscreen",
+            str(out),
+            "--frames",
+            "3",
+            "--every",
+            "0.02",
+            "--settle",
+            "0.3",
+            "--size",
+            "480",
+            "300",
+        ],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     # no backend: the demo fails naming what to install (the test fails too)
     assert proc.returncode == 0, proc.stderr
     times = [float(t) for t in re.findall(r"^t = ([0-9.]+) s", proc.stdout, re.M)]
@@ -117,7 +134,8 @@ def test_bench_pressure_runs_every_model_and_grid():
     ex = runpy.run_path(str(EXAMPLES / "bench_pressure.py"))
     rows = ex["measure"](steps=5, elastic_steps=2, rounds=1)
     assert {(r["taxels"], r["model"]) for r in rows} == {
-        (n * n, m) for n in (64, 128, 256) for m in ("contacts", "winkler", "elastic")}
+        (n * n, m) for n in (64, 128, 256) for m in ("contacts", "winkler", "elastic")
+    }
     for r in rows:
         for k in ("us_per_step", "over_bare", "over_native_tactile", "native_tactile_us_per_step"):
             assert np.isfinite(r[k]) and r[k] > 0, (r, k)
@@ -155,9 +173,24 @@ def test_bench_surface_fast_paths_match_reference(yaw, capsys):
 
 def test_mesh_textures_braille_and_knurl_from_mesh_files(tmp_path, capsys):
     # coarse meshes and a small skin: the example's pipeline in seconds
-    out = run_json("mesh_textures.py", ["--out", str(tmp_path), "--mesh-grid", "1e-4",
-                                        "--resolution", "5e-5", "--duration", "0.25",
-                                        "--nx", "48", "--pitch", "2e-4"], capsys)
+    out = run_json(
+        "mesh_textures.py",
+        [
+            "--out",
+            str(tmp_path),
+            "--mesh-grid",
+            "1e-4",
+            "--resolution",
+            "5e-5",
+            "--duration",
+            "0.25",
+            "--nx",
+            "48",
+            "--pitch",
+            "2e-4",
+        ],
+        capsys,
+    )
     assert sorted(p.name for p in tmp_path.iterdir()) == ["braille.stl", "knurl.ply"]
     # the meshes' reliefs (their highest vertices) survive export in mm and
     # from_mesh: cell means sit below the highest vertex by at most the

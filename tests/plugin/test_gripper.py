@@ -12,8 +12,10 @@ import pytest
 import mjtouch
 from mjtouch.scene import scenes
 
-EX = runpy.run_path(str(pathlib.Path(__file__).resolve().parents[2] / "examples" /
-                        "gripper_slide.py"), run_name="example")
+EX = runpy.run_path(
+    str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "gripper_slide.py"),
+    run_name="example",
+)
 PROTOCOL = scenes.Protocol(force_n=0.5, speed_m_s=0.04, timestep_s=2e-4)
 
 

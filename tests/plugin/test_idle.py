@@ -12,8 +12,7 @@ IDLE_SLOT = 4  # plugin_state header: kStReceptorsIdle (plugin/core/pipeline/mod
 
 
 def run(outputs, **skin):
-    tip = scenes.Fingertip(nx=48, pitch_m=1.5e-4, ridges=False,
-                           skin={"outputs": outputs, **skin})
+    tip = scenes.Fingertip(nx=48, pitch_m=1.5e-4, ridges=False, skin={"outputs": outputs, **skin})
     m = scenes.build_model(tip, scenes.Texture(kind="flat"), scenes.Protocol(timestep_s=2e-4))
     d = mujoco.MjData(m)
     layout = SkinLayout.from_model(m)
@@ -62,9 +61,13 @@ def test_idle_with_default_noise_is_taken_and_deterministic():
     stepped, never = run("spikes voltage force")
     assert idle[1600:2400].all() and never.max() == 0
     np.testing.assert_array_equal(skipped, again)
-    layout = SkinLayout.from_model(scenes.build_model(
-        scenes.Fingertip(nx=48, pitch_m=1.5e-4, ridges=False), scenes.Texture(kind="flat"),
-        scenes.Protocol(timestep_s=2e-4)))
+    layout = SkinLayout.from_model(
+        scenes.build_model(
+            scenes.Fingertip(nx=48, pitch_m=1.5e-4, ridges=False),
+            scenes.Texture(kind="flat"),
+            scenes.Protocol(timestep_s=2e-4),
+        )
+    )
     for c in ("SA1", "RA", "PC"):
         m = layout.classes == c
         for press in (slice(0, 800), slice(2400, None)):

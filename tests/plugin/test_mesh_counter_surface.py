@@ -24,8 +24,13 @@ def targets():
     box = trimesh.creation.box([6e-3, 6e-3, 4e-3])
     return [
         ("sphere", dict(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[5e-3, 0, 0]), sphere, 5e-3, 0.0),
-        ("capsule", dict(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[3e-3, 4e-3, 0],
-                         quat=CAPSULE_QUAT), capsule, 3e-3, 0.0),
+        (
+            "capsule",
+            dict(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[3e-3, 4e-3, 0], quat=CAPSULE_QUAT),
+            capsule,
+            3e-3,
+            0.0,
+        ),
         # the box's edge x = 3 mm runs through the contact patch
         ("box", dict(type=mujoco.mjtGeom.mjGEOM_BOX, size=[3e-3, 3e-3, 2e-3]), box, 2e-3, 2.6e-3),
     ]
@@ -35,11 +40,15 @@ def press(geom_kwargs, mesh, top_z, pad_x):
     spec = mujoco.MjSpec()
     spec.option.gravity = [0, 0, 0]
     if mesh is not None:
-        spec.add_mesh(name="target", uservert=np.asarray(mesh.vertices).ravel().tolist(),
-                      userface=np.asarray(mesh.faces).ravel().tolist())
+        spec.add_mesh(
+            name="target",
+            uservert=np.asarray(mesh.vertices).ravel().tolist(),
+            userface=np.asarray(mesh.faces).ravel().tolist(),
+        )
         extra = {"quat": geom_kwargs["quat"]} if "quat" in geom_kwargs else {}
-        spec.worldbody.add_geom(name="target", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="target",
-                                **extra)
+        spec.worldbody.add_geom(
+            name="target", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="target", **extra
+        )
     else:
         spec.worldbody.add_geom(name="target", **geom_kwargs)
     finger = spec.worldbody.add_body(name="finger", pos=[pad_x, 0.0015, top_z + R_PAD - DEPTH])
@@ -100,12 +109,16 @@ def test_a_mesh_edge_sliding_under_a_cell_moves_the_load_smoothly():
 
 def test_mesh_rendering_is_deterministic_across_rollout_threads_copy_and_reset():
     import mujoco.rollout
+
     name, geom, mesh, top, x = targets()[2]  # the box, its edge under the patch
     spec = mujoco.MjSpec()
     spec.option.gravity = [0, 0, 0]
     spec.option.timestep = 1e-4  # one tactile evaluation per step (no oversampling)
-    spec.add_mesh(name="target", uservert=np.asarray(mesh.vertices).ravel().tolist(),
-                  userface=np.asarray(mesh.faces).ravel().tolist())
+    spec.add_mesh(
+        name="target",
+        uservert=np.asarray(mesh.vertices).ravel().tolist(),
+        userface=np.asarray(mesh.faces).ravel().tolist(),
+    )
     spec.worldbody.add_geom(name="target", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="target")
     finger = spec.worldbody.add_body(name="finger", pos=[x, 0.0015, top + R_PAD - DEPTH])
     finger.add_joint(name="x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])

@@ -29,8 +29,14 @@ def strongest_peak(tex, duration_s=0.35):
 def test_stl_grating_gives_the_generated_gratings_VD_line(grating_stl):
     # a 2 mm wide crop of the profile, widened to the generated plate's width
     mt = meshes.from_mesh(grating_stl, resolution_m=2e-5, width_m=0.002)
-    generated = scenes.Texture(kind="grating", period_m=D, plateau_m=W_PLATEAU, height_m=H,
-                               edge_m=0.0, length_m=mt.length_m)
+    generated = scenes.Texture(
+        kind="grating",
+        period_m=D,
+        plateau_m=W_PLATEAU,
+        height_m=H,
+        edge_m=0.0,
+        length_m=mt.length_m,
+    )
     f_mesh, bin_hz = strongest_peak(mt.texture(width_m=generated.width_m))
     f_gen, _ = strongest_peak(generated)
     assert abs(f_mesh - f_gen) <= bin_hz
@@ -38,9 +44,24 @@ def test_stl_grating_gives_the_generated_gratings_VD_line(grating_stl):
 
 
 def test_cli_texture_mesh_reports_peaks_against_VD(grating_stl, capsys):
-    rc = cli.main(["slide", "--texture-mesh", str(grating_stl), "--period", str(D),
-                   "--speed", str(SPEED / 2), "--duration", "0.25", "--nx", "48",
-                   "--pitch", "2e-4", "--json"])
+    rc = cli.main(
+        [
+            "slide",
+            "--texture-mesh",
+            str(grating_stl),
+            "--period",
+            str(D),
+            "--speed",
+            str(SPEED / 2),
+            "--duration",
+            "0.25",
+            "--nx",
+            "48",
+            "--pitch",
+            "2e-4",
+            "--json",
+        ]
+    )
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert out["texture"] == "mesh"

@@ -13,7 +13,8 @@ from mjtouch.scene.sensor import SkinLayout
 def layout(dt, **skin):
     tip = scenes.Fingertip(nx=32, pitch_m=2e-4, skin={k: str(v) for k, v in skin.items()})
     return SkinLayout.from_model(
-        scenes.build_model(tip, scenes.Texture(period_m=1e-3), scenes.Protocol(timestep_s=dt)))
+        scenes.build_model(tip, scenes.Texture(period_m=1e-3), scenes.Protocol(timestep_s=dt))
+    )
 
 
 def test_auto_oversample_resolves_the_afferents():
@@ -28,8 +29,11 @@ def test_auto_oversample_resolves_the_afferents():
 
 
 def test_unresolvable_pc_is_refused():
-    with pytest.raises(ValueError, match=r"PC afferents need tactile sampling of at least 2000 Hz"
-                                         r".*`oversample` >= 2"):
+    with pytest.raises(
+        ValueError,
+        match=r"PC afferents need tactile sampling of at least 2000 Hz"
+        r".*`oversample` >= 2",
+    ):
         layout(1e-3, oversample=1)
     # the contacts model has no geometry to interpolate: it cannot oversample
     with pytest.raises(ValueError, match=r"PC afferents need tactile sampling"):
@@ -47,9 +51,17 @@ def test_oversampled_coarse_step_approaches_the_fine_step():
     # the noise-free PC gain of before issue 14's noise (4.89e-6 s^2/Pa, the
     # default is calibrated with noise) keeps the count over 100.
     def run(dt, k, classes="SA1 RA PC"):
-        tip = scenes.Fingertip(nx=64, pitch_m=1.5e-4, skin={
-            "oversample": str(k), "classes": classes, "outputs": "spikes stress force",
-            "noise": "0 0 0", "pc_gain": "4.89e-6"})
+        tip = scenes.Fingertip(
+            nx=64,
+            pitch_m=1.5e-4,
+            skin={
+                "oversample": str(k),
+                "classes": classes,
+                "outputs": "spikes stress force",
+                "noise": "0 0 0",
+                "pc_gain": "4.89e-6",
+            },
+        )
         proto = scenes.Protocol(force_n=0.5, speed_m_s=0.04, timestep_s=dt, press_s=0.1)
         return rollout.run_slide(tip, scenes.Texture(period_m=1e-3), proto, duration_s=0.3)
 

@@ -20,10 +20,17 @@ ALL_MODELS = sorted(p.name for p in MODELS.glob("*.xml"))
 def test_plain_import_mujoco_registers_plugin():
     # A fresh interpreter that imports only mujoco: the `mujoco.plugins`
     # entry point must register mjtouch.skin.
-    code = (f"import mujoco; m = mujoco.MjModel.from_xml_path({str(MODELS / 'slide_flat.xml')!r}); "
-            "print(m.nplugin, m.nsensordata)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         cwd=tempfile.gettempdir(), timeout=120)
+    code = (
+        f"import mujoco; m = mujoco.MjModel.from_xml_path({str(MODELS / 'slide_flat.xml')!r}); "
+        "print(m.nplugin, m.nsensordata)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        cwd=tempfile.gettempdir(),
+        timeout=120,
+    )
     assert out.returncode == 0, out.stderr
     nplugin, nsensordata = map(int, out.stdout.split())
     assert nplugin == 1 and nsensordata > 0
@@ -44,18 +51,25 @@ def test_committed_models_match_builders():
             assert committed.is_file(), f"models/{p.name} missing; run scenes.write_models"
             assert committed.read_text() == p.read_text(), (
                 f"models/{p.name} is out of date; regenerate with "
-                "python -c 'import mjtouch.scenes as s; s.write_models(\"models\")'")
+                "python -c 'import mjtouch.scenes as s; s.write_models(\"models\")'"
+            )
 
 
 def _arrays(m: mujoco.MjModel) -> dict:
-    return {k: getattr(m, k) for k in dir(m)
-            if not k.startswith("_") and isinstance(getattr(m, k, None), np.ndarray)}
+    return {
+        k: getattr(m, k)
+        for k in dir(m)
+        if not k.startswith("_") and isinstance(getattr(m, k, None), np.ndarray)
+    }
 
 
 def test_scene_spec_compiles_to_the_committed_scene():
     # the Python builder and the committed file give the same model, bit for bit
-    built = _arrays(scenes.scene_spec(scenes.Fingertip(ridges=False),
-                                      model_name="slide_grating_smooth").compile())
+    built = _arrays(
+        scenes.scene_spec(
+            scenes.Fingertip(ridges=False), model_name="slide_grating_smooth"
+        ).compile()
+    )
     read = _arrays(mujoco.MjModel.from_xml_path(str(MODELS / "slide_grating_smooth.xml")))
     differ = [k for k in read if not np.array_equal(read[k], built[k])]
     assert differ == []
@@ -100,13 +114,20 @@ def test_scene_steps_one_second_pressed_without_warnings(name):
 
 
 def test_layout_blocks_and_receptors():
-    m = mujoco.MjModel.from_xml_string(pad_scene({"outputs": "spikes stress voltage force pressure"}))
+    m = mujoco.MjModel.from_xml_string(
+        pad_scene({"outputs": "spikes stress voltage force pressure"})
+    )
     layout = SkinLayout.from_model(m)
     nrec = len(layout.classes)
     assert nrec > 0 and set(layout.classes) == {"SA1", "RA", "PC"}
     sizes = {k: s.stop - s.start for k, s in layout.blocks.items()}
-    assert sizes == {"spikes": nrec, "stress": nrec, "voltage": nrec, "force": 5,
-                     "pressure": layout.nx ** 2}
+    assert sizes == {
+        "spikes": nrec,
+        "stress": nrec,
+        "voltage": nrec,
+        "force": 5,
+        "pressure": layout.nx**2,
+    }
     assert layout.size == m.nsensordata
     # densities (per cm^2) times the population disc's area
     r = np.hypot(layout.positions_m[:, 0], layout.positions_m[:, 1])
@@ -144,7 +165,8 @@ def test_set_skin_edits_the_shipped_scenes_inline_instance():
     scenes.set_skin(spec, pressure="elastic", nx="40")
     layout = SkinLayout.from_model(spec.compile())
     assert layout.nx == 40
-    bare = scenes.remove_skin(scenes.scene_spec(scenes.Fingertip(), scenes.Texture(),
-                                                scenes.Protocol()))
+    bare = scenes.remove_skin(
+        scenes.scene_spec(scenes.Fingertip(), scenes.Texture(), scenes.Protocol())
+    )
     with pytest.raises(ValueError, match="no mjtouch.skin"):
         scenes.set_skin(bare, nx="40")

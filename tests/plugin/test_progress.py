@@ -34,13 +34,16 @@ def counts(stderr: str) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in re.findall(r"(\d+)/(\d+) \[", stderr)]
 
 
-@pytest.mark.parametrize("mode,json_output,tty,shown", [
-    ("auto", False, True, True),  # a terminal
-    ("auto", True, True, False),  # --json: machine-read output, no bar
-    ("auto", False, False, False),  # a pipe, a CI log
-    ("on", True, False, True),
-    ("off", False, True, False),
-])
+@pytest.mark.parametrize(
+    "mode,json_output,tty,shown",
+    [
+        ("auto", False, True, True),  # a terminal
+        ("auto", True, True, False),  # --json: machine-read output, no bar
+        ("auto", False, False, False),  # a pipe, a CI log
+        ("on", True, False, True),
+        ("off", False, True, False),
+    ],
+)
 def test_wanted(mode, json_output, tty, shown):
     assert progress.wanted(mode, json_output, Stream(tty)) is shown
 
@@ -66,8 +69,9 @@ def test_chunked_rollout_is_the_one_call_rollout_bit_for_bit():
     tip = scenes.Fingertip(nx=24, pitch_m=2e-4)
     protocol = scenes.Protocol(timestep_s=5e-4)
     reported = []
-    chunked = rollout.run_slide(tip, scenes.Texture(), protocol, duration_s=0.15,
-                                progress=reported.append)
+    chunked = rollout.run_slide(
+        tip, scenes.Texture(), protocol, duration_s=0.15, progress=reported.append
+    )
     assert len(reported) > 3 and sum(reported) == SMALL_STEPS == len(chunked.time_s)
     # the same slide in one mujoco.rollout call
     m = scenes.build_model(tip, scenes.Texture(), protocol)
@@ -86,8 +90,12 @@ def test_chunked_rollout_is_the_one_call_rollout_bit_for_bit():
 
 
 def run_slide_cli(*args):
-    return subprocess.run([sys.executable, "-m", "mjtouch", "slide", *SMALL, *args],
-                          capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "mjtouch", "slide", *SMALL, *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_slide_is_quiet_with_json_and_off_a_terminal():

@@ -27,14 +27,18 @@ def require(module: str):
     test fails (a skipped sweep test would pass CI without ever running Ray)."""
     top = module.split(".")[0]
     if importlib.util.find_spec(top) is None:
-        pytest.fail(f"{top} is not installed: the sweep tests need mjtouch's 'ray' extra, "
-                    "which the 'test' extra includes: pip install '.[test]'", pytrace=False)
+        pytest.fail(
+            f"{top} is not installed: the sweep tests need mjtouch's 'ray' extra, "
+            "which the 'test' extra includes: pip install '.[test]'",
+            pytrace=False,
+        )
     return importlib.import_module(module)
 
 
 def mjtouch(*args):
-    return subprocess.run([sys.executable, "-m", "mjtouch", *args], capture_output=True,
-                          text=True, timeout=600)
+    return subprocess.run(
+        [sys.executable, "-m", "mjtouch", *args], capture_output=True, text=True, timeout=600
+    )
 
 
 def run_sweep(out, *args):
@@ -51,9 +55,16 @@ def read(path):
 
 
 def test_values_ranges_and_names():
-    v = sweep.parse_values({"period": ["0.8e-3", "1.2e-3"], "speed_m_s": "0.02:0.05:0.01",
-                            "ridge-pitch": 4.5e-4, "ridges": [True, "off"], "nx": "16:24:8",
-                            "force": {"start": 0.25, "stop": 0.75, "step": 0.25}})
+    v = sweep.parse_values(
+        {
+            "period": ["0.8e-3", "1.2e-3"],
+            "speed_m_s": "0.02:0.05:0.01",
+            "ridge-pitch": 4.5e-4,
+            "ridges": [True, "off"],
+            "nx": "16:24:8",
+            "force": {"start": 0.25, "stop": 0.75, "step": 0.25},
+        }
+    )
     assert v["period_m"] == [0.8e-3, 1.2e-3]
     assert v["speed_m_s"] == [0.02, 0.03, 0.04, 0.05]  # decimal values, both ends included
     assert v["ridge_pitch_m"] == [4.5e-4] and v["ridges"] == [True, False]
@@ -67,23 +78,35 @@ def test_values_ranges_and_names():
 
 def test_toml_config(tmp_path):
     f = tmp_path / "s.toml"
-    f.write_text('texture = "random"\nseed = [1, 2]\nrms_m = "1e-5:3e-5:1e-5"\n'
-                 'pressure = ["winkler", "elastic"]\n')
+    f.write_text(
+        'texture = "random"\nseed = [1, 2]\nrms_m = "1e-5:3e-5:1e-5"\n'
+        'pressure = ["winkler", "elastic"]\n'
+    )
     v = sweep.read_config(f)
-    assert v == {"texture": ["random"], "seed": [1, 2], "rms_m": [1e-5, 2e-5, 3e-5],
-                 "pressure": ["winkler", "elastic"]}
+    assert v == {
+        "texture": ["random"],
+        "seed": [1, 2],
+        "rms_m": [1e-5, 2e-5, 3e-5],
+        "pressure": ["winkler", "elastic"],
+    }
 
 
-@pytest.mark.parametrize("values,msg", [
-    ({"perod": 1e-3}, "unknown sweep parameter 'perod'; valid: texture, period_m"),
-    ({"speed": "0.02:0.05:0.02"}, "STOP - START is not a whole number of STEPs"),
-    ({"speed": "0.05:0.02:0.01"}, "needs STEP > 0 and STOP >= START"),
-    ({"speed": -1}, "--speed = -1.0 is out of range; valid range (0, 2] m/s"),
-    ({"texture": "wood"}, "--texture = 'wood' is not one of 'grating', 'random', 'dots', 'flat'"),
-    ({"ridges": "maybe"}, "--ridges 'maybe' is not a boolean"),
-    ({"texture": "grating:flat:1"}, "a range is START:STOP:STEP of a numeric option"),
-    ({"nx": [2, 24]}, "--nx = 2 is out of range; valid range [4, 512]"),
-])
+@pytest.mark.parametrize(
+    "values,msg",
+    [
+        ({"perod": 1e-3}, "unknown sweep parameter 'perod'; valid: texture, period_m"),
+        ({"speed": "0.02:0.05:0.02"}, "STOP - START is not a whole number of STEPs"),
+        ({"speed": "0.05:0.02:0.01"}, "needs STEP > 0 and STOP >= START"),
+        ({"speed": -1}, "--speed = -1.0 is out of range; valid range (0, 2] m/s"),
+        (
+            {"texture": "wood"},
+            "--texture = 'wood' is not one of 'grating', 'random', 'dots', 'flat'",
+        ),
+        ({"ridges": "maybe"}, "--ridges 'maybe' is not a boolean"),
+        ({"texture": "grating:flat:1"}, "a range is START:STOP:STEP of a numeric option"),
+        ({"nx": [2, 24]}, "--nx = 2 is out of range; valid range [4, 512]"),
+    ],
+)
 def test_bad_values_name_the_option_and_range(values, msg):
     with pytest.raises(ValueError, match=None) as e:
         sweep.expand(sweep.parse_values(values))
@@ -96,7 +119,10 @@ def test_bad_toml(tmp_path):
     with pytest.raises(ValueError, match=f"sweep config {f}"):
         sweep.read_config(f)
     f.write_text("duration = -1\n")
-    with pytest.raises(ValueError, match=re.escape(f"{f}: duration = -1.0 is out of range; valid range [0.15, inf) s")):
+    with pytest.raises(
+        ValueError,
+        match=re.escape(f"{f}: duration = -1.0 is out of range; valid range [0.15, inf) s"),
+    ):
         sweep.read_config(f)
 
 
@@ -116,7 +142,11 @@ def test_ray_and_serial_give_the_same_table(tmp_path):
     assert a.drop_columns(["wall_s"]).equals(b.drop_columns(["wall_s"]))
     rows = a.to_pylist()
     assert [(r["period_m"], r["speed_m_s"]) for r in rows] == [
-        (0.8e-3, 0.02), (0.8e-3, 0.04), (1.2e-3, 0.02), (1.2e-3, 0.04)]  # product order
+        (0.8e-3, 0.02),
+        (0.8e-3, 0.04),
+        (1.2e-3, 0.02),
+        (1.2e-3, 0.04),
+    ]  # product order
     for r in rows:
         assert r["expected_texture_hz"] == pytest.approx(r["speed_m_s"] / r["period_m"])
         assert r["expected_ridges_hz"] == pytest.approx(r["speed_m_s"] / r["ridge_pitch_m"])
@@ -142,11 +172,13 @@ def test_row_is_the_slide_with_the_same_options(tmp_path):
     assert len(trains) == len(classes) == len(row["receptor_x_m"])
     window_s = row["duration_s"] + 0.15 - row["window_start_s"] + row["dt_s"]
     for c in ("SA1", "RA", "PC"):
-        n = sum(sum(t >= row["window_start_s"] for t in trains[i])
-                for i in np.nonzero(classes == c)[0])
+        n = sum(
+            sum(t >= row["window_start_s"] for t in trains[i]) for i in np.nonzero(classes == c)[0]
+        )
         assert n == row[f"{c.lower()}_spike_count"], c
         assert n / (row[f"{c.lower()}_receptors"] * window_s) == pytest.approx(
-            row[f"{c.lower()}_rate_hz"], rel=1e-9)
+            row[f"{c.lower()}_rate_hz"], rel=1e-9
+        )
     assert row["sa1_spike_count"] + row["pc_spike_count"] > 0  # the check saw spikes
 
 
@@ -169,8 +201,19 @@ def test_resume_skips_finished_runs(tmp_path):
 
 def test_failed_run_is_reported_and_the_rest_run(tmp_path):
     # plateau 0.9 mm fits the 1.2 mm period, not the 0.8 mm one
-    r = mjtouch("sweep", "--out", str(tmp_path), "--period", "0.8e-3", "1.2e-3",
-                "--plateau", "0.9e-3", *SMALL, "--serial", "--json")
+    r = mjtouch(
+        "sweep",
+        "--out",
+        str(tmp_path),
+        "--period",
+        "0.8e-3",
+        "1.2e-3",
+        "--plateau",
+        "0.9e-3",
+        *SMALL,
+        "--serial",
+        "--json",
+    )
     assert r.returncode == 1
     s = json.loads(r.stdout)
     assert s["ran"] == 1 and len(s["failed"]) == 1
@@ -187,8 +230,11 @@ def test_bad_arguments_exit_2_before_running(tmp_path):
     assert r.returncode == 2 and "--num-cpus 0 must be >= 1" in r.stderr
     require("ray")  # an address where no cluster answers (port 1): an error, not a hang
     r = mjtouch("sweep", "--out", str(tmp_path), "--address", "127.0.0.1:1", *SMALL)
-    assert r.returncode == 2 and "could not join the Ray cluster at --address 127.0.0.1:1: " \
-        "nothing answers there" in r.stderr
+    assert (
+        r.returncode == 2
+        and "could not join the Ray cluster at --address 127.0.0.1:1: nothing answers there"
+        in r.stderr
+    )
     r = mjtouch("sweep", "--out", str(tmp_path), "--serial", "--address", "auto")
     assert r.returncode == 2 and "--address joins a Ray cluster; not with --serial" in r.stderr
     assert not (tmp_path / "runs").exists() or not any((tmp_path / "runs").iterdir())
@@ -198,8 +244,23 @@ def test_bench_sweep_example(capsys):
     # examples/bench_sweep.py (the README's speed-up) on two tiny runs
     require("ray")
     main = runpy.run_path(str(EXAMPLES / "bench_sweep.py"), run_name="example")["main"]
-    assert main(["--repeats", "1", "--num-cpus", "2", "--json", "--",
-                 "--period", "0.8e-3", "1.2e-3", *SMALL]) == 0
+    assert (
+        main(
+            [
+                "--repeats",
+                "1",
+                "--num-cpus",
+                "2",
+                "--json",
+                "--",
+                "--period",
+                "0.8e-3",
+                "1.2e-3",
+                *SMALL,
+            ]
+        )
+        == 0
+    )
     o = json.loads(capsys.readouterr().out)
     assert o["runs"] == 2 and o["tables_identical"] is True
     for key in ("speedup_min", "speedup_median", "speedup_runs_only_median"):

@@ -28,33 +28,48 @@ FLASH_S = 0.03  # visualize.cc kFlashS
 MIN_REL_PRESSURE = 0.02  # visualize.cc kMinRelPressure
 MAX_TILES_PER_SIDE = 32  # visualize.cc kMaxTilesPerSide
 LIT_RADIUS_M, IDLE_RADIUS_M = 1.2e-4, 4e-5  # visualize.cc: small, so the heatmap reads
-CLASS_RGBA = {"SA1": (0.15, 0.45, 1.0, 1.0), "RA": (0.1, 0.9, 0.25, 1.0),
-              "PC": (0.95, 0.2, 0.95, 1.0)}
+CLASS_RGBA = {
+    "SA1": (0.15, 0.45, 1.0, 1.0),
+    "RA": (0.1, 0.9, 0.25, 1.0),
+    "PC": (0.95, 0.2, 0.95, 1.0),
+}
 # Frames: half a grating period apart at V/D = 25 Hz, so the pattern moves.
 FRAME_TIMES_S = (0.30, 0.32)
-INSTALL_HINT = ("no offscreen OpenGL backend works on this machine (tried MUJOCO_GL=egl, then "
-                "osmesa). Install one: EGL with `apt-get install libegl1 libegl-mesa0 "
-                "libgl1-mesa-dri` (Debian/Ubuntu), or OSMesa with `apt-get install libosmesa6`; "
-                "then check with `MUJOCO_GL=egl python -c \"import mujoco; "
-                "mujoco.Renderer(mujoco.MjModel.from_xml_string('<mujoco/>'), 8, 8)\"`")
+INSTALL_HINT = (
+    "no offscreen OpenGL backend works on this machine (tried MUJOCO_GL=egl, then "
+    "osmesa). Install one: EGL with `apt-get install libegl1 libegl-mesa0 "
+    "libgl1-mesa-dri` (Debian/Ubuntu), or OSMesa with `apt-get install libosmesa6`; "
+    'then check with `MUJOCO_GL=egl python -c "import mujoco; '
+    "mujoco.Renderer(mujoco.MjModel.from_xml_string('<mujoco/>'), 8, 8)\"`"
+)
 
 
 def heat_color(u: float) -> np.ndarray:
     """visualize.cc HeatColor: the tile colour at pressure u x the peak."""
     v = 0.2 + 0.8 * min(max(u, 0.0), 1.0)
-    return np.array([min(max(3 * v, 0.0), 1.0), min(max(3 * v - 1, 0.0), 1.0),
-                     min(max(3 * v - 2, 0.0), 1.0), 1.0])
+    return np.array(
+        [
+            min(max(3 * v, 0.0), 1.0),
+            min(max(3 * v - 1, 0.0), 1.0),
+            min(max(3 * v - 2, 0.0), 1.0),
+            1.0,
+        ]
+    )
 
 
 def skin_geoms(scn: mujoco.MjvScene, sensor_id: int) -> list[int]:
     """Indices of the geoms the skin plugin added to the scene."""
-    return [i for i in range(scn.ngeom)
-            if scn.geoms[i].objtype == mujoco.mjtObj.mjOBJ_UNKNOWN
-            and scn.geoms[i].objid == sensor_id
-            and scn.geoms[i].category == mujoco.mjtCatBit.mjCAT_DECOR]
+    return [
+        i
+        for i in range(scn.ngeom)
+        if scn.geoms[i].objtype == mujoco.mjtObj.mjOBJ_UNKNOWN
+        and scn.geoms[i].objid == sensor_id
+        and scn.geoms[i].category == mujoco.mjtCatBit.mjCAT_DECOR
+    ]
 
 
 # ----- the render worker (this file as a script) ----------------------------
+
 
 def _worker(out: pathlib.Path) -> None:
     """Render frames of the sliding scene and of the environments; write
@@ -96,8 +111,9 @@ def _worker(out: pathlib.Path) -> None:
     lay = session.layout
     p = lay.block(session.data.sensordata, "pressure").reshape(lay.nx, lay.nx)
     b = -(-lay.nx // MAX_TILES_PER_SIDE)
-    tiles = [p[j:j + b, i:i + b].mean() for j in range(0, lay.nx, b)
-             for i in range(0, lay.nx, b)]
+    tiles = [
+        p[j : j + b, i : i + b].mean() for j in range(0, lay.nx, b) for i in range(0, lay.nx, b)
+    ]
     report["peak_tile_kpa"] = float(max(tiles)) / 1e3
     report["scale_top_kpa"] = float(session.scale_figure().range[0][1])
     Image.fromarray(arrays["session"]).save(out / "viewer_session.png")
@@ -159,8 +175,9 @@ def gl_env():
 def rendered(tmp_path_factory, gl_env):
     out = tmp_path_factory.mktemp("viewer_frames")
     env = gl_env
-    proc = subprocess.run([sys.executable, __file__, str(out)], env=env, capture_output=True,
-                          text=True, timeout=300)
+    proc = subprocess.run(
+        [sys.executable, __file__, str(out)], env=env, capture_output=True, text=True, timeout=300
+    )
     assert proc.returncode == 0, f"render worker failed:\n{proc.stdout}\n{proc.stderr}"
     frames = dict(np.load(out / "frames.npz"))
     report = json.loads((out / "worker.json").read_text())
@@ -184,8 +201,10 @@ def classify(img: np.ndarray) -> dict[str, np.ndarray]:
 def test_rendered_frames_show_heatmap_and_spikes_over_the_pad(rendered):
     frames, report, out = rendered
     for k in range(len(FRAME_TIMES_S)):
-        drawn = np.abs(frames[f"with_{k}"].astype(int)
-                       - frames[f"without_{k}"].astype(int)).max(axis=2) > 30
+        drawn = (
+            np.abs(frames[f"with_{k}"].astype(int) - frames[f"without_{k}"].astype(int)).max(axis=2)
+            > 30
+        )
         colours = {name: m & drawn for name, m in classify(frames[f"with_{k}"]).items()}
         counts = {name: int(m.sum()) for name, m in colours.items()}
         # the heatmap: a 9.6 mm square 5 cm from a 640 x 480 camera covers
@@ -199,6 +218,7 @@ def test_rendered_frames_show_heatmap_and_spikes_over_the_pad(rendered):
         cols = np.nonzero(drawn)[1]
         assert pad_cols.min() <= cols.mean() <= pad_cols.max()
         assert report[f"skin_geoms_{k}"] > 300
+
     # while sliding (the camera tracks the finger, so the pad stays put) the
     # drawing changes: the grating moved half a period under the pad
     def differ(a, b):
@@ -218,8 +238,8 @@ def test_rendered_viewer_frame_has_raster_spectrum_and_marks(rendered):
     frames, report, _ = rendered
     img = frames["session"]
     h, w, _ = img.shape
-    raster = img[: h // 2, 2 * w // 3:]
-    spectrum = img[h // 2:, 2 * w // 3:]
+    raster = img[: h // 2, 2 * w // 3 :]
+    spectrum = img[h // 2 :, 2 * w // 3 :]
     rc = {name: int(m.sum()) for name, m in classify(raster).items()}
     assert rc["SA1"] > 50 and rc["PC"] > 20 and rc["RA"] > 5, rc  # ticks of each class
     r, g, b = (spectrum[..., c].astype(int) for c in range(3))
@@ -244,7 +264,7 @@ def test_rendered_viewer_frame_has_a_colour_scale(rendered):
     assert len(matched) > 0.6 * (w // 3 - 20), (row, len(matched))
     # along the bar the colour follows the ramp: brightness rises left to right
     bright = corner[row, matched].sum(axis=1)[2:-2]  # the bar's anti-aliased ends left out
-    assert bright[: len(bright) // 4].mean() + 150 < bright[-len(bright) // 4:].mean()
+    assert bright[: len(bright) // 4].mean() + 150 < bright[-len(bright) // 4 :].mean()
     assert np.all(np.diff(bright) >= 0), bright  # band by band, never darker
     # MjvFigure.range is float32
     assert report["scale_top_kpa"] == pytest.approx(report["peak_tile_kpa"], rel=1e-6)
@@ -264,9 +284,13 @@ def test_view_command_offscreen_writes_a_png(tmp_path, gl_env):
     from PIL import Image
 
     png = tmp_path / "view.png"
-    proc = subprocess.run([sys.executable, "-m", "mjtouch", "view", "--offscreen", str(png),
-                           "--duration", "0.3"], env=gl_env, capture_output=True, text=True,
-                          timeout=300)
+    proc = subprocess.run(
+        [sys.executable, "-m", "mjtouch", "view", "--offscreen", str(png), "--duration", "0.3"],
+        env=gl_env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr
     assert "wrote" in proc.stdout and "F = 0.50 N" in proc.stdout
     img = np.asarray(Image.open(png).convert("RGB"))
@@ -279,15 +303,19 @@ def test_view_command_offscreen_writes_a_png(tmp_path, gl_env):
 
 # ----- the drawing in the scene, checked exactly (no OpenGL needed) ---------
 
+
 @pytest.fixture(scope="module")
 def pressure_session(tmp_path_factory):
     """The viewer's sliding scene with the skin's pressure output on."""
     s = ViewSettings()
-    tip = scenes.Fingertip(nx=s.nx, pitch_m=s.pitch_m,
-                           skin={"outputs": "spikes stress force pressure"})
-    xml = scenes.scene_xml(tip, scenes.Texture(period_m=1e-3),
-                           scenes.Protocol(force_n=s.force_n, speed_m_s=s.speed_m_s,
-                                           timestep_s=s.timestep_s))
+    tip = scenes.Fingertip(
+        nx=s.nx, pitch_m=s.pitch_m, skin={"outputs": "spikes stress force pressure"}
+    )
+    xml = scenes.scene_xml(
+        tip,
+        scenes.Texture(period_m=1e-3),
+        scenes.Protocol(force_n=s.force_n, speed_m_s=s.speed_m_s, timestep_s=s.timestep_s),
+    )
     path = tmp_path_factory.mktemp("scene") / "slide_pressure.xml"
     path.write_text(xml)
     return path
@@ -296,8 +324,15 @@ def pressure_session(tmp_path_factory):
 def scene_drawing(session: SlideSession):
     m, d = session.model, session.data
     scn = mujoco.MjvScene(m, maxgeom=5000)
-    mujoco.mjv_updateScene(m, d, mujoco.MjvOption(), mujoco.MjvPerturb(), session.camera(),
-                           mujoco.mjtCatBit.mjCAT_ALL, scn)
+    mujoco.mjv_updateScene(
+        m,
+        d,
+        mujoco.MjvOption(),
+        mujoco.MjvPerturb(),
+        session.camera(),
+        mujoco.mjtCatBit.mjCAT_ALL,
+        scn,
+    )
     idx = skin_geoms(scn, session.layout.sensor_id)
     boxes = [scn.geoms[i] for i in idx if scn.geoms[i].type == mujoco.mjtGeom.mjGEOM_BOX]
     spheres = [scn.geoms[i] for i in idx if scn.geoms[i].type == mujoco.mjtGeom.mjGEOM_SPHERE]
@@ -311,7 +346,7 @@ def expected_tiles(session: SlideSession) -> np.ndarray:
     b = -(-lay.nx // MAX_TILES_PER_SIDE)
     nt = -(-lay.nx // b)
     padded = np.full((nt * b, nt * b), np.nan)
-    padded[:lay.nx, :lay.nx] = p
+    padded[: lay.nx, : lay.nx] = p
     tiles = np.nanmean(padded.reshape(nt, b, nt, b), axis=(1, 3)).ravel()
     peak = tiles.max()
     return np.array([heat_color(t / peak) for t in tiles if t >= MIN_REL_PRESSURE * peak])
@@ -357,6 +392,7 @@ def test_scene_heatmap_and_flashing_receptors_match_the_skin(pressure_session):
 
 
 # ----- session logic: keys, sliders, figures (no window) -----------------
+
 
 def test_keys_change_force_speed_texture_and_ridges():
     session = SlideSession()
@@ -443,7 +479,7 @@ def test_spectrum_figure_peaks_at_the_marked_v_over_d():
     session.advance(int(round(1.0 / session.dt)))  # press, then a window of steady sliding
     fig = session.spectrum_figure()
     n = fig.linepnt[0]
-    f, logp = fig.linedata[0, 0:2 * n:2], fig.linedata[0, 1:2 * n:2]
+    f, logp = fig.linedata[0, 0 : 2 * n : 2], fig.linedata[0, 1 : 2 * n : 2]
     v_over_d = session.expected_hz()["V/D"]
     assert v_over_d == pytest.approx(25.0)
     assert fig.linedata[1, 0] == pytest.approx(v_over_d) == fig.linedata[1, 2]
@@ -462,7 +498,7 @@ def test_spectrum_figure_peaks_at_the_marked_v_over_d():
 
 def fig_ticks(fig: mujoco.MjvFigure, line: int) -> np.ndarray:
     n = fig.linepnt[line]
-    pts = fig.linedata[line, :2 * n].reshape(-1, 2)
+    pts = fig.linedata[line, : 2 * n].reshape(-1, 2)
     return pts[1::3, 0] if n >= 3 else np.zeros(0)
 
 

@@ -26,8 +26,15 @@ def scene(**skin):
 
 def drawn(model, data, option=None):
     scn = mujoco.MjvScene(model, maxgeom=5000)
-    mujoco.mjv_updateScene(model, data, option or mujoco.MjvOption(), mujoco.MjvPerturb(),
-                           mujoco.MjvCamera(), mujoco.mjtCatBit.mjCAT_ALL, scn)
+    mujoco.mjv_updateScene(
+        model,
+        data,
+        option or mujoco.MjvOption(),
+        mujoco.MjvPerturb(),
+        mujoco.MjvCamera(),
+        mujoco.mjtCatBit.mjCAT_ALL,
+        scn,
+    )
     return [scn.geoms[i] for i in range(scn.ngeom)]
 
 
@@ -36,8 +43,9 @@ def test_the_texture_the_skin_feels_is_drawn_once():
     tex = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "texture")
     assert model.geom_group[tex] == scenes.TEXTURE_GROUP
     assert not mujoco.MjvOption().geomgroup[scenes.TEXTURE_GROUP]  # hidden by default
-    copies = [g for g in drawn(model, data)
-              if g.objtype == mujoco.mjtObj.mjOBJ_GEOM and g.objid == tex]
+    copies = [
+        g for g in drawn(model, data) if g.objtype == mujoco.mjtObj.mjOBJ_GEOM and g.objid == tex
+    ]
     assert len(copies) == 1
     g = copies[0]
     assert g.type == mujoco.mjtGeom.mjGEOM_HFIELD and g.dataid == model.geom_dataid[tex]
@@ -45,20 +53,31 @@ def test_the_texture_the_skin_feels_is_drawn_once():
     # with the group shown MuJoCo draws it itself: no second copy
     opt = mujoco.MjvOption()
     opt.geomgroup[scenes.TEXTURE_GROUP] = 1
-    assert sum(g.objtype == mujoco.mjtObj.mjOBJ_GEOM and g.objid == tex
-               for g in drawn(model, data, opt)) == 1
+    assert (
+        sum(
+            g.objtype == mujoco.mjtObj.mjOBJ_GEOM and g.objid == tex
+            for g in drawn(model, data, opt)
+        )
+        == 1
+    )
     # visual = none: the skin draws nothing, the texture stays hidden
     model, data = scene(visual="none")
-    assert not any(g.objtype == mujoco.mjtObj.mjOBJ_GEOM and g.objid == tex
-                   for g in drawn(model, data))
+    assert not any(
+        g.objtype == mujoco.mjtObj.mjOBJ_GEOM and g.objid == tex for g in drawn(model, data)
+    )
 
 
 @pytest.mark.parametrize("ridges,angle", [(True, 0.0), (True, 30.0), (False, 0.0)])
 def test_ridge_crests_are_drawn_over_the_heatmap(ridges, angle):
     model, data = scene(ridges="true" if ridges else "false", ridge_angle=str(angle))
     lay = SkinLayout.from_model(model)
-    lines = [g for g in drawn(model, data) if g.type == mujoco.mjtGeom.mjGEOM_LINE
-             and g.objid == lay.sensor_id and g.objtype == mujoco.mjtObj.mjOBJ_UNKNOWN]
+    lines = [
+        g
+        for g in drawn(model, data)
+        if g.type == mujoco.mjtGeom.mjGEOM_LINE
+        and g.objid == lay.sensor_id
+        and g.objtype == mujoco.mjtObj.mjOBJ_UNKNOWN
+    ]
     if not ridges:
         assert lines == []
         return
@@ -99,11 +118,13 @@ print(json.dumps({"texture": int(((seg[..., 0] == tex) & is_geom).sum()),
 def test_offscreen_frames_show_the_texture_not_the_flat_proxy():
     backend = viewer.offscreen_backend()
     if backend is None:
-        pytest.fail("no offscreen OpenGL backend (MUJOCO_GL=egl or osmesa) works here",
-                    pytrace=False)
+        pytest.fail(
+            "no offscreen OpenGL backend (MUJOCO_GL=egl or osmesa) works here", pytrace=False
+        )
     env = {**os.environ, "MUJOCO_GL": backend, "PYOPENGL_PLATFORM": backend}
-    proc = subprocess.run([sys.executable, "-c", RENDER], env=env, capture_output=True,
-                          text=True, timeout=300)
+    proc = subprocess.run(
+        [sys.executable, "-c", RENDER], env=env, capture_output=True, text=True, timeout=300
+    )
     assert proc.returncode == 0, proc.stderr
     px = json.loads(proc.stdout.strip().splitlines()[-1])
     # the viewer's camera looks down on the plate around the pad: the

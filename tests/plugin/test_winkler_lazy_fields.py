@@ -13,8 +13,9 @@ from mjtouch.scene.sensor import SkinLayout
 
 
 def _run(skin: dict[str, str], steps: int = 120) -> dict[str, np.ndarray]:
-    model = mujoco.MjModel.from_xml_string(pad_scene(
-        {"pressure": "winkler", "nx": "64", "outputs": "stress force pressure", **skin}))
+    model = mujoco.MjModel.from_xml_string(
+        pad_scene({"pressure": "winkler", "nx": "64", "outputs": "stress force pressure", **skin})
+    )
     data = mujoco.MjData(model)
     # pushed sideways: a tangential contact force, so the shear is nonzero
     data.xfrc_applied[model.body("finger").id, 0] = 0.2

@@ -32,8 +32,15 @@ SCENE = ROOT / "models" / "slide_grating.xml"
 ANCHOR = '<config key="texture_group" value="3"/>'
 # Values the scene itself sets (replaced, not added: MuJoCo refuses a
 # duplicate config key).
-SCENE_KEYS = {"texture_group", "nx", "pitch", "ridges", "ridge_pitch", "ridge_height",
-              "ridge_angle"}
+SCENE_KEYS = {
+    "texture_group",
+    "nx",
+    "pitch",
+    "ridges",
+    "ridge_pitch",
+    "ridge_height",
+    "ridge_angle",
+}
 OUTCOMES = ("error", "ran", "hang", "crash", "silent")
 
 
@@ -42,8 +49,13 @@ def scene_xml(attrs: dict[str, str] | None = None, edit=None) -> str:
     an optional text edit of the rest."""
     xml = SCENE.read_text()
     for key, value in (attrs or {}).items():
-        value = (value.replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;")
-                 .replace("\t", "&#9;").replace("\n", "&#10;"))
+        value = (
+            value.replace("&", "&amp;")
+            .replace('"', "&quot;")
+            .replace("<", "&lt;")
+            .replace("\t", "&#9;")
+            .replace("\n", "&#10;")
+        )
         own = re.search(rf'<config key="{re.escape(key)}" value="[^"]*"/>', xml)
         if own:
             xml = xml.replace(own.group(0), f'<config key="{key}" value="{value}"/>')
@@ -54,10 +66,13 @@ def scene_xml(attrs: dict[str, str] | None = None, edit=None) -> str:
 
 # -- the worker (a separate process) ------------------------------------------
 
+
 def _evaluate(xml: str, steps: int) -> dict:
     import mujoco
     import numpy as np
+
     from mjtouch.sensor import SkinLayout
+
     t0 = time.perf_counter()
     try:
         m = mujoco.MjModel.from_xml_string(xml)
@@ -74,19 +89,25 @@ def _evaluate(xml: str, steps: int) -> dict:
         except Exception:  # noqa: BLE001 - another plugin
             pass
     press = m.actuator("press").id if "press" in [m.actuator(i).name for i in range(m.nu)] else None
-    for k in range(steps):
+    for _ in range(steps):
         if press is not None:
             d.ctrl[press] = -0.5
         mujoco.mj_step(m, d)
     finite = bool(np.all(np.isfinite(d.sensordata)) and np.all(np.isfinite(d.plugin_state)))
     blocks = [{name: s.stop - s.start for name, s in lay.blocks.items()} for lay in skins]
     classes = [sorted(set(lay.classes)) for lay in skins]
-    return {"kind": "ran", "finite": finite, "blocks": blocks, "classes": classes,
-            "seconds": time.perf_counter() - t0}
+    return {
+        "kind": "ran",
+        "finite": finite,
+        "blocks": blocks,
+        "classes": classes,
+        "seconds": time.perf_counter() - t0,
+    }
 
 
 def _serve() -> None:
     import mjtouch  # noqa: F401 - registers the plugin before the first case
+
     for line in sys.stdin:
         case = json.loads(line)
         out = _evaluate(case["xml"], case["steps"])
@@ -103,9 +124,14 @@ class Runner:
         self.proc = None
 
     def _start(self):
-        self.proc = subprocess.Popen([sys.executable, __file__, "--serve"], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                                     text=True, env=os.environ.copy())
+        self.proc = subprocess.Popen(
+            [sys.executable, __file__, "--serve"],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+            env=os.environ.copy(),
+        )
 
     def close(self):
         if self.proc:
@@ -170,17 +196,47 @@ def classify(result: dict, attrs: dict[str, str] | None = None) -> tuple[str, st
 
 # -- the fixed sweep (counts for the docs) -------------------------------------
 
-NUMBER_PROBES = ["", " ", "nan", "inf", "-inf", "0", "-1", "1e-30", "1e30", "1e-300",
-                 "abc", "1 2", "99999999999999999999999"]
+NUMBER_PROBES = [
+    "",
+    " ",
+    "nan",
+    "inf",
+    "-inf",
+    "0",
+    "-1",
+    "1e-30",
+    "1e30",
+    "1e-300",
+    "abc",
+    "1 2",
+    "99999999999999999999999",
+]
 COMPOSITE_PROBES = {
-    "layers": ["1e-30 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4",
-               "1e-300 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4",
-               "1e-6 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4",
-               "7e-4 1e12 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4",
-               "7e-4 8e4 0.48, 8e-4 5e4 0.48", ";", "7e-4 8e4 0.48;;", "7e-4 8e4",
-               "7e-4 8e4 0.6", "7e-4 8e4 nan", "1 8e4 0.48", "; ".join(["1e-4 8e4 0.48"] * 65)],
-    "sites": [";", "SA1,0,0,1e-3", "SA1 0 0 1e-3", "SA1 0 0 1e-3; RA 1e-3 0 7.5e-4",
-              "SA1 0 0", "XX 0 0 1e-3", "SA1 0 0 0", "SA1 1 0 1e-3", "SA1 nan 0 1e-3"],
+    "layers": [
+        "1e-30 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4",
+        "1e-300 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4",
+        "1e-6 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4",
+        "7e-4 1e12 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4",
+        "7e-4 8e4 0.48, 8e-4 5e4 0.48",
+        ";",
+        "7e-4 8e4 0.48;;",
+        "7e-4 8e4",
+        "7e-4 8e4 0.6",
+        "7e-4 8e4 nan",
+        "1 8e4 0.48",
+        "; ".join(["1e-4 8e4 0.48"] * 65),
+    ],
+    "sites": [
+        ";",
+        "SA1,0,0,1e-3",
+        "SA1 0 0 1e-3",
+        "SA1 0 0 1e-3; RA 1e-3 0 7.5e-4",
+        "SA1 0 0",
+        "XX 0 0 1e-3",
+        "SA1 0 0 0",
+        "SA1 1 0 1e-3",
+        "SA1 nan 0 1e-3",
+    ],
     "density": ["0 0 0", "70 140", "70,140,21", "1e30 1 1", "70 140 0"],
     "depth": ["0 0 0", "7.5e-4 7.5e-4 5e-3", "1e-30 1e-3 2e-3", "a b c"],
     "noise": ["0.3; 0.3; 0.1", "-1 0 0", "inf 0 0", "0 0 0"],
@@ -194,8 +250,11 @@ COMPOSITE_PROBES = {
     "radius": ["0", "1e-30"],
     "pc_lowpass": ["1e5"],
 }
-GRID_PROBES = [{"nx": "4", "pitch": "1e-6"}, {"nx": "512", "pitch": "1e-6"},
-               {"nx": "4", "pitch": "1e-2", "ridges": "false"}]
+GRID_PROBES = [
+    {"nx": "4", "pitch": "1e-6"},
+    {"nx": "512", "pitch": "1e-6"},
+    {"nx": "4", "pitch": "1e-2", "ridges": "false"},
+]
 
 
 def _replace_geom_attr(xml, name, attr, value):
@@ -204,38 +263,50 @@ def _replace_geom_attr(xml, name, attr, value):
         if re.search(rf'\b{attr}="', tag):
             return re.sub(rf'\b{attr}="[^"]*"', f'{attr}="{value}"', tag)
         return tag.replace("<geom ", f'<geom {attr}="{value}" ', 1)
+
     return re.sub(rf'<geom name="{name}"[^>]*/>', sub, xml)
 
 
 STRUCTURAL = {
     "pad cylinder": lambda x: _replace_geom_attr(x, "pad", "type", "cylinder"),
-    "pad sphere": lambda x: _replace_geom_attr(_replace_geom_attr(x, "pad", "type", "sphere"),
-                                               "pad", "size", "0.008"),
+    "pad sphere": lambda x: _replace_geom_attr(
+        _replace_geom_attr(x, "pad", "type", "sphere"), "pad", "size", "0.008"
+    ),
     "pad box": lambda x: _replace_geom_attr(x, "pad", "type", "box"),
-    "pad capsule": lambda x: _replace_geom_attr(_replace_geom_attr(x, "pad", "type", "capsule"),
-                                                "pad", "size", "0.007 0.003"),
+    "pad capsule": lambda x: _replace_geom_attr(
+        _replace_geom_attr(x, "pad", "type", "capsule"), "pad", "size", "0.007 0.003"
+    ),
     "pad tiny": lambda x: _replace_geom_attr(x, "pad", "size", "1e-5 1e-5 1e-5"),
-    "sensor on a body": lambda x: x.replace('objtype="geom" objname="pad"',
-                                            'objtype="body" objname="finger"'),
+    "sensor on a body": lambda x: x.replace(
+        'objtype="geom" objname="pad"', 'objtype="body" objname="finger"'
+    ),
     "two sensors, one instance": lambda x: x.replace(
-        "</sensor>", '<plugin objtype="geom" objname="pad" plugin="mjtouch.skin" name="skin2"/>'
-        "</sensor>"),
-    "texture names a missing geom": lambda x: x.replace(ANCHOR, ANCHOR + '<config key="texture" value="nothere"/>'),
-    "texture names the pad": lambda x: x.replace(ANCHOR, ANCHOR + '<config key="texture" value="pad"/>'),
+        "</sensor>",
+        '<plugin objtype="geom" objname="pad" plugin="mjtouch.skin" name="skin2"/></sensor>',
+    ),
+    "texture names a missing geom": lambda x: x.replace(
+        ANCHOR, ANCHOR + '<config key="texture" value="nothere"/>'
+    ),
+    "texture names the pad": lambda x: x.replace(
+        ANCHOR, ANCHOR + '<config key="texture" value="pad"/>'
+    ),
     "timestep 1e-6": lambda x: x.replace('timestep="0.0001"', 'timestep="1e-6"'),
     "timestep 1e-2": lambda x: x.replace('timestep="0.0001"', 'timestep="1e-2"'),
-    "hfield z-size 1e30": lambda x: x.replace('size="0.04 0.015 0.0001 0.001"',
-                                              'size="0.04 0.015 1e30 0.001"'),
-    "hfield z-size 0": lambda x: x.replace('size="0.04 0.015 0.0001 0.001"',
-                                           'size="0.04 0.015 0 0.001"'),
+    "hfield z-size 1e30": lambda x: x.replace(
+        'size="0.04 0.015 0.0001 0.001"', 'size="0.04 0.015 1e30 0.001"'
+    ),
+    "hfield z-size 0": lambda x: x.replace(
+        'size="0.04 0.015 0.0001 0.001"', 'size="0.04 0.015 0 0.001"'
+    ),
     "no contact pair": lambda x: re.sub(r"<contact>.*?</contact>", "", x, flags=re.S),
     "friction 0": lambda x: x.replace('friction="0.5 0.5"', 'friction="0 0"'),
     "integrator RK4": lambda x: x.replace('integrator="implicitfast"', 'integrator="RK4"'),
     "integrator Euler": lambda x: x.replace('integrator="implicitfast"', 'integrator="Euler"'),
     "gravity 1e4": lambda x: x.replace("<option ", '<option gravity="0 0 -1e4" '),
     "pad mass 1e-9": lambda x: x.replace('mass="0.02"', 'mass="1e-9"'),
-    "finger starts 5 mm inside the plate": lambda x: x.replace('pos="-0.02 0 0.0073"',
-                                                               'pos="-0.02 0 0.0023"'),
+    "finger starts 5 mm inside the plate": lambda x: x.replace(
+        'pos="-0.02 0 0.0073"', 'pos="-0.02 0 0.0023"'
+    ),
 }
 
 
@@ -245,6 +316,7 @@ def sweep_cases():
     structural cases."""
     sys.path.insert(0, str(ROOT / "tests"))
     from conftest import registered_attributes
+
     cases = []
     for key in registered_attributes():
         for v in NUMBER_PROBES:
@@ -276,8 +348,9 @@ def main() -> None:
     total = sum(counts.values())
     print(f"cases {total}: " + ", ".join(f"{k} {v}" for k, v in counts.items()))
     worst.sort(reverse=True)
-    print("slowest (compile + 300 steps, s):",
-          ", ".join(f"{label} {s:.1f}" for s, label in worst[:5]))
+    print(
+        "slowest (compile + 300 steps, s):", ", ".join(f"{label} {s:.1f}" for s, label in worst[:5])
+    )
 
 
 if __name__ == "__main__":

@@ -29,6 +29,7 @@ def _compile_error(spec: mujoco.MjSpec) -> str:
 
 # -- non-finite height-field samples --------------------------------------
 
+
 def test_nan_in_texture_hfield_fails_at_compile():
     # userdata is stored as given (row-major): sample 3 is row 0, col 3.
     spec = pad_spec()
@@ -44,10 +45,12 @@ def test_inf_in_colliding_hfield_fails_at_mjdata(capfd):
     # edited after compiling are checked when the plugin starts (MjData):
     # MuJoCo raises its generic init error, our message is its warning.
     spec = pad_spec(texture=False)
-    spec.add_hfield(name="ground", nrow=3, ncol=3, size=[0.02, 0.02, 0.001, 0.001],
-                    userdata=[0.0] * 9)
-    spec.worldbody.add_geom(name="bumps", type=mujoco.mjtGeom.mjGEOM_HFIELD,
-                            hfieldname="ground", pos=[0, 0, -0.01])
+    spec.add_hfield(
+        name="ground", nrow=3, ncol=3, size=[0.02, 0.02, 0.001, 0.001], userdata=[0.0] * 9
+    )
+    spec.worldbody.add_geom(
+        name="bumps", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="ground", pos=[0, 0, -0.01]
+    )
     m = spec.compile()
     mujoco.MjData(m)  # finite: fine
     m.hfield_data[4] = np.inf
@@ -61,10 +64,18 @@ def test_inf_in_colliding_hfield_fails_at_mjdata(capfd):
 def test_nan_in_hfield_the_skin_never_renders_is_accepted():
     # non-colliding and not a texture: the skin never reads it
     spec = pad_spec(texture=False)
-    spec.add_hfield(name="h", nrow=2, ncol=5, size=[0.01, 0.01, 0.0001, 0.001],
-                    userdata=NAN_SAMPLES)
-    spec.worldbody.add_geom(name="decor", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="h",
-                            contype=0, conaffinity=0, group=4, pos=[0.05, 0, 0])
+    spec.add_hfield(
+        name="h", nrow=2, ncol=5, size=[0.01, 0.01, 0.0001, 0.001], userdata=NAN_SAMPLES
+    )
+    spec.worldbody.add_geom(
+        name="decor",
+        type=mujoco.mjtGeom.mjGEOM_HFIELD,
+        hfieldname="h",
+        contype=0,
+        conaffinity=0,
+        group=4,
+        pos=[0.05, 0, 0],
+    )
     m = spec.compile()
     assert np.isnan(m.hfield_data).sum() == 1
     mujoco.MjData(m)
@@ -82,6 +93,7 @@ def test_nan_set_after_compile_fails_at_mjdata(capfd):
 
 # -- one instance, two sensors ----------------------------------------------
 
+
 def test_two_sensors_sharing_an_instance_fail_at_compile():
     # MuJoCo accepts it (the second sensor would stay all zero)
     spec = pad_spec()
@@ -90,8 +102,12 @@ def test_two_sensors_sharing_an_instance_fail_at_compile():
     left = spec.sensor("skin")
     left.name = "left"
     left.plugin = plugin  # the sensor holds a copy of the reference: renew it
-    right = spec.add_sensor(name="right", type=mujoco.mjtSensor.mjSENS_PLUGIN,
-                            objtype=mujoco.mjtObj.mjOBJ_GEOM, objname="pad")
+    right = spec.add_sensor(
+        name="right",
+        type=mujoco.mjtSensor.mjSENS_PLUGIN,
+        objtype=mujoco.mjtObj.mjOBJ_GEOM,
+        objname="pad",
+    )
     right.plugin = plugin
     msg = _compile_error(spec)
     assert "plugin instance 'x' is used by two sensors, 'left' and 'right'" in msg, msg
@@ -99,6 +115,7 @@ def test_two_sensors_sharing_an_instance_fail_at_compile():
 
 
 # -- copying and pickling MjData --------------------------------------------
+
 
 def _model():
     return pad_spec().compile()
@@ -132,8 +149,11 @@ def _copy_pickle(m, d):
     return pickle.loads(pickle.dumps(d))
 
 
-@pytest.mark.parametrize("make_copy", [_copy_deepcopy, _copy_copy, _copy_mj_copydata, _copy_pickle],
-                         ids=["deepcopy", "copy", "mj_copyData", "pickle"])
+@pytest.mark.parametrize(
+    "make_copy",
+    [_copy_deepcopy, _copy_copy, _copy_mj_copydata, _copy_pickle],
+    ids=["deepcopy", "copy", "mj_copyData", "pickle"],
+)
 def test_copy_continues_bit_identically(make_copy):
     m = _model()
     d = mujoco.MjData(m)
@@ -148,9 +168,14 @@ def test_copy_continues_bit_identically(make_copy):
 
 
 def _python(code: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], cwd=REPO / "tests" / "robustness",
-                          env={**os.environ, "PYTHONPATH": str(REPO / "tests")},
-                          capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        cwd=REPO / "tests" / "robustness",
+        env={**os.environ, "PYTHONPATH": str(REPO / "tests")},
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_pickle_round_trip_does_not_crash_the_process():

@@ -67,7 +67,11 @@ CASES = [
     ({"sites": "SA1 0 0"}, "`sites` entry 1 has 3 words", "'CLASS x y depth' (CLASS in SA1 RA PC"),
     ({"sites": "XX 0 0 1e-3"}, "`sites` entry 1", "CLASS in SA1 RA PC"),
     ({"sites": "SA1 abc 0 1e-3"}, "`sites` entry 1", "x, y, depth in m"),
-    ({"sites": "SA1 0 0 1e-3; RA 0.01 0 1e-3"}, "`sites` entry 2", "|x|, |y| <= nx * pitch / 2 - pitch = 0.00345 m"),
+    (
+        {"sites": "SA1 0 0 1e-3; RA 0.01 0 1e-3"},
+        "`sites` entry 2",
+        "|x|, |y| <= nx * pitch / 2 - pitch = 0.00345 m",
+    ),
     ({"sites": "PC 0 0 0"}, "`sites` entry 1", "(0, 0.02] m"),
     ({"sites": "PC 0 0 0.03"}, "`sites` entry 1", "(0, 0.02] m"),
     ({"sites": "SA1 0 0 1e-3; SA1 1e-3 0 2e-3"}, "`sites` entry 2", "the same depth"),
@@ -100,7 +104,7 @@ CASES = [
     ({"stress_method": "gpu"}, "`stress_method`", "tree direct fft auto"),
     ({"stress_method": "tree", "stress_theta": "0"}, "`stress_theta`", "(0, 2]"),
     ({"stress_method": "tree", "stress_theta": "2.5"}, "`stress_theta`", "(0, 2]"),
-    ({"stress_theta": "0.3"}, "`stress_theta`", "stress_method=\"tree\" only"),
+    ({"stress_theta": "0.3"}, "`stress_theta`", 'stress_method="tree" only'),
     ({"threads": "0"}, "`threads`", "[1, 64]"),
     ({"threads": "65"}, "`threads`", "[1, 64]"),
     ({"threads": "1.5"}, "`threads`", "not an integer"),
@@ -112,14 +116,17 @@ CASES = [
     ({"layers": "1e-3 5e4 0.45 2"}, "`layers`", "needs 3 numbers"),
     ({"layers": "2 5e4 0.45"}, "`layers`", "[1e-06, 1] m"),
     ({"base": "5e4"}, "`base`", "nu in (-1, 0.5]"),
-    ({"base": "5e4 0.45", "skin": "halfspace"}, "`base`", "skin=\"layered\" only"),
+    ({"base": "5e4 0.45", "skin": "halfspace"}, "`base`", 'skin="layered" only'),
     ({"interface_side": "both"}, "`interface_side`", "upper lower"),
     # lower bounds that keep the output finite and physical (values near
     # 1e-300 gave inf/NaN sensordata or an all-zero force block)
     ({"pitch": "1e-308"}, "`pitch` = 1e-308", "[1e-06, 0.01] m"),
     ({"pitch": "9e-7"}, "`pitch` = 9e-07", "[1e-06, 0.01] m"),
-    ({"young": "1e-20", "skin": "halfspace", "pressure": "elastic"}, "`young` = 1e-20",
-     "[100, 1e+10] Pa"),
+    (
+        {"young": "1e-20", "skin": "halfspace", "pressure": "elastic"},
+        "`young` = 1e-20",
+        "[100, 1e+10] Pa",
+    ),
     ({"young": "99", "skin": "halfspace"}, "`young` = 99", "[100, 1e+10] Pa"),
     ({"stiffness": "1e-308"}, "`stiffness` = 1e-308", "[100000, 1e+12] Pa/m"),
     ({"stiffness": "9e4"}, "`stiffness` = 90000", "[100000, 1e+12] Pa/m"),
@@ -140,27 +147,52 @@ CASES = [
     ({"sites": "SA1 0 0 1e-3;"}, "`sites`: entry 2 is empty", "separated by ';'"),
     ({"sites": "SA1,0,0,1e-3"}, "`sites`: ',' is not a separator", "entries by ';'"),
     ({"layers": "7e-4 8e4 0.48;; 8e-4 5e4 0.48"}, "`layers`: entry 2 is empty", "separated by ';'"),
-    ({"layers": "7e-4 8e4 0.48, 8e-4 5e4 0.48"}, "`layers`: ',' is not a separator",
-     "'thickness E nu'"),
-    ({"density": "70,140,21"}, "`density` = '70,140,21': ',' is not a separator",
-     "separated by spaces"),
-    ({"noise": "0.3; 0.3; 0.1"}, "`noise` = '0.3; 0.3; 0.1': ';' is not a separator",
-     "separated by spaces"),
+    (
+        {"layers": "7e-4 8e4 0.48, 8e-4 5e4 0.48"},
+        "`layers`: ',' is not a separator",
+        "'thickness E nu'",
+    ),
+    (
+        {"density": "70,140,21"},
+        "`density` = '70,140,21': ',' is not a separator",
+        "separated by spaces",
+    ),
+    (
+        {"noise": "0.3; 0.3; 0.1"},
+        "`noise` = '0.3; 0.3; 0.1': ';' is not a separator",
+        "separated by spaces",
+    ),
     ({"classes": "SA1,RA"}, "`classes` = 'SA1,RA': ',' is not a separator", "SA1 RA PC"),
     ({"outputs": "spikes;force"}, "`outputs` = 'spikes;force': ';'", "spikes stress voltage"),
     ({"base": "5e4,0.45"}, "`base` = '5e4,0.45': ','", "'rigid' or 'E nu'"),
     # physical ranges: a layer stiffer than bone, thinner than any tissue
     ({"layers": "1e-3 1e12 0.48"}, "`layers`: layer 1 E = '1e12' Pa is above", "[100, 2e+10] Pa"),
     ({"base": "1e12 0.3"}, "`base`: E = '1e12' Pa is above", "[100, 2e+10] Pa"),
-    ({"layers": "1e-30 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4"},
-     "`layers`: layer 1 thickness = '1e-30' m is below", "[1e-06, 1] m"),
-    ({"layers": "1e-300 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4"},
-     "`layers`: layer 1 thickness = '1e-300' m is below", "[1e-06, 1] m"),
-    ({"layers": "7e-4 8e4 0.48; 1e-7 5e4 0.48"}, "`layers`: layer 2 thickness = '1e-7' m",
-     "[1e-06, 1] m"),
+    (
+        {"layers": "1e-30 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4"},
+        "`layers`: layer 1 thickness = '1e-30' m is below",
+        "[1e-06, 1] m",
+    ),
+    (
+        {"layers": "1e-300 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4"},
+        "`layers`: layer 1 thickness = '1e-300' m is below",
+        "[1e-06, 1] m",
+    ),
+    (
+        {"layers": "7e-4 8e4 0.48; 1e-7 5e4 0.48"},
+        "`layers`: layer 2 thickness = '1e-7' m",
+        "[1e-06, 1] m",
+    ),
     # in range, but more work than a compile may take: the bound says what to change
-    ({"nx": "128", "pitch": "1e-4", "layers": "1.5e-6 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4"},
-     "`layers`: layer 1 thickness = 1.5e-06 m is below", "or a smaller `nx` x `pitch`"),
+    (
+        {
+            "nx": "128",
+            "pitch": "1e-4",
+            "layers": "1.5e-6 8e4 0.48; 8e-4 5e4 0.48; 2.5e-3 2.4e4 0.4",
+        },
+        "`layers`: layer 1 thickness = 1.5e-06 m is below",
+        "or a smaller `nx` x `pitch`",
+    ),
     # a class that gets no receptor: an error naming why, not empty blocks
     ({"nx": "4", "pitch": "1e-6"}, "no SA1 receptor", "(default): min(5e-3, `nx` * `pitch` / 2"),
     ({"radius": "0"}, "no SA1 receptor", "raise `density` or `radius`"),
@@ -170,12 +202,20 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize("attrs,name,valid", CASES,
-                         ids=[";".join(f"{k}={v}" for k, v in c[0].items()) for c in CASES])
+@pytest.mark.parametrize(
+    "attrs,name,valid", CASES, ids=[";".join(f"{k}={v}" for k, v in c[0].items()) for c in CASES]
+)
 def test_bad_attribute_fails_at_compile(attrs, name, valid):
     spec = pad_spec(attrs)
-    add_geom(spec.worldbody, "sphere", [0.001], name="plate_sphere", pos=[0.03, 0, 0.01],
-             contype=0, conaffinity=0)
+    add_geom(
+        spec.worldbody,
+        "sphere",
+        [0.001],
+        name="plate_sphere",
+        pos=[0.03, 0, 0.01],
+        contype=0,
+        conaffinity=0,
+    )
     with pytest.raises(ValueError) as e:
         spec.compile()
     msg = str(e.value)
@@ -189,13 +229,15 @@ def test_bad_attribute_fails_at_compile(attrs, name, valid):
     assert "plugin->init failed" not in msg, msg
 
 
-@pytest.mark.parametrize("key,value,timestep", [("pc_lowpass", "1e5", 1e-4),
-                                               ("ra_lowpass", "1e4", 1e-3)])
+@pytest.mark.parametrize(
+    "key,value,timestep", [("pc_lowpass", "1e5", 1e-4), ("ra_lowpass", "1e4", 1e-3)]
+)
 def test_sampling_advice_can_be_followed(key, value, timestep):
     # e.g. dt 1e-4: even oversample 64 samples 640 kHz, below 8 x 100 kHz;
     # the message must not ask for an oversample past its range but name a
     # corner (or timestep) that compiles
     import re
+
     attrs = {key: value, "oversample": "auto", "classes": "SA1 RA PC"}
     spec = pad_spec(attrs)
     spec.option.timestep = timestep
@@ -222,6 +264,7 @@ def test_every_attribute_is_checked_here_or_in_test_layered():
     # every key the plugin registers has a bad-input case in CASES (or in
     # tests/unit/test_layered.py's BAD for the elastic skin)
     from test_layered import BAD
+
     covered = {k for attrs, *_ in CASES + BAD for k in attrs}
     assert set(registered_attributes()) - covered == set()
 
@@ -230,6 +273,7 @@ def test_every_attribute_is_checked_here_or_in_test_layered():
 def test_rate_output_is_accepted(outputs):
     # the counterpart of the `outputs` error: `rate` is a valid block
     from mjtouch.scene.sensor import SkinLayout
+
     m = mujoco.MjModel.from_xml_string(pad_scene({"outputs": outputs, "rate_tau": "0.05"}))
     layout = SkinLayout.from_model(m)
     assert set(layout.blocks) == set(outputs.split())
@@ -254,8 +298,15 @@ def test_sdf_texture_cannot_be_rendered():
     torus = spec.add_plugin(name="torus", plugin_name="mujoco.sdf.torus", active=True)
     torus.config = {"radius1": "0.01", "radius2": "0.003"}
     spec.add_mesh(name="torus").plugin = torus
-    knob = spec.worldbody.add_geom(name="knob", type=mujoco.mjtGeom.mjGEOM_SDF, meshname="torus",
-                                   group=2, contype=0, conaffinity=0, pos=[0.03, 0, 0.01])
+    knob = spec.worldbody.add_geom(
+        name="knob",
+        type=mujoco.mjtGeom.mjGEOM_SDF,
+        meshname="torus",
+        group=2,
+        contype=0,
+        conaffinity=0,
+        pos=[0.03, 0, 0.01],
+    )
     knob.plugin = torus
     with pytest.raises(ValueError, match="geom 'knob' in `texture_group` 2 cannot be rendered"):
         spec.compile()
@@ -270,6 +321,7 @@ def test_sensor_must_name_a_geom():
 
 
 # -- messages that name the wrong thing, or twice (plugin bugs, see below) ---
+
 
 def _plugin_lines(attrs):
     with pytest.raises(ValueError) as e:
@@ -292,6 +344,7 @@ def test_default_ridge_pitch_against_pitch_says_default():
 
 # -- a plugin built for another MuJoCo -----------------------------------------
 
+
 def test_loader_refuses_a_plugin_built_for_another_mujoco(monkeypatch):
     # The Python loader compares the MuJoCo the library was compiled against
     # (mjtouch_built_mujoco_version) with the installed mujoco: pretend an
@@ -299,9 +352,13 @@ def test_loader_refuses_a_plugin_built_for_another_mujoco(monkeypatch):
     import importlib.metadata
 
     from mjtouch import _loader
+
     real_version = importlib.metadata.version
-    monkeypatch.setattr(importlib.metadata, "version",
-                        lambda name: "3.3.7" if name == "mujoco" else real_version(name))
+    monkeypatch.setattr(
+        importlib.metadata,
+        "version",
+        lambda name: "3.3.7" if name == "mujoco" else real_version(name),
+    )
     monkeypatch.setattr(_loader, "_handle", None)
     with pytest.raises(_loader.PluginNotBuiltError) as e:
         _loader.load()
@@ -337,29 +394,41 @@ def test_library_refuses_to_register_under_another_mujoco(tmp_path, mismatch):
     import sys
 
     from mjtouch import _loader
+
     libmujoco = sorted(pathlib.Path(mujoco.__file__).parent.glob("libmujoco.so.*"))[0]
     env = dict(os.environ)
     if mismatch:
         cc = os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
         assert cc, "no C compiler on PATH"
         (tmp_path / "shim.c").write_text(SHIM_C)
-        build = subprocess.run([cc, "-shared", "-fPIC", "-o", str(tmp_path / "shim.so"),
-                                str(tmp_path / "shim.c")], capture_output=True, text=True)
+        build = subprocess.run(
+            [cc, "-shared", "-fPIC", "-o", str(tmp_path / "shim.so"), str(tmp_path / "shim.c")],
+            capture_output=True,
+            text=True,
+        )
         assert build.returncode == 0, build.stderr
         # after any sanitizer runtime already preloaded (it must come first)
         env["LD_PRELOAD"] = f"{env.get('LD_PRELOAD', '')} {tmp_path / 'shim.so'}".strip()
     (tmp_path / "probe.py").write_text(PROBE_PY)
-    run = subprocess.run([sys.executable, str(tmp_path / "probe.py"), str(libmujoco),
-                          str(_loader.library_path())], capture_output=True, text=True,
-                         cwd=tmp_path, env=env, timeout=120)
+    run = subprocess.run(
+        [sys.executable, str(tmp_path / "probe.py"), str(libmujoco), str(_loader.library_path())],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env=env,
+        timeout=120,
+    )
     assert run.returncode == 0, run.stdout + run.stderr
-    log = (tmp_path / "MUJOCO_LOG.TXT").read_text() if (tmp_path / "MUJOCO_LOG.TXT").exists() else ""
+    log = (
+        (tmp_path / "MUJOCO_LOG.TXT").read_text() if (tmp_path / "MUJOCO_LOG.TXT").exists() else ""
+    )
     said = run.stdout + run.stderr + log
     if mismatch:
         assert "registered: False" in run.stdout
         built = _loader.load().mjtouch_built_mujoco_version()
-        assert (f"mjtouch: plugin built for MuJoCo {built} but running MuJoCo 3003007; "
-                "not registered") in said, said
+        assert (
+            f"mjtouch: plugin built for MuJoCo {built} but running MuJoCo 3003007; not registered"
+        ) in said, said
     else:
         assert "registered: True" in run.stdout
         assert "mjtouch" not in said.replace("registered: True", ""), said

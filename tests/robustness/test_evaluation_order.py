@@ -68,6 +68,7 @@ def test_elastic_oversampled_repeat_agrees_within_the_solver_tolerance(tolerance
     # inputs, and the CG converges to its `tolerance` from the other start,
     # so the stress agrees to about that tolerance (shrinking with it).
     from mjtouch.sensor import SkinLayout
+
     m = slide_model(oversample="3", tolerance=repr(tolerance))
     blocks = SkinLayout.from_model(m).blocks
     alone = run(m, 200)
@@ -84,6 +85,7 @@ def test_leading_forward_of_a_fresh_run_leaves_the_spikes():
     # a forward with ctrl 0 at t = 0 (e.g. to draw the first frame) before
     # the run's first step
     from mjtouch.sensor import SkinLayout
+
     m = slide_model()
     layout = SkinLayout.from_model(m)
     spikes = layout.blocks["spikes"]

@@ -5,29 +5,73 @@ with a time limit: a hang fails the test instead of stalling the suite."""
 
 import numpy as np
 import pytest
+from fuzz_cases import STRUCTURAL, Runner, classify, scene_xml
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
-
-from fuzz_cases import STRUCTURAL, Runner, classify, scene_xml
 from test_fuzz import LIST_VALUES
 
 # Generous next to the bounded kernel build (~1-2 s at its bound on one
 # core): the limit catches hangs (a 1e-30 m layer never returned), not speed.
 TIMEOUT_S = 60.0
 
-COMPOSITE = ["layers", "sites", "noise", "density", "depth", "adapt", "adapt_tau", "outputs",
-             "classes", "quantity", "sa1_merkel", "base", "seed", "oversample"]
+COMPOSITE = [
+    "layers",
+    "sites",
+    "noise",
+    "density",
+    "depth",
+    "adapt",
+    "adapt_tau",
+    "outputs",
+    "classes",
+    "quantity",
+    "sa1_merkel",
+    "base",
+    "seed",
+    "oversample",
+]
 
 token = st.one_of(
-    st.sampled_from(["SA1", "RA", "PC", "XX", "szz", "sed", "maxcomp", "spikes", "force",
-                     "stress", "rate", "rigid", "auto", "nan", "inf", "-inf", "0", "-1", "1e-30",
-                     "1e30", "1e-300", "7e-4", "8e4", "0.48", "1e-3", "2e-3", "5e4", "abc", ""]),
+    st.sampled_from(
+        [
+            "SA1",
+            "RA",
+            "PC",
+            "XX",
+            "szz",
+            "sed",
+            "maxcomp",
+            "spikes",
+            "force",
+            "stress",
+            "rate",
+            "rigid",
+            "auto",
+            "nan",
+            "inf",
+            "-inf",
+            "0",
+            "-1",
+            "1e-30",
+            "1e30",
+            "1e-300",
+            "7e-4",
+            "8e4",
+            "0.48",
+            "1e-3",
+            "2e-3",
+            "5e4",
+            "abc",
+            "",
+        ]
+    ),
     st.floats(allow_nan=False, allow_infinity=False).map(repr),
-    st.integers(-10**20, 10**20).map(str),
+    st.integers(-(10**20), 10**20).map(str),
 )
 separator = st.sampled_from([" ", " ", " ", "  ", ";", "; ", ",", ";;", "\t"])
 jumble = st.lists(st.tuples(token, separator), max_size=12).map(
-    lambda parts: "".join(t + s for t, s in parts))
+    lambda parts: "".join(t + s for t, s in parts)
+)
 
 
 @st.composite
@@ -53,23 +97,36 @@ def assert_clear_or_sane(runner, attrs, edit=None, steps=40):
 
 
 # Deterministic (derandomize, no example database) and bounded: ~1 min.
-@settings(max_examples=60, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=60,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(attrs=composite_case())
 def test_composite_attribute_gives_clear_error_or_sane_run(runner, attrs):
     event(assert_clear_or_sane(runner, attrs))
 
 
-thickness = st.one_of(st.floats(-300, 3).map(lambda e: repr(10.0 ** e)),
-                      st.sampled_from(["0", "-1e-3", "nan", "inf", "1e-6", "4e-6"]))
-modulus = st.floats(-3, 15).map(lambda e: repr(10.0 ** e))
+thickness = st.one_of(
+    st.floats(-300, 3).map(lambda e: repr(10.0**e)),
+    st.sampled_from(["0", "-1e-3", "nan", "inf", "1e-6", "4e-6"]),
+)
+modulus = st.floats(-3, 15).map(lambda e: repr(10.0**e))
 poisson = st.floats(-2, 1).map(repr)
 layers_value = st.lists(st.tuples(thickness, modulus, poisson), min_size=1, max_size=6).map(
-    lambda ls: "; ".join(" ".join(layer) for layer in ls))
+    lambda ls: "; ".join(" ".join(layer) for layer in ls)
+)
 
 
-@settings(max_examples=30, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=30,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(layers=layers_value)
 def test_any_layers_value_compiles_or_fails_within_the_time_limit(runner, layers):
     # compile and a few steps; the worker is killed past TIMEOUT_S (a hang)
@@ -92,15 +149,16 @@ def test_the_hang_of_a_1e_30_layer_is_a_prompt_error(runner):
 
 def test_classify_rejects_the_failures_it_is_for():
     # the classifier itself: each failure form is caught
-    twice = "Error: engine error: plugin->init failed for plugin id 0\n" + \
-        "mjtouch.skin: attribute `nx` = 3 is out of range\n" * 2
+    twice = (
+        "Error: engine error: plugin->init failed for plugin id 0\n"
+        + "mjtouch.skin: attribute `nx` = 3 is out of range\n" * 2
+    )
     assert classify({"kind": "error", "message": twice})[0] == "silent"
     vague = "Error: engine error: plugin->init failed for plugin id 0"
     assert classify({"kind": "error", "message": vague})[0] == "silent"
     assert classify({"kind": "hang"})[0] == "hang"
     assert classify({"kind": "crash", "returncode": -11})[0] == "crash"
-    empty = {"kind": "ran", "finite": True, "blocks": [{"spikes": 0, "force": 5}],
-             "classes": [[]]}
+    empty = {"kind": "ran", "finite": True, "blocks": [{"spikes": 0, "force": 5}], "classes": [[]]}
     assert classify(empty)[0] == "silent"
     nan = {"kind": "ran", "finite": False, "blocks": [], "classes": []}
     assert classify(nan)[0] == "silent"

@@ -95,10 +95,18 @@ def simulate(m, ctrl_fn, steps, setup=None) -> Run:
     # recomputes contacts, forces and the plugin's output at the same time.
     mujoco.mj_forward(m, d)
     n = layout.nx
-    r = Run(np.array(out["spikes"]), np.array(out["stress"]), np.array(out["force"]),
-            np.array(out["psum"]), np.array(out["pmax"]), contact_steps, layout,
-            layout.block(d.sensordata, "pressure").reshape(n, n).copy(),
-            layout.block(d.sensordata, "stress").copy(), d.geom_xpos[pad].copy())
+    r = Run(
+        np.array(out["spikes"]),
+        np.array(out["stress"]),
+        np.array(out["force"]),
+        np.array(out["psum"]),
+        np.array(out["pmax"]),
+        contact_steps,
+        layout,
+        layout.block(d.sensordata, "pressure").reshape(n, n).copy(),
+        layout.block(d.sensordata, "stress").copy(),
+        d.geom_xpos[pad].copy(),
+    )
     f = layout.block(d.sensordata, "force")
     pad_z = d.geom_xmat[pad].reshape(3, 3)[:, 2]
     fn = pad_normal_force(m, d, pad, pad_z)
@@ -126,27 +134,31 @@ def check(run: Run, dt: float) -> None:
 def press_slide(force=0.5, speed=0.025, t_press=0.05):
     def ctrl(d, k):
         d.ctrl[:] = [speed if d.time > t_press else 0.0, -force]
+
     return ctrl
 
 
 def model(tip=None, texture=None, protocol=None, edit=None):
     """The sliding scene; ``edit(spec)`` changes its MjSpec before compiling."""
-    spec = scenes.scene_spec(tip or fast_tip(), texture or scenes.Texture(period_m=0.6e-3),
-                             protocol or scenes.Protocol(timestep_s=2e-4))
+    spec = scenes.scene_spec(
+        tip or fast_tip(),
+        texture or scenes.Texture(period_m=0.6e-3),
+        protocol or scenes.Protocol(timestep_s=2e-4),
+    )
     if edit:
         edit(spec)
     return spec.compile()
 
 
 def box(spec, name, half_m, pos_m, **kw):
-    spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=half_m, pos=pos_m,
-                            **kw)
+    spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=half_m, pos=pos_m, **kw)
 
 
 @pytest.mark.parametrize("solref", ["0.002 1", "0.05 1"], ids=["stiff", "soft"])
 def test_very_stiff_and_very_soft_contact(solref):
     def edit(spec):
         spec.pairs[0].solref = [float(v) for v in solref.split()]
+
     m = model(edit=edit)
     assert list(m.pair_solref[0]) == [float(v) for v in solref.split()]
     r = simulate(m, press_slide(), 1000)
@@ -156,9 +168,11 @@ def test_very_stiff_and_very_soft_contact(solref):
 
 def test_impact_at_half_a_metre_per_second():
     m = model()
+
     def setup(m, d):
         d.qpos[m.joint("press_z").qposadr[0]] = 2e-3  # 2.3 mm above the plate
         d.qvel[m.joint("press_z").dofadr[0]] = -0.5
+
     r = simulate(m, press_slide(speed=0.0), 1500, setup)
     check(r, m.opt.timestep)
     # the impact overshoots the static load, then settles to it
@@ -199,6 +213,7 @@ def test_contact_at_plate_edge_and_corner(corner):
     def edit(spec):
         finger = spec.body("finger")
         finger.pos = [PLATE_HALF_M[0], PLATE_HALF_M[1] if corner else 0.0, finger.pos[2]]
+
     m = model(texture=scenes.Texture(kind="flat"), edit=edit)
     r = simulate(m, press_slide(speed=0.0), 800)
     check(r, m.opt.timestep)
@@ -232,10 +247,13 @@ def love_rectangle_szz(x1, x2, y1, y2, z):
     """-s_zz at depth z under the origin from a unit uniform pressure on the
     rectangle [x1, x2] x [y1, y2] of a homogeneous half-space (Love 1929,
     by superposition of corner rectangles; independent of nu)."""
+
     def corner(a, b):
         r = np.sqrt(a * a + b * b + z * z)
-        return (np.arctan(a * b / (z * r))
-                + a * b * z / r * (1 / (a * a + z * z) + 1 / (b * b + z * z))) / (2 * np.pi)
+        return (
+            np.arctan(a * b / (z * r)) + a * b * z / r * (1 / (a * a + z * z) + 1 / (b * b + z * z))
+        ) / (2 * np.pi)
+
     return corner(x2, y2) - corner(x1, y2) - corner(x2, y1) + corner(x1, y1)
 
 
@@ -258,19 +276,32 @@ def test_receptors_under_a_sharp_step_edge(skin):
     h = 1.5e-4
     xs = (-1.5 * h, -0.5 * h, 0.5 * h, 1.5 * h)
     ys = (0.5 * h, 3.5 * h)
-    sites = "; ".join(f"{c} {x!r} {y!r} {z!r}" for c, z in (("SA1", 20e-6), ("RA", 0.15e-3),
-                                                            ("PC", 0.75e-3))
-                      for x in xs for y in ys)
+    sites = "; ".join(
+        f"{c} {x!r} {y!r} {z!r}"
+        for c, z in (("SA1", 20e-6), ("RA", 0.15e-3), ("PC", 0.75e-3))
+        for x in xs
+        for y in ys
+    )
     # Winkler: the pressure is a plateau cut by the edge (elastic contact
     # would add the punch-edge singularity, not what this checks)
-    cfg = {"outputs": "spikes stress force pressure", "shear": "false", "pressure": "winkler",
-           "quantity": "szz szz szz", "sites": sites, **STEP_SKINS[skin]}
+    cfg = {
+        "outputs": "spikes stress force pressure",
+        "shear": "false",
+        "pressure": "winkler",
+        "quantity": "szz szz szz",
+        "sites": sites,
+        **STEP_SKINS[skin],
+    }
 
     def edit(spec):
         spec.body("finger").pos = [-0.02, 0, 0.0103]
         box(spec, "step", [0.01, 0.01, 0.0015], [-0.01, 0, 0.0015])
-    m = model(tip=fast_tip(skin=cfg, ridges=False, pitch_m=h), texture=scenes.Texture(kind="flat"),
-              edit=edit)
+
+    m = model(
+        tip=fast_tip(skin=cfg, ridges=False, pitch_m=h),
+        texture=scenes.Texture(kind="flat"),
+        edit=edit,
+    )
     r = simulate(m, press_slide(speed=0.0), 600)
     check(r, m.opt.timestep)
     layout, p = r.layout, r.final_pressure
@@ -290,6 +321,7 @@ def test_receptors_under_a_sharp_step_edge(skin):
         # rendered pressure (LayeredSkin: the same tables, evaluated outside
         # the plugin)
         from mjtouch import core
+
         stack = core.LayeredSkin()
         ij = np.rint(pos[:, :2] / h + (layout.nx - 1) / 2).astype(int)
         want = np.empty(len(got))
@@ -297,10 +329,21 @@ def test_receptors_under_a_sharp_step_edge(skin):
             k = pos[:, 2] == z
             want[k] = -stack.field_stress(p.astype(np.float32), h, z, ij[k])[:, 2]
     else:
-        want = np.array([
-            (p * love_rectangle_szz(c[None, :] - h / 2 - x, c[None, :] + h / 2 - x,
-                                    c[:, None] - h / 2 - y, c[:, None] + h / 2 - y, z)).sum()
-            for x, y, z in pos])
+        want = np.array(
+            [
+                (
+                    p
+                    * love_rectangle_szz(
+                        c[None, :] - h / 2 - x,
+                        c[None, :] + h / 2 - x,
+                        c[:, None] - h / 2 - y,
+                        c[:, None] + h / 2 - y,
+                        z,
+                    )
+                ).sum()
+                for x, y, z in pos
+            ]
+        )
         # Boussinesq's s_zz kernel is positive and integrates to 1: 0 <= -s_zz <= max p
         assert np.all(got >= 0) and np.all(got <= p.max() * (1 + 1e-6))
     # kernel tables and pressures are float32 (6e-8 relative each); 1e-5 of
@@ -363,8 +406,9 @@ def test_very_thin_10um_layer():
     # order in its thickness (membrane stiffness E t): halving t halves it,
     # up to O(t^2) (measured ratio 1.9).
     stiff = 10 * SHAO_LAYERS[0][1]
-    film10 = skin_rollout({"layers": layers_attr(film_stack(10e-6, stiff)),
-                           "depth": "1e-5 0.75e-3 2e-3"})
+    film10 = skin_rollout(
+        {"layers": layers_attr(film_stack(10e-6, stiff)), "depth": "1e-5 0.75e-3 2e-3"}
+    )
     film5 = skin_rollout({"layers": layers_attr(film_stack(5e-6, stiff))})
     deep = ~ref.layout.mask("SA1")
     effect10 = np.abs(film10.stress[:, deep] - ref.stress[:, deep]).max()
@@ -405,13 +449,21 @@ def test_receptor_exactly_on_an_interface():
     # and below it, with interface_side upper and lower.
     z, eps, h = 0.7e-3, 0.5e-6, 1.5e-4
     xy = [(0.0, 0.0), (3 * h, 0.0), (0.0, 6 * h), (-9 * h, 3 * h)]
-    sites = "; ".join(f"{c} {x!r} {y!r} {d!r}" for c, d in (("SA1", z - eps), ("RA", z),
-                                                           ("PC", z + eps)) for x, y in xy)
+    sites = "; ".join(
+        f"{c} {x!r} {y!r} {d!r}"
+        for c, d in (("SA1", z - eps), ("RA", z), ("PC", z + eps))
+        for x, y in xy
+    )
     for quantity in ("szz", "maxcomp"):
         got = {}
         for side in ("upper", "lower"):
-            r = skin_rollout({"sites": sites, "interface_side": side,
-                              "quantity": f"{quantity} {quantity} {quantity}"})
+            r = skin_rollout(
+                {
+                    "sites": sites,
+                    "interface_side": side,
+                    "quantity": f"{quantity} {quantity} {quantity}",
+                }
+            )
             got[side] = {c: r.stress[:, r.layout.mask(c)] for c in ("SA1", "RA", "PC")}
         above, below = got["upper"]["SA1"], got["upper"]["PC"]
         peak = np.abs(above).max()
@@ -422,8 +474,9 @@ def test_receptor_exactly_on_an_interface():
         if quantity == "szz":
             # traction continuity: s_zz is the same from both sides (float32
             # tables: 1e-5 of the peak) ...
-            np.testing.assert_allclose(got["upper"]["RA"], got["lower"]["RA"], rtol=0,
-                                       atol=1e-5 * peak)
+            np.testing.assert_allclose(
+                got["upper"]["RA"], got["lower"]["RA"], rtol=0, atol=1e-5 * peak
+            )
             # ... and so is d s_zz / dz (equilibrium: -d s_xz / dx - d s_yz / dy,
             # both continuous), so the interface value is the mean of its
             # neighbours up to O(eps^2): within a tenth of their difference
@@ -439,11 +492,13 @@ def test_receptor_exactly_on_an_interface():
 
 def test_lift_off_and_recontact_every_few_ms():
     m = model()
+
     def ctrl(d, k):
         # 6 ms pressed with 2 N, 6 ms pulled up with 1.5 N (gravity
         # compensated): the pad leaves the plate and falls back each cycle
         # (a symmetric pull would ratchet it upwards, out of reach)
         d.ctrl[:] = [0.02, -2.0 if (k // 30) % 2 == 0 else 1.5]
+
     r = simulate(m, ctrl, 1000)
     check(r, m.opt.timestep)
     touching = r.force[:, 0] > 0
@@ -463,8 +518,10 @@ def test_grazing_contact_with_near_zero_force():
     # 0.1 mN held: the pad rests on the plate with ~1e-5 m of overlap.
     proto = scenes.Protocol(force_n=1e-4, timestep_s=2e-4)
     m = model(protocol=proto)
+
     def setup(m, d):  # start with the pad just touching the plate
         d.qpos[m.joint("press_z").qposadr[0]] = -3e-4
+
     r = simulate(m, press_slide(force=1e-4, speed=0.0), 1500, setup)
     check(r, m.opt.timestep)
     assert r.contact_steps == 1500
@@ -516,6 +573,7 @@ def test_fingertip_rotated_ninety_degrees_side_contact():
         finger.alt.type = mujoco.mjtOrientation.mjORIENTATION_EULER
         finger.alt.euler = [0, -90, 0]  # degrees (compiler.degree)
         box(spec, "wall", [0.002, 0.02, 0.02], [-0.0107, 0, 0.02], rgba=[0.5, 0.5, 0.5, 1])
+
     m = model(texture=scenes.Texture(kind="flat"), edit=edit)
     # After the -90 degree turn about y the finger's local z is world -x, so
     # the press actuator's ctrl < 0 drives the pad towards +x, into the wall.
@@ -529,12 +587,15 @@ def test_several_objects_touching_at_once():
     def edit(spec):
         box(spec, "block_a", [0.002, 0.01, 0.0002], [-0.0225, 0, 0.0002])
         box(spec, "block_b", [0.002, 0.01, 0.0002], [-0.0175, 0, 0.0002])
+
     m = model(texture=scenes.Texture(kind="flat"), edit=edit)
     seen = set()
+
     def ctrl(d, k):
         d.ctrl[:] = [0.0, -0.5]
         for i in range(d.ncon):
             seen.update({m.geom(g).name for g in d.contact[i].geom})
+
     r = simulate(m, ctrl, 800)
     check(r, m.opt.timestep)
     assert {"block_a", "block_b"} <= seen
@@ -542,8 +603,10 @@ def test_several_objects_touching_at_once():
 
 def test_long_time_without_contact_then_contact():
     m = model()
+
     def ctrl(d, k):
         d.ctrl[:] = [0.0, 1e-3 if k < 5000 else -0.5]  # hover for 1 s, then press
+
     r = simulate(m, ctrl, 5600)
     check(r, m.opt.timestep)
     assert np.all(r.force[:4000, 0] == 0)
@@ -555,8 +618,9 @@ def test_long_time_without_contact_then_contact():
 # Largest adaptation current (threshold units) of the default afferents:
 # jump x 1.4 (the largest variant multiplier) / (1 - exp(-refractory / tau_a))
 # for (jump, tau_a) of SA1, RA, PC (receptors.h ReceptorParams::adapt).
-W_MAX_ADAPT = max(j * 1.4 / (1 - np.exp(-1e-3 / tau))
-                  for j, tau in ((0.1, 0.05), (1.0, 0.03), (1.0, 0.02)))
+W_MAX_ADAPT = max(
+    j * 1.4 / (1 - np.exp(-1e-3 / tau)) for j, tau in ((0.1, 0.05), (1.0, 0.03), (1.0, 0.02))
+)
 
 
 def test_million_steps_without_drift_or_state_growth():
@@ -567,14 +631,18 @@ def test_million_steps_without_drift_or_state_growth():
     # Noise off: a periodic steady state is a property of the noise-free
     # model (the noisy membrane's bound: test_afferent_tuning.py,
     # test_noisy_membranes_stay_below_threshold).
-    tip = scenes.Fingertip(nx=16, pitch_m=4e-4, ridges=False,
-                           skin={"outputs": "spikes voltage force", "radius": "2.5e-3",
-                                 "noise": "0 0 0"})
+    tip = scenes.Fingertip(
+        nx=16,
+        pitch_m=4e-4,
+        ridges=False,
+        skin={"outputs": "spikes voltage force", "radius": "2.5e-3", "noise": "0 0 0"},
+    )
     proto = scenes.Protocol(timestep_s=1e-3, speed_m_s=0.0)
     m = model(tip=tip, texture=scenes.Texture(kind="flat"), protocol=proto)
     period = 100  # steps
     nsteps = 1_000_000
     import mujoco.rollout
+
     d = mujoco.MjData(m)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     s0 = np.empty(mujoco.mj_stateSize(m, spec))
@@ -587,11 +655,11 @@ def test_million_steps_without_drift_or_state_growth():
     counts = []
     state = s0[None]
     for c in range(nsteps // chunk):
-        st, sd = mujoco.rollout.rollout(m, d, state, ctrl[None, c * chunk:(c + 1) * chunk])
+        st, sd = mujoco.rollout.rollout(m, d, state, ctrl[None, c * chunk : (c + 1) * chunk])
         state = st[:, -1]
         spikes = layout.block(sd[0], "spikes")
         assert np.all(np.isfinite(sd))
-        counts.append(spikes[-10 * period:].sum(axis=0))
+        counts.append(spikes[-10 * period :].sum(axis=0))
         fn = layout.block(sd[0], "force")[:, 0]
         assert np.all(fn[-period:] > 0)
         # membranes stay below threshold and above minus the largest

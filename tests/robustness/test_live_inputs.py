@@ -61,8 +61,9 @@ def test_light_press_is_not_flagged(capfd):
 
 def test_height_field_z_size_1e30_is_flagged(capfd):
     # an absurd elevation scale gives an absurd indentation: flagged, warned
-    m = slide_model(lambda x: x.replace('size="0.04 0.015 0.0001 0.001"',
-                                        'size="0.04 0.015 1e30 0.001"'))
+    m = slide_model(
+        lambda x: x.replace('size="0.04 0.015 0.0001 0.001"', 'size="0.04 0.015 1e30 0.001"')
+    )
     capfd.readouterr()
     force, _ = press(m, 0.5, 600)
     touching = force[:, 0] > 0
@@ -83,7 +84,7 @@ def test_non_finite_sample_edited_in_is_warned_once_and_left_out(capfd):
     capfd.readouterr()
     edited, _ = press(m, 0.5, 300, d=d)
     out = "".join(capfd.readouterr())
-    assert out.count("has sample inf at row 0, col %d" % col) == 1, out
+    assert out.count(f"has sample inf at row 0, col {col}") == 1, out
     assert "edited after the MjData was made" in out
     ref, _ = press(plain, 0.5, 300)
     assert ref[:, 0].any()

@@ -44,6 +44,7 @@ def initial_state(m, d=None):
 
 # --- rates do not depend on dt (receptor stage) -----------------------------------------
 
+
 def ramp_and_hold(t, peak_pa, ramp_s, hold_s, period_s, t_on_s=0.02):
     """Trapezoids repeated every period_s: rest, ramp up, hold, ramp down."""
     knots = [0, t_on_s, t_on_s + ramp_s, t_on_s + ramp_s + hold_s, t_on_s + 2 * ramp_s + hold_s]
@@ -93,6 +94,7 @@ def test_rates_at_two_timesteps_agree(cls, kind):
 
 
 # --- ramp-and-hold presses in the full plugin -------------------------------------------
+
 
 def _default(name):
     """An attribute's documented default (the attribute table, attributes.cc)."""
@@ -168,8 +170,9 @@ def test_sa1_fires_through_hold_rate_rising_with_force(ramp_runs):
     idx = np.nonzero(sa1)[0]
     for i in range(len(FORCES_N)):
         for r_ in idx[::3]:
-            got, _ = core.receptor_run("SA1", r.stress[i][:, r_], RAMP_DT, {"noise": "0 0 0"},
-                                     stream=int(r_))
+            got, _ = core.receptor_run(
+                "SA1", r.stress[i][:, r_], RAMP_DT, {"noise": "0 0 0"}, stream=int(r_)
+            )
             # the plugin integrates over exactly the timestep (not time -
             # last time, which differs by round-off), as receptor_run does
             assert np.array_equal(got, r.spikes[i][:, r_]), (i, r_)
@@ -333,15 +336,17 @@ def sweep(request):
     datas = [mujoco.MjData(m) for _ in range(2)]
     spec = vib_spec(kind)
     nmax = max(vib_rows(f)[0] for f in VIB_FREQS_HZ)
-    _, sd0 = mujoco.rollout.rollout(m, datas, s0[None], vib_controls(kind, 1.0, 0.0, nmax)[None],
-                                    control_spec=spec)
+    _, sd0 = mujoco.rollout.rollout(
+        m, datas, s0[None], vib_controls(kind, 1.0, 0.0, nmax)[None], control_spec=spec
+    )
     q0 = layout.block(sd0[0], "stress")
     base, delta, delta2, spikes = {}, {}, {}, {}
     for f in VIB_FREQS_HZ:
         n = vib_rows(f)[0]
         ctrl = np.stack([vib_controls(kind, f, amp, n), vib_controls(kind, f, 2 * amp, n)])
-        _, sd = mujoco.rollout.rollout(m, datas, np.repeat(s0[None], 2, axis=0), ctrl,
-                                       control_spec=spec)
+        _, sd = mujoco.rollout.rollout(
+            m, datas, np.repeat(s0[None], 2, axis=0), ctrl, control_spec=spec
+        )
         q = layout.block(sd, "stress")
         base[f], delta[f], delta2[f] = q0[:n], q[0] - q0[:n], q[1] - q0[:n]
         spikes[f] = layout.block(sd[0], "spikes")
@@ -353,11 +358,19 @@ def sweep(request):
         resp = np.abs(delta[250.0][:, idx]).max(axis=0)
         units[cls] = idx[np.argsort(resp)[::-1][:4]]
         for out, per_cycle in ((thresholds, True), (absolute, False)):
-            out[cls] = np.array([[locked_scale(cls, base[f][:, r], delta[f][:, r], f, int(r),
-                                               per_cycle=per_cycle) * amp
-                                  for r in units[cls]] for f in VIB_FREQS_HZ])
-    return Sweep(kind, amp, m, s0, layout, base, delta, delta2, spikes, thresholds, absolute,
-                 units)
+            out[cls] = np.array(
+                [
+                    [
+                        locked_scale(
+                            cls, base[f][:, r], delta[f][:, r], f, int(r), per_cycle=per_cycle
+                        )
+                        * amp
+                        for r in units[cls]
+                    ]
+                    for f in VIB_FREQS_HZ
+                ]
+            )
+    return Sweep(kind, amp, m, s0, layout, base, delta, delta2, spikes, thresholds, absolute, units)
 
 
 def test_vibration_stress_is_linear_in_amplitude(sweep):
@@ -395,7 +408,7 @@ def test_pc_threshold_curve_is_u_shaped(sweep):
         curve = sweep.absolute["PC"][:, u]
         best = int(np.argmin(curve))
         assert 150 <= VIB_FREQS_HZ[best] <= 400, (VIB_FREQS_HZ[best], curve)
-        assert np.all(np.diff(curve[:best + 1]) < 0), curve
+        assert np.all(np.diff(curve[: best + 1]) < 0), curve
         assert np.all(np.diff(curve[best:]) > 0), curve
         assert curve[i40] >= 10 * curve[i250], (curve[i40], curve[i250])
 
@@ -428,9 +441,13 @@ def test_pc_phase_locks_one_to_one_at_best_frequency(sweep):
     f, unit, thr = VIB_FREQS_HZ[fi], sweep.units["PC"][ui], sweep.thresholds["PC"][fi, ui]
     n, win, m = vib_rows(f)
     ctrl = np.stack([vib_controls(sweep.kind, f, s * thr, n) for s in (0.9, 1.25)])
-    _, sd = mujoco.rollout.rollout(sweep.model, mujoco.MjData(sweep.model),
-                                   np.repeat(sweep.state[None], 2, axis=0), ctrl,
-                                   control_spec=vib_spec(sweep.kind))
+    _, sd = mujoco.rollout.rollout(
+        sweep.model,
+        mujoco.MjData(sweep.model),
+        np.repeat(sweep.state[None], 2, axis=0),
+        ctrl,
+        control_spec=vib_spec(sweep.kind),
+    )
     below, above = sweep.layout.block(sd, "spikes")[:, :, unit]
     assert below[win].sum() < m  # under threshold: fewer spikes than cycles
     vs = analysis.vector_strength_counts(above[win], VIB_DT, f)
@@ -502,13 +519,20 @@ def test_noise_same_seed_is_bit_identical_across_copy_reset_and_threads():
 def test_noise_seeds_differ_and_zero_noise_is_no_noise():
     ctrl = press_controls(1000, 2e-4)
     runs = {}
-    for name, extra in {"seed7": {"seed": "7"}, "seed8": {"seed": "8"},
-                        "sd0": {"noise": "0 0 0", "seed": "7"}}.items():
+    for name, extra in {
+        "seed7": {"seed": "7"},
+        "seed8": {"seed": "8"},
+        "sd0": {"noise": "0 0 0", "seed": "7"},
+    }.items():
         m, _ = noise_model(**extra)
         runs[name] = run_serial(m, mujoco.MjData(m), ctrl)
     # the seed also picks each receptor's population variant: compare at seed 7
-    plain_skin = {"outputs": NOISE_SKIN["outputs"], "seed": "7", "noise": "0 0 0",
-                  "noise_tau": "5e-3"}  # no noise at all, whatever its time constant
+    plain_skin = {
+        "outputs": NOISE_SKIN["outputs"],
+        "seed": "7",
+        "noise": "0 0 0",
+        "noise_tau": "5e-3",
+    }  # no noise at all, whatever its time constant
     m = flat_scene(plain_skin, timestep_s=2e-4)
     layout = SkinLayout.from_model(m)
     plain = run_serial(m, mujoco.MjData(m), ctrl)
@@ -534,15 +558,26 @@ def test_noisy_plugin_spikes_equal_receptor_run_with_its_stream():
 
 # --- explicit sites and the rate output --------------------------------------------------
 
+
 def test_sites_place_receptors_where_asked():
     pitch, nx = 1.5e-4, 48
-    asked = [("SA1", 0.0, 0.0), ("SA1", 1.03e-3, -0.52e-3), ("RA", -2.01e-3, 0.4e-3),
-             ("PC", 0.61e-3, 1.9e-3), ("RA", 0.3e-3, 0.3e-3)]
+    asked = [
+        ("SA1", 0.0, 0.0),
+        ("SA1", 1.03e-3, -0.52e-3),
+        ("RA", -2.01e-3, 0.4e-3),
+        ("PC", 0.61e-3, 1.9e-3),
+        ("RA", 0.3e-3, 0.3e-3),
+    ]
     depth = {"SA1": 5e-4, "RA": 9e-4, "PC": 2.2e-3}
     sites = "; ".join(f"{c} {x} {y} {depth[c]}" for c, x, y in asked)
     # exact stress summation (as core's), no shear traction, q = -s_zz
-    skin = {"outputs": "spikes stress pressure", "sites": sites, "shear": "false",
-            "quantity": "szz szz szz", "stress_method": "direct"}
+    skin = {
+        "outputs": "spikes stress pressure",
+        "sites": sites,
+        "shear": "false",
+        "quantity": "szz szz szz",
+        "stress_method": "direct",
+    }
     m = flat_scene(skin, timestep_s=2e-4)
     layout = SkinLayout.from_model(m)
     # classes in SA1, RA, PC order, each in the order given
@@ -586,5 +621,6 @@ def test_rate_output_is_the_smoothed_spike_count():
     # and the smoothed rate integrates to the spike count (kernel area 1),
     # up to the tail still inside the kernel at the end
     tail = rate[-1] * tau
-    np.testing.assert_allclose(rate.sum(axis=0) * dt + tail, spikes.sum(axis=0),
-                               rtol=0.01, atol=0.5)
+    np.testing.assert_allclose(
+        rate.sum(axis=0) * dt + tail, spikes.sum(axis=0), rtol=0.01, atol=0.5
+    )

@@ -27,9 +27,23 @@ def quick(tmp_path_factory):
     png = tmp_path_factory.mktemp("bench") / "bench.png"
     # --progress on: the bar is quiet with --json and off a terminal, and its
     # count is checked below
-    out = subprocess.run([sys.executable, "-m", "mjtouch", "bench", "--quick", "--json",
-                          "--progress", "on", "--plot", str(png)], capture_output=True, text=True,
-                         timeout=600)
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mjtouch",
+            "bench",
+            "--quick",
+            "--json",
+            "--progress",
+            "on",
+            "--plot",
+            str(png),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert out.returncode == 0, out.stderr
     return json.loads(out.stdout), out.stderr, png
 
@@ -37,9 +51,13 @@ def quick(tmp_path_factory):
 def test_quick_structure_and_finiteness(quick):
     o, stderr, png = quick
     b = o["baselines"]
-    for key in ("bare_mujoco_us_per_step", "native_tactile_us_per_step",
-                "idle_plugin_us_per_step", "full_pipeline_us_per_step",
-                "homogeneous_kernel_us_per_step"):
+    for key in (
+        "bare_mujoco_us_per_step",
+        "native_tactile_us_per_step",
+        "idle_plugin_us_per_step",
+        "full_pipeline_us_per_step",
+        "homogeneous_kernel_us_per_step",
+    ):
         assert math.isfinite(b[key]) and b[key] > 0, key
     assert b["native_tactile_taxels"] == b["taxels"]
     assert b["contacts_pressed"] >= 1 and b["contacts_idle"] == 0  # pressed vs lifted state
@@ -47,10 +65,13 @@ def test_quick_structure_and_finiteness(quick):
     knobs = [r["knob"] for r in o["rows"]]
     assert {"pitch", "pressure", "stress_method", "receptors", "timestep"} <= set(knobs)
     for row in o["rows"]:
-        assert {"knob", "setting", "us_per_step", "errors", "pareto", "pareto_spike_rate"} <= set(row)
+        assert {"knob", "setting", "us_per_step", "errors", "pareto", "pareto_spike_rate"} <= set(
+            row
+        )
         assert math.isfinite(row["us_per_step"]) and row["us_per_step"] > 0
-        assert row["wall_s_per_sim_s"] == pytest.approx(row["us_per_step"] * 1e-6
-                                                        / row["timestep_s"])
+        assert row["wall_s_per_sim_s"] == pytest.approx(
+            row["us_per_step"] * 1e-6 / row["timestep_s"]
+        )
         for key in ERROR_KEYS:
             v = row["errors"][key]
             assert v is None or (math.isfinite(v) and v >= 0), (row["setting"], key)
@@ -113,8 +134,11 @@ def test_report_lists_every_row_and_marks_the_front(quick):
     buf = io.StringIO()
     bench.print_report(o, buf)
     text = buf.getvalue()
-    table = [line for line in text.splitlines() if line[:2] in ("* ", "  ")
-             and line[2:].split(" ")[0] in {r["knob"] for r in o["rows"]}]
+    table = [
+        line
+        for line in text.splitlines()
+        if line[:2] in ("* ", "  ") and line[2:].split(" ")[0] in {r["knob"] for r in o["rows"]}
+    ]
     assert len(table) == len(o["rows"])
     assert sum(line.startswith("*") for line in table) == sum(r["pareto"] for r in o["rows"])
     for key in ("Baselines", "Effects", "Threads", "Scaling"):
@@ -192,7 +216,7 @@ def test_pareto_front():
 
 def test_fits_recover_known_laws():
     x = np.array([100.0, 300.0, 1000.0, 5000.0])
-    f = bench.fit_power_law(x, 3.0 * x ** 1.7)
+    f = bench.fit_power_law(x, 3.0 * x**1.7)
     assert f["exponent"] == pytest.approx(1.7, rel=1e-10)
     assert f["prefactor"] == pytest.approx(3.0, rel=1e-9)
     assert f["r2"] == pytest.approx(1.0, abs=1e-12)
@@ -218,8 +242,9 @@ def test_lattice_sites_are_the_same_receptors_on_every_grid():
     for pos in positions[1:]:  # the plugin snaps sites to taxel centres: none moved
         np.testing.assert_allclose(pos, positions[0], rtol=0, atol=1e-12)
     given = np.array([[float(v) for v in s.split()[1:]] for s in sites.split(";")])
-    order = np.argsort([{"SA1": 0, "RA": 1, "PC": 2}[s.split()[0]] for s in sites.split(";")],
-                       kind="stable")  # the plugin lists SA1, RA, PC
+    order = np.argsort(
+        [{"SA1": 0, "RA": 1, "PC": 2}[s.split()[0]] for s in sites.split(";")], kind="stable"
+    )  # the plugin lists SA1, RA, PC
     np.testing.assert_allclose(positions[0], given[order], rtol=0, atol=1e-12)
     counts = {c: int((classes == c).sum()) for c in ("SA1", "RA", "PC")}
     assert counts["RA"] > counts["SA1"] > counts["PC"] > 0  # density order 140 > 70 > 21
@@ -231,8 +256,10 @@ def test_lattice_sites_are_the_same_receptors_on_every_grid():
 
 def test_bare_and_native_tactile_scenes():
     tip = scenes.Fingertip(nx=16, pitch_m=4e-4, ridges=False)
+
     def spec():
         return scenes.scene_spec(tip, scenes.Texture(), scenes.Protocol(timestep_s=2e-4))
+
     full = spec().compile()
     bare = bench.strip_plugin(spec()).compile()
     assert full.nplugin == 1 and bare.nplugin == 0 and bare.nsensor == 0
@@ -264,14 +291,17 @@ def test_one_line_knob_overrides_are_checked():
         bench.scene_parts({"density_scale": -1})
 
 
-@pytest.mark.parametrize("args,msg", [
-    (["--knobs", "pitch,wood"], "unknown knob 'wood'; valid: pitch, pressure"),
-    (["--knob-steps", "pitch=many"], "--knob-steps 'pitch=many' is not KNOB=N"),
-    (["--knob-steps", "wood=100"], "knob_steps: unknown knob 'wood'"),
-    (["--repeats", "0"], "repeats = 0 is out of range; valid range [1, 100]"),
-    (["--duration", "0.001"], "duration_s = 0.001 is out of range"),
-    (["--from-json", "/nonexistent/bench.json"], "not a saved bench result"),
-])
+@pytest.mark.parametrize(
+    "args,msg",
+    [
+        (["--knobs", "pitch,wood"], "unknown knob 'wood'; valid: pitch, pressure"),
+        (["--knob-steps", "pitch=many"], "--knob-steps 'pitch=many' is not KNOB=N"),
+        (["--knob-steps", "wood=100"], "knob_steps: unknown knob 'wood'"),
+        (["--repeats", "0"], "repeats = 0 is out of range; valid range [1, 100]"),
+        (["--duration", "0.001"], "duration_s = 0.001 is out of range"),
+        (["--from-json", "/nonexistent/bench.json"], "not a saved bench result"),
+    ],
+)
 def test_bad_arguments(args, msg, capsys):
     assert cli.main(["bench", "--quick", *args]) == 2
     assert msg in capsys.readouterr().err

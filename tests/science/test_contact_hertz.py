@@ -31,6 +31,7 @@ def test_pressure_ladder_example():
     # what the ladder shows.
     import pathlib
     import runpy
+
     ex = runpy.run_path(str(pathlib.Path(__file__).parents[2] / "examples" / "pressure_ladder.py"))
     out = ex["ladder"](radius_m=0.02, force_n=0.5, steps=1500)
     h = reference_solutions.Hertz(load_n=0.5, radius_m=0.02, young_pa=E, poisson=NU)

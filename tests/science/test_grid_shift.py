@@ -42,16 +42,24 @@ def test_grid_shift_sphere_pad_matches_hertz():
 
 
 def _slide(grid_shift: str, nx: int = 65, pitch: float = 2e-4):
-    tip = scenes.Fingertip(nx=nx, pitch_m=pitch, skin={
-        "noise": "0 0 0", "sites": lattice_sites([(nx, pitch)]), "grid_shift": grid_shift})
-    r = rollout.run_slide(tip, scenes.Texture(), scenes.Protocol(speed_m_s=SPEED, force_n=0.5),
-                          duration_s=0.25)
+    tip = scenes.Fingertip(
+        nx=nx,
+        pitch_m=pitch,
+        skin={"noise": "0 0 0", "sites": lattice_sites([(nx, pitch)]), "grid_shift": grid_shift},
+    )
+    r = rollout.run_slide(
+        tip, scenes.Texture(), scenes.Protocol(speed_m_s=SPEED, force_n=0.5), duration_s=0.25
+    )
     w, m = r.window(), r.layout.mask("PC")
     f, p = analysis.stress_spectrum(r.stress[w][:, m], r.dt)
     hw = max(3.0, 1.5 * (f[1] - f[0]))
     band = lambda fc: float(p[np.abs(f - fc) <= hw].max())  # noqa: E731
-    return r, band(SPEED / pitch), band(SPEED / 1e-3), \
-        analysis.rates_hz(r.spikes[w], r.dt, r.layout.classes)["PC"]
+    return (
+        r,
+        band(SPEED / pitch),
+        band(SPEED / 1e-3),
+        analysis.rates_hz(r.spikes[w], r.dt, r.layout.classes)["PC"],
+    )
 
 
 def test_grid_shift_cancels_the_v_over_pitch_line():
@@ -82,8 +90,15 @@ def test_grid_shift_warm_start_from_its_history_reaches_the_cold_solution():
     # and 2e-6 with it; a stale or mis-placed history, or a wrong K p0,
     # converges elsewhere
     proto = scenes.Protocol(timestep_s=2e-4, press_s=0.05)
-    tip = fast_tip(skin={"pressure": "elastic", "grid_shift": "true", "tolerance": "1e-9",
-                         "outputs": "force pressure", "noise": "0 0 0"})
+    tip = fast_tip(
+        skin={
+            "pressure": "elastic",
+            "grid_shift": "true",
+            "tolerance": "1e-9",
+            "outputs": "force pressure",
+            "noise": "0 0 0",
+        }
+    )
     m = scenes.build_model(tip, scenes.Texture(period_m=0.6e-3), proto)
     layout = SkinLayout.from_model(m)
     d = mujoco.MjData(m)

@@ -24,8 +24,12 @@ def test_grating_peak_at_v_over_d(period_m, speed_m_s):
 def test_line_frequency_scales_linearly_with_speed():
     period = 0.6e-3
     speeds = np.array([0.015, 0.025, 0.04])
-    f = np.array([testing.slide_spectrum(texture=testing.grating(period), speed_m_s=v).peaks()[0]
-                  for v in speeds])
+    f = np.array(
+        [
+            testing.slide_spectrum(texture=testing.grating(period), speed_m_s=v).peaks()[0]
+            for v in speeds
+        ]
+    )
     slope, intercept = np.polyfit(speeds, f, 1)
     # slope 1/D; intercept 0 within a bin (2.2 Hz)
     assert slope == pytest.approx(1 / period, rel=0.01)
@@ -45,12 +49,21 @@ def _ridge_filtering_spectra(speed_m_s, ridge_angle_deg=0.0):
     would leak fine-scale traction into the smooth skin's spectrum)."""
     out = {}
     for ridges in (True, False):
-        tip = scenes.Fingertip(nx=64, pitch_m=1.5e-4, ridges=ridges,
-                               ridge_angle_deg=ridge_angle_deg,
-                               skin={"pressure": "elastic", "outputs": "stress force"})
-        out[ridges] = testing.slide_spectrum(texture=testing.random_texture(), speed_m_s=speed_m_s,
-                                             ridges=ridges, duration_s=0.4, timestep_s=1e-3,
-                                             tip=tip)
+        tip = scenes.Fingertip(
+            nx=64,
+            pitch_m=1.5e-4,
+            ridges=ridges,
+            ridge_angle_deg=ridge_angle_deg,
+            skin={"pressure": "elastic", "outputs": "stress force"},
+        )
+        out[ridges] = testing.slide_spectrum(
+            texture=testing.random_texture(),
+            speed_m_s=speed_m_s,
+            ridges=ridges,
+            duration_s=0.4,
+            timestep_s=1e-3,
+            tip=tip,
+        )
     return out[True], out[False]
 
 
@@ -78,6 +91,7 @@ def test_fingerprint_ridges_add_a_peak_at_v_over_lambda():
 
 # -- Shao et al. 2010 (seed 001): the fine texture needs the ridges ----------
 
+
 def test_shao2010_fine_grating_lines_need_ridges():
     # examples/shao2010.py --quick: D = 0.2 mm at 25 mm/s (V/D = 125 Hz), 0.1 N,
     # Mises stress at the Meissner (0.75 mm) and Pacinian (2 mm) depths. The
@@ -85,6 +99,7 @@ def test_shao2010_fine_grating_lines_need_ridges():
     # README's comparison) nothing is.
     import pathlib
     import runpy
+
     ex = runpy.run_path(str(pathlib.Path(__file__).parents[2] / "examples" / "shao2010.py"))
     ridged, smooth = ex["run"](quick=True)
     assert ridged["ridges"] and not smooth["ridges"]

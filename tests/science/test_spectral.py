@@ -33,8 +33,9 @@ def test_flat_plate_has_no_texture_line():
     D = 1e-3
     power = {}
     for kind in ("flat", "grating"):
-        res = rollout.run_slide(fast_tip(ridges=False), scenes.Texture(kind=kind, period_m=D),
-                                proto, 0.4)
+        res = rollout.run_slide(
+            fast_tip(ridges=False), scenes.Texture(kind=kind, period_m=D), proto, 0.4
+        )
         f, p = analysis.stress_spectrum(res.stress[res.window(0.1)], res.dt)
         power[kind] = analysis.power_at(f, p, proto.speed_m_s / D)
     assert power["flat"] < 1e-4 * power["grating"], power
@@ -54,10 +55,10 @@ def test_no_line_at_speed_over_taxel_pitch(kind):
     res = rollout.run_slide(tip, scenes.Texture(kind=kind, period_m=1e-3), proto, 0.4)
     f, p = analysis.stress_spectrum(res.stress[res.window(0.05)], res.dt)
     k = int(np.argmin(abs(f - speed / pitch)))
-    floor = np.median(np.r_[p[k - 30:k - 5], p[k + 5:k + 30]])
-    assert p[k - 2:k + 3].max() <= 10 * floor, (p[k - 2:k + 3], floor)
+    floor = np.median(np.r_[p[k - 30 : k - 5], p[k + 5 : k + 30]])
+    assert p[k - 2 : k + 3].max() <= 10 * floor, (p[k - 2 : k + 3], floor)
     if kind == "grating":  # the texture's own line stands far above it
-        assert analysis.power_at(f, p, speed / 1e-3) > 1e4 * p[k - 2:k + 3].max()
+        assert analysis.power_at(f, p, speed / 1e-3) > 1e4 * p[k - 2 : k + 3].max()
 
 
 def test_displacement_controlled_press_and_slide():
@@ -68,8 +69,9 @@ def test_displacement_controlled_press_and_slide():
     forces, stress = [], []
     for depth in (0.5e-3, 1e-3, 1.5e-3):
         tip = scenes.Fingertip(nx=48, pitch_m=1.5e-4, skin={"outputs": "spikes stress force"})
-        proto = scenes.Protocol(control="displacement", depth_m=depth, timestep_s=2e-4,
-                                press_s=0.15)
+        proto = scenes.Protocol(
+            control="displacement", depth_m=depth, timestep_s=2e-4, press_s=0.15
+        )
         res = rollout.run_slide(tip, scenes.Texture(period_m=1e-3), proto, 0.2)
         fn = res.force[res.window(0.05)][:, 0]
         assert fn.std() < 1e-3 * fn.mean()

@@ -17,11 +17,13 @@ DT = 1e-4
 @pytest.fixture(scope="module")
 def probe_scene():
     # 0.3 mm pre-indentation so sines stay in contact (their troughs 0.25 mm)
-    return stimuli.ProbeScene(stimuli.Probe("pin", radius_m=0.5e-3), preindent_m=0.3e-3,
-                              settle_s=0.05, timestep_s=DT)
+    return stimuli.ProbeScene(
+        stimuli.Probe("pin", radius_m=0.5e-3), preindent_m=0.3e-3, settle_s=0.05, timestep_s=DT
+    )
 
 
 # --- the probe: displacement control with the finger held still --------------------------
+
 
 def test_probe_achieves_commanded_indentation_and_finger_stays_put():
     scene = stimuli.ProbeScene(stimuli.Probe("pin", radius_m=0.5e-3), settle_s=0.0)
@@ -99,9 +101,10 @@ def test_trace_is_interpolated_and_runs_bit_identically(probe_scene):
 
 
 def test_probe_shapes_sphere_and_any_geom_touch_at_zero_depth():
-    for probe in (stimuli.Probe("sphere", radius_m=1e-3),
-                  stimuli.Probe("geom", geom_type="box", geom_size=(0.5e-3, 0.5e-3, 1e-3),
-                                x_m=1e-3)):
+    for probe in (
+        stimuli.Probe("sphere", radius_m=1e-3),
+        stimuli.Probe("geom", geom_type="box", geom_size=(0.5e-3, 0.5e-3, 1e-3), x_m=1e-3),
+    ):
         scene = stimuli.ProbeScene(probe, settle_s=0.0)
         r = scene.run(stimuli.ramp_and_hold(0.2e-3, ramp_s=0.02, hold_s=0.03))
         assert r.force_n[0] == 0.0  # touching, not yet pressing
@@ -110,6 +113,7 @@ def test_probe_shapes_sphere_and_any_geom_touch_at_zero_depth():
 
 
 # --- the vibrating plate ---------------------------------------------------------------------
+
 
 def test_vibrating_plate_line_in_stress_and_finger_pressed():
     scene = stimuli.PlateScene(press_n=0.5, settle_s=0.06, timestep_s=DT)
@@ -123,11 +127,13 @@ def test_vibrating_plate_line_in_stress_and_finger_pressed():
 
 # --- force control ------------------------------------------------------------------------
 
+
 def _replayed_force(spec, press):
     """Replay the press controls in the skinned model; the skin's own normal
     force (its force block) per step."""
     m = spec.compile()
     from mjtouch.scene.sensor import SkinLayout
+
     layout = SkinLayout.from_model(m)
     d = mujoco.MjData(m)
     s0 = np.empty(mujoco.mj_stateSize(m, stimuli._FULL))
@@ -168,28 +174,51 @@ def test_force_control_lands_the_pad_within_50ms(force_n):
 
 # --- bad arguments ----------------------------------------------------------------------------
 
-@pytest.mark.parametrize("make, match", [
-    (lambda: stimuli.ramp_and_hold(-1e-3), r"depth_m = -0.001 is out of range; valid range \(0, "),
-    (lambda: stimuli.ramp_and_hold(1e-3, ramp_s=0), r"ramp_s = 0 is out of range"),
-    (lambda: stimuli.sine(1e-5, 0.0), r"freq_hz = 0.0 is out of range; valid range \(0, 2000\] Hz"),
-    (lambda: stimuli.sine(3e-3, 10.0), r"amplitude_m = 0.003 is out of range"),
-    (lambda: stimuli.sine(1e-5, 10.0, duration_s=0.1, ramp_s=0.2), r"ramp_s = 0.2 is out of"),
-    (lambda: stimuli.sum_of_sines([1e-5], [10.0, 20.0]), r"same non-zero length"),
-    (lambda: stimuli.noise(1e-6, (300.0, 100.0)), r"band_hz\[1\] = 100.0 is out of range"),
-    (lambda: stimuli.noise(1e-6, seed=-1), r"seed = -1 must be a non-negative integer"),
-    (lambda: stimuli.trace([0.0], 1e-3), r"values_m must be a 1-D finite array of >= 2"),
-    (lambda: stimuli.trace([0.0, 0.01], 1e-3), r"valid range \[-5e-3, 5e-3\] m"),
-    (lambda: stimuli.trace([0.0, 1e-4], 0), r"dt_s = 0 is out of range"),
-    (lambda: stimuli.ProbeScene(stimuli.Probe("cone")), r"probe shape = 'cone' is not one of"),
-    (lambda: stimuli.ProbeScene(stimuli.Probe("pin", radius_m=0)), r"radius_m = 0 is out"),
-    (lambda: stimuli.ProbeScene(stimuli.Probe("geom", geom_type="mesh")), r"geom_type = 'mesh'"),
-    (lambda: stimuli.ProbeScene(stimuli.Probe(x_m=0.01)), r"outside the pad's central half"),
-    (lambda: stimuli.ProbeScene(preindent_m=4e-3), r"preindent_m = 0.004 is out of range"),
-    (lambda: stimuli.PlateScene(press_n=0), r"press_n = 0 is out of range; valid range \(0, 20\]"),
-    (lambda: stimuli.press_force_controls(stimuli.vibrating_plate_spec(), [-1.0]), r"valid range \[0, 100\]"),
-    (lambda: stimuli.press_force_controls(stimuli.vibrating_plate_spec(), [0.1], counter="wall"),
-     r"no geom 'wall'"),
-])
+
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (
+            lambda: stimuli.ramp_and_hold(-1e-3),
+            r"depth_m = -0.001 is out of range; valid range \(0, ",
+        ),
+        (lambda: stimuli.ramp_and_hold(1e-3, ramp_s=0), r"ramp_s = 0 is out of range"),
+        (
+            lambda: stimuli.sine(1e-5, 0.0),
+            r"freq_hz = 0.0 is out of range; valid range \(0, 2000\] Hz",
+        ),
+        (lambda: stimuli.sine(3e-3, 10.0), r"amplitude_m = 0.003 is out of range"),
+        (lambda: stimuli.sine(1e-5, 10.0, duration_s=0.1, ramp_s=0.2), r"ramp_s = 0.2 is out of"),
+        (lambda: stimuli.sum_of_sines([1e-5], [10.0, 20.0]), r"same non-zero length"),
+        (lambda: stimuli.noise(1e-6, (300.0, 100.0)), r"band_hz\[1\] = 100.0 is out of range"),
+        (lambda: stimuli.noise(1e-6, seed=-1), r"seed = -1 must be a non-negative integer"),
+        (lambda: stimuli.trace([0.0], 1e-3), r"values_m must be a 1-D finite array of >= 2"),
+        (lambda: stimuli.trace([0.0, 0.01], 1e-3), r"valid range \[-5e-3, 5e-3\] m"),
+        (lambda: stimuli.trace([0.0, 1e-4], 0), r"dt_s = 0 is out of range"),
+        (lambda: stimuli.ProbeScene(stimuli.Probe("cone")), r"probe shape = 'cone' is not one of"),
+        (lambda: stimuli.ProbeScene(stimuli.Probe("pin", radius_m=0)), r"radius_m = 0 is out"),
+        (
+            lambda: stimuli.ProbeScene(stimuli.Probe("geom", geom_type="mesh")),
+            r"geom_type = 'mesh'",
+        ),
+        (lambda: stimuli.ProbeScene(stimuli.Probe(x_m=0.01)), r"outside the pad's central half"),
+        (lambda: stimuli.ProbeScene(preindent_m=4e-3), r"preindent_m = 0.004 is out of range"),
+        (
+            lambda: stimuli.PlateScene(press_n=0),
+            r"press_n = 0 is out of range; valid range \(0, 20\]",
+        ),
+        (
+            lambda: stimuli.press_force_controls(stimuli.vibrating_plate_spec(), [-1.0]),
+            r"valid range \[0, 100\]",
+        ),
+        (
+            lambda: stimuli.press_force_controls(
+                stimuli.vibrating_plate_spec(), [0.1], counter="wall"
+            ),
+            r"no geom 'wall'",
+        ),
+    ],
+)
 def test_bad_arguments_are_named_with_their_range(make, match):
     with pytest.raises(ValueError, match=match):
         make()
@@ -206,6 +235,7 @@ def test_force_control_example_beats_the_motor(capsys):
     import json
     import pathlib
     import runpy
+
     path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "force_control.py"
     main = runpy.run_path(str(path), run_name="example")["main"]
     assert main(["--forces", "0.01", "--duration", "0.3", "--json"]) == 0

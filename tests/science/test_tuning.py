@@ -28,8 +28,9 @@ def run_cli(*args):
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     path = tmp_path_factory.mktemp("tuning")
-    out = run_cli("tuning", "--quick", "--json", "--out", str(path / "t.json"),
-                  "--plot", str(path / "t.png"))
+    out = run_cli(
+        "tuning", "--quick", "--json", "--out", str(path / "t.json"), "--plot", str(path / "t.png")
+    )
     assert out.returncode == 0, out.stderr
     o = json.loads(out.stdout)
     o["_dir"] = path
@@ -47,8 +48,9 @@ def test_tuning_json_structure(quick):
                 v = th["thresholds_m"][c][unit][crit]
                 assert len(v) == len(cfg.freqs_hz)
                 # a threshold is inside the searched range or inf (none found)
-                assert all(x == math.inf or cfg.amp_range_m[0] <= x <= cfg.amp_range_m[1]
-                           for x in v), v
+                assert all(
+                    x == math.inf or cfg.amp_range_m[0] <= x <= cfg.amp_range_m[1] for x in v
+                ), v
             # the most sensitive unit is at least as sensitive as the centred one
             for crit in tuning.CRITERIA:
                 best = np.array(th["thresholds_m"][c]["best"][crit])
@@ -60,8 +62,9 @@ def test_tuning_json_structure(quick):
         assert len(ri["rates"][c]["hold_hz"]) == len(cfg.depths_m)
     # published ranges travel with the result, each with its source
     for boxes in quick["published"]["thresholds"].values():
-        assert boxes and all(b["source"] and b["amplitude_m"][0] < b["amplitude_m"][1]
-                             for b in boxes)
+        assert boxes and all(
+            b["source"] and b["amplitude_m"][0] < b["amplitude_m"][1] for b in boxes
+        )
     assert json.loads((quick["_dir"] / "t.json").read_text())["thresholds"] == th
     assert (quick["_dir"] / "t.png").read_bytes()[:4] == b"\x89PNG"
 
@@ -101,12 +104,27 @@ def test_tuning_human_output_and_bad_config():
 
 
 def test_probe_cli_json_and_errors():
-    out = run_cli("probe", "--json", "--waveform", "sine", "--freq", "100", "--amplitude",
-                  "5e-6", "--duration", "0.2", "--nx", "24", "--pitch", "3e-4")
+    out = run_cli(
+        "probe",
+        "--json",
+        "--waveform",
+        "sine",
+        "--freq",
+        "100",
+        "--amplitude",
+        "5e-6",
+        "--duration",
+        "0.2",
+        "--nx",
+        "24",
+        "--pitch",
+        "3e-4",
+    )
     assert out.returncode == 0, out.stderr
     o = json.loads(out.stdout)
-    assert o["waveform"] == dict(kind="sine", amplitude_m=5e-6, freq_hz=100.0, duration_s=0.2,
-                                 ramp_s=0.05)
+    assert o["waveform"] == dict(
+        kind="sine", amplitude_m=5e-6, freq_hz=100.0, duration_s=0.2, ramp_s=0.05
+    )
     assert set(o["rates_hz"]) == {"SA1", "RA", "PC"}
     assert o["max_displacement_error_m"] < 1e-7
     bad = run_cli("probe", "--depth", "0.01")
@@ -118,13 +136,42 @@ def test_probe_cli_json_and_errors():
 def test_probe_cli_trace_file_and_plate(tmp_path):
     f = tmp_path / "trace.txt"
     np.savetxt(f, 1e-4 * np.sin(np.linspace(0, 2 * np.pi, 101)))
-    out = run_cli("probe", "--json", "--waveform", "trace", "--trace", str(f), "--trace-dt",
-                  "1e-3", "--nx", "24", "--pitch", "3e-4")
+    out = run_cli(
+        "probe",
+        "--json",
+        "--waveform",
+        "trace",
+        "--trace",
+        str(f),
+        "--trace-dt",
+        "1e-3",
+        "--nx",
+        "24",
+        "--pitch",
+        "3e-4",
+    )
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["waveform"]["samples"] == 101
-    out = run_cli("probe", "--json", "--probe", "plate", "--waveform", "sine", "--freq", "200",
-                  "--amplitude", "1e-6", "--duration", "0.15", "--press", "0.3", "--nx", "24",
-                  "--pitch", "3e-4")
+    out = run_cli(
+        "probe",
+        "--json",
+        "--probe",
+        "plate",
+        "--waveform",
+        "sine",
+        "--freq",
+        "200",
+        "--amplitude",
+        "1e-6",
+        "--duration",
+        "0.15",
+        "--press",
+        "0.3",
+        "--nx",
+        "24",
+        "--pitch",
+        "3e-4",
+    )
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["force_steady_mean_n"] == pytest.approx(0.3, rel=0.03)
 
@@ -164,8 +211,9 @@ PIN_FREQS_HZ = sorted({f for _, f in ATONAL_CASES} | {80.0})
 
 @pytest.fixture(scope="module")
 def pin_sine_stress():
-    return tuning.pin_sine_stress(tuning.TuningConfig(), PIN_FREQS_HZ,
-                                  (0.0, ATONAL_REF_M, 2 * ATONAL_REF_M))
+    return tuning.pin_sine_stress(
+        tuning.TuningConfig(), PIN_FREQS_HZ, (0.0, ATONAL_REF_M, 2 * ATONAL_REF_M)
+    )
 
 
 @pytest.mark.parametrize("f", PIN_FREQS_HZ)

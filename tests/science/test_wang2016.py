@@ -83,10 +83,12 @@ def test_prescribed_pressure_stress_does_not_depend_on_the_skin(wang):
     contact = W["SpecimenContact"](W["skin_layers"](W["SPECIMENS"][0]), PITCH_M)
     for f in W["FORCES_N"]:
         p = contact.press(f)["pressure_pa"]
-        half = W["max_compressive_pa"](core.field_stress(p, PITCH_M, DEPTH_M, contact.site_ij[:1],
-                                                         poisson=W["SKIN_POISSON"]))[0]
-        layered = np.array(wang["modes"]["pressure"]["sites"]["centre"]["q_pa"])[:, list(
-            W["FORCES_N"]).index(f)]
+        half = W["max_compressive_pa"](
+            core.field_stress(p, PITCH_M, DEPTH_M, contact.site_ij[:1], poisson=W["SKIN_POISSON"])
+        )[0]
+        layered = np.array(wang["modes"]["pressure"]["sites"]["centre"]["q_pa"])[
+            :, list(W["FORCES_N"]).index(f)
+        ]
         assert np.abs(layered / half - 1).max() < (DEPTH_M / 267.71e-6) ** 2  # as above
     # the rates follow: two spike-count quanta (1 spike / 2.5 s each)
     for site in ("centre", "edge"):

@@ -46,8 +46,10 @@ def sine_spikes(cls, f, amp, cfg, stream=0):
 def threshold(cls, f, cfg, per_cycle, stream=0, lo=1e-3, hi=1e7, iters=22):
     """Smallest amplitude (Pa) with >= per_cycle x 20 spikes (per_cycle 1/20:
     any spike)."""
+
     def ok(a):
         return sine_spikes(cls, f, a, cfg, stream) >= max(1, round(per_cycle * 20))
+
     if not ok(hi):
         return math.inf
     for _ in range(iters):  # (1e10)^(2^-22): 0.5% relative
@@ -100,7 +102,7 @@ def test_pc_u_shaped_minimum_150_to_400_hz(stream):
     thr = np.array([absolute("PC", f, cfg, stream or 0) for f in freqs])
     best = int(np.argmin(thr))
     assert 150 <= freqs[best] <= 400, thr
-    assert np.all(np.diff(thr[:best + 1]) < 0) and np.all(np.diff(thr[best:]) > 0), thr
+    assert np.all(np.diff(thr[: best + 1]) < 0) and np.all(np.diff(thr[best:]) > 0), thr
     assert thr[0] >= 10 * thr[freqs.index(250)], thr
 
 
@@ -123,8 +125,9 @@ def test_ra_entrainment_over_1_5x_absolute_at_5_to_20_hz(f):
     # each varied unit is held to > 1.2x.
     a, e = absolute("RA", f), entrainment("RA", f)
     assert e > 1.5 * a, (a, e)
-    ratios = np.array([entrainment("RA", f, {}, s) / absolute("RA", f, {}, s)
-                       for s in VARIED_STREAMS])
+    ratios = np.array(
+        [entrainment("RA", f, {}, s) / absolute("RA", f, {}, s) for s in VARIED_STREAMS]
+    )
     assert np.median(ratios) > 1.5 and ratios.min() > 1.2, ratios
 
 
@@ -138,16 +141,22 @@ def test_calibration_absolute_thresholds():
 
 # --- ramp-and-hold stress ------------------------------------------------------------------
 
+
 def trapezoid(t, peak, t_on=0.1, ramp=0.1, hold=0.5):
-    return peak * np.interp(t, [0, t_on, t_on + ramp, t_on + ramp + hold,
-                                t_on + 2 * ramp + hold, 1e9], [0, 0, 1, 1, 0, 0])
+    return peak * np.interp(
+        t,
+        [0, t_on, t_on + ramp, t_on + ramp + hold, t_on + 2 * ramp + hold, 1e9],
+        [0, 0, 1, 1, 0, 0],
+    )
 
 
 def windows(t, t_on=0.1, ramp=0.1, hold=0.5):
-    return {"up": (t > t_on) & (t <= t_on + ramp),
-            "hold": (t > t_on + ramp + 0.1) & (t <= t_on + ramp + hold),
-            "down": (t > t_on + ramp + hold) & (t <= t_on + 2 * ramp + hold),
-            "after": t > t_on + 2 * ramp + hold + 0.1}
+    return {
+        "up": (t > t_on) & (t <= t_on + ramp),
+        "hold": (t > t_on + ramp + 0.1) & (t <= t_on + ramp + hold),
+        "down": (t > t_on + ramp + hold) & (t <= t_on + 2 * ramp + hold),
+        "after": t > t_on + 2 * ramp + hold + 0.1,
+    }
 
 
 def test_sa1_sustained_and_roughly_linear_in_stress():
@@ -164,7 +173,7 @@ def test_sa1_sustained_and_roughly_linear_in_stress():
         h = sp[w["hold"]]
         rates.append(h.sum() / (w["hold"].sum() * dt))
         early.append(h[: h.size // 2].sum())
-        late.append(h[h.size // 2:].sum())
+        late.append(h[h.size // 2 :].sum())
         assert sp[w["after"]].sum() == 0
     rates = np.array(rates)
     assert np.all(np.diff(rates) > 0) and 5 < rates[0] and rates[-1] < 150, rates
@@ -173,7 +182,7 @@ def test_sa1_sustained_and_roughly_linear_in_stress():
     # roughly linear above threshold: a straight line explains >= 97% of the
     # variance of the rates over this range
     r = np.corrcoef(peaks, rates)[0, 1]
-    assert r ** 2 >= 0.97, (rates, r)
+    assert r**2 >= 0.97, (rates, r)
 
 
 def test_sa1_pauses_on_release():
@@ -208,16 +217,20 @@ def test_population_variants_differ_and_are_deterministic():
     dt = 1e-4
     t = np.arange(int(0.9 / dt)) * dt
     q = trapezoid(t, 40e3)
-    counts = {s: core.receptor_run("SA1", q, dt, {"seed": "3"}, stream=s)[0].sum()
-              for s in range(12)}
+    counts = {
+        s: core.receptor_run("SA1", q, dt, {"seed": "3"}, stream=s)[0].sum() for s in range(12)
+    }
     assert len(set(counts.values())) >= 3  # several parameter sets in use
     for s in range(12):  # a pure function of (seed, stream)
         assert core.receptor_run("SA1", q, dt, {"seed": "3"}, stream=s)[0].sum() == counts[s]
     # `uniform`: every receptor is the median unit (noise off: each stream
     # draws its own noise)
-    uni = {core.receptor_run("SA1", q, dt, {"seed": "3", "population": "uniform",
-                                            "noise": "0 0 0"}, stream=s)[0].sum()
-           for s in range(12)}
+    uni = {
+        core.receptor_run(
+            "SA1", q, dt, {"seed": "3", "population": "uniform", "noise": "0 0 0"}, stream=s
+        )[0].sum()
+        for s in range(12)
+    }
     assert len(uni) == 1
 
 
@@ -251,11 +264,18 @@ SA1_RATE_1P5MM_HZ = (0.8 * 50, 1.2 * 89)
 @pytest.fixture(scope="module")
 def pin_sa1_rates():
     from mjtouch.experiments import stimuli
-    scene = stimuli.ProbeScene(stimuli.Probe("pin", radius_m=0.5e-3), preindent_m=0.0,
-                               settle_s=0.0, timestep_s=1e-4)
+
+    scene = stimuli.ProbeScene(
+        stimuli.Probe("pin", radius_m=0.5e-3), preindent_m=0.0, settle_s=0.0, timestep_s=1e-4
+    )
     hold_s, ramp_s = 0.3, 0.05
-    res = scene.run([stimuli.ramp_and_hold(d * 1e-3, ramp_s=ramp_s, hold_s=hold_s, rest_s=0.0)
-                     for d in PIN_DEPTHS_MM], threads=2)
+    res = scene.run(
+        [
+            stimuli.ramp_and_hold(d * 1e-3, ramp_s=ramp_s, hold_s=hold_s, rest_s=0.0)
+            for d in PIN_DEPTHS_MM
+        ],
+        threads=2,
+    )
     out = []
     for r in res:
         u = r.centred_units()["SA1"]

@@ -27,6 +27,7 @@ def poisson_counts(rng, rate_hz, dt_s, shape):
 
 # --- spike times, raster, rates -----------------------------------------------------------
 
+
 def test_raster_recovers_spike_times_to_half_a_step(rng):
     dt, nstep = 1e-3, 2000
     trains = [np.sort(rng.uniform(0.0, (nstep - 1) * dt, size=n)) for n in (0, 7, 150)]
@@ -105,6 +106,7 @@ def test_smoothed_rate_mean_equals_rate_of_a_regular_train():
 
 # --- vector strength ---------------------------------------------------------------------
 
+
 def test_vector_strength_of_a_phase_locked_train_is_one():
     f, phase0 = 250.0, 0.3  # phase in cycles
     times = (np.arange(500) + phase0) / f
@@ -142,8 +144,9 @@ def test_rayleigh_p_value_is_calibrated():
     # Under uniform phases the p-value is uniform: P(p < 0.1) = 0.1.
     rng = np.random.default_rng(2)
     trials, n = 1000, 40
-    p = np.array([analysis.vector_strength(rng.uniform(0, 1, n), 13.0).p_value
-                  for _ in range(trials)])
+    p = np.array(
+        [analysis.vector_strength(rng.uniform(0, 1, n), 13.0).p_value for _ in range(trials)]
+    )
     # binomial(1000, 0.1): sd 0.0095; 5 sd
     assert abs((p < 0.1).mean() - 0.1) < 5 * math.sqrt(0.1 * 0.9 / trials)
     # for large n Zar's formula tends to exp(-Z)
@@ -187,6 +190,7 @@ def test_spikes_per_cycle_of_a_locked_train():
 
 # --- spectra ------------------------------------------------------------------------------
 
+
 def test_spike_spectrum_of_poisson_trains_is_flat_at_twice_the_rate(rng):
     dt, lam, nrec, nstep = 1e-3, 30.0, 20, 20_000
     counts = poisson_counts(rng, lam, dt, (nstep, nrec))
@@ -213,6 +217,7 @@ def test_spike_spectrum_of_a_regular_train_has_lines_at_its_harmonics():
 
 
 # --- bad input ----------------------------------------------------------------------------
+
 
 def test_band_line_finds_a_sine_off_its_expected_frequency(rng):
     # a 61 Hz sine in white noise, looked for at 55.6 Hz (+-15%: 47.2-63.9 Hz)
@@ -261,6 +266,7 @@ def test_bad_arguments_name_the_argument():
 
 
 # --- figures -----------------------------------------------------------------------------
+
 
 def test_figures_draw_what_analysis_computes(rng):
     dt = 1e-3

@@ -11,8 +11,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 def _tool():
-    spec = importlib.util.spec_from_file_location("attribute_table",
-                                                  ROOT / ".ci" / "attribute_table.py")
+    spec = importlib.util.spec_from_file_location(
+        "attribute_table", ROOT / ".ci" / "attribute_table.py"
+    )
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
     return tool
@@ -20,8 +21,10 @@ def _tool():
 
 def test_readme_attribute_table_is_generated():
     diff = _tool().diff()
-    assert diff == "", ("plugin/README.md's attribute table differs from the plugin's; run "
-                        "`python .ci/attribute_table.py --write`:\n" + diff)
+    assert diff == "", (
+        "plugin/README.md's attribute table differs from the plugin's; run "
+        "`python .ci/attribute_table.py --write`:\n" + diff
+    )
 
 
 def test_readme_table_has_one_row_per_registered_attribute():
@@ -45,24 +48,61 @@ def test_a_changed_readme_row_is_reported(tmp_path, monkeypatch):
 # A valid value different from the default for every physics attribute, with
 # the attributes it needs (nx, pitch: a grid that holds the sites).
 NON_DEFAULT = {
-    "texture_group": "2", "nx": "64", "pitch": "1.2e-4", "ridges": "false",
-    "ridge_pitch": "5e-4", "ridge_height": "6e-5", "ridge_angle": "30",
-    "ridge_profile": "square", "pressure": "winkler", "oversample": "3",
-    "young": ("5e4", {"skin": "halfspace"}), "tolerance": "1e-3", "contact_solver": "pk",
-    "elastic_precision": "double", "grid_shift": "true",
+    "texture_group": "2",
+    "nx": "64",
+    "pitch": "1.2e-4",
+    "ridges": "false",
+    "ridge_pitch": "5e-4",
+    "ridge_height": "6e-5",
+    "ridge_angle": "30",
+    "ridge_profile": "square",
+    "pressure": "winkler",
+    "oversample": "3",
+    "young": ("5e4", {"skin": "halfspace"}),
+    "tolerance": "1e-3",
+    "contact_solver": "pk",
+    "elastic_precision": "double",
+    "grid_shift": "true",
     "stiffness": "3e7",
-    "poisson": ("0.4", {"skin": "halfspace"}), "shear": "false", "radius": "2e-3",
-    "classes": "SA1 RA", "density": "70 140 20", "depth": "7.5e-4 7.5e-4 1.5e-3",
-    "quantity": "szz szz szz", "outputs": "spikes", "sa1_merkel": "8 5 3",
-    "sa1_k0": "2e-16", "sa1_k1": "2e-16", "sa1_i0": "5e-12", "sa1_c": "2e-11",
-    "sa1_r": "2e9", "sa1_vth": "0.04", "ra_gain": "2e-4", "ra_lowpass": "50",
-    "ra_tau": "6e-3", "pc_gain": "6e-6", "pc_highpass": "160", "pc_lowpass": "260",
-    "pc_tau": "2e-3", "refractory": "2e-3", "noise": "0.1 0 0", "noise_tau": "3e-3",
-    "seed": "7", "rate_tau": "0.1", "sites": "SA1 0 0 7.5e-4",
-    "stress_method": "direct", "stress_theta": ("0.4", {"stress_method": "tree"}),
-    "skin": "halfspace", "layers": "7e-4 8e4 0.48; 3e-3 3e4 0.45", "base": "3e4 0.45",
-    "interface_side": "lower", "sa1_model": "wang2016", "sa1_lowpass": "40",
-    "adapt": "0.2 1 1", "adapt_tau": "0.05 0.03 0.03", "ra_saturation": "4",
+    "poisson": ("0.4", {"skin": "halfspace"}),
+    "shear": "false",
+    "radius": "2e-3",
+    "classes": "SA1 RA",
+    "density": "70 140 20",
+    "depth": "7.5e-4 7.5e-4 1.5e-3",
+    "quantity": "szz szz szz",
+    "outputs": "spikes",
+    "sa1_merkel": "8 5 3",
+    "sa1_k0": "2e-16",
+    "sa1_k1": "2e-16",
+    "sa1_i0": "5e-12",
+    "sa1_c": "2e-11",
+    "sa1_r": "2e9",
+    "sa1_vth": "0.04",
+    "ra_gain": "2e-4",
+    "ra_lowpass": "50",
+    "ra_tau": "6e-3",
+    "pc_gain": "6e-6",
+    "pc_highpass": "160",
+    "pc_lowpass": "260",
+    "pc_tau": "2e-3",
+    "refractory": "2e-3",
+    "noise": "0.1 0 0",
+    "noise_tau": "3e-3",
+    "seed": "7",
+    "rate_tau": "0.1",
+    "sites": "SA1 0 0 7.5e-4",
+    "stress_method": "direct",
+    "stress_theta": ("0.4", {"stress_method": "tree"}),
+    "skin": "halfspace",
+    "layers": "7e-4 8e4 0.48; 3e-3 3e4 0.45",
+    "base": "3e4 0.45",
+    "interface_side": "lower",
+    "sa1_model": "wang2016",
+    "sa1_lowpass": "40",
+    "adapt": "0.2 1 1",
+    "adapt_tau": "0.05 0.03 0.03",
+    "ra_saturation": "4",
     "sa1_saturation": "3e4",
     "population": "uniform",
     # not physics (the same bits for any count), but read from the shared
@@ -74,6 +114,7 @@ NOT_PHYSICS = {"texture", "visual"}  # adapter and drawing only
 
 def _cache_key(attrs: dict) -> str:
     from mjtouch import _core
+
     return _core.config_cache_key({k: str(v) for k, v in attrs.items()})
 
 
@@ -98,8 +139,11 @@ def test_every_written_default_is_the_parsed_default():
     # writing a documented default explicitly must give the same model as
     # leaving the attribute out (it did not when `pressure` changed once).
     from mjtouch import _core
-    rows = [[f.strip() for f in line.split("|")]
-            for line in _core.attribute_table_markdown().splitlines()[2:]]
+
+    rows = [
+        [f.strip() for f in line.split("|")]
+        for line in _core.attribute_table_markdown().splitlines()[2:]
+    ]
     defaults = {f[1].strip("`"): f[2] for f in rows}
     assert DESCRIBED_DEFAULTS <= set(defaults)
     for key, text in defaults.items():

@@ -35,11 +35,17 @@ def test_wrong_rank_or_layout_is_a_type_error():
 
 
 def test_wrong_shape_is_a_value_error_naming_the_argument_and_shape():
-    with pytest.raises(ValueError, match=r"points_m must have shape \(npoint, 3\), got shape "
-                                         r"\(4, 2\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"points_m must have shape \(npoint, 3\), got shape "
+        r"\(4, 2\)",
+    ):
         _core.halfspace_stress(np.ones((4, 2)))
-    with pytest.raises(ValueError, match=r"gap_m must be a non-empty square \(n x n\) array, got "
-                                         r"shape \(8, 6\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"gap_m must be a non-empty square \(n x n\) array, got "
+        r"shape \(8, 6\)",
+    ):
         _core.winkler_pressure(np.zeros((8, 6)), np.ones((8, 6)), 1e-4, 1e6, 1.0)
     with pytest.raises(ValueError, match=r"coverage must have shape \(8, 8\)"):
         _core.winkler_pressure(np.zeros((8, 8)), np.ones((8, 7)), 1e-4, 1e6, 1.0)
@@ -93,9 +99,18 @@ def test_stress_engine_keeps_its_substrate_alive():
     skin = core.LayeredSkin()
     engine = core.StressEngine(skin, 8, 2e-4, [1e-3], [[4, 4]], method="direct")
     ref = engine.stress(np.ones((8, 8)))
-    raw = _core.StressEngine(skin._s, 0.0, 8, 2e-4, np.array([1e-3]),
-                             np.array([[4, 4]], np.int32), np.zeros(1, np.int32),
-                             np.full(1, 63, np.int32), "direct", 0.5)
+    raw = _core.StressEngine(
+        skin._s,
+        0.0,
+        8,
+        2e-4,
+        np.array([1e-3]),
+        np.array([[4, 4]], np.int32),
+        np.zeros(1, np.int32),
+        np.full(1, 63, np.int32),
+        "direct",
+        0.5,
+    )
     del skin, engine
     gc.collect()
     out, _, used, active = raw.stress(np.ones((8, 8), np.float32))
@@ -111,10 +126,13 @@ def test_instance_reader_refuses_a_library_that_is_not_loaded(tmp_path):
 
 
 def test_missing_extension_says_how_to_build():
-    code = ("import sys; sys.modules['mjtouch._core'] = None\n"
-            "try:\n    import mjtouch.core\n"
-            "except ImportError as e:\n    print(type(e).__name__, e)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout
+    code = (
+        "import sys; sys.modules['mjtouch._core'] = None\n"
+        "try:\n    import mjtouch.core\n"
+        "except ImportError as e:\n    print(type(e).__name__, e)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
     assert out.startswith("PluginNotBuiltError")
     assert "Was the package built? Run `pip install .`" in out

@@ -33,10 +33,22 @@ def ridged_grating_gap(shift_cells: int = 0) -> np.ndarray:
 
 
 def solve(gap, force_n, skin, method, tolerance, initial=None, precision="double"):
-    kw = (dict(compliance_m_per_pa=core.LayeredSkin().compliance_table(H, N))
-          if skin == "layered" else dict(young_pa=E, poisson=NU))
-    return core.elastic_pressure(gap, H, force_n, tolerance=tolerance, max_iterations=20000,
-                                 method=method, initial_pa=initial, precision=precision, **kw)
+    kw = (
+        dict(compliance_m_per_pa=core.LayeredSkin().compliance_table(H, N))
+        if skin == "layered"
+        else dict(young_pa=E, poisson=NU)
+    )
+    return core.elastic_pressure(
+        gap,
+        H,
+        force_n,
+        tolerance=tolerance,
+        max_iterations=20000,
+        method=method,
+        initial_pa=initial,
+        precision=precision,
+        **kw,
+    )
 
 
 def rms_rel(p, ref):

@@ -34,8 +34,9 @@ def test_cli_page_is_generated_from_the_parser_the_cli_uses():
     assert "```{mjtouch-cli}" in (DOCS / "reference" / "cli.md").read_text()
     parser = docs_ext().cli_parser()
     commands = set(docs_ext().subcommands(parser))
-    usage = subprocess.run([sys.executable, "-m", "mjtouch", "--help"], capture_output=True,
-                           text=True, check=True).stdout
+    usage = subprocess.run(
+        [sys.executable, "-m", "mjtouch", "--help"], capture_output=True, text=True, check=True
+    ).stdout
     listed = set(re.search(r"\{([a-z,]+)\}", usage).group(1).split(","))
     assert commands == listed and "slide" in commands, (commands, listed)
 
@@ -44,8 +45,10 @@ def test_readme_is_a_front_page_with_the_two_commands_first():
     text = (ROOT / "README.md").read_text()
     assert len(text.splitlines()) <= 200
     first_block = text.split("```bash\n", 1)[1].split("```", 1)[0].splitlines()
-    assert first_block == ["pip install . && python -m mjtouch slide",
-                           'pip install ".[test]" && python -m pytest']
+    assert first_block == [
+        "pip install . && python -m mjtouch slide",
+        'pip install ".[test]" && python -m pytest',
+    ]
     for target in re.findall(r"\]\(([^)#]+)\)", text):
         if not target.startswith("http"):
             assert (ROOT / target).exists(), target
@@ -54,9 +57,21 @@ def test_readme_is_a_front_page_with_the_two_commands_first():
 
 
 def test_markdown_docstrings_become_rest():
-    lines = ["Intro:", "- first item", "  continued", "After the list.", "",
-             "| key | value |", "|---|---|", "| ``a`` | F* |", "", "```python", "x = 1", "```",
-             "The norm |v| of v."]
+    lines = [
+        "Intro:",
+        "- first item",
+        "  continued",
+        "After the list.",
+        "",
+        "| key | value |",
+        "|---|---|",
+        "| ``a`` | F* |",
+        "",
+        "```python",
+        "x = 1",
+        "```",
+        "The norm |v| of v.",
+    ]
     docs_ext().markdown_docstring(None, "module", "m", None, {}, lines)
     text = "\n".join(lines)
     assert "Intro:\n\n- first item\n  continued\n\nAfter the list." in text

@@ -56,11 +56,16 @@ def test_cerruti_closed_forms():
 def divergence(load, nu, p, h=1e-7):
     """d s_ij / d x_j at point p by central differences (equilibrium: 0)."""
     x, y, z = p
+
     def S(dx, dy, dz):
         v = core.halfspace_stress(x + dx, y + dy, z + dz, load, nu)
         return np.array([[v[XX], v[XY], v[XZ]], [v[XY], v[YY], v[YZ]], [v[XZ], v[YZ], v[ZZ]]])
-    d = [(S(h, 0, 0) - S(-h, 0, 0)) / (2 * h), (S(0, h, 0) - S(0, -h, 0)) / (2 * h),
-         (S(0, 0, h) - S(0, 0, -h)) / (2 * h)]
+
+    d = [
+        (S(h, 0, 0) - S(-h, 0, 0)) / (2 * h),
+        (S(0, h, 0) - S(0, -h, 0)) / (2 * h),
+        (S(0, 0, h) - S(0, 0, -h)) / (2 * h),
+    ]
     return np.array([sum(d[j][i, j] for j in range(3)) for i in range(3)])
 
 
@@ -99,17 +104,22 @@ def love_corner(q, a, b, z):
     """s_zz under the corner of a uniformly loaded a x b rectangle (Love 1929;
     Johnson 1985 eq. 3.44 form), compressive negative."""
     R = np.sqrt(a * a + b * b + z * z)
-    return -q / (2 * np.pi) * (np.arctan(a * b / (z * R))
-                               + a * b * z / R * (1 / (a * a + z * z) + 1 / (b * b + z * z)))
+    return (
+        -q
+        / (2 * np.pi)
+        * (np.arctan(a * b / (z * R)) + a * b * z / R * (1 / (a * a + z * z) + 1 / (b * b + z * z)))
+    )
 
 
-@pytest.mark.parametrize("x,y,z", [(0, 0, 5e-5), (0, 0, 3e-4), (1e-4, 5e-5, 2e-4), (3e-4, 0, 1e-4),
-                                   (0, 0, 2e-3)])
+@pytest.mark.parametrize(
+    "x,y,z", [(0, 0, 5e-5), (0, 0, 3e-4), (1e-4, 5e-5, 2e-4), (3e-4, 0, 1e-4), (0, 0, 2e-3)]
+)
 def test_single_cell_matches_love_rectangle(x, y, z):
     # Uniform 1 Pa on a square cell of side h centred at the origin, by
     # superposing four corner solutions. The quadrature is adaptive, so it
     # must hold to ~1e-6 even for a receptor shallower than the cell.
     h = 1e-4
+
     def corner_sum(X, Y):
         tot = 0.0
         for ax in (h / 2 - X, h / 2 + X):
@@ -117,6 +127,7 @@ def test_single_cell_matches_love_rectangle(x, y, z):
                 sgn = np.sign(ax) * np.sign(by)
                 tot += sgn * love_corner(1.0, abs(ax), abs(by), z)
         return tot
+
     s = core.halfspace_stress(x, y, z, "pressure", 0.3, cell_m=h)
     assert_allclose(s[ZZ], corner_sum(x, y), rtol=2e-6)
 

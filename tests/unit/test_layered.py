@@ -59,6 +59,7 @@ def test_default_skin_is_shao_fingertip(shao):
 # (Papkovich-Neuber potentials, mu and nu only, real arithmetic); agreement to
 # 1e-5 of the largest value is the issue's bar, both are far better.
 
+
 @pytest.mark.parametrize("stack", ["shao", "two"])
 def test_transfer_functions_match_oracle(stack, shao, two):
     skin, layers, base = (shao, SHAO, None) if stack == "shao" else (two, TWO, TWO_BASE)
@@ -84,19 +85,24 @@ def test_lattice_and_disc_stress_match_oracle(shao, two):
     # loads (radius 1 mm), all loads, against the oracle's direct 2D Fourier
     # integrals: within 1e-5 of the largest component.
     pitch, n = 0.2e-3, 16
-    cases = [(shao, SHAO, None, 0.75e-3, "upper", (0, 0), "pressure"),
-             (shao, SHAO, None, 0.7e-3, "lower", (2, -3), "shear_x"),
-             (shao, SHAO, None, 2.0e-3, "upper", (-5, 4), "shear_y"),
-             (two, TWO, TWO_BASE, 0.4e-3, "upper", (1, 2), "pressure"),
-             (two, TWO, TWO_BASE, 1.5e-3, "upper", (-4, -1), "shear_x")]
+    cases = [
+        (shao, SHAO, None, 0.75e-3, "upper", (0, 0), "pressure"),
+        (shao, SHAO, None, 0.7e-3, "lower", (2, -3), "shear_x"),
+        (shao, SHAO, None, 2.0e-3, "upper", (-5, 4), "shear_y"),
+        (two, TWO, TWO_BASE, 0.4e-3, "upper", (1, 2), "pressure"),
+        (two, TWO, TWO_BASE, 1.5e-3, "upper", (-4, -1), "shear_x"),
+    ]
     for skin, layers, base, z, side, (di, dj), load in cases:
         table = skin.lattice_table(z, pitch, n, side)
         got = table[core.LOADS[load], :, dj + n - 1, di + n - 1]
-        ref = oracle.cell_stress(load, -di * pitch, -dj * pitch, z, pitch, layers, base,
-                                 side == "upper")
+        ref = oracle.cell_stress(
+            load, -di * pitch, -dj * pitch, z, pitch, layers, base, side == "upper"
+        )
         assert np.max(np.abs(got - ref)) <= 1e-5 * np.max(np.abs(ref)), (z, side, load, got, ref)
-    for skin, layers, base, (x, y, z), load in [(shao, SHAO, None, (0.5e-3, 0.3e-3, 0.3e-3), "shear_y"),
-                                                (two, TWO, TWO_BASE, (-2e-3, 1e-3, 2.5e-3), "pressure")]:
+    for skin, layers, base, (x, y, z), load in [
+        (shao, SHAO, None, (0.5e-3, 0.3e-3, 0.3e-3), "shear_y"),
+        (two, TWO, TWO_BASE, (-2e-3, 1e-3, 2.5e-3), "pressure"),
+    ]:
         got = skin.disc_stress(x, y, z, 1e-3, load)
         ref = oracle.disc_stress(load, x, y, z, 1e-3, layers, base)
         assert np.max(np.abs(got - ref)) <= 1e-5 * np.max(np.abs(ref)), (load, got, ref)
@@ -114,11 +120,19 @@ def test_axisymmetric_disc_matches_oracle_hankel(shao):
 
 # -- homogeneous limits -----------------------------------------------------
 
+
 @pytest.mark.parametrize("nu", [0.3, 0.5])
 def test_identical_layers_reproduce_boussinesq_and_cerruti(nu):
     skin = identical(nu)
-    pts = np.array([(0.0, 0.0, 0.2e-3), (0.3e-3, 0.0, 0.3e-3), (0.25e-3, -0.4e-3, 0.9e-3),
-                    (3e-3, 1e-3, 2e-3), (-1e-3, 0.5e-3, 2.5e-3)])
+    pts = np.array(
+        [
+            (0.0, 0.0, 0.2e-3),
+            (0.3e-3, 0.0, 0.3e-3),
+            (0.25e-3, -0.4e-3, 0.9e-3),
+            (3e-3, 1e-3, 2e-3),
+            (-1e-3, 0.5e-3, 2.5e-3),
+        ]
+    )
     for load in core.LOADS:
         got = skin.point_stress(pts[:, 0], pts[:, 1], pts[:, 2], load)
         ref = core.halfspace_stress(pts[:, 0], pts[:, 1], pts[:, 2], load, nu)
@@ -174,8 +188,9 @@ def test_identical_layers_reproduce_hertz_subsurface_field():
     srr = p0 * (-(1 + nu) * (1 - zz / a * np.arctan(a / zz)) + 0.5 / (1 + zz**2 / a**2))
     err_coarse = res[0.05e-3][:, ZZ] - szz
     err_fine = res[0.025e-3][:, ZZ] - szz
-    assert np.all((3.5 < err_coarse / err_fine) & (err_coarse / err_fine < 4.5)), \
+    assert np.all((3.5 < err_coarse / err_fine) & (err_coarse / err_fine < 4.5)), (
         err_coarse / err_fine
+    )
     rich = (4 * res[0.025e-3] - res[0.05e-3]) / 3
     assert_allclose(rich[:, ZZ], szz, atol=1e-4 * p0)
     assert_allclose(rich[:, XX], srr, atol=1e-4 * p0)
@@ -225,8 +240,13 @@ def test_layer_on_rigid_base_compliance(nu):
     E, H = 50e3, 1.5e-3
     kh = np.array([0.1, 0.5, 1.0, 2.0, 5.0, 20.0])
     k3 = 3 - 4 * nu
-    ref = 2 * (1 - nu * nu) / (E * kh / H) * (k3 * np.sinh(2 * kh) - 2 * kh) / (
-        k3 * np.cosh(2 * kh) + 2 * kh**2 + 5 - 12 * nu + 8 * nu**2)
+    ref = (
+        2
+        * (1 - nu * nu)
+        / (E * kh / H)
+        * (k3 * np.sinh(2 * kh) - 2 * kh)
+        / (k3 * np.cosh(2 * kh) + 2 * kh**2 + 5 - 12 * nu + 8 * nu**2)
+    )
     assert_allclose(core.LayeredSkin([(H, E, nu)]).compliance(kh / H), ref, rtol=1e-8)
 
 
@@ -242,17 +262,23 @@ def test_compliance_table_half_space_centre_is_love():
 
 # -- laws -------------------------------------------------------------------
 
+
 def test_load_integral_over_every_plane(shao):
     # Equilibrium of the slab above depth z: the integral of s_zz over the
     # plane is minus the applied normal load, of s_xz (s_yz) the shear load.
     # k = 0 transfer functions are that integral, exactly, at any depth:
-    for skin, zs in [(shao, [0.05e-3, 0.7e-3, 1.5e-3, 3.9e-3]),
-                     (core.LayeredSkin(SHAO, (24e3, 0.4)), [0.7e-3, 4e-3, 6e-3])]:
+    for skin, zs in [
+        (shao, [0.05e-3, 0.7e-3, 1.5e-3, 3.9e-3]),
+        (core.LayeredSkin(SHAO, (24e3, 0.4)), [0.7e-3, 4e-3, 6e-3]),
+    ]:
         for z in zs:
             for side in ("upper", "lower"):
                 t = skin.transfer(0.0, z, side)
-                assert_allclose([t["p_zz"], t["q_xiz"], t["a_etaz"], t["p_xiz"], t["q_zz"]],
-                                [-1, 1, -1, 0, 0], atol=1e-13)
+                assert_allclose(
+                    [t["p_zz"], t["q_xiz"], t["a_etaz"], t["p_xiz"], t["q_zz"]],
+                    [-1, 1, -1, 0, 0],
+                    atol=1e-13,
+                )
     # ... and the plugin's lattice tables sum to it. A table's sum is the
     # stress under a uniform traction on its whole square, so it falls short
     # of the load by the field outside. Over bone at 4 mm the shear field
@@ -338,8 +364,10 @@ def test_interface_side(shao):
     assert np.abs(above - up).max() < 1e-2 * np.abs(up - lo).max()
     assert np.abs(below - lo).max() < 1e-2 * np.abs(up - lo).max()
     default_lower = core.LayeredSkin(SHAO, "rigid", interface_side="lower")
-    assert_allclose(default_lower.cell_stress(0.1e-3, 0, 0.7e-3, h),
-                    shao.cell_stress(0.1e-3, 0, 0.7e-3, h, side="lower"))
+    assert_allclose(
+        default_lower.cell_stress(0.1e-3, 0, 0.7e-3, h),
+        shao.cell_stress(0.1e-3, 0, 0.7e-3, h, side="lower"),
+    )
     shao.check_depth(4e-3)  # bone surface, from above: valid
     with pytest.raises(ValueError, match="rigid base"):
         shao.check_depth(4e-3, "lower")
@@ -347,21 +375,25 @@ def test_interface_side(shao):
         shao.check_depth(5e-3)
 
 
-@pytest.mark.parametrize("layers,base,msg", [
-    ([], "rigid", "non-empty sequence"),
-    ([(0.0, 1e3, 0.3)], "rigid", "thickness"),
-    ([(1e-3, -1.0, 0.3)], "rigid", "young: must be > 0"),
-    ([(1e-3, 1e3, 0.51)], "rigid", "(-1, 0.5]"),
-    ([(1e-3, 1e3, -1.0)], "rigid", "(-1, 0.5]"),
-    ([(1e-3, 1e3, 0.3)], (0.0, 0.3), "base young"),
-    ([(1e-3, 1e3, 0.3)], (1e3, 0.7), "base poisson"),
-])
+@pytest.mark.parametrize(
+    "layers,base,msg",
+    [
+        ([], "rigid", "non-empty sequence"),
+        ([(0.0, 1e3, 0.3)], "rigid", "thickness"),
+        ([(1e-3, -1.0, 0.3)], "rigid", "young: must be > 0"),
+        ([(1e-3, 1e3, 0.51)], "rigid", "(-1, 0.5]"),
+        ([(1e-3, 1e3, -1.0)], "rigid", "(-1, 0.5]"),
+        ([(1e-3, 1e3, 0.3)], (0.0, 0.3), "base young"),
+        ([(1e-3, 1e3, 0.3)], (1e3, 0.7), "base poisson"),
+    ],
+)
 def test_python_bad_stack(layers, base, msg):
     with pytest.raises(ValueError, match=msg.replace("(", r"\(").replace("]", r"\]")):
         core.LayeredSkin(np.array(layers).reshape(-1, 3), base)
 
 
 # -- the plugin --------------------------------------------------------------
+
 
 def _run(skin: dict, steps: int = 250):
     model = mujoco.MjModel.from_xml_string(pad_scene(skin))
@@ -376,8 +408,9 @@ def test_plugin_default_skin_layered_and_build_time_reported():
     layout = SkinLayout.from_model(model)
     assert layout.substrate == core.LayeredSkin().describe()
     assert layout.kernel_build_s > 0
-    half = SkinLayout.from_model(mujoco.MjModel.from_xml_string(
-        pad_scene({"skin": "halfspace", "poisson": "0.45"})))
+    half = SkinLayout.from_model(
+        mujoco.MjModel.from_xml_string(pad_scene({"skin": "halfspace", "poisson": "0.45"}))
+    )
     assert half.substrate == "homogeneous half-space (nu=0.45)"
 
 
@@ -387,19 +420,29 @@ def test_plugin_stress_equals_layered_recomputation():
     # tables, receptor cells, and the material (E, nu of the receptor's layer)
     # for strain and SED.
     layers = "0.5e-3 80e3 0.45; 0.6e-3 40e3 0.48; 1.5e-3 20e3 0.4"
-    skin = {"outputs": "stress force pressure", "shear": "false", "layers": layers,
-            "base": "30e3 0.45", "quantity": "sed strain maxcomp",
-            "depth": "0.4e-3 0.8e-3 2.5e-3", "stress_method": "direct"}
+    skin = {
+        "outputs": "stress force pressure",
+        "shear": "false",
+        "layers": layers,
+        "base": "30e3 0.45",
+        "quantity": "sed strain maxcomp",
+        "depth": "0.4e-3 0.8e-3 2.5e-3",
+        "stress_method": "direct",
+    }
     model, data, layout = _run(skin)
     n, h = layout.nx, layout.pitch_m
     p = layout.block(data.sensordata, "pressure").reshape(n, n)
     assert p.sum() * h * h == pytest.approx(layout.block(data.sensordata, "force")[0], rel=1e-6)
     got = layout.block(data.sensordata, "stress")
-    stack = core.LayeredSkin([(0.5e-3, 80e3, 0.45), (0.6e-3, 40e3, 0.48), (1.5e-3, 20e3, 0.4)],
-                             (30e3, 0.45))
+    stack = core.LayeredSkin(
+        [(0.5e-3, 80e3, 0.45), (0.6e-3, 40e3, 0.48), (1.5e-3, 20e3, 0.4)], (30e3, 0.45)
+    )
     ij = np.rint(layout.positions_m[:, :2] / h + (n - 1) / 2).astype(int)
-    for cls, z, (E, nu) in [("SA1", 0.4e-3, (80e3, 0.45)), ("RA", 0.8e-3, (40e3, 0.48)),
-                            ("PC", 2.5e-3, (30e3, 0.45))]:
+    for cls, z, (E, nu) in [
+        ("SA1", 0.4e-3, (80e3, 0.45)),
+        ("RA", 0.8e-3, (40e3, 0.48)),
+        ("PC", 2.5e-3, (30e3, 0.45)),
+    ]:
         m = layout.mask(cls)
         s = stack.field_stress(p.astype(np.float32), h, z, ij[m][:, ::1])
         tr = s[:, :3].sum(axis=1)
@@ -434,12 +477,21 @@ def test_plugin_interface_side():
     # across it; the most compressive principal stress (SA1) is not.
     res = {}
     for side in ("upper", "lower"):
-        _, data, layout = _run({"interface_side": side, "depth": "0.7e-3 0.7e-3 2e-3",
-                                "quantity": "maxcomp szz szz", "outputs": "stress"}, steps=150)
+        _, data, layout = _run(
+            {
+                "interface_side": side,
+                "depth": "0.7e-3 0.7e-3 2e-3",
+                "quantity": "maxcomp szz szz",
+                "outputs": "stress",
+            },
+            steps=150,
+        )
         res[side] = layout.block(data.sensordata, "stress").copy()
     ra, sa1 = layout.mask("RA"), layout.mask("SA1")
     assert_allclose(res["upper"][ra], res["lower"][ra], atol=1e-5 * np.abs(res["upper"][ra]).max())
-    assert np.abs(res["upper"][sa1] - res["lower"][sa1]).max() > 1e-3 * np.abs(res["upper"][sa1]).max()
+    assert (
+        np.abs(res["upper"][sa1] - res["lower"][sa1]).max() > 1e-3 * np.abs(res["upper"][sa1]).max()
+    )
 
 
 BAD = [
@@ -455,24 +507,41 @@ BAD = [
     ({"base": "30e3 0.5001"}, "`base`", "nu", "(-1, 0.5]"),
     ({"base": "bone"}, "`base`", "'rigid'", "E in [100, 2e+10] Pa"),
     ({"depth": "0.75e-3 0.75e-3 5e-3"}, "`depth` entry 3", "rigid base", "(0, 0.004] m"),
-    ({"depth": "0.75e-3 0.75e-3 4e-3", "interface_side": "lower"}, "`depth` entry 3",
-     "rigid base", "(0, 0.004) m"),
-    ({"layers": "1e-3 50e3 0.45", "depth": "0.75e-3 1.5e-3 0.5e-3"}, "`depth` entry 2",
-     "rigid base", "(0, 0.001] m"),
+    (
+        {"depth": "0.75e-3 0.75e-3 4e-3", "interface_side": "lower"},
+        "`depth` entry 3",
+        "rigid base",
+        "(0, 0.004) m",
+    ),
+    (
+        {"layers": "1e-3 50e3 0.45", "depth": "0.75e-3 1.5e-3 0.5e-3"},
+        "`depth` entry 2",
+        "rigid base",
+        "(0, 0.001] m",
+    ),
     ({"interface_side": "middle"}, "`interface_side`", "middle", "upper lower"),
     ({"skin": "foam"}, "`skin`", "foam", "layered halfspace"),
-    ({"poisson": "0.45"}, "`poisson`", "skin=\"halfspace\" only", "`layers`"),
-    ({"skin": "halfspace", "layers": "1e-3 50e3 0.45"}, "`layers`", "skin=\"layered\" only",
-     "halfspace"),
-    ({"skin": "halfspace", "quantity": "sed szz szz"}, "`quantity`", "'sed' for SA1",
-     "szz maxcomp vonmises maxshear"),
+    ({"poisson": "0.45"}, "`poisson`", 'skin="halfspace" only', "`layers`"),
+    (
+        {"skin": "halfspace", "layers": "1e-3 50e3 0.45"},
+        "`layers`",
+        'skin="layered" only',
+        "halfspace",
+    ),
+    (
+        {"skin": "halfspace", "quantity": "sed szz szz"},
+        "`quantity`",
+        "'sed' for SA1",
+        "szz maxcomp vonmises maxshear",
+    ),
     ({"quantity": "maxcomp energy szz"}, "`quantity`", "energy", "sed strain"),
     ({"stress_method": "gpu"}, "`stress_method`", "gpu", "tree direct fft auto"),
 ]
 
 
-@pytest.mark.parametrize("attrs,name,what,valid", BAD,
-                         ids=[";".join(f"{k}={v}" for k, v in b[0].items()) for b in BAD])
+@pytest.mark.parametrize(
+    "attrs,name,what,valid", BAD, ids=[";".join(f"{k}={v}" for k, v in b[0].items()) for b in BAD]
+)
 def test_bad_elastic_skin_fails_at_compile(attrs, name, what, valid):
     with pytest.raises(ValueError) as e:
         mujoco.MjModel.from_xml_string(pad_scene(attrs))
@@ -488,14 +557,38 @@ def test_cpp_layered_checks(tmp_path):
     build_dir = tmp_path / "build"
     generator = ["-G", "Ninja"] if shutil.which("ninja") else []
     configure = subprocess.run(
-        [cmake, "-S", str(REPO), "-B", str(build_dir), *generator, "-DSKBUILD=1",
-         "-DMJTOUCH_BUILD_TESTS=ON", "-DMJTOUCH_PYTHON_MODULE=OFF", "-DCMAKE_BUILD_TYPE=Release",
-         f"-DPython_EXECUTABLE={sys.executable}"],
-        capture_output=True, text=True, timeout=120)
+        [
+            cmake,
+            "-S",
+            str(REPO),
+            "-B",
+            str(build_dir),
+            *generator,
+            "-DSKBUILD=1",
+            "-DMJTOUCH_BUILD_TESTS=ON",
+            "-DMJTOUCH_PYTHON_MODULE=OFF",
+            "-DCMAKE_BUILD_TYPE=Release",
+            f"-DPython_EXECUTABLE={sys.executable}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert configure.returncode == 0, configure.stdout[-2000:] + configure.stderr[-4000:]
-    build = subprocess.run([cmake, "--build", str(build_dir), "--target", "mjtouch_cpp_tests",
-                            "--parallel", str(os.cpu_count() or 2)],
-                           capture_output=True, text=True, timeout=300)
+    build = subprocess.run(
+        [
+            cmake,
+            "--build",
+            str(build_dir),
+            "--target",
+            "mjtouch_cpp_tests",
+            "--parallel",
+            str(os.cpu_count() or 2),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert build.returncode == 0, build.stdout[-4000:] + build.stderr[-4000:]
     # test_layered: the layered kernel; test_membrane: the afferents' exact
     # LIF integrator (first spike = first threshold crossing); test_fft_threads:
@@ -504,9 +597,16 @@ def test_cpp_layered_checks(tmp_path):
     # stages against a naive DFT; test_receptor_batch: the receptors' four-lane
     # path (AdvanceBatch) the same bits as Advance receptor by receptor;
     # test_exact_fma: the stress sums' fma without an FMA unit against std::fma
-    for exe in ("test_layered", "test_membrane", "test_fft_threads", "test_fft_radix",
-                "test_receptor_batch", "test_exact_fma"):
-        run = subprocess.run([str(build_dir / "tests" / "cpp" / exe)],
-                             capture_output=True, text=True, timeout=300)
+    for exe in (
+        "test_layered",
+        "test_membrane",
+        "test_fft_threads",
+        "test_fft_radix",
+        "test_receptor_batch",
+        "test_exact_fma",
+    ):
+        run = subprocess.run(
+            [str(build_dir / "tests" / "cpp" / exe)], capture_output=True, text=True, timeout=300
+        )
         assert run.returncode == 0, exe + ":\n" + run.stdout[-4000:]
         assert "PASS: 0 failure(s)" in run.stdout, exe

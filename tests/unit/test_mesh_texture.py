@@ -22,9 +22,11 @@ def grating_points(length_m):
 
 def square_wave_cell_means(x, r):
     """Analytic mean of the square wave over [x - r/2, x + r/2]."""
+
     def F(s):  # integral of the unit square wave from a period start
         k = np.floor((s + D / 2) / D)
         return k * W_PLATEAU + np.clip(s - k * D, -W_PLATEAU / 2, W_PLATEAU / 2)
+
     return H * (F(x + r / 2) - F(x - r / 2)) / r
 
 
@@ -58,8 +60,9 @@ def test_exact_for_a_tilted_plane_on_an_irregular_triangulation():
     x = np.sort(np.concatenate([[-4e-3, 4e-3], rng.uniform(-4e-3, 4e-3, 9)]))
     y = np.sort(np.concatenate([[-3e-3, 3e-3], rng.uniform(-3e-3, 3e-3, 7)]))
     X, Y = np.meshgrid(x, y)
-    mt = meshes.from_mesh(meshes.heightmap_mesh(x, y, 0.02 * X + 0.01 * Y + 1e-4),
-                          resolution_m=5e-5)
+    mt = meshes.from_mesh(
+        meshes.heightmap_mesh(x, y, 0.02 * X + 0.01 * Y + 1e-4), resolution_m=5e-5
+    )
     xc = np.linspace(-mt.length_m / 2, mt.length_m / 2, mt.heights.shape[1])
     yc = np.linspace(-mt.width_m / 2, mt.width_m / 2, mt.heights.shape[0])
     Xc, Yc = np.meshgrid(xc, yc)
@@ -85,6 +88,7 @@ def test_placement_scale_up_axis_and_rotation(grating_stl, tmp_path):
 
 def test_mesh_texture_in_a_scene_compiles_with_its_heights(grating_stl):
     from mjtouch.scene import scenes
+
     mt = meshes.from_mesh(grating_stl, resolution_m=4e-5, width_m=0.002)
     tex = mt.texture(width_m=0.02)
     model = scenes.plate_spec(tex).compile()
@@ -92,16 +96,16 @@ def test_mesh_texture_in_a_scene_compiles_with_its_heights(grating_stl):
     assert np.abs(h - mt.heights).max() < 1e-6 * H
     assert model.hfield_size[0, 1] == pytest.approx(0.01)
     with pytest.raises(ValueError, match="only a profile"):
-        meshes.from_mesh(meshes.heightmap_mesh([-2e-3, 0, 2e-3], [-2e-3, 2e-3],
-                                               [[0, 1e-4, 0], [0, 2e-4, 0]])).texture(width_m=0.1)
+        meshes.from_mesh(
+            meshes.heightmap_mesh([-2e-3, 0, 2e-3], [-2e-3, 2e-3], [[0, 1e-4, 0], [0, 2e-4, 0]])
+        ).texture(width_m=0.1)
 
 
 def test_bad_meshes_get_clear_errors(tmp_path, grating_stl):
     down = trimesh.Trimesh([[0, 0, 0], [0.01, 0, 0], [0, 0.01, 0]], [[0, 2, 1]], process=False)
     with pytest.raises(ValueError, match="no top surface"):
         meshes.from_mesh(down)
-    bad = trimesh.Trimesh([[0, 0, 0], [0.01, 0, np.nan], [0, 0.01, 0]], [[0, 1, 2]],
-                          process=False)
+    bad = trimesh.Trimesh([[0, 0, 0], [0.01, 0, np.nan], [0, 0.01, 0]], [[0, 1, 2]], process=False)
     with pytest.raises(ValueError, match="non-finite vertices"):
         meshes.from_mesh(bad)
     with pytest.raises(ValueError, match=r"scale = 1000.*scale = 1e-3"):

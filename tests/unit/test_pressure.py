@@ -44,8 +44,13 @@ def _hertz_case(cells_per_radius: float, force: float = 0.5, R: float = 0.01):
     X, Y = np.meshgrid(x, x)
     gap = (X**2 + Y**2) / (2 * R)  # paraboloid: Hertz's geometry
     p, info = core.elastic_pressure(gap, h, force, E, NU, tolerance=1e-10)
-    return p, info, dict(a=a, h=h, R=R, W=force, X=X, Y=Y,
-                         p0=3 * force / (2 * math.pi * a * a), delta=a * a / R)
+    return (
+        p,
+        info,
+        dict(
+            a=a, h=h, R=R, W=force, X=X, Y=Y, p0=3 * force / (2 * math.pi * a * a), delta=a * a / R
+        ),
+    )
 
 
 def test_elastic_matches_hertz_at_32_cells_per_radius():
@@ -109,8 +114,9 @@ def test_elastic_warm_start_reaches_same_solution():
     p_cold, info_cold, H = _hertz_case(12)
     guess = np.sqrt(np.clip(H["delta"] / 2 - (H["X"] ** 2 + H["Y"] ** 2) / (2 * H["R"]), 0, None))
     gap = (H["X"] ** 2 + H["Y"] ** 2) / (2 * H["R"])
-    p_warm, info_warm = core.elastic_pressure(gap, H["h"], H["W"], E, NU, tolerance=1e-10,
-                                              initial_pa=guess)
+    p_warm, info_warm = core.elastic_pressure(
+        gap, H["h"], H["W"], E, NU, tolerance=1e-10, initial_pa=guess
+    )
     assert info_warm["iterations"] < info_cold["iterations"]
     assert_allclose(p_warm, p_cold, atol=1e-6 * p_cold.max())
 
@@ -138,23 +144,26 @@ def test_elastic_solver_on_layered_compliance_tables():
     gap = (X**2 + Y**2) / (2 * 0.05)
     same = core.LayeredSkin([(1e-3, 80e3, 0.48), (2e-3, 80e3, 0.48)], (80e3, 0.48))
     p_ref, st_ref = core.elastic_pressure(gap, h, 0.05, 80e3, 0.48, tolerance=1e-10)
-    p, st = core.elastic_pressure(gap, h, 0.05, tolerance=1e-10,
-                                  compliance_m_per_pa=same.compliance_table(h, n))
+    p, st = core.elastic_pressure(
+        gap, h, 0.05, tolerance=1e-10, compliance_m_per_pa=same.compliance_table(h, n)
+    )
     np.testing.assert_allclose(p, p_ref, atol=1e-4 * p_ref.max())
     assert st["approach_m"] == pytest.approx(st_ref["approach_m"], rel=1e-4)
     # Stiffening any material can only reduce the indentation under a set
     # load: the Shao skin (every layer at least 24 kPa and nu 0.4, over rigid
     # bone) indents less than a half-space of its softest layer.
     shao = core.LayeredSkin()
-    _, st_shao = core.elastic_pressure(gap, h, 0.05, tolerance=1e-10,
-                                       compliance_m_per_pa=shao.compliance_table(h, n))
+    _, st_shao = core.elastic_pressure(
+        gap, h, 0.05, tolerance=1e-10, compliance_m_per_pa=shao.compliance_table(h, n)
+    )
     _, st_soft = core.elastic_pressure(gap, h, 0.05, 24e3, 0.4, tolerance=1e-10)
     assert 0 < st_shao["approach_m"] < st_soft["approach_m"]
     with pytest.raises(ValueError, match="compliance_m_per_pa must be a finite"):
         core.elastic_pressure(gap, h, 0.05, compliance_m_per_pa=np.zeros((3, 3)))
     with pytest.raises(ValueError, match="either compliance_m_per_pa or young_pa"):
-        core.elastic_pressure(gap, h, 0.05, 80e3, 0.48,
-                              compliance_m_per_pa=same.compliance_table(h, n))
+        core.elastic_pressure(
+            gap, h, 0.05, 80e3, 0.48, compliance_m_per_pa=same.compliance_table(h, n)
+        )
 
 
 def test_shear_tractions_sum_to_mujocos_tangential_force():
@@ -168,12 +177,14 @@ def test_shear_tractions_sum_to_mujocos_tangential_force():
     qx, qy = core.slip_shear(p, h, fn, (-0.31 * fn, 0.12 * fn))
     assert qx.sum() * h * h == pytest.approx(-0.31 * fn, rel=1e-12)
     assert qy.sum() * h * h == pytest.approx(0.12 * fn, rel=1e-12)
-    contacts = np.c_[rng.uniform(-2e-3, 2e-3, (5, 2)), rng.normal(0, 0.1, (5, 2)),
-                     rng.uniform(0.05, 0.2, 5)]
+    contacts = np.c_[
+        rng.uniform(-2e-3, 2e-3, (5, 2)), rng.normal(0, 0.1, (5, 2)), rng.uniform(0.05, 0.2, 5)
+    ]
     ps, sx, sy = core.splat_contacts(contacts, n, h)
     total = contacts[:, 2:].sum(axis=0)
     assert [sx.sum() * h * h, sy.sum() * h * h, ps.sum() * h * h] == pytest.approx(
-        list(total), rel=1e-12)
+        list(total), rel=1e-12
+    )
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -194,8 +205,12 @@ def test_winkler_fast_solve_matches_reference_bit_for_bit(seed):
     assert_allclose(p_ref.sum() * h * h, force, rtol=1e-6)
     assert np.count_nonzero(p_ref) > 50
     for guess in (math.nan, a_ref, a_ref + 1e-7, a_ref + 2e-5, a_ref - 1e-7, 1.0):
-        runs = [core.winkler_pressure(gap, h, k, force, cov, approach_guess_m=guess,
-                                      reference=ref) for ref in (True, False)]
+        runs = [
+            core.winkler_pressure(gap, h, k, force, cov, approach_guess_m=guess, reference=ref)
+            for ref in (True, False)
+        ]
         (p0, a0), (p1, a1) = runs
         assert a0 == a1 == a_ref, f"approach differs with guess {guess}"
-        assert p0.tobytes() == p1.tobytes() == p_ref.tobytes(), f"pressure differs with guess {guess}"
+        assert p0.tobytes() == p1.tobytes() == p_ref.tobytes(), (
+            f"pressure differs with guess {guess}"
+        )

@@ -49,17 +49,28 @@ def _spiral_sites(n, h):
     ij, cls = [], []
     for s in range(120):
         r = 5e-3 * math.sqrt((s + 0.5) / 120)
-        ij.append((int(np.clip(round(r * math.cos(s * golden) / h + n / 2), 0, n - 1)),
-                   int(np.clip(round(r * math.sin(s * golden) / h + n / 2), 0, n - 1))))
+        ij.append(
+            (
+                int(np.clip(round(r * math.cos(s * golden) / h + n / 2), 0, n - 1)),
+                int(np.clip(round(r * math.sin(s * golden) / h + n / 2), 0, n - 1)),
+            )
+        )
         cls.append(s % 3)
     return ij, np.array(cls)
 
 
 def _stage_engine(n, h, ij, cls):
     comps = [range(6) if c == 0 else (2,) for c in cls]
-    return core.StressEngine(core.LayeredSkin(), n, h, [0.75e-3, 2e-3], ij,
-                             depth_index=np.where(cls == 2, 1, 0), components=comps,
-                             method="direct")
+    return core.StressEngine(
+        core.LayeredSkin(),
+        n,
+        h,
+        [0.75e-3, 2e-3],
+        ij,
+        depth_index=np.where(cls == 2, 1, 0),
+        components=comps,
+        method="direct",
+    )
 
 
 @pytest.fixture(scope="module")
@@ -118,8 +129,9 @@ def test_stress_bit_identical_for_any_thread_count(sliding_contact, engine, fold
     _, p, ratio = sliding_contact
     one = engine.stress(p, slip=ratio, method="direct", fold=fold, threads=1)
     for threads in (2, 3, 8):
-        assert np.array_equal(engine.stress(p, slip=ratio, method="direct", fold=fold,
-                                            threads=threads), one)
+        assert np.array_equal(
+            engine.stress(p, slip=ratio, method="direct", fold=fold, threads=threads), one
+        )
 
 
 # The stage in a fresh process (MJTOUCH_SUM_LANES is read once per process).
@@ -151,9 +163,19 @@ def test_every_vector_width_gives_the_same_bits(sliding_contact, engine, lanes, 
     np.savez(tmp_path / "in.npz", n=tip.nx, h=tip.pitch_m, p=p, ratio=np.array(ratio))
     widest = engine.stress(p, slip=ratio, method="direct", fold=True)
     env = {**os.environ, "MJTOUCH_SUM_LANES": lanes}
-    subprocess.run([sys.executable, "-c", _STAGE_SCRIPT, str(tmp_path / "in.npz"),
-                    str(tmp_path / "out.npy"), str(pathlib.Path(__file__).parent)],
-                   env=env, check=True, timeout=300)
+    subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            _STAGE_SCRIPT,
+            str(tmp_path / "in.npz"),
+            str(tmp_path / "out.npy"),
+            str(pathlib.Path(__file__).parent),
+        ],
+        env=env,
+        check=True,
+        timeout=300,
+    )
     narrow = np.load(tmp_path / "out.npy")
     assert np.abs(widest).max() > 1e3, "the contact must load the sites"
     assert np.array_equal(narrow, widest)
@@ -172,16 +194,22 @@ def test_aligned_sums_and_rx_cache_are_the_legacy_bits(sliding_contact, engine):
     ij = [(i, j) for j in (20, 64, 100) for i in range(56, 72)]  # 16 columns: every shift
     assert {i % 16 for i, _ in ij} == set(range(16))
     comps = [range(6) if k % 3 else (2,) for k in range(len(ij))]  # 1 and 6 components
-    e = core.StressEngine(core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], ij,
-                          components=comps, method="direct")
+    e = core.StressEngine(
+        core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], ij, components=comps, method="direct"
+    )
     edge = np.zeros((n, n), np.float32)
     yy, xx = np.mgrid[0:n, 0:n]
     edge[(xx - 2) ** 2 + (yy - n + 4) ** 2 < 50] = 3e3  # at column 0 and the last row
     edge[(xx - n + 3) ** 2 + (yy - 5) ** 2 < 30] = 1e3  # at the last column
     rx_next = float(np.nextafter(np.float32(0.3), np.float32(1)))  # the next float rx
     for eng in (engine, e):
-        for field, slip in ((p, ratio), (p, None), (edge, (0.3, -0.45)), (edge, (rx_next, 0.2)),
-                            (edge, (0.3, 0.2))):
+        for field, slip in (
+            (p, ratio),
+            (p, None),
+            (edge, (0.3, -0.45)),
+            (edge, (rx_next, 0.2)),
+            (edge, (0.3, 0.2)),
+        ):
             legacy = eng.stress(field, slip=slip, method="direct", fold_legacy=True)
             assert np.abs(legacy).max() > 0
             for threads in (1, 3, 1):  # the second call on reads the rx cache
@@ -202,13 +230,17 @@ def test_site_stress_does_not_depend_on_other_sites(sliding_contact):
     # with and without shear.
     tip, p, ratio = sliding_contact
     n = tip.nx
-    ij = [(50, 64), (61, 64), (77, 64), (70, 64), (40, 40), (83, 40), (66, 90), (58, 20),
-          (59, 20)]
+    ij = [(50, 64), (61, 64), (77, 64), (70, 64), (40, 40), (83, 40), (66, 90), (58, 20), (59, 20)]
     comps = [(2,), (2,), (2,), range(6), (2,), (2,), (2,), (0, 2), (2,)]
-    e = core.StressEngine(core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], ij, components=comps,
-                          method="direct")
-    alone = [core.StressEngine(core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], [s],
-                               components=[c], method="direct") for s, c in zip(ij, comps)]
+    e = core.StressEngine(
+        core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], ij, components=comps, method="direct"
+    )
+    alone = [
+        core.StressEngine(
+            core.LayeredSkin(), n, tip.pitch_m, [0.75e-3], [s], components=[c], method="direct"
+        )
+        for s, c in zip(ij, comps)
+    ]
     for slip in (ratio, None):
         want = np.concatenate([a.stress(p, slip=slip, method="direct") for a in alone])
         assert np.abs(want[:, 2]).min() > 0  # every site under the contact's stress
@@ -247,6 +279,7 @@ def test_bench_stage_table_runs(sliding_contact, engine, capsys):
     # one short round: the three paths run and agree to the tolerance.
     import importlib.util
     import pathlib
+
     path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_kernel.py"
     spec = importlib.util.spec_from_file_location("bench_kernel", path)
     bench = importlib.util.module_from_spec(spec)
@@ -268,6 +301,7 @@ def test_bench_scene_stage_is_the_plugins():
     # classes: -s_zz) at that step, to the folded path's tolerance.
     import importlib.util
     import pathlib
+
     path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_kernel.py"
     spec = importlib.util.spec_from_file_location("bench_kernel", path)
     bench = importlib.util.module_from_spec(spec)
@@ -289,6 +323,7 @@ def test_bench_baseline_build_in_one_process(sliding_contact, engine, tmp_path, 
     import shutil
 
     from mjtouch import _core
+
     path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_kernel.py"
     spec = importlib.util.spec_from_file_location("bench_kernel", path)
     bench = importlib.util.module_from_spec(spec)
@@ -302,12 +337,14 @@ def test_bench_baseline_build_in_one_process(sliding_contact, engine, tmp_path, 
     ij = [(40, 60), (64, 64), (70, 90), (90, 50)]
     comps = [range(6), (2,), range(6), (2,)]
     with bench.using_core(base):
-        e_base = core.StressEngine(core.LayeredSkin(), n, h, [0.75e-3], ij, components=comps,
-                                   method="direct")
+        e_base = core.StressEngine(
+            core.LayeredSkin(), n, h, [0.75e-3], ij, components=comps, method="direct"
+        )
     assert isinstance(e_base._e, base.StressEngine)
     assert not isinstance(e_base._e, _core.StressEngine)
-    e = core.StressEngine(core.LayeredSkin(), n, h, [0.75e-3], ij, components=comps,
-                          method="direct")
+    e = core.StressEngine(
+        core.LayeredSkin(), n, h, [0.75e-3], ij, components=comps, method="direct"
+    )
     got = e_base.stress(p, slip=ratio, method="direct")
     assert np.abs(got).max() > 1e3
     assert np.array_equal(got, e.stress(p, slip=ratio, method="direct"))

@@ -43,8 +43,10 @@ def engines():
     di = np.arange(60) % 2
     comps = [list(range(6)) if k % 3 == 0 else [2] for k in range(60)]
     direct = core.StressEngine(skin, N, H, DEPTHS, ij, di, comps, method="direct")
-    trees = {t: core.StressEngine(skin, N, H, DEPTHS, ij, di, comps, method="tree", theta=t)
-             for t in (0.02, 0.25, 0.5, 1.0)}
+    trees = {
+        t: core.StressEngine(skin, N, H, DEPTHS, ij, di, comps, method="tree", theta=t)
+        for t in (0.02, 0.25, 0.5, 1.0)
+    }
     return direct, trees
 
 
@@ -71,8 +73,10 @@ def test_error_is_second_order_in_theta(engines):
     X, Y = np.meshgrid(x, x)
     p = np.sqrt(np.clip(1 - (X**2 + Y**2) / 3e-3**2, 0, None))
     ref = direct.stress(p, -0.5 * p, 0.1 * p, method="direct")
-    err = {t: rel_rms(trees[t].stress(p, -0.5 * p, 0.1 * p, method="tree"), ref)
-           for t in (0.25, 0.5, 1.0)}
+    err = {
+        t: rel_rms(trees[t].stress(p, -0.5 * p, 0.1 * p, method="tree"), ref)
+        for t in (0.25, 0.5, 1.0)
+    }
     assert err[0.5] <= err[1.0] / 4 and err[0.25] <= err[0.5] / 4, err
 
 
@@ -111,8 +115,10 @@ def test_plugin_tree_matches_direct():
             # Winkler: a smooth pressure field, where theta 0.5 holds 2e-3;
             # on the ridge-fragmented elastic field the tree's error is larger
             # (README, "What accuracy costs": why exact stress is the default)
-            pad_scene({"stress_method": method, "outputs": "stress", "nx": "64",
-                       "pressure": "winkler"}))
+            pad_scene(
+                {"stress_method": method, "outputs": "stress", "nx": "64", "pressure": "winkler"}
+            )
+        )
         data = mujoco.MjData(model)
         for _ in range(150):
             mujoco.mj_step(model, data)
@@ -122,8 +128,11 @@ def test_plugin_tree_matches_direct():
 
 
 def test_theta_needs_tree_method():
-    with pytest.raises(ValueError, match="`stress_theta` applies to stress_method=\"tree\""):
-        mujoco.MjModel.from_xml_string(pad_scene({"stress_method": "direct",
-                                                  "stress_theta": "0.3"}))
-    with pytest.raises(ValueError, match=r"`stress_theta` = 3 is out of range; valid range \(0, 2\]"):
+    with pytest.raises(ValueError, match='`stress_theta` applies to stress_method="tree"'):
+        mujoco.MjModel.from_xml_string(
+            pad_scene({"stress_method": "direct", "stress_theta": "0.3"})
+        )
+    with pytest.raises(
+        ValueError, match=r"`stress_theta` = 3 is out of range; valid range \(0, 2\]"
+    ):
         mujoco.MjModel.from_xml_string(pad_scene({"stress_theta": "3"}))

@@ -16,8 +16,8 @@ from mjtouch.scene import textures
 
 N, PITCH = 48, 1e-4
 SEMI = (8e-3, 7e-3, 7e-3)
-HALF = (2.0e-3, 1.5e-3)          # texture half sizes: edges fall inside a 4.8 mm grid
-RES = 2.5e-5                     # texture sample spacing
+HALF = (2.0e-3, 1.5e-3)  # texture half sizes: edges fall inside a 4.8 mm grid
+RES = 2.5e-5  # texture sample spacing
 
 
 def _rot(yaw_deg=0.0, tilt_deg=0.0):
@@ -51,7 +51,8 @@ def _assert_bit_identical(fast, ref, what):
     for a, b, name in zip(fast, ref, ("gap", "coverage")):
         assert a.tobytes() == b.tobytes(), (
             f"{what}: {name} differs from the general path in {np.sum(a != b)} cells, "
-            f"max {np.nanmax(np.abs(np.where(a == b, 0, a - b)))}")
+            f"max {np.nanmax(np.abs(np.where(a == b, 0, a - b)))}"
+        )
 
 
 def _texture(elevation=1e-4):
@@ -97,16 +98,20 @@ def test_aligned_plane_and_rectangle_edges():
             assert np.any((cov > 0) & (cov < 1)), "the rectangle's edge must cut some cells"
 
 
-@pytest.mark.parametrize("body", [
-    dict(type="sphere", pos=(0.4e-3, 0, -3e-3 + 5e-5), size=(3e-3, 0, 0)),
-    dict(type="capsule", pos=(0, 0, -1e-3 + 4e-5), size=(1e-3, 2e-3, 0), mat=_rot(0, 90)),
-    dict(type="rectangle", pos=(0, 0, 3e-5), half=(0.5e-3, 0.5e-3)),  # a box's top face
-])
+@pytest.mark.parametrize(
+    "body",
+    [
+        dict(type="sphere", pos=(0.4e-3, 0, -3e-3 + 5e-5), size=(3e-3, 0, 0)),
+        dict(type="capsule", pos=(0, 0, -1e-3 + 4e-5), size=(1e-3, 2e-3, 0), mat=_rot(0, 90)),
+        dict(type="rectangle", pos=(0, 0, 3e-5), half=(0.5e-3, 0.5e-3)),  # a box's top face
+    ],
+)
 def test_bodies_mixed_with_a_grating(body):
     # Analytic bodies take the general path, the grating the fast one; the
     # nearest surface per cell (first one on ties) must be the same.
-    fast, ref = _render([PLATE, _texture(), body], _samples("grating"),
-                        (0.0, 0.0, SEMI[2] + 2e-5), np.eye(3))
+    fast, ref = _render(
+        [PLATE, _texture(), body], _samples("grating"), (0.0, 0.0, SEMI[2] + 2e-5), np.eye(3)
+    )
     _assert_bit_identical(fast, ref, body["type"])
 
 
@@ -145,12 +150,19 @@ def _plate_and_texture_rows(n: int) -> np.ndarray:
 def _reference_and_fast_fields(pressure, pos, mat, forces, surfaces, samples):
     """Stages 1-2 over the steps by the reference and the fast paths (ridged
     skin, all fields): (reference, fast) traction_steps outputs."""
-    config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05",
-              "pressure": pressure}
-    ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
-                               reference=True, fields=True)
-    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
-                                fields=True)
+    config = {
+        "nx": str(N),
+        "pitch": str(PITCH),
+        "ridges": "true",
+        "ridge_height": "5e-05",
+        "pressure": pressure,
+    }
+    ref = _core.traction_steps(
+        list(SEMI), config, pos, mat, forces, surfaces, samples, reference=True, fields=True
+    )
+    fast = _core.traction_steps(
+        list(SEMI), config, pos, mat, forces, surfaces, samples, fields=True
+    )
     return ref, fast
 
 
@@ -172,10 +184,12 @@ def test_stages_1_2_fast_paths_match_reference_over_a_slide(yaw_deg):
     forces[:, 0] = 0.3 + 0.2 * np.sin(np.linspace(0, 3, T))
     forces[:, 1] = 0.1
     config = {"nx": str(N), "pitch": str(PITCH), "ridges": "true", "ridge_height": "5e-05"}
-    ref = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
-                               reference=True, fields=True)
-    fast = _core.traction_steps(list(SEMI), config, pos, mat, forces, surfaces, samples,
-                                fields=True)
+    ref = _core.traction_steps(
+        list(SEMI), config, pos, mat, forces, surfaces, samples, reference=True, fields=True
+    )
+    fast = _core.traction_steps(
+        list(SEMI), config, pos, mat, forces, surfaces, samples, fields=True
+    )
     approach_ref, approach_fast = ref[2], fast[2]
     assert np.all(np.isfinite(approach_ref)), "the pad must touch at every step"
     assert approach_fast.tobytes() == approach_ref.tobytes()
@@ -248,5 +262,5 @@ def test_stages_1_2_fields_when_a_second_body_comes_within_reach(pressure):
     assert fast[2].tobytes() == ref[2].tobytes()
     assert fast[3].tobytes() == ref[3].tobytes()
     # the bump carries load at the end (loaded cells right of the pad's pole)
-    right = ref[3][-1, 0][:, N // 2 + 15:]
+    right = ref[3][-1, 0][:, N // 2 + 15 :]
     assert np.count_nonzero(right) > 0

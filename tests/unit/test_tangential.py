@@ -25,8 +25,12 @@ def hertz(n, per_radius, fn=9.1954):
 
 def cattaneo(r, p0, mu, c):
     """Cattaneo's traction magnitude at radius r for stick radius c."""
-    return mu * p0 / A_M * (np.sqrt(np.clip(A_M**2 - r * r, 0, None))
-                            - np.sqrt(np.clip(c * c - r * r, 0, None)))
+    return (
+        mu
+        * p0
+        / A_M
+        * (np.sqrt(np.clip(A_M**2 - r * r, 0, None)) - np.sqrt(np.clip(c * c - r * r, 0, None)))
+    )
 
 
 def stick_radius(result, h):
@@ -45,8 +49,9 @@ def test_cattaneo_mindlin_half_space(nu, ratio):
     G, mu = 100e6, 0.5
     P = p.sum() * h * h
     Q = ratio * mu * P
-    res, _ = half_space(n, h, G, nu).solve(p, mu, (Q, 0.0), tolerance=1e-8, max_iterations=500,
-                                           precision="double")
+    res, _ = half_space(n, h, G, nu).solve(
+        p, mu, (Q, 0.0), tolerance=1e-8, max_iterations=500, precision="double"
+    )
     c = A_M * (1 - ratio) ** (1 / 3)
     # The stick edge runs through cells: c to within half a cell.
     assert stick_radius(res, h) == pytest.approx(c, abs=0.5 * h)
@@ -76,9 +81,14 @@ def test_contact_cattaneo_example(precision, tolerance):
     n, per = 96, 40
     h, r, p, p0 = hertz(n, per, fn=9.1954)
     P = p.sum() * h * h
-    res, _ = half_space(n, h, 100e6, 0.42).solve(p, 0.4, (3.218 * P / 9.1954, 0.0),
-                                                 tolerance=tolerance, max_iterations=500,
-                                                 precision=precision)
+    res, _ = half_space(n, h, 100e6, 0.42).solve(
+        p,
+        0.4,
+        (3.218 * P / 9.1954, 0.0),
+        tolerance=tolerance,
+        max_iterations=500,
+        precision=precision,
+    )
     assert stick_radius(res, h) == pytest.approx(0.5e-3, abs=0.5 * h)
     # CONTACT 0.008155 mm, the formula 0.008171 mm: the grid (40 cells per
     # radius) moves the shift by < 0.3% (measured 32-64 cells per radius).
@@ -114,8 +124,10 @@ def test_force_balance_oblique():
     h, r, p, p0 = hertz(n, per)
     P = p.sum() * h * h
     F = (0.2 * P, -0.15 * P)
-    for res, _ in (tg.winkler_partial_slip(p, h, 0.5, F, 1e7),
-                   half_space(n, h, 100e6, 0.45).solve(p, 0.5, F, tolerance=1e-4)):
+    for res, _ in (
+        tg.winkler_partial_slip(p, h, 0.5, F, 1e7),
+        half_space(n, h, 100e6, 0.45).solve(p, 0.5, F, tolerance=1e-4),
+    ):
         assert 0 < res["stuck_share"] < 1
         np.testing.assert_allclose(res["shear_x_pa"].sum() * h * h, F[0], rtol=1e-12)
         np.testing.assert_allclose(res["shear_y_pa"].sum() * h * h, F[1], rtol=1e-12)
@@ -127,10 +139,18 @@ def test_mindlin_deresiewicz_unloading():
     P = p.sum() * h * h
     solver = half_space(n, h, G, nu)
     q_star, dq = 0.7 * mu * P, 0.6 * mu * P
-    _, state = solver.solve(p, mu, (q_star, 0.0), tolerance=1e-8, max_iterations=500,
-                            precision="double")
-    res, _ = solver.solve(p, mu, (q_star - dq, 0.0), state=state, tolerance=1e-8,
-                          max_iterations=500, precision="double")
+    _, state = solver.solve(
+        p, mu, (q_star, 0.0), tolerance=1e-8, max_iterations=500, precision="double"
+    )
+    res, _ = solver.solve(
+        p,
+        mu,
+        (q_star - dq, 0.0),
+        state=state,
+        tolerance=1e-8,
+        max_iterations=500,
+        precision="double",
+    )
     c = A_M * (1 - q_star / (mu * P)) ** (1 / 3)
     b = A_M * (1 - dq / (2 * mu * P)) ** (1 / 3)
     # Johnson 1985 sec. 7.2: stick inside b, reversed slip in b < r < a.
@@ -142,8 +162,9 @@ def test_mindlin_deresiewicz_unloading():
     away = (np.abs(r - c) > 1.5 * h) & (np.abs(r - b) > 1.5 * h) & (r < A_M - 1.5 * h)
     assert err[away].max() < 0.02
     # Without memory the same force gives Cattaneo's loading profile instead.
-    fresh, _ = solver.solve(p, mu, (q_star - dq, 0.0), tolerance=1e-8, max_iterations=500,
-                            precision="double")
+    fresh, _ = solver.solve(
+        p, mu, (q_star - dq, 0.0), tolerance=1e-8, max_iterations=500, precision="double"
+    )
     assert np.all(fresh["shear_x_pa"][p > 0] >= 0)
 
 
@@ -163,8 +184,9 @@ def test_full_slip(model, ratio):
     np.testing.assert_allclose(res["shear_x_pa"], p * F[0] / P, rtol=1e-12, atol=0)
     np.testing.assert_allclose(res["shear_y_pa"], p * F[1] / P, rtol=1e-12, atol=0)
     if ratio == 1.0:
-        np.testing.assert_allclose(np.hypot(res["shear_x_pa"], res["shear_y_pa"]), mu * p,
-                                   rtol=1e-12)
+        np.testing.assert_allclose(
+            np.hypot(res["shear_x_pa"], res["shear_y_pa"]), mu * p, rtol=1e-12
+        )
 
 
 def test_deterministic():
@@ -179,8 +201,17 @@ def test_deterministic():
         a2, _ = solver.solve(p * 0.9, 0.5, F2, state=s1)
         w1, ws = tg.winkler_partial_slip(p, h, 0.5, F1, 1e7)
         w2, _ = tg.winkler_partial_slip(p, h, 0.5, F2, 1e7, state=ws)
-        runs.append([a2["shear_x_pa"], a2["shear_y_pa"], a2["stick"], np.array([a2["shift_x_m"]]),
-                     w2["shear_x_pa"], w2["shear_y_pa"], np.array([w2["shift_y_m"]])])
+        runs.append(
+            [
+                a2["shear_x_pa"],
+                a2["shear_y_pa"],
+                a2["stick"],
+                np.array([a2["shift_x_m"]]),
+                w2["shear_x_pa"],
+                w2["shear_y_pa"],
+                np.array([w2["shift_y_m"]]),
+            ]
+        )
     for x, y in zip(*runs):
         assert x.tobytes() == y.tobytes()
 
@@ -196,8 +227,7 @@ def test_bad_input():
     with pytest.raises(ValueError, match="poisson = 0.6 must be in"):
         tg.ElasticPartialSlip(16, h, 1e5, 0.6)
     with pytest.raises(ValueError, match="give both shear_x_pa and shear_y_pa"):
-        tg.winkler_partial_slip(p, h, 0.5, (0.1, 0.0), 1e7,
-                                state=tg.TangentialState(shear_x_pa=p))
+        tg.winkler_partial_slip(p, h, 0.5, (0.1, 0.0), 1e7, state=tg.TangentialState(shear_x_pa=p))
 
 
 def test_rough_contact_against_tamaas():
@@ -213,8 +243,9 @@ def test_rough_contact_against_tamaas():
     X, Y = np.meshgrid(x, x, indexing="ij")
     rng = np.random.default_rng(3)
     k2 = np.fft.fftfreq(n)[:, None] ** 2 + np.fft.fftfreq(n)[None, :] ** 2
-    noise = np.real(np.fft.ifft2(np.fft.fft2(rng.standard_normal((n, n)))
-                                 * np.exp(-k2 / (2 * 0.06**2))))
+    noise = np.real(
+        np.fft.ifft2(np.fft.fft2(rng.standard_normal((n, n))) * np.exp(-k2 / (2 * 0.06**2)))
+    )
     surface = -(X**2 + Y**2) / (2 * 0.01) + noise * (3e-6 / noise.std())
     model = tm.ModelFactory.createModel(tm.model_type.surface_2d, [L, L], [n, n])
     model.E, model.nu = E, nu
@@ -224,8 +255,13 @@ def test_rough_contact_against_tamaas():
     t = np.array(model.traction).transpose(1, 0, 2)  # tamaas [i, j] -> ours [j, i]
     p, qx, qy = t[..., 2].copy(), t[..., 0], t[..., 1]
     res, _ = tg.ElasticPartialSlip(n, h, E, nu).solve(
-        p, mu, (qx.sum() * h * h, qy.sum() * h * h), tolerance=1e-8, max_iterations=3000,
-        precision="double")
+        p,
+        mu,
+        (qx.sum() * h * h, qy.sum() * h * h),
+        tolerance=1e-8,
+        max_iterations=3000,
+        precision="double",
+    )
     load = p > 0
     diff = np.hypot(res["shear_x_pa"] - qx, res["shear_y_pa"] - qy)
     assert diff.sum() / np.hypot(qx, qy).sum() < 0.04
@@ -246,7 +282,10 @@ def test_winkler_unloading_superposition():
     half, _ = tg.winkler_partial_slip(p, h, mu, (dq / 2, 0.0), k)
     b = A_M * (1 - dq / (2 * mu * P)) ** 0.25
     assert stick_radius(res, h) == pytest.approx(b, abs=0.5 * h)
-    np.testing.assert_allclose(res["shear_x_pa"], loaded["shear_x_pa"] - 2 * half["shear_x_pa"],
-                               rtol=0, atol=1e-9 * mu * p0)
-    assert res["shift_x_m"] == pytest.approx(loaded["shift_x_m"] - 2 * half["shift_x_m"],
-                                             rel=1e-9)
+    np.testing.assert_allclose(
+        res["shear_x_pa"],
+        loaded["shear_x_pa"] - 2 * half["shear_x_pa"],
+        rtol=0,
+        atol=1e-9 * mu * p0,
+    )
+    assert res["shift_x_m"] == pytest.approx(loaded["shift_x_m"] - 2 * half["shift_x_m"], rel=1e-9)

@@ -18,8 +18,9 @@ def test_hfield_orientation_matches_mujoco_ray():
     data[0, 0], data[-1, -1] = 0.0, 1.0  # MuJoCo normalises to [0, 1]
     rx, ry, hz = 0.01, 0.006, 0.002
     spec = mujoco.MjSpec()
-    spec.add_hfield(name="h", nrow=nrow, ncol=ncol, size=[rx, ry, hz, 0.001],
-                    userdata=data.ravel().tolist())
+    spec.add_hfield(
+        name="h", nrow=nrow, ncol=ncol, size=[rx, ry, hz, 0.001], userdata=data.ravel().tolist()
+    )
     spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="h", pos=[0.1, -0.2, 0.3])
     m = spec.compile()
     d = mujoco.MjData(m)
@@ -27,8 +28,9 @@ def test_hfield_orientation_matches_mujoco_ray():
     samples = m.hfield_data.reshape(nrow, ncol)
     geomid = np.array([-1], dtype=np.int32)
     for x, y in [(-0.007, 0.004), (0.003, -0.005), (0.0081, 0.0012), (-0.0099, -0.0059)]:
-        dist = mujoco.mj_ray(m, d, np.array([0.1 + x, -0.2 + y, 1.0]), np.array([0, 0, -1.0]),
-                             None, 1, -1, geomid)
+        dist = mujoco.mj_ray(
+            m, d, np.array([0.1 + x, -0.2 + y, 1.0]), np.array([0, 0, -1.0]), None, 1, -1, geomid
+        )
         ray_height = 1.0 - dist - 0.3
         ours = core.hfield_box_mean(samples, rx, ry, hz, x, x, y, y)
         # MuJoCo triangulates each cell (two planes); the skin's bilinear
@@ -37,8 +39,16 @@ def test_hfield_orientation_matches_mujoco_ray():
         c = (x + rx) / (2 * rx) * (ncol - 1)
         r = (y + ry) / (2 * ry) * (nrow - 1)
         c0, r0 = min(int(c), ncol - 2), min(int(r), nrow - 2)
-        twist = abs(samples[r0, c0] - samples[r0, c0 + 1] - samples[r0 + 1, c0]
-                    + samples[r0 + 1, c0 + 1]) * hz / 4
+        twist = (
+            abs(
+                samples[r0, c0]
+                - samples[r0, c0 + 1]
+                - samples[r0 + 1, c0]
+                + samples[r0 + 1, c0 + 1]
+            )
+            * hz
+            / 4
+        )
         assert abs(ours - ray_height) <= twist + 1e-9, (x, y, ours, ray_height)
 
 
@@ -57,8 +67,9 @@ def test_hfield_box_mean_is_exact_integral():
     r0 = np.minimum(ry_.astype(int), 3)
     fx, fy = cx - c0, ry_ - r0
     S = s.astype(float)
-    H = ((1 - fy)[:, None] * ((1 - fx) * S[r0][:, c0] + fx * S[r0][:, c0 + 1])
-         + fy[:, None] * ((1 - fx) * S[r0 + 1][:, c0] + fx * S[r0 + 1][:, c0 + 1]))
+    H = (1 - fy)[:, None] * ((1 - fx) * S[r0][:, c0] + fx * S[r0][:, c0 + 1]) + fy[:, None] * (
+        (1 - fx) * S[r0 + 1][:, c0] + fx * S[r0 + 1][:, c0 + 1]
+    )
     expect = hz * H.mean()
     # midpoint rule error ~ (1/n)^2 of the second derivative (piecewise
     # linear: kinks only) -> ~1e-6 relative here
@@ -103,8 +114,15 @@ def test_dots_are_spherical_caps_on_a_lattice():
 
 
 def test_2d_texture_model_holds_the_heights():
-    tex = scenes.Texture(kind="random", length_m=0.02, width_m=0.01, resolution_m=5e-5,
-                         rms_m=10e-6, corr_length_m=2e-4, seed=4)
+    tex = scenes.Texture(
+        kind="random",
+        length_m=0.02,
+        width_m=0.01,
+        resolution_m=5e-5,
+        rms_m=10e-6,
+        corr_length_m=2e-4,
+        seed=4,
+    )
     m = scenes.build_model(scenes.Fingertip(nx=32, pitch_m=2e-4), tex, scenes.Protocol())
     h = tex.heights()
     assert (m.hfield_nrow[0], m.hfield_ncol[0]) == h.shape
@@ -113,12 +131,15 @@ def test_2d_texture_model_holds_the_heights():
     assert_allclose(m.hfield_data.reshape(h.shape) * relief, h, atol=1e-7 * relief)
 
 
-@pytest.mark.parametrize("kw,msg", [
-    (dict(kind="wood"), "not one of"),
-    (dict(kind="random", rms_m=-1), "rms_m"),
-    (dict(kind="grating", plateau_m=2e-3), "plateau_m"),
-    (dict(kind="dots", dot_radius_m=0), "dot_radius_m"),
-])
+@pytest.mark.parametrize(
+    "kw,msg",
+    [
+        (dict(kind="wood"), "not one of"),
+        (dict(kind="random", rms_m=-1), "rms_m"),
+        (dict(kind="grating", plateau_m=2e-3), "plateau_m"),
+        (dict(kind="dots", dot_radius_m=0), "dot_radius_m"),
+    ],
+)
 def test_bad_texture_parameters(kw, msg):
     with pytest.raises(ValueError, match=msg):
         scenes.Texture(**kw).validate()
@@ -135,22 +156,34 @@ def test_analytic_counter_surfaces_render_their_exact_tops():
     R, d, hh = 2e-3, 1e-4, 1e-3  # radius, clearance, half length (capsule, cylinder)
     a, b, c = 2.5e-3, 1.5e-3, 1e-3  # ellipsoid semi-axes
     cases = {
-        "sphere": (dict(pos=(0, 0, -R - d), size=(R, 0, 0)),
-                   R + d - np.sqrt(np.clip(R * R - r2, 0, None)), r2 < R * R),
-        "capsule": (dict(pos=(0, 0, -R - hh - d), size=(R, hh, 0)),
-                    R + d - np.sqrt(np.clip(R * R - r2, 0, None)), r2 < R * R),
+        "sphere": (
+            dict(pos=(0, 0, -R - d), size=(R, 0, 0)),
+            R + d - np.sqrt(np.clip(R * R - r2, 0, None)),
+            r2 < R * R,
+        ),
+        "capsule": (
+            dict(pos=(0, 0, -R - hh - d), size=(R, hh, 0)),
+            R + d - np.sqrt(np.clip(R * R - r2, 0, None)),
+            r2 < R * R,
+        ),
         "cylinder": (dict(pos=(0, 0, -hh - d), size=(R, hh, 0)), np.full_like(r2, d), r2 < R * R),
-        "ellipsoid": (dict(pos=(0, 0, -c - d), size=(a, b, c)),
-                      c + d - c * np.sqrt(np.clip(1 - X**2 / a**2 - Y**2 / b**2, 0, None)),
-                      X**2 / a**2 + Y**2 / b**2 < 1),
+        "ellipsoid": (
+            dict(pos=(0, 0, -c - d), size=(a, b, c)),
+            c + d - c * np.sqrt(np.clip(1 - X**2 / a**2 - Y**2 / b**2, 0, None)),
+            X**2 / a**2 + Y**2 / b**2 < 1,
+        ),
     }
     for name, (surface, expect, inside) in cases.items():
-        gap, cov = core.render_gap(np.zeros((n, n)), h, [dict(type=name, **surface)],
-                                   area_average=False)
+        gap, cov = core.render_gap(
+            np.zeros((n, n)), h, [dict(type=name, **surface)], area_average=False
+        )
         # cells whose centre is off the body see no surface (centres exactly
         # on the rim graze it: left out)
-        rim = np.isclose(r2 if name != "ellipsoid" else X**2 / a**2 + Y**2 / b**2,
-                         R * R if name != "ellipsoid" else 1.0, rtol=1e-9)
+        rim = np.isclose(
+            r2 if name != "ellipsoid" else X**2 / a**2 + Y**2 / b**2,
+            R * R if name != "ellipsoid" else 1.0,
+            rtol=1e-9,
+        )
         outside = ~inside & ~rim
         assert np.all(np.isinf(gap[outside])) and np.all(cov[outside] == 0), name
         np.testing.assert_allclose(gap[inside], expect[inside], rtol=0, atol=1e-12, err_msg=name)
@@ -158,6 +191,7 @@ def test_analytic_counter_surfaces_render_their_exact_tops():
     # Area averaging: the 2 x 2 Gauss mean of a sphere's top over a cell; at
     # the pole the top is r^2 / 2R to leading order, whose cell mean exceeds
     # the centre value by h^2 / 12R: the averaged gap is larger by that.
-    gap, _ = core.render_gap(np.zeros((n, n)), h, [dict(type="sphere", pos=(0, 0, -R - d),
-                                                        size=(R, 0, 0))])
+    gap, _ = core.render_gap(
+        np.zeros((n, n)), h, [dict(type="sphere", pos=(0, 0, -R - d), size=(R, 0, 0))]
+    )
     assert gap[16, 16] - d == pytest.approx(h * h / (12 * R), rel=1e-2)

@@ -38,8 +38,9 @@ class Hertz:
         return self.contact_radius_m**2 / self.radius_m
 
 
-def hertz_errors(h: Hertz, pressure_pa: np.ndarray, pitch_m: float,
-                 indentation_m: float) -> dict[str, float]:
+def hertz_errors(
+    h: Hertz, pressure_pa: np.ndarray, pitch_m: float, indentation_m: float
+) -> dict[str, float]:
     """Relative errors of a centred pressure field (n x n, Pa, cells of side
     pitch_m) and indentation against Hertz: peak pressure, contact radius
     (from the second moment, int p r^2 dA / W = 2 a^2 / 5, which does not
@@ -50,5 +51,8 @@ def hertz_errors(h: Hertz, pressure_pa: np.ndarray, pitch_m: float,
     X, Y = np.meshgrid(x, x)
     load = p.sum() * pitch_m**2
     a = np.sqrt(2.5 * (p * (X**2 + Y**2)).sum() * pitch_m**2 / load)
-    return {"peak": p.max() / h.peak_pa - 1, "radius": a / h.contact_radius_m - 1,
-            "indentation": indentation_m / h.indentation_m - 1}
+    return {
+        "peak": p.max() / h.peak_pa - 1,
+        "radius": a / h.contact_radius_m - 1,
+        "indentation": indentation_m / h.indentation_m - 1,
+    }

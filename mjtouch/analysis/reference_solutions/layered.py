@@ -64,16 +64,14 @@ def _inplane_basis(k, zeta, h, lam, mu, mu_ref):
     # A: u_xi = i e, u_z = -e.
     cols.append((1j * e, -e, -1j * e, e))
     # B: u_xi = i s e, u_z = -(kappa + s) e.
-    cols.append((1j * s * e, -(kappa + s) * e, 1j * (1 - s) * e,
-                 (kappa + s - 1) * e))
+    cols.append((1j * s * e, -(kappa + s) * e, 1j * (1 - s) * e, (kappa + s - 1) * e))
     if np.isfinite(h):
         sp = k * (zeta - h)  # <= 0
         ep = np.exp(sp)
         # C: u_xi = i e', u_z = e'.
         cols.append((1j * ep, ep, 1j * ep, ep))
         # D: u_xi = -i s' e', u_z = (kappa - s') e'.
-        cols.append((-1j * sp * ep, (kappa - sp) * ep, -1j * (1 + sp) * ep,
-                     (kappa - 1 - sp) * ep))
+        cols.append((-1j * sp * ep, (kappa - sp) * ep, -1j * (1 + sp) * ep, (kappa - 1 - sp) * ep))
     else:
         z0 = np.zeros_like(e)
         cols += [(z0, z0, z0, z0)] * 2
@@ -81,10 +79,10 @@ def _inplane_basis(k, zeta, h, lam, mu, mu_ref):
         div = 1j * ux + duz  # (i k u_xi + u_z') mu_ref / k... per unit k
         out[:, c, 0] = ux
         out[:, c, 1] = uz
-        out[:, c, 2] = (lam * div + 2 * mu * 1j * ux) / mu_ref   # s_xixi
-        out[:, c, 3] = lam * div / mu_ref                        # s_etaeta
-        out[:, c, 4] = (lam * div + 2 * mu * duz) / mu_ref       # s_zz
-        out[:, c, 5] = mu * (dux + 1j * uz) / mu_ref             # s_xiz
+        out[:, c, 2] = (lam * div + 2 * mu * 1j * ux) / mu_ref  # s_xixi
+        out[:, c, 3] = lam * div / mu_ref  # s_etaeta
+        out[:, c, 4] = (lam * div + 2 * mu * duz) / mu_ref  # s_zz
+        out[:, c, 5] = mu * (dux + 1j * uz) / mu_ref  # s_xiz
     return out
 
 
@@ -134,45 +132,54 @@ def solve(k, layers, base):
 
     def bi(j, zeta):
         t, lam, mu = mats[j]
-        return _inplane_basis(k, zeta, t, lam, mu, mu_ref)[:, :ncol[j], :]
+        return _inplane_basis(k, zeta, t, lam, mu, mu_ref)[:, : ncol[j], :]
 
     def ba(j, zeta):
         t, lam, mu = mats[j]
-        return _antiplane_basis(k, zeta, t, mu, mu_ref)[:, :na_col[j], :]
+        return _antiplane_basis(k, zeta, t, mu, mu_ref)[:, : na_col[j], :]
 
     # Surface: s_zz = -p, s_xiz = -q_xi, s_etaz = -q_eta (traction on z = 0).
     b = bi(0, 0.0)
-    M[:, 0, offs[0]:offs[1]] = b[:, :, 4]
-    M[:, 1, offs[0]:offs[1]] = b[:, :, 5]
+    M[:, 0, offs[0] : offs[1]] = b[:, :, 4]
+    M[:, 1, offs[0] : offs[1]] = b[:, :, 5]
     rhs[:, 0, 0] = -1.0 / mu_ref
     rhs[:, 1, 1] = -1.0 / mu_ref
     a = ba(0, 0.0)
-    Ma[:, 0, oa[0]:oa[1]] = a[:, :, 1]
+    Ma[:, 0, oa[0] : oa[1]] = a[:, :, 1]
     ra[:, 0, 0] = -1.0 / mu_ref
     row, rowa = 2, 1
     for j in range(nl - 1):
         top = bi(j, mats[j][0])
         bot = bi(j + 1, 0.0)
         for comp in (0, 1, 4, 5):  # u_xi, u_z, s_zz, s_xiz
-            M[:, row, offs[j]:offs[j + 1]] = top[:, :, comp]
-            M[:, row, offs[j + 1]:offs[j + 2]] = -bot[:, :, comp]
+            M[:, row, offs[j] : offs[j + 1]] = top[:, :, comp]
+            M[:, row, offs[j + 1] : offs[j + 2]] = -bot[:, :, comp]
             row += 1
         ta = ba(j, mats[j][0])
         bb = ba(j + 1, 0.0)
         for comp in (0, 1):
-            Ma[:, rowa, oa[j]:oa[j + 1]] = ta[:, :, comp]
-            Ma[:, rowa, oa[j + 1]:oa[j + 2]] = -bb[:, :, comp]
+            Ma[:, rowa, oa[j] : oa[j + 1]] = ta[:, :, comp]
+            Ma[:, rowa, oa[j + 1] : oa[j + 2]] = -bb[:, :, comp]
             rowa += 1
     if base is None:  # rigid: u = 0 at the bottom of the last layer
         last = bi(nl - 1, mats[-1][0])
-        M[:, row, offs[-2]:offs[-1]] = last[:, :, 0]
-        M[:, row + 1, offs[-2]:offs[-1]] = last[:, :, 1]
+        M[:, row, offs[-2] : offs[-1]] = last[:, :, 0]
+        M[:, row + 1, offs[-2] : offs[-1]] = last[:, :, 1]
         la = ba(nl - 1, mats[-1][0])
-        Ma[:, rowa, oa[-2]:oa[-1]] = la[:, :, 0]
+        Ma[:, rowa, oa[-2] : oa[-1]] = la[:, :, 0]
     x = np.linalg.solve(M, rhs)
     xa = np.linalg.solve(Ma, ra)
-    return {"k": k, "mats": mats, "offs": offs, "oa": oa, "ncol": ncol,
-            "na_col": na_col, "x": x, "xa": xa, "mu_ref": mu_ref}
+    return {
+        "k": k,
+        "mats": mats,
+        "offs": offs,
+        "oa": oa,
+        "ncol": ncol,
+        "na_col": na_col,
+        "x": x,
+        "xa": xa,
+        "mu_ref": mu_ref,
+    }
 
 
 def _locate(z, layers, base, upper):
@@ -199,11 +206,11 @@ def stress_xieta(k, z, layers, base, upper=True):
     j, zeta = _locate(z, layers, base, upper)
     t, lam, mu = sol["mats"][j]
     mu_ref = sol["mu_ref"]
-    b = _inplane_basis(sol["k"], zeta, t, lam, mu, mu_ref)[:, :sol["ncol"][j], :]
-    c = sol["x"][:, sol["offs"][j]:sol["offs"][j + 1], :]  # (nk, ncol, 2)
+    b = _inplane_basis(sol["k"], zeta, t, lam, mu, mu_ref)[:, : sol["ncol"][j], :]
+    c = sol["x"][:, sol["offs"][j] : sol["offs"][j + 1], :]  # (nk, ncol, 2)
     f = np.einsum("kcq,kcl->klq", b, c) * mu_ref  # (nk, 2 loads, 6)
-    ab = _antiplane_basis(sol["k"], zeta, t, mu, mu_ref)[:, :sol["na_col"][j], :]
-    ca = sol["xa"][:, sol["oa"][j]:sol["oa"][j + 1], 0]
+    ab = _antiplane_basis(sol["k"], zeta, t, mu, mu_ref)[:, : sol["na_col"][j], :]
+    ca = sol["xa"][:, sol["oa"][j] : sol["oa"][j + 1], 0]
     fa = np.einsum("kcq,kc->kq", ab, ca) * mu_ref
     S = np.zeros((sol["k"].size, 3, 3, 3), dtype=complex)
     for load in (0, 1):
@@ -220,12 +227,16 @@ def transfer(k, z, layers, base, upper=True):
     """The C++ LayerTransfer functions (see layered.h) at wavenumbers k."""
     S = stress_xieta(k, z, layers, base, upper)
     return {
-        "p_xixi": S[:, 0, 0, 0].real, "p_etaeta": S[:, 0, 1, 1].real,
-        "p_zz": S[:, 0, 2, 2].real, "p_xiz": (S[:, 0, 0, 2] / 1j).real,
+        "p_xixi": S[:, 0, 0, 0].real,
+        "p_etaeta": S[:, 0, 1, 1].real,
+        "p_zz": S[:, 0, 2, 2].real,
+        "p_xiz": (S[:, 0, 0, 2] / 1j).real,
         "q_xixi": (S[:, 1, 0, 0] / 1j).real,
         "q_etaeta": (S[:, 1, 1, 1] / 1j).real,
-        "q_zz": (S[:, 1, 2, 2] / 1j).real, "q_xiz": (-S[:, 1, 0, 2]).real,
-        "a_etaz": S[:, 2, 1, 2].real, "a_xieta": (S[:, 2, 0, 1] / 1j).real,
+        "q_zz": (S[:, 1, 2, 2] / 1j).real,
+        "q_xiz": (-S[:, 1, 0, 2]).real,
+        "a_etaz": S[:, 2, 1, 2].real,
+        "a_xieta": (S[:, 2, 0, 1] / 1j).real,
     }
 
 
@@ -234,8 +245,7 @@ def surface_compliance(k, layers, base):
     sol = solve(k, layers, base)
     t, lam, mu = sol["mats"][0]
     b = _inplane_basis(sol["k"], 0.0, t, lam, mu, sol["mu_ref"])
-    uz = np.einsum("kc,kc->k", b[:, :sol["ncol"][0], 1],
-                   sol["x"][:, :sol["ncol"][0], 0])
+    uz = np.einsum("kc,kc->k", b[:, : sol["ncol"][0], 1], sol["x"][:, : sol["ncol"][0], 0])
     return (uz * sol["mu_ref"] / (sol["mu_ref"] * sol["k"])).real
 
 
@@ -291,8 +301,12 @@ def _window_stress(load, x, y, z, window, layers, base, upper):
         if kind == "disc":
             win = np.full(m, disc[i])
         else:
-            win = size * size * np.sinc(k[i] * c * size / (2 * math.pi)) * \
-                np.sinc(k[i] * s * size / (2 * math.pi))
+            win = (
+                size
+                * size
+                * np.sinc(k[i] * c * size / (2 * math.pi))
+                * np.sinc(k[i] * s * size / (2 * math.pi))
+            )
         # Rotation from (xi, eta, z) to (x, y, z): columns xi, eta, z.
         R = np.zeros((m, 3, 3))
         R[:, 0, 0], R[:, 0, 1] = c, -s
@@ -307,12 +321,10 @@ def _window_stress(load, x, y, z, window, layers, base, upper):
             Sx = q_xi[:, None, None] * S[i, 1] + q_eta[:, None, None] * S[i, 2]
         cart = np.einsum("mab,mbc,mdc->mad", R, Sx, R)
         phase = np.exp(1j * k[i] * (x * c + y * s))
-        total += np.einsum("m,mab->ab", phase * win, cart) * (
-            2 * math.pi / m) * wk[i] * k[i]
-    total /= 4 * math.pi ** 2
+        total += np.einsum("m,mab->ab", phase * win, cart) * (2 * math.pi / m) * wk[i] * k[i]
+    total /= 4 * math.pi**2
     out = total.real
-    return np.array([out[0, 0], out[1, 1], out[2, 2], out[0, 1], out[0, 2],
-                     out[1, 2]])
+    return np.array([out[0, 0], out[1, 1], out[2, 2], out[0, 1], out[0, 2], out[1, 2]])
 
 
 def disc_pressure_axisym(r, z, radius, layers, base, upper=True):
@@ -339,19 +351,20 @@ def _self_check():
     layers = [(0.3e-3, E, nu), (0.9e-3, E, nu)]
     base = (E, nu)
     for z in (0.2e-3, 0.3e-3, 1.5e-3):
-        ref = -(1 - z ** 3 / (a * a + z * z) ** 1.5)
+        ref = -(1 - z**3 / (a * a + z * z) ** 1.5)
         s = disc_stress("pressure", 0.0, 0.0, z, a, layers, base)
         h = disc_pressure_axisym(0.0, z, a, layers, base)
         err = max(abs(s[2] - ref), abs(h[2] - ref))
-        print(f"disc axis z={z*1e3:.2f} mm: s_zz {s[2]:.10f} hankel {h[2]:.10f}"
-              f" closed {ref:.10f} err {err:.1e}")
+        print(
+            f"disc axis z={z * 1e3:.2f} mm: s_zz {s[2]:.10f} hankel {h[2]:.10f}"
+            f" closed {ref:.10f} err {err:.1e}"
+        )
         ok &= err < 1e-8
     # Two routes agree off the axis on a real stack (s_xx at y = 0 is s_rr).
     shao = [(0.7e-3, 80e3, 0.48), (0.8e-3, 50e3, 0.48), (2.5e-3, 24e3, 0.4)]
     s = disc_stress("pressure", 0.8e-3, 0.0, 0.7e-3, a, shao, None)
     h = disc_pressure_axisym(0.8e-3, 0.7e-3, a, shao, None)
-    err = max(abs(s[0] - h[0]), abs(s[1] - h[1]), abs(s[2] - h[2]),
-              abs(s[4] - h[3]))
+    err = max(abs(s[0] - h[0]), abs(s[1] - h[1]), abs(s[2] - h[2]), abs(s[4] - h[3]))
     print(f"shao off-axis, angular vs hankel: max diff {err:.1e}")
     ok &= err < 1e-8
     # Layer on bone: closed-form compliance.
@@ -359,8 +372,13 @@ def _self_check():
         H = 1.5e-3
         kh = np.array([0.1, 1.0, 5.0, 20.0])
         k3 = 3 - 4 * nu
-        ref = 2 * (1 - nu * nu) / (E * kh / H) * (k3 * np.sinh(2 * kh) - 2 * kh) / (
-            k3 * np.cosh(2 * kh) + 2 * kh ** 2 + 5 - 12 * nu + 8 * nu * nu)
+        ref = (
+            2
+            * (1 - nu * nu)
+            / (E * kh / H)
+            * (k3 * np.sinh(2 * kh) - 2 * kh)
+            / (k3 * np.cosh(2 * kh) + 2 * kh**2 + 5 - 12 * nu + 8 * nu * nu)
+        )
         c = surface_compliance(kh / H, [(H, E, nu)], None)
         err = np.max(np.abs(c / ref - 1))
         print(f"layer on bone nu={nu}: compliance rel err {err:.1e}")
@@ -378,24 +396,29 @@ def compare_dump(path):
         layers = [tuple(layer) for layer in case["layers"]]
         base = None if case["base"] is None else tuple(case["base"])
         for pt in case["disc"]:
-            ref = disc_stress(pt["load"], pt["x"], pt["y"], pt["z"],
-                              pt["radius"], layers, base, pt["upper"])
+            ref = disc_stress(
+                pt["load"], pt["x"], pt["y"], pt["z"], pt["radius"], layers, base, pt["upper"]
+            )
             got = np.array(pt["stress"])
             err = np.max(np.abs(got - ref)) / max(np.max(np.abs(ref)), 1e-30)
             worst = max(worst, err)
-            print(f"{case['name']} {pt['load']} z={pt['z']*1e3:.2f} mm "
-                  f"x={pt['x']*1e3:.2f} y={pt['y']*1e3:.2f}: rel err {err:.1e}")
+            print(
+                f"{case['name']} {pt['load']} z={pt['z'] * 1e3:.2f} mm "
+                f"x={pt['x'] * 1e3:.2f} y={pt['y'] * 1e3:.2f}: rel err {err:.1e}"
+            )
         for pt in case.get("cell", []):
-            ref = cell_stress(pt["load"], pt["x"], pt["y"], pt["z"],
-                              pt["pitch"], layers, base, pt["upper"])
+            ref = cell_stress(
+                pt["load"], pt["x"], pt["y"], pt["z"], pt["pitch"], layers, base, pt["upper"]
+            )
             got = np.array(pt["stress"])
             err = np.max(np.abs(got - ref)) / max(np.max(np.abs(ref)), 1e-30)
             worst = max(worst, err)
-            print(f"{case['name']} cell {pt['load']} z={pt['z']*1e3:.2f} mm "
-                  f"x={pt['x']*1e3:.2f} y={pt['y']*1e3:.2f}: rel err {err:.1e}")
+            print(
+                f"{case['name']} cell {pt['load']} z={pt['z'] * 1e3:.2f} mm "
+                f"x={pt['x'] * 1e3:.2f} y={pt['y'] * 1e3:.2f}: rel err {err:.1e}"
+            )
         for tr in case.get("transfer", []):
-            ref = transfer(np.array([tr["k"]]), tr["z"], layers, base,
-                           tr["upper"])
+            ref = transfer(np.array([tr["k"]]), tr["z"], layers, base, tr["upper"])
             got = tr["values"]
             scale = max(abs(ref[name][0]) for name in got) or 1.0
             err = max(abs(got[name] - ref[name][0]) for name in got) / scale

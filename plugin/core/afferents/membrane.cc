@@ -41,8 +41,7 @@ double Membrane(double u0, double a, double b, double tau, double s, const Membr
 // kappa = tau_a / (tau_a - tau).
 double AdaptResponse(double c, double tau, double tau_a, double s, const MembraneSpan* pre) {
   if (c == 0.0) return 0.0;
-  if (pre && s == pre->span)
-    return -c * tau_a / (tau_a - tau) * pre->adapt_decay * pre->adapt_rise;
+  if (pre && s == pre->span) return -c * tau_a / (tau_a - tau) * pre->adapt_decay * pre->adapt_rise;
   const double x = s / tau, xa = s / tau_a;
   // exp(-xa) - exp(-x) = exp(-xa) (1 - exp(xa - x)), accurate for small s
   return -c * tau_a / (tau_a - tau) * std::exp(-xa) * -std::expm1(xa - x);
@@ -70,7 +69,10 @@ double FirstCrossing(double u0, double a, double b, double tau, double span,
   double lo = 0.0, s = hi;
   for (int it = 0; it < 200; ++it) {
     const double u = Membrane(u0, a, b, tau, s, nullptr);
-    if (u >= 1.0) hi = s; else lo = s;
+    if (u >= 1.0)
+      hi = s;
+    else
+      lo = s;
     if (hi - lo <= tol) break;
     const double du = (a + b * s - u) / tau;
     double next = du > 0.0 ? s - (u - 1.0) / du : 0.5 * (lo + hi);
@@ -98,9 +100,7 @@ double FirstCrossing(double u0, double a, double b, double tau, double span,
 struct ExpSum {
   double A, B, C, l1, D, l2;
   double g(double t) const { return A + B * t + C * std::exp(-l1 * t) + D * std::exp(-l2 * t); }
-  double d1(double t) const {
-    return B - C * l1 * std::exp(-l1 * t) - D * l2 * std::exp(-l2 * t);
-  }
+  double d1(double t) const { return B - C * l1 * std::exp(-l1 * t) - D * l2 * std::exp(-l2 * t); }
 };
 
 // Root of a monotone f on [lo, hi] with f(lo), f(hi) of opposite signs:
@@ -110,7 +110,10 @@ double Bisect(const F& f, double lo, double hi) {
   const bool up = f(hi) >= 0.0;
   for (int it = 0; it < 200 && hi - lo > 1e-15 * std::max(hi, 1e-300); ++it) {
     const double mid = 0.5 * (lo + hi);
-    if ((f(mid) >= 0.0) == up) hi = mid; else lo = mid;
+    if ((f(mid) >= 0.0) == up)
+      hi = mid;
+    else
+      lo = mid;
   }
   return hi;
 }
@@ -127,8 +130,8 @@ double FirstCrossingAdapted(double u0, double a, double b, double tau, double c,
   if (!(t0 <= span)) return kInf;
   if (t0 == 0.0) return 0.0;  // u0 >= 1
   const double kappa = tau_a / (tau_a - tau);
-  const ExpSum e{a - b * tau - 1.0, b, u0 - a + b * tau + c * kappa, 1.0 / tau,
-                 -c * kappa, 1.0 / tau_a};
+  const ExpSum e{a - b * tau - 1.0, b,          u0 - a + b * tau + c * kappa,
+                 1.0 / tau,         -c * kappa, 1.0 / tau_a};
   double pts[6];
   int n = 0;
   pts[n++] = t0;
@@ -182,10 +185,10 @@ MembraneSpan PrecomputeSpan(double span, double tau, const Adaptation& adapt) {
   return p;
 }
 
-int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, double span,
-                   double tau, double refractory, double* refractory_left,
-                   const Adaptation& adapt, double* adapt_current,
-                   void (*on_spike)(double t, void* ctx), void* ctx, const MembraneSpan* pre) {
+int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, double span, double tau,
+                   double refractory, double* refractory_left, const Adaptation& adapt,
+                   double* adapt_current, void (*on_spike)(double t, void* ctx), void* ctx,
+                   const MembraneSpan* pre) {
   const double tau_a = AdaptTau(adapt, tau);
   if (pre && !(pre->tau == tau && pre->tau_a == tau_a)) pre = nullptr;
   int spikes = 0;

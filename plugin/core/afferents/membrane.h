@@ -52,8 +52,8 @@ MembraneSpan PrecomputeSpan(double span, double tau, const Adaptation& adapt);
 inline bool FallingStaysBelow(double u0, double a, double b, double tau, double span,
                               const MembraneSpan* pre) {
   const double margin = 1e-9 * (1.0 + std::abs(u0) + std::abs(a) + std::abs(b) * (tau + span));
-  const double bound = pre && span == pre->span ? std::max(u0, u0 * pre->decay + a * pre->phi1)
-                                                : std::max(u0, a);
+  const double bound =
+      pre && span == pre->span ? std::max(u0, u0 * pre->decay + a * pre->phi1) : std::max(u0, a);
   return bound < 1.0 - margin;
 }
 
@@ -92,10 +92,9 @@ inline bool QuietWholeSpan(int nodes, double* u, const double* a, const double* 
   return true;
 }
 
-int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, double span,
-                   double tau, double refractory, double* refractory_left,
-                   const Adaptation& adapt, double* adapt_current,
-                   void (*on_spike)(double t, void* ctx), void* ctx,
+int LinearDriveLIF(int nodes, double* u, const double* a, const double* b, double span, double tau,
+                   double refractory, double* refractory_left, const Adaptation& adapt,
+                   double* adapt_current, void (*on_spike)(double t, void* ctx), void* ctx,
                    const MembraneSpan* pre = nullptr);
 
 }  // namespace mjtouch

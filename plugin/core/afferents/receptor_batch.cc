@@ -64,8 +64,8 @@ void Store(double* const* st, int slot, const V& x) {
 
 template <ReceptorClass C>
 MJTOUCH_TARGET_CLONES int ReceptorStepper::Group(const double* q1_in, const double* n0s,
-                                                 const double* n1s, double* state,
-                                                 double* spikes, double* voltage) const {
+                                                 const double* n1s, double* state, double* spikes,
+                                                 double* voltage) const {
   constexpr int ci = static_cast<int>(C);
   double* st[kLanes];
   for (int l = 0; l < kLanes; ++l) st[l] = state + static_cast<size_t>(l) * kReceptorStateSize;
@@ -76,7 +76,7 @@ MJTOUCH_TARGET_CLONES int ReceptorStepper::Group(const double* q1_in, const doub
   const V q0 = Load(st, kPrevQ);
   const V v = (q1 - q0) / dt;  // q linear over the step
   Store(st, kPrevQ, q1);
-  auto per_variant = [&](const double(&table)[kNumVariants]) {
+  auto per_variant = [&](const double (&table)[kNumVariants]) {
     V r;
     for (int l = 0; l < kLanes; ++l) r[l] = table[variant[l]];
     return r;
@@ -162,7 +162,7 @@ MJTOUCH_TARGET_CLONES int ReceptorStepper::Group(const double* q1_in, const doub
   uncommon |= Load(st, kRefractory) > 0.0;
   const MembraneSpan* pre[kLanes];
   for (int l = 0; l < kLanes; ++l) pre[l] = &step_span_[ci][variant[l]];
-  auto from_pre = [&](double MembraneSpan::*field) {
+  auto from_pre = [&](double MembraneSpan::* field) {
     V r;
     for (int l = 0; l < kLanes; ++l) r[l] = pre[l]->*field;
     return r;
@@ -172,9 +172,9 @@ MJTOUCH_TARGET_CLONES int ReceptorStepper::Group(const double* q1_in, const doub
   const V phi2 = from_pre(&MembraneSpan::phi2);
   const V adapt_decay = from_pre(&MembraneSpan::adapt_decay);
   const V w = Load(st, kAdapt);
-  const V adapt_end = w == 0.0 ? Splat(0.0)
-                               : -w * tau_a / (tau_a - tau) * adapt_decay *
-                                     from_pre(&MembraneSpan::adapt_rise);
+  const V adapt_end =
+      w == 0.0 ? Splat(0.0)
+               : -w * tau_a / (tau_a - tau) * adapt_decay * from_pre(&MembraneSpan::adapt_rise);
   V end[kMaxNodes];
   for (int k = 0; k < nodes; ++k) {
     const V u0 = Load(st, kU0 + k), bk = b[k], ak = a[k] + bk * 0.0;
@@ -224,8 +224,8 @@ MJTOUCH_TARGET_CLONES int ReceptorStepper::Group(const double* q1_in, const doub
 }
 
 int ReceptorStepper::AdvanceBatch(ReceptorClass cls, int count, const double* q_end,
-                                  unsigned long long first_stream, double* state,
-                                  double* spikes, double* voltage) const {
+                                  unsigned long long first_stream, double* state, double* spikes,
+                                  double* voltage) const {
   // The lanes take AdvanceAs's kFiltered SA1 (the kWang2016 one per
   // receptor) with 1 .. kMaxNodes heminodes.
   const bool lanes =
@@ -248,16 +248,16 @@ int ReceptorStepper::AdvanceBatch(ReceptorClass cls, int count, const double* q_
       const int r = i + j;
       switch (cls) {
         case ReceptorClass::kSA1:
-          total += Group<ReceptorClass::kSA1>(q_end + r, n0 + j, n1 + j, sg, spikes + r,
-                                              voltage + r);
+          total +=
+              Group<ReceptorClass::kSA1>(q_end + r, n0 + j, n1 + j, sg, spikes + r, voltage + r);
           break;
         case ReceptorClass::kRA:
-          total += Group<ReceptorClass::kRA>(q_end + r, n0 + j, n1 + j, sg, spikes + r,
-                                             voltage + r);
+          total +=
+              Group<ReceptorClass::kRA>(q_end + r, n0 + j, n1 + j, sg, spikes + r, voltage + r);
           break;
         default:
-          total += Group<ReceptorClass::kPC>(q_end + r, n0 + j, n1 + j, sg, spikes + r,
-                                             voltage + r);
+          total +=
+              Group<ReceptorClass::kPC>(q_end + r, n0 + j, n1 + j, sg, spikes + r, voltage + r);
       }
     }
     i += n;

@@ -37,8 +37,8 @@ void DefaultSA1Gains(Quantity q, SA1Params* p) {
     // the row's rheobase quantity (heminode 1, the largest M) before rescaling
     double mmax = 0.0;
     for (double m : p->merkel_cells) mmax = std::max(mmax, m);
-    const double rheobase = (p->threshold_v / p->resistance_ohm - p->i0_a) /
-                            (mmax * p->k0_a_per_pa);
+    const double rheobase =
+        (p->threshold_v / p->resistance_ohm - p->i0_a) / (mmax * p->k0_a_per_pa);
     p->saturation = kSA1SaturationOverRheobase * rheobase;
     p->k0_a_per_pa *= kSA1StaticScale;
     p->k1_a_s_per_pa = p->k0_a_per_pa * kSA1RateTimeS;

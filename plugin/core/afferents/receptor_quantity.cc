@@ -20,15 +20,18 @@ void Principal(const double s[6], double* l1, double* l2, double* l3) {
     double e[3] = {xx, yy, zz};
     std::sort(e, e + 3);
     *l1 = e[0];
-    if (l3) { *l2 = e[1]; *l3 = e[2]; }
+    if (l3) {
+      *l2 = e[1];
+      *l3 = e[2];
+    }
     return;
   }
   const double p2 = (xx - q) * (xx - q) + (yy - q) * (yy - q) + (zz - q) * (zz - q) + 2 * p1;
   const double p = std::sqrt(p2 / 6.0);
   const double b00 = (xx - q) / p, b11 = (yy - q) / p, b22 = (zz - q) / p;
   const double b01 = xy / p, b02 = xz / p, b12 = yz / p;
-  const double det = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
-                     b02 * (b01 * b12 - b11 * b02);
+  const double det =
+      b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02);
   const double r = std::clamp(det / 2.0, -1.0, 1.0);
   const double phi = std::acos(r) / 3.0;
   const double e1 = q + 2 * p * std::cos(phi + 2.0943951023931957);
@@ -61,12 +64,30 @@ const char* QuantityName(Quantity q) {
 }
 
 bool ParseQuantity(const std::string& s, Quantity* q) {
-  if (s == "szz") { *q = Quantity::kCompressiveSzz; return true; }
-  if (s == "maxcomp") { *q = Quantity::kMaxCompressive; return true; }
-  if (s == "vonmises") { *q = Quantity::kVonMises; return true; }
-  if (s == "maxshear") { *q = Quantity::kMaxShear; return true; }
-  if (s == "sed") { *q = Quantity::kStrainEnergy; return true; }
-  if (s == "strain") { *q = Quantity::kCompressiveStrain; return true; }
+  if (s == "szz") {
+    *q = Quantity::kCompressiveSzz;
+    return true;
+  }
+  if (s == "maxcomp") {
+    *q = Quantity::kMaxCompressive;
+    return true;
+  }
+  if (s == "vonmises") {
+    *q = Quantity::kVonMises;
+    return true;
+  }
+  if (s == "maxshear") {
+    *q = Quantity::kMaxShear;
+    return true;
+  }
+  if (s == "sed") {
+    *q = Quantity::kStrainEnergy;
+    return true;
+  }
+  if (s == "strain") {
+    *q = Quantity::kCompressiveStrain;
+    return true;
+  }
   return false;
 }
 

@@ -10,16 +10,22 @@ namespace mjtouch {
 namespace receptor_state {
 
 enum {
-  kU0 = 0, kU1, kU2, kU3,  // membranes over threshold (SA1: one per heminode)
-  kRefractory,             // refractory time left, s
-  kPrevQ,                  // q at the end of the previous step
-  kHasPrev,                // 1 once primed
-  kRate,                   // exponentially smoothed rate, Hz
-  kNoise,                  // Ornstein-Uhlenbeck noise, units of threshold
-  kCount,                  // steps drawn from the noise generator
-  kF0, kF1, kF2, kF3,      // filter states (SA1, RA: 2, PC: 4)
-  kAdapt,                  // adaptation current, threshold units
-  kVariant                 // population variant index
+  kU0 = 0,
+  kU1,
+  kU2,
+  kU3,          // membranes over threshold (SA1: one per heminode)
+  kRefractory,  // refractory time left, s
+  kPrevQ,       // q at the end of the previous step
+  kHasPrev,     // 1 once primed
+  kRate,        // exponentially smoothed rate, Hz
+  kNoise,       // Ornstein-Uhlenbeck noise, units of threshold
+  kCount,       // steps drawn from the noise generator
+  kF0,
+  kF1,
+  kF2,
+  kF3,      // filter states (SA1, RA: 2, PC: 4)
+  kAdapt,   // adaptation current, threshold units
+  kVariant  // population variant index
 };
 static_assert(kVariant + 1 == kReceptorStateSize, "receptor state layout");
 constexpr int kMaxNodes = 4;  // SA1 heminodes

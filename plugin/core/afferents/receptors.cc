@@ -96,8 +96,8 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
   seed_hash_ = SplitMix64(p.noise.seed);
   sa1_scale_ = p.sa1.resistance_ohm / p.sa1.threshold_v;
   for (int c = 0; c < kNumClasses; ++c)
-    noise_gain_[c] = NoiseSd(p, static_cast<ReceptorClass>(c)) *
-                     std::sqrt(1.0 - noise_rho_ * noise_rho_);
+    noise_gain_[c] =
+        NoiseSd(p, static_cast<ReceptorClass>(c)) * std::sqrt(1.0 - noise_rho_ * noise_rho_);
   for (int level = 0; level < kMaxSubLevels; ++level) {
     sub_error_den_[level] = 4.0 * p.ra.saturation * std::ldexp(1.0, 2 * level);
     sub_error_skip_[level] = 0.99e-4 * sub_error_den_[level];
@@ -125,8 +125,8 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
       sa1_m_[v][k] = p.sa1.merkel_cells[k] * ReceptorVariant(ReceptorClass::kSA1, v).gain;
 }
 
-void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
-                   unsigned long long stream, double* st) {
+void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q, unsigned long long stream,
+                   double* st) {
   std::fill(st, st + kReceptorStateSize, 0.0);
   st[kPrevQ] = q;
   st[kHasPrev] = 1.0;
@@ -162,8 +162,8 @@ void FilterStep(const double* phi, const double* gamma, const double* c, double 
 }
 }  // namespace
 
-int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long stream,
-                             double* st, double* voltage) const {
+int ReceptorStepper::Advance(ReceptorClass cls, double q1, unsigned long long stream, double* st,
+                             double* voltage) const {
   switch (cls) {
     case ReceptorClass::kSA1: return AdvanceAs<ReceptorClass::kSA1>(q1, stream, st, voltage);
     case ReceptorClass::kRA: return AdvanceAs<ReceptorClass::kRA>(q1, stream, st, voltage);
@@ -183,8 +183,8 @@ void ReceptorStepper::Noise(int ci, unsigned long long stream, double* st, doubl
   }
 }
 
-void ReceptorStepper::NoiseRun(int ci, int n, unsigned long long stream, double* state,
-                               double* n0, double* n1) const {
+void ReceptorStepper::NoiseRun(int ci, int n, unsigned long long stream, double* state, double* n0,
+                               double* n1) const {
   double u1[kNoiseRun], u2[kNoiseRun];
   for (int i = 0; i < n; ++i) {
     double* st = state + static_cast<size_t>(i) * kReceptorStateSize;
@@ -328,8 +328,7 @@ int ReceptorStepper::FromDrive(const Drive& d, double* st, double* voltage) cons
   return spikes;
 }
 
-int ReceptorStepper::Finish(ReceptorClass cls, const Drive& d, double* st,
-                            double* voltage) const {
+int ReceptorStepper::Finish(ReceptorClass cls, const Drive& d, double* st, double* voltage) const {
   const double dt = dt_;
   const int ci = static_cast<int>(cls);
   const int variant = d.variant;
@@ -450,11 +449,11 @@ bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
   double noise_margin = 0.0;
   const double sd = NoiseSd(p_, cls);
   if (sd > 0.0) {
-    const double tau_m = var.tau * (cls == ReceptorClass::kSA1
-                                        ? p_.sa1.resistance_ohm * p_.sa1.capacitance_f
-                                        : cls == ReceptorClass::kRA ? p_.ra.tau_s : p_.pc.tau_s);
-    noise_margin = kIdleNoiseSds * sd *
-                   std::sqrt(p_.noise.tau_s / (p_.noise.tau_s + tau_m));
+    const double tau_m =
+        var.tau * (cls == ReceptorClass::kSA1  ? p_.sa1.resistance_ohm * p_.sa1.capacitance_f
+                   : cls == ReceptorClass::kRA ? p_.ra.tau_s
+                                               : p_.pc.tau_s);
+    noise_margin = kIdleNoiseSds * sd * std::sqrt(p_.noise.tau_s / (p_.noise.tau_s + tau_m));
   }
   // Filters of chained real poles: no state entry ever exceeds the sum of
   // the current ones (each propagator entry is (w t)^k / k! exp(-w t) <= 1),
@@ -476,8 +475,8 @@ bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
     const int nodes = static_cast<int>(std::min<size_t>(s.merkel_cells.size(), kMaxNodes));
     double mmax = 0.0;
     for (int k = 0; k < nodes; ++k) mmax = std::max(mmax, s.merkel_cells[k] * gain_scale);
-    const double dyn = s.model == SA1Model::kFiltered
-                           ? scale * mmax * s.k1_a_s_per_pa * filter_bound(sa1_) : 0.0;
+    const double dyn =
+        s.model == SA1Model::kFiltered ? scale * mmax * s.k1_a_s_per_pa * filter_bound(sa1_) : 0.0;
     const double bias = scale * s.i0_a;  // drive at q = 0
     if (!(bias + dyn + noise_margin < 1.0)) return false;
     for (int k = 0; k < nodes; ++k)

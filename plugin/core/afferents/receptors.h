@@ -21,8 +21,14 @@ const char* ClassName(ReceptorClass c);
 // kStrainEnergy (SED, J/m^3) and kCompressiveStrain (most compressive
 // principal strain, Wang 2016) need the material at the receptor: pipeline/step.cc
 // converts them (ReceptorQuantity returns NaN for them).
-enum class Quantity { kCompressiveSzz, kMaxCompressive, kVonMises, kMaxShear, kStrainEnergy,
-                      kCompressiveStrain };
+enum class Quantity {
+  kCompressiveSzz,
+  kMaxCompressive,
+  kVonMises,
+  kMaxShear,
+  kStrainEnergy,
+  kCompressiveStrain
+};
 const char* QuantityName(Quantity q);
 bool ParseQuantity(const std::string& s, Quantity* q);
 // Compressive-positive receptor quantity from a stress tensor (Voigt, Pa).
@@ -50,14 +56,14 @@ enum class SA1Model { kFiltered = 0, kWang2016 = 1 };
 struct SA1Params {
   SA1Model model = SA1Model::kFiltered;
   std::vector<double> merkel_cells = {8, 5, 3, 1};  // M_k per heminode
-  double k0_a_per_pa = 1.40e-16;     // static gain (set by DefaultSA1Gains)
-  double k1_a_s_per_pa = 1.68e-16;   // dynamic gain (set by DefaultSA1Gains)
-  double i0_a = 4.94e-12;            // bias current (Wang 2016, Table 1)
-  double capacitance_f = 10e-12;     // C
-  double resistance_ohm = 1.5e9;     // R
-  double threshold_v = 30e-3;        // U_th
-  double refractory_s = 1e-3;        // absolute refractory period
-  double lowpass_hz = 30.0;          // kFiltered: corner of the rate term
+  double k0_a_per_pa = 1.40e-16;                    // static gain (set by DefaultSA1Gains)
+  double k1_a_s_per_pa = 1.68e-16;                  // dynamic gain (set by DefaultSA1Gains)
+  double i0_a = 4.94e-12;                           // bias current (Wang 2016, Table 1)
+  double capacitance_f = 10e-12;                    // C
+  double resistance_ohm = 1.5e9;                    // R
+  double threshold_v = 30e-3;                       // U_th
+  double refractory_s = 1e-3;                       // absolute refractory period
+  double lowpass_hz = 30.0;                         // kFiltered: corner of the rate term
   // kFiltered: the stress is saturated before the heminodes, q_s = q / (1 +
   // |q| / saturation) (units of q; 0: none), TouchSim's saturation form
   // (Saal et al. 2017) on the input: the SA1 rate grows about linearly with
@@ -85,11 +91,12 @@ constexpr double kSA1SaturationOverRheobase = 4.5;
 // RA (Meissner, FA1): the rate of change of q, low-passed by two equal real
 // poles at `lowpass_hz`, y = w^2 / (s + w)^2 dq/dt (Pa/s), full-wave
 // rectified (fires on loading and unloading, silent in a steady hold):
-// tau dU/dt = -U + |sat(gain y)| - w_adapt, threshold 1, sat(d) = d s / (s + |d|). The low-pass sets the
-// best frequency (tens of Hz; Johansson et al. 1982), the membrane time
-// constant is in TouchSim's 3-9 ms range (Saal et al. 2017).
+// tau dU/dt = -U + |sat(gain y)| - w_adapt, threshold 1, sat(d) = d s / (s + |d|). The low-pass
+// sets the best frequency (tens of Hz; Johansson et al. 1982), the membrane time constant is in
+// TouchSim's 3-9 ms range (Saal et al. 2017).
 struct RAParams {
-  // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 100 Pa at 40 Hz.
+  // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 100 Pa at 40
+  // Hz.
   double gain_s_per_pa = 5.92e-5;
   double lowpass_hz = 40.0;
   double tau_s = 5e-3;
@@ -107,7 +114,8 @@ struct RAParams {
 // 1-2 ms) bound the high one. Half-wave rectified (one spike per cycle, phase
 // locked): tau dU/dt = -U + gain max(0, y) - w_adapt, threshold 1.
 struct PCParams {
-  // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 0.5 Pa at 250 Hz.
+  // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 0.5 Pa at 250
+  // Hz.
   double gain_s2_per_pa = 4.12e-6;
   double highpass_hz = 150.0;
   double lowpass_hz = 250.0;
@@ -206,8 +214,8 @@ class ReceptorStepper {
   Filter sa1_, ra_, pc_;
   Filter ra_sub_[kMaxSubLevels];  // RA filter over dt / 2^k, k = 1..
   double noise_rho_, rate_decay_;
-  unsigned long long seed_hash_;  // SplitMix64 of the noise seed
-  double sa1_scale_;              // SA1: R / U_th, A -> threshold units
+  unsigned long long seed_hash_;          // SplitMix64 of the noise seed
+  double sa1_scale_;                      // SA1: R / U_th, A -> threshold units
   double noise_gain_[kNumClasses];        // sd sqrt(1 - rho^2): the OU innovation
   double sub_error_den_[kMaxSubLevels];   // RA sub-steps: 4 s 4^k
   double sub_error_skip_[kMaxSubLevels];  // 0.99e-4 of it
@@ -241,14 +249,14 @@ class ReceptorStepper {
   int FromDriveAs(ReceptorClass cls, const Drive& d, double* state, double* voltage) const;
   int Finish(ReceptorClass cls, const Drive& d, double* state, double* voltage) const;
   template <ReceptorClass C>
-  int Group(const double* q_end, const double* n0, const double* n1, double* state,
-            double* spikes, double* voltage) const;
+  int Group(const double* q_end, const double* n0, const double* n1, double* state, double* spikes,
+            double* voltage) const;
 };
 
 // The state of a receptor at rest with quantity q (first call): filters at
 // rest, noise drawn from its stationary distribution.
-void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q,
-                   unsigned long long stream, double* state);
+void PrimeReceptor(const ReceptorParams& p, ReceptorClass cls, double q, unsigned long long stream,
+                   double* state);
 // Exponentially smoothed firing rate (Hz) held in the state.
 double ReceptorRate(const double* state);
 

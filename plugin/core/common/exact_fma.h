@@ -50,7 +50,7 @@ inline __attribute__((always_inline)) VF FmaFromDouble(VF a, VF b, VF c) {
   const VU bits = reinterpret_cast<VU>(s);
   const VU move = reinterpret_cast<VU>(e != 0) & ~bits & 1;  // inexact, last bit even
   const VU same_sign = ~(reinterpret_cast<VU>(e) ^ bits) >> 63;
-  const VU step = (same_sign << 1) - 1;                     // +1 away from zero, else -1
+  const VU step = (same_sign << 1) - 1;  // +1 away from zero, else -1
   const VU odd = bits + (step & (0 - move));
   return __builtin_convertvector(reinterpret_cast<VD>(odd), VF);
 }

@@ -50,59 +50,60 @@ inline __attribute__((always_inline)) void ForEachGroup(int n, int span, int in_
 // stride): butterfly j reads and writes elements j + r n/R alike, so each
 // reads its inputs before writing them, and none reads another's outputs.
 template <int R, bool kInverse, typename T, int kOut = R, bool kInPlace = false>
-MJTOUCH_TARGET_CLONES
-void Stage(int n, int span, const T* tw_re, const T* tw_im, const T* in_re, const T* in_im,
-           int in_stride, T* out_re, T* out_im, int out_stride, int batch) {
-  ForEachGroup<R>(n, span, in_stride, out_stride, [&](int jm, size_t io, size_t oo,
-                                                      size_t in_step, size_t out_step)
-                                                      __attribute__((always_inline)) {
-    T wr[R], wi[R];
-    for (int r = 0; r < R; ++r) {
-      wr[r] = tw_re[jm * R + r];
-      wi[r] = kInverse ? -tw_im[jm * R + r] : tw_im[jm * R + r];
-    }
-    const T* ir = kInPlace ? nullptr : in_re + io;
-    const T* ii = kInPlace ? nullptr : in_im + io;
-    if (jm != 0) {
-      Butterflies<R, kInverse, true, T, kOut, kInPlace>(ir, ii, in_step, out_re + oo,
-                                                        out_im + oo, out_step, wr, wi, batch);
-    } else {
-      Butterflies<R, kInverse, false, T, kOut, kInPlace>(ir, ii, in_step, out_re + oo,
-                                                         out_im + oo, out_step, wr, wi, batch);
-    }
-  });
+MJTOUCH_TARGET_CLONES void Stage(int n, int span, const T* tw_re, const T* tw_im, const T* in_re,
+                                 const T* in_im, int in_stride, T* out_re, T* out_im,
+                                 int out_stride, int batch) {
+  ForEachGroup<R>(n, span, in_stride, out_stride,
+                  [&](int jm, size_t io, size_t oo, size_t in_step, size_t out_step)
+                      __attribute__((always_inline)) {
+                        T wr[R], wi[R];
+                        for (int r = 0; r < R; ++r) {
+                          wr[r] = tw_re[jm * R + r];
+                          wi[r] = kInverse ? -tw_im[jm * R + r] : tw_im[jm * R + r];
+                        }
+                        const T* ir = kInPlace ? nullptr : in_re + io;
+                        const T* ii = kInPlace ? nullptr : in_im + io;
+                        if (jm != 0) {
+                          Butterflies<R, kInverse, true, T, kOut, kInPlace>(
+                              ir, ii, in_step, out_re + oo, out_im + oo, out_step, wr, wi, batch);
+                        } else {
+                          Butterflies<R, kInverse, false, T, kOut, kInPlace>(
+                              ir, ii, in_step, out_re + oo, out_im + oo, out_step, wr, wi, batch);
+                        }
+                      });
 }
 
 // A fused stage (FusedButterflies): twa / twb, stages A's and B's tables.
 template <int Ra, int Rb, bool kInverse, bool kInPlace, bool kHalfA, typename T>
-MJTOUCH_TARGET_CLONES
-void FusedStage(int n, int span, const T* twa_re, const T* twa_im, const T* twb_re,
-                const T* twb_im, const T* in_re, const T* in_im, int in_stride, T* out_re,
-                T* out_im, int out_stride, int batch) {
-  ForEachGroup<Ra * Rb>(n, span, in_stride, out_stride, [&](int jm, size_t io, size_t oo,
-                                                            size_t in_step, size_t out_step)
-                                                            __attribute__((always_inline)) {
-    T wa_r[Ra], wa_i[Ra], wb_r[Ra][Rb], wb_i[Ra][Rb];
-    for (int r = 0; r < Ra; ++r) {
-      wa_r[r] = twa_re[jm * Ra + r];
-      wa_i[r] = kInverse ? -twa_im[jm * Ra + r] : twa_im[jm * Ra + r];
-      for (int q = 0; q < Rb; ++q) {
-        const int e = (r * span + jm) * Rb + q;
-        wb_r[r][q] = twb_re[e];
-        wb_i[r][q] = kInverse ? -twb_im[e] : twb_im[e];
-      }
-    }
-    const T* ir = kInPlace ? nullptr : in_re + io;
-    const T* ii = kInPlace ? nullptr : in_im + io;
-    if (jm != 0) {
-      if constexpr (!kHalfA)
-        FusedButterflies<Ra, Rb, kInverse, false, false, kInPlace>(
-            ir, ii, in_step, out_re + oo, out_im + oo, out_step, wa_r, wa_i, wb_r, wb_i, batch);
-    } else {
-      FusedButterflies<Ra, Rb, kInverse, true, kHalfA, kInPlace>(
-          ir, ii, in_step, out_re + oo, out_im + oo, out_step, wa_r, wa_i, wb_r, wb_i, batch);
-    }
-  });
+MJTOUCH_TARGET_CLONES void FusedStage(int n, int span, const T* twa_re, const T* twa_im,
+                                      const T* twb_re, const T* twb_im, const T* in_re,
+                                      const T* in_im, int in_stride, T* out_re, T* out_im,
+                                      int out_stride, int batch) {
+  ForEachGroup<Ra * Rb>(
+      n, span, in_stride, out_stride,
+      [&](int jm, size_t io, size_t oo, size_t in_step,
+          size_t out_step) __attribute__((always_inline)) {
+        T wa_r[Ra], wa_i[Ra], wb_r[Ra][Rb], wb_i[Ra][Rb];
+        for (int r = 0; r < Ra; ++r) {
+          wa_r[r] = twa_re[jm * Ra + r];
+          wa_i[r] = kInverse ? -twa_im[jm * Ra + r] : twa_im[jm * Ra + r];
+          for (int q = 0; q < Rb; ++q) {
+            const int e = (r * span + jm) * Rb + q;
+            wb_r[r][q] = twb_re[e];
+            wb_i[r][q] = kInverse ? -twb_im[e] : twb_im[e];
+          }
+        }
+        const T* ir = kInPlace ? nullptr : in_re + io;
+        const T* ii = kInPlace ? nullptr : in_im + io;
+        if (jm != 0) {
+          if constexpr (!kHalfA)
+            FusedButterflies<Ra, Rb, kInverse, false, false, kInPlace>(
+                ir, ii, in_step, out_re + oo, out_im + oo, out_step, wa_r, wa_i, wb_r, wb_i, batch);
+        } else {
+          FusedButterflies<Ra, Rb, kInverse, true, kHalfA, kInPlace>(
+              ir, ii, in_step, out_re + oo, out_im + oo, out_step, wa_r, wa_i, wb_r, wb_i, batch);
+        }
+      });
 }
 
 // The fused pairs FftPlan makes: (2, 3) and (3, 3).
@@ -114,20 +115,30 @@ void RunFusedStage(int ra, int n, int span, const T* twa_re, const T* twa_im, co
     FusedStage<2, 3, kInverse, kInPlace, kHalfA>(n, span, twa_re, twa_im, twb_re, twb_im, ir, ii,
                                                  is, orr, oi, os, batch);
   } else if constexpr (!kHalfA) {
-    FusedStage<3, 3, kInverse, kInPlace, false>(n, span, twa_re, twa_im, twb_re, twb_im, ir, ii,
-                                                is, orr, oi, os, batch);
+    FusedStage<3, 3, kInverse, kInPlace, false>(n, span, twa_re, twa_im, twb_re, twb_im, ir, ii, is,
+                                                orr, oi, os, batch);
   }
 }
 
 template <bool kInverse, bool kInPlace, typename T>
-void RunStage(int radix, int n, int span, const T* twr, const T* twi, const T* ir,
-              const T* ii, int is, T* orr, T* oi, int os, int batch) {
+void RunStage(int radix, int n, int span, const T* twr, const T* twi, const T* ir, const T* ii,
+              int is, T* orr, T* oi, int os, int batch) {
   switch (radix) {
-    case 2: Stage<2, kInverse, T, 2, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
-    case 3: Stage<3, kInverse, T, 3, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
-    case 4: Stage<4, kInverse, T, 4, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
-    case 8: Stage<8, kInverse, T, 8, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
-    default: Stage<5, kInverse, T, 5, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch); break;
+    case 2:
+      Stage<2, kInverse, T, 2, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      break;
+    case 3:
+      Stage<3, kInverse, T, 3, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      break;
+    case 4:
+      Stage<4, kInverse, T, 4, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      break;
+    case 8:
+      Stage<8, kInverse, T, 8, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      break;
+    default:
+      Stage<5, kInverse, T, 5, kInPlace>(n, span, twr, twi, ir, ii, is, orr, oi, os, batch);
+      break;
   }
 }
 
@@ -135,9 +146,9 @@ void RunStage(int radix, int n, int span, const T* twr, const T* twi, const T* i
 // j + 3 n/4 are zero: the butterfly of Butterflies<4> with x2 = x3 = 0
 // dropped, which rounds alike (x + 0 and x - 0 are x), reading half the data.
 template <bool kInverse, typename T>
-MJTOUCH_TARGET_CLONES
-void FirstStage4HalfInput(int n, const T* in_re, const T* in_im, int in_stride, T* out_re,
-                          T* out_im, int out_stride, int batch) {
+MJTOUCH_TARGET_CLONES void FirstStage4HalfInput(int n, const T* in_re, const T* in_im,
+                                                int in_stride, T* out_re, T* out_im, int out_stride,
+                                                int batch) {
   constexpr T sg = kInverse ? T(-1) : T(1);
   const int m = n / 4;
   const size_t in_step = static_cast<size_t>(m) * in_stride;
@@ -170,9 +181,11 @@ void FirstStage4HalfInput(int n, const T* in_re, const T* in_im, int in_stride, 
 // recomputed from their two inputs (loads from L1) rather than held: 32
 // intermediates per lane would not fit in the registers.
 template <int r, bool kInverse, typename T>
-inline __attribute__((always_inline)) void Half4Then8(
-    const T* __restrict a_r, const T* __restrict a_i, size_t in_step, T* __restrict o_r,
-    T* __restrict o_i, size_t os, const T (&wb_r)[4][8], const T (&wb_i)[4][8], int batch) {
+inline __attribute__((always_inline)) void Half4Then8(const T* __restrict a_r,
+                                                      const T* __restrict a_i, size_t in_step,
+                                                      T* __restrict o_r, T* __restrict o_i,
+                                                      size_t os, const T (&wb_r)[4][8],
+                                                      const T (&wb_i)[4][8], int batch) {
   constexpr T sg = kInverse ? T(-1) : T(1);
   T w_r[8], w_i[8];
   for (int q = 0; q < 8; ++q) {
@@ -215,9 +228,9 @@ inline __attribute__((always_inline)) void Half4Then8(
 }
 
 template <bool kInverse, typename T>
-MJTOUCH_TARGET_CLONES
-void FirstStages4Half8(int n, const T* tw8_re, const T* tw8_im, const T* in_re, const T* in_im,
-                       int in_stride, T* out_re, T* out_im, int out_stride, int batch) {
+MJTOUCH_TARGET_CLONES void FirstStages4Half8(int n, const T* tw8_re, const T* tw8_im,
+                                             const T* in_re, const T* in_im, int in_stride,
+                                             T* out_re, T* out_im, int out_stride, int batch) {
   const int m = n / 32;
   const size_t in_step = static_cast<size_t>(m) * in_stride;
   const size_t os = static_cast<size_t>(out_stride);
@@ -244,9 +257,9 @@ void FirstStages4Half8(int n, const T* tw8_re, const T* tw8_im, const T* in_re, 
 // spectrum with a kernel's fused into the inverse transform's first pass,
 // the same products (the same bits) as multiplying beforehand.
 template <int R, bool kInverse, typename T>
-MJTOUCH_TARGET_CLONES
-void FirstStageScaled(int n, const T* k, int ks, const T* in_re, const T* in_im, int in_stride,
-                      T* out_re, T* out_im, int out_stride, int batch) {
+MJTOUCH_TARGET_CLONES void FirstStageScaled(int n, const T* k, int ks, const T* in_re,
+                                            const T* in_im, int in_stride, T* out_re, T* out_im,
+                                            int out_stride, int batch) {
   const int m = n / R;
   const size_t in_step = static_cast<size_t>(m) * in_stride;
   const size_t k_step = static_cast<size_t>(m) * ks;
@@ -254,10 +267,9 @@ void FirstStageScaled(int n, const T* k, int ks, const T* in_re, const T* in_im,
   for (int j = 0; j < m; ++j) {
     const size_t io = static_cast<size_t>(j) * in_stride;
     const size_t oo = static_cast<size_t>(j) * R * out_stride;
-    Butterflies<R, kInverse, false, T, R, false, true>(in_re + io, in_im + io, in_step,
-                                                       out_re + oo, out_im + oo, out_stride, w,
-                                                       w, batch, k + static_cast<size_t>(j) * ks,
-                                                       k_step);
+    Butterflies<R, kInverse, false, T, R, false, true>(in_re + io, in_im + io, in_step, out_re + oo,
+                                                       out_im + oo, out_stride, w, w, batch,
+                                                       k + static_cast<size_t>(j) * ks, k_step);
   }
 }
 
@@ -312,8 +324,7 @@ inline void CopyRows(const T* src, size_t src_stride, int rows, int cols, T* dst
 }
 
 // dst[c * dst_stride + r] = src[r * src_stride + c], r < rows, c < cols.
-void Transpose(const double* src, int src_stride, int rows, int cols, double* dst,
-               int dst_stride) {
+void Transpose(const double* src, int src_stride, int rows, int cols, double* dst, int dst_stride) {
   constexpr int kBlock = 32;
   for (int r0 = 0; r0 < rows; r0 += kBlock) {
     const int r1 = std::min(rows, r0 + kBlock);
@@ -321,7 +332,8 @@ void Transpose(const double* src, int src_stride, int rows, int cols, double* ds
       const int c1 = std::min(cols, c0 + kBlock);
       for (int r = r0; r < r1; ++r)
         for (int c = c0; c < c1; ++c)
-          dst[static_cast<size_t>(c) * dst_stride + r] = src[static_cast<size_t>(r) * src_stride + c];
+          dst[static_cast<size_t>(c) * dst_stride + r] =
+              src[static_cast<size_t>(r) * src_stride + c];
     }
   }
 }
@@ -349,7 +361,10 @@ FftPlan::FftPlan(int n) : n_(n) {
   // less; the first stage stays radix 4 for Transform's half-input skip).
   // Measured: ConvolveReal<float> 160 x 160 0.94x, 160 x 150 0.97x time.
   int p2 = 0;
-  while (rest % 2 == 0) { rest /= 2; ++p2; }
+  while (rest % 2 == 0) {
+    rest /= 2;
+    ++p2;
+  }
   if (p2 >= 5 && p2 % 2 == 1) {
     for (int k = 0; k < (p2 - 3) / 2; ++k) radices.push_back(4);
     radices.push_back(8);
@@ -357,8 +372,14 @@ FftPlan::FftPlan(int n) : n_(n) {
   }
   for (; p2 >= 2; p2 -= 2) radices.push_back(4);
   if (p2 == 1) radices.push_back(2);
-  while (rest % 3 == 0) { radices.push_back(3); rest /= 3; }
-  while (rest % 5 == 0) { radices.push_back(5); rest /= 5; }
+  while (rest % 3 == 0) {
+    radices.push_back(3);
+    rest /= 3;
+  }
+  while (rest % 5 == 0) {
+    radices.push_back(5);
+    rest /= 5;
+  }
   int span = 1;
   for (int R : radices) {
     Stage s;
@@ -471,8 +492,8 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
     if (half_4_8 && first) {
       const Stage& s8 = stages_[1];
       WithFlag(inverse, [&](auto inv) {
-        FirstStages4Half8<inv>(n_, Tables<T>(s8.tw_re, s8.tw_re_f),
-                               Tables<T>(s8.tw_im, s8.tw_im_f), ir, ii, is, orr, oi, os, batch);
+        FirstStages4Half8<inv>(n_, Tables<T>(s8.tw_re, s8.tw_re_f), Tables<T>(s8.tw_im, s8.tw_im_f),
+                               ir, ii, is, orr, oi, os, batch);
       });
     } else if (s.ra != 0) {
       const T* tw2r = Tables<T>(s.tw2_re, s.tw2_re_f);
@@ -480,11 +501,11 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
       const bool half = half_input && first;  // (ra 2: SkipsUpperHalf)
       WithFlags(inverse, in_place, [&](auto inv, auto ip) {
         if (half) {
-          RunFusedStage<inv, false, true>(s.ra, n_, s.span, twr, twi, tw2r, tw2i, ir, ii, is,
-                                          orr, oi, os, batch);
+          RunFusedStage<inv, false, true>(s.ra, n_, s.span, twr, twi, tw2r, tw2i, ir, ii, is, orr,
+                                          oi, os, batch);
         } else {
-          RunFusedStage<inv, ip, false>(s.ra, n_, s.span, twr, twi, tw2r, tw2i, ir, ii, is, orr,
-                                        oi, os, batch);
+          RunFusedStage<inv, ip, false>(s.ra, n_, s.span, twr, twi, tw2r, tw2i, ir, ii, is, orr, oi,
+                                        os, batch);
         }
       });
     } else if (last_part && &s == &stages_.back()) {
@@ -498,9 +519,8 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
     } else if (half_input && first && s.radix == 2) {
       FirstStage2HalfInput(n_, ir, ii, is, orr, oi, os, batch);
     } else if (half_input && first) {
-      WithFlag(inverse, [&](auto inv) {
-        FirstStage4HalfInput<inv>(n_, ir, ii, is, orr, oi, os, batch);
-      });
+      WithFlag(inverse,
+               [&](auto inv) { FirstStage4HalfInput<inv>(n_, ir, ii, is, orr, oi, os, batch); });
     } else {
       WithFlags(inverse, in_place, [&](auto inv, auto ip) {
         RunStage<inv, ip>(s.radix, n_, s.span, twr, twi, ir, ii, is, orr, oi, os, batch);
@@ -518,19 +538,18 @@ void FftPlan::Transform(T* re, T* im, int batch, int stride, bool inverse, T* sr
     CopyRows(sim, scratch_stride, rows, batch, im, stride);
   }
 }
-template void FftPlan::Transform(double*, double*, int, int, bool, double*, double*, int,
-                                 int, const double*, int) const;
+template void FftPlan::Transform(double*, double*, int, int, bool, double*, double*, int, int,
+                                 const double*, int) const;
 template void FftPlan::Transform(float*, float*, int, int, bool, float*, float*, int, int,
                                  const float*, int) const;
 
 using fft_detail::PaddedStride;
 using fft_detail::SplitScratch;
 
-Fft2D::Fft2D(int nx, int ny)
-    : nx_(nx), ny_(ny), spec_stride_(PaddedStride(ny)), px_(nx), py_(ny) {}
+Fft2D::Fft2D(int nx, int ny) : nx_(nx), ny_(ny), spec_stride_(PaddedStride(ny)), px_(nx), py_(ny) {}
 
-void Fft2D::Forward(const double* re, const double* im, int stride, int rows, int cols, double* spec_re,
-                    double* spec_im, std::vector<double>* scratch) const {
+void Fft2D::Forward(const double* re, const double* im, int stride, int rows, int cols,
+                    double* spec_re, double* spec_im, std::vector<double>* scratch) const {
   const int lw = PaddedStride(cols);
   const size_t W = static_cast<size_t>(ny_) * lw;
   double *wr, *wi, *sr, *si;
@@ -550,8 +569,8 @@ void Fft2D::Forward(const double* re, const double* im, int stride, int rows, in
   px_.Transform(spec_re, spec_im, ny_, ls, false, sr, si);
 }
 
-void Fft2D::Inverse(double* spec_re, double* spec_im, int rows, int cols, double* re, double* im, int stride,
-                    std::vector<double>* scratch) const {
+void Fft2D::Inverse(double* spec_re, double* spec_im, int rows, int cols, double* re, double* im,
+                    int stride, std::vector<double>* scratch) const {
   const int lw = PaddedStride(cols);
   const size_t W = static_cast<size_t>(ny_) * lw;
   double *wr, *wi, *sr, *si;

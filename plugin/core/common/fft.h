@@ -62,7 +62,7 @@ class FftPlan {
     // as one in registers (fft.cc's FusedStage); tw: the first's table,
     // tw2 the second's.
     int ra = 0;
-    std::vector<double> tw_re, tw_im;  // span x radix: exp(-2 pi i r j / (span radix))
+    std::vector<double> tw_re, tw_im;     // span x radix: exp(-2 pi i r j / (span radix))
     std::vector<float> tw_re_f, tw_im_f;  // the same, rounded to float
     std::vector<double> tw2_re, tw2_im;
     std::vector<float> tw2_re_f, tw2_im_f;
@@ -85,8 +85,8 @@ class Fft2D {
   size_t spectrum_size() const { return static_cast<size_t>(nx_) * spec_stride_; }
 
   // Input re/im[y * stride + x], y < rows, x < cols (im may be null: zero).
-  void Forward(const double* re, const double* im, int stride, int rows, int cols,
-               double* spec_re, double* spec_im, std::vector<double>* scratch) const;
+  void Forward(const double* re, const double* im, int stride, int rows, int cols, double* spec_re,
+               double* spec_im, std::vector<double>* scratch) const;
   // Destroys the spectrum; writes re/im[y * stride + x] for y < rows,
   // x < cols only (im may be null). No 1/(nx ny) factor.
   void Inverse(double* spec_re, double* spec_im, int rows, int cols, double* re, double* im,
@@ -115,8 +115,8 @@ class Fft2D {
   // lanes are independent, so the same bits for any thread count).
   template <typename T>
   void ConvolveReal(const double* in, int in_stride, int in_rows, int in_cols, const T* k_hat,
-                    int out_rows, int out_cols, double* out, int out_stride, T* spec_re,
-                    T* spec_im, std::vector<T>* scratch, int threads) const;
+                    int out_rows, int out_cols, double* out, int out_stride, T* spec_re, T* spec_im,
+                    std::vector<T>* scratch, int threads) const;
   // The same with row stride nx (arrays of the full transform size).
   void Forward(const double* re, const double* im, int rows, int cols, double* spec_re,
                double* spec_im, std::vector<double>* scratch) const {
@@ -139,8 +139,8 @@ class Fft2D {
   };
   template <typename T>
   void ForwardColumns(const double* re, int stride, int rows, int cols, int c0, int c1, T* wr,
-                      T* wi, int lw, const Slab* slabs, int nslabs, T* spec_re, T* spec_im,
-                      T* sr, T* si) const;
+                      T* wi, int lw, const Slab* slabs, int nslabs, T* spec_re, T* spec_im, T* sr,
+                      T* si) const;
   template <typename T>
   void ForwardLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr, T* si) const;
   template <typename T>

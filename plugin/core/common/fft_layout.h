@@ -32,14 +32,14 @@ typedef double V4d __attribute__((vector_size(32)));
 // Macros, not functions: 32-byte vectors passed by value warn of an ABI
 // change (-Wpsabi) in the SSE2 build.
 #define MJTOUCH_LOAD(v, p) std::memcpy(&(v), (p), sizeof(v))
-#define MJTOUCH_STORE(p, v)       \
-  do {                            \
-    const auto tmp_ = (v);        \
+#define MJTOUCH_STORE(p, v)                \
+  do {                                     \
+    const auto tmp_ = (v);                 \
     std::memcpy((p), &tmp_, sizeof(tmp_)); \
   } while (0)
 
-inline __attribute__((always_inline)) void Block(const float* src, size_t ss, float* dst,
-                                                 size_t ds) {
+inline
+    __attribute__((always_inline)) void Block(const float* src, size_t ss, float* dst, size_t ds) {
   V8f r[8];
   for (int k = 0; k < 8; ++k) MJTOUCH_LOAD(r[k], src + k * ss);
   V8f t[8], u[8];
@@ -77,15 +77,22 @@ inline __attribute__((always_inline)) void Block(const double* src, size_t ss, d
 #undef MJTOUCH_LOAD
 #undef MJTOUCH_STORE
 
-template <typename T> struct VecOf;
-template <> struct VecOf<float> { typedef V8f type; };
-template <> struct VecOf<double> { typedef V4d type; };
+template <typename T>
+struct VecOf;
+template <>
+struct VecOf<float> {
+  typedef V8f type;
+};
+template <>
+struct VecOf<double> {
+  typedef V4d type;
+};
 
 // Scratch for a 2D transform: the y-pass work arrays (W each) and the
 // stages' ping-pong arrays (max(W, spectrum) each), in one buffer.
 template <typename T>
 inline void SplitScratch(size_t W, size_t spectrum, std::vector<T>* scratch, T** wr, T** wi, T** sr,
-                  T** si) {
+                         T** si) {
   // 64-byte aligned arrays (see PaddedStride), each a whole number of lines.
   constexpr size_t kLine = 64 / sizeof(T);
   W = (W + kLine - 1) / kLine * kLine;

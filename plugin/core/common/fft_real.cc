@@ -24,9 +24,9 @@ using fft_detail::VecOf;
 // transposed in registers (Block), instead of transposing Z first (a pass
 // less). Each element's arithmetic is the scalar split's: the same bits.
 template <typename T>
-MJTOUCH_TARGET_CLONES
-void SplitToSpectrum(const T* wr, const T* wi, size_t lw, int ny, int c0, int c1, int h,
-                     int cols, int lo, int hi, T* sre, T* sim, size_t ss) {
+MJTOUCH_TARGET_CLONES void SplitToSpectrum(const T* wr, const T* wi, size_t lw, int ny, int c0,
+                                           int c1, int h, int cols, int lo, int hi, T* sre, T* sim,
+                                           size_t ss) {
   constexpr int W = 32 / sizeof(T);
   using V = typename VecOf<T>::type;
   const int nb = c1 - c0, b_lim = cols - h;
@@ -90,9 +90,9 @@ void SplitToSpectrum(const T* wr, const T* wi, size_t lw, int ny, int c0, int c1
 // x + y and (-x) + y == y - x exactly: the conjugate half rounds as
 // sgn * (...) would; each element's arithmetic is the scalar merge's.
 template <typename T>
-MJTOUCH_TARGET_CLONES
-void MergeFromSpectrum(const T* sre, const T* sim, size_t ss, int ny, int top, int c0, int c1,
-                       int h, int cols, int lo, int hi, T* wr, T* wi, size_t lw) {
+MJTOUCH_TARGET_CLONES void MergeFromSpectrum(const T* sre, const T* sim, size_t ss, int ny, int top,
+                                             int c0, int c1, int h, int cols, int lo, int hi, T* wr,
+                                             T* wi, size_t lw) {
   constexpr int W = 32 / sizeof(T);
   using V = typename VecOf<T>::type;
   const int nb = c1 - c0, b_lim = cols - h;
@@ -161,9 +161,9 @@ void MergeFromSpectrum(const T* sre, const T* sim, size_t ss, int ny, int top, i
 // packed column, nx per ky lane), so any split gives the bits of a single
 // part (ForwardReal, InverseReal).
 template <typename T>
-void Fft2D::ForwardColumns(const double* re, int stride, int rows, int cols, int c0, int c1,
-                           T* wr, T* wi, int lw, const Slab* slabs, int nslabs, T* spec_re,
-                           T* spec_im, T* sr, T* si) const {
+void Fft2D::ForwardColumns(const double* re, int stride, int rows, int cols, int c0, int c1, T* wr,
+                           T* wi, int lw, const Slab* slabs, int nslabs, T* spec_re, T* spec_im,
+                           T* sr, T* si) const {
   if (c0 >= c1) return;
   const int h = (cols + 1) / 2;  // column c is packed with column c + h
   const int nb = c1 - c0;
@@ -189,8 +189,8 @@ void Fft2D::ForwardColumns(const double* re, int stride, int rows, int cols, int
   py_.Transform(wr, wi, nb, lw, false, sr + c0 * ts, si + c0 * ts, rows);
   for (int q = 0; q < nslabs; ++q) {
     const Slab& sl = slabs[q];
-    SplitToSpectrum(wr, wi, lw, ny_, c0, c1, h, cols, sl.lo, sl.hi,
-                    spec_re + sl.offset - sl.lo, spec_im + sl.offset - sl.lo, sl.stride);
+    SplitToSpectrum(wr, wi, lw, ny_, c0, c1, h, cols, sl.lo, sl.hi, spec_re + sl.offset - sl.lo,
+                    spec_im + sl.offset - sl.lo, sl.stride);
   }
 }
 
@@ -203,8 +203,10 @@ void Fft2D::ForwardLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr
   // columns >= cols are zero (those the transform reads: as above)
   const int zero_x = px_.SkipsUpperHalf(cols) ? nx_ / 2 : nx_;
   for (int x = cols; x < zero_x; ++x) {
-    std::fill(re + static_cast<size_t>(x) * sl.stride, re + static_cast<size_t>(x) * sl.stride + nb, T(0));
-    std::fill(im + static_cast<size_t>(x) * sl.stride, im + static_cast<size_t>(x) * sl.stride + nb, T(0));
+    std::fill(re + static_cast<size_t>(x) * sl.stride, re + static_cast<size_t>(x) * sl.stride + nb,
+              T(0));
+    std::fill(im + static_cast<size_t>(x) * sl.stride, im + static_cast<size_t>(x) * sl.stride + nb,
+              T(0));
   }
   const size_t tn = static_cast<size_t>(nx_);
   px_.Transform(re, im, nb, sl.stride, false, sr + sl.lo * tn, si + sl.lo * tn, cols);
@@ -223,8 +225,8 @@ void Fft2D::InverseLanes(int cols, const Slab& sl, T* spec_re, T* spec_im, T* sr
 
 template <typename T>
 void Fft2D::InverseColumns(T* spec_re, T* spec_im, const Slab* slabs, int nslabs, int rows,
-                           int cols, int c0, int c1, double* re, int stride, T* wr, T* wi,
-                           int lw, T* sr, T* si) const {
+                           int cols, int c0, int c1, double* re, int stride, T* wr, T* wi, int lw,
+                           T* sr, T* si) const {
   if (c0 >= c1) return;
   const int h = (cols + 1) / 2;
   const int nb = c1 - c0;
@@ -310,7 +312,8 @@ void Fft2D::ConvolveReal(const double* in, int in_stride, int in_rows, int in_co
   auto slab_sizes = [&](int h, int np, int* lw, size_t* off) {
     size_t used = 0;
     for (int k = 0; k < np; ++k) {
-      lw[k] = PaddedStride(np == 1 ? h : PartBound(h, np, k + 1, kAlign) - PartBound(h, np, k, kAlign));
+      lw[k] =
+          PaddedStride(np == 1 ? h : PartBound(h, np, k + 1, kAlign) - PartBound(h, np, k, kAlign));
       off[k] = used;
       used += static_cast<size_t>(ny_) * lw[k];
     }
@@ -328,8 +331,8 @@ void Fft2D::ConvolveReal(const double* in, int in_stride, int in_rows, int in_co
                    spec_re, spec_im, sr, si);
     ForwardLanes(in_cols, all, spec_re, spec_im, sr, si);
     InverseLanes(out_cols, all, spec_re, spec_im, sr, si, k_hat);
-    InverseColumns(spec_re, spec_im, &all, 1, out_rows, out_cols, 0, h_out, out, out_stride, wr,
-                   wi, PaddedStride(h_out), sr, si);
+    InverseColumns(spec_re, spec_im, &all, 1, out_rows, out_cols, 0, h_out, out, out_stride, wr, wi,
+                   PaddedStride(h_out), sr, si);
     return;
   }
   // Three passes, each split into parts that write disjoint memory; the
@@ -338,8 +341,8 @@ void Fft2D::ConvolveReal(const double* in, int in_stride, int in_rows, int in_co
   ThreadPool& pool = ThreadPool::Shared();
   pool.Run(pa, threads, [&](int k) {
     ForwardColumns(in, in_stride, in_rows, in_cols, PartBound(h_in, pa, k, kAlign),
-                   PartBound(h_in, pa, k + 1, kAlign), wr + off_a[k], wi + off_a[k], lw_a[k],
-                   slabs, pb, spec_re, spec_im, sr, si);
+                   PartBound(h_in, pa, k + 1, kAlign), wr + off_a[k], wi + off_a[k], lw_a[k], slabs,
+                   pb, spec_re, spec_im, sr, si);
   });
   pool.Run(pb, threads, [&](int k) {
     const Slab& sl = slabs[k];
@@ -347,21 +350,19 @@ void Fft2D::ConvolveReal(const double* in, int in_stride, int in_rows, int in_co
     InverseLanes(out_cols, sl, spec_re, spec_im, sr, si, k_hat);
   });
   pool.Run(pc, threads, [&](int k) {
-    InverseColumns(spec_re, spec_im, slabs, pb, out_rows, out_cols,
-                   PartBound(h_out, pc, k, kAlign), PartBound(h_out, pc, k + 1, kAlign), out,
-                   out_stride, wr + off_c[k], wi + off_c[k], lw_c[k], sr, si);
+    InverseColumns(spec_re, spec_im, slabs, pb, out_rows, out_cols, PartBound(h_out, pc, k, kAlign),
+                   PartBound(h_out, pc, k + 1, kAlign), out, out_stride, wr + off_c[k],
+                   wi + off_c[k], lw_c[k], sr, si);
   });
 }
 
-#define MJTOUCH_FFT_REAL(T)                                                                  \
-  template void Fft2D::ForwardReal(const double*, int, int, int, T*, T*, std::vector<T>*)    \
-      const;                                                                                 \
-  template void Fft2D::InverseReal(T*, T*, int, int, double*, int, std::vector<T>*) const;    \
-  template void Fft2D::ConvolveReal(const double*, int, int, int, const T*, int, int, double*, \
+#define MJTOUCH_FFT_REAL(T)                                                                      \
+  template void Fft2D::ForwardReal(const double*, int, int, int, T*, T*, std::vector<T>*) const; \
+  template void Fft2D::InverseReal(T*, T*, int, int, double*, int, std::vector<T>*) const;       \
+  template void Fft2D::ConvolveReal(const double*, int, int, int, const T*, int, int, double*,   \
                                     int, T*, T*, std::vector<T>*, int) const;
 MJTOUCH_FFT_REAL(double)
 MJTOUCH_FFT_REAL(float)
 #undef MJTOUCH_FFT_REAL
-
 
 }  // namespace mjtouch

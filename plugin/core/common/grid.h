@@ -56,7 +56,11 @@ struct CellBounds {
 // [i_begin, i_end) of active cells.
 struct ActiveRuns {
   std::vector<int> row, begin, end;
-  void Clear() { row.clear(); begin.clear(); end.clear(); }
+  void Clear() {
+    row.clear();
+    begin.clear();
+    end.clear();
+  }
   void Add(int j, int i_begin, int i_end) {
     row.push_back(j);
     begin.push_back(i_begin);

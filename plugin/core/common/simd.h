@@ -76,14 +76,12 @@ inline Isa ChosenIsa() {
 }  // namespace mjtouch
 
 #if MJTOUCH_X86_SIMD && defined(__GNUC__)
-#define MJTOUCH_X86_ISA_COPIES(name, params, args)                          \
-  __attribute__((target("avx2,fma"))) MJTOUCH_CONTRACT void name##Avx2Fma \
-      params {                                                             \
-    name##Body<8, true> args;                                              \
-  }                                                                        \
-  __attribute__((target("avx512f"))) MJTOUCH_CONTRACT void name##Avx512   \
-      params {                                                             \
-    name##Body<16, true> args;                                             \
+#define MJTOUCH_X86_ISA_COPIES(name, params, args)                                 \
+  __attribute__((target("avx2,fma"))) MJTOUCH_CONTRACT void name##Avx2Fma params { \
+    name##Body<8, true> args;                                                      \
+  }                                                                                \
+  __attribute__((target("avx512f"))) MJTOUCH_CONTRACT void name##Avx512 params {   \
+    name##Body<16, true> args;                                                     \
   }
 #define MJTOUCH_X86_ISA_SWITCH(name, args)                    \
   switch (::mjtouch::ChosenIsa()) {                           \
@@ -95,12 +93,12 @@ inline Isa ChosenIsa() {
 #define MJTOUCH_X86_ISA_COPIES(name, params, args)
 #define MJTOUCH_X86_ISA_SWITCH(name, args)
 #endif
-#define MJTOUCH_ISA_COPIES(name, params, args)             \
-  MJTOUCH_BASELINE_CONTRACT void name##Baseline params {   \
-    name##Body<4, MJTOUCH_BASELINE_FMA> args;              \
-  }                                                        \
-  MJTOUCH_X86_ISA_COPIES(name, params, args)               \
-  void name params {                                       \
-    MJTOUCH_X86_ISA_SWITCH(name, args)                     \
-    name##Baseline args;                                   \
+#define MJTOUCH_ISA_COPIES(name, params, args)           \
+  MJTOUCH_BASELINE_CONTRACT void name##Baseline params { \
+    name##Body<4, MJTOUCH_BASELINE_FMA> args;            \
+  }                                                      \
+  MJTOUCH_X86_ISA_COPIES(name, params, args)             \
+  void name params {                                     \
+    MJTOUCH_X86_ISA_SWITCH(name, args)                   \
+    name##Baseline args;                                 \
   }

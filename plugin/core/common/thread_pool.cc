@@ -23,8 +23,10 @@ inline void CpuRelax() {
 // A waiting thread yields after a short spin: on a machine busier than
 // its cores, the thread it waits for may share its core.
 inline void Backoff(int k) {
-  if (k < 64) CpuRelax();
-  else std::this_thread::yield();
+  if (k < 64)
+    CpuRelax();
+  else
+    std::this_thread::yield();
 }
 
 }  // namespace

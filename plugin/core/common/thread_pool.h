@@ -52,7 +52,7 @@ class ThreadPool {
   std::mutex job_mutex_;
   const std::function<void(int)>* fn_ = nullptr;
   int num_chunks_ = 0;
-  int helpers_wanted_ = 0;           // workers allowed to join this job
+  int helpers_wanted_ = 0;  // workers allowed to join this job
   std::atomic<int> next_chunk_{0};
   std::atomic<int> done_chunks_{0};
   std::atomic<int> helpers_joined_{0};
@@ -78,9 +78,8 @@ inline void ForRowParts(int rows, int threads, int min_rows, F&& fn) {
     fn(0, rows);
     return;
   }
-  ThreadPool::Shared().Run(parts, threads, [&](int k) {
-    fn(rows * k / parts, rows * (k + 1) / parts);
-  });
+  ThreadPool::Shared().Run(parts, threads,
+                           [&](int k) { fn(rows * k / parts, rows * (k + 1) / parts); });
 }
 
 }  // namespace mjtouch

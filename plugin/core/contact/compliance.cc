@@ -113,8 +113,8 @@ std::shared_ptr<const SurfaceCompliance::Spectrum> SurfaceCompliance::SpectrumFo
 }
 
 void SurfaceCompliance::Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
-                              ComplianceWork* w, ApplyPrecision precision, int threads,
-                              int in_rows, int in_cols) const {
+                              ComplianceWork* w, ApplyPrecision precision, int threads, int in_rows,
+                              int in_cols) const {
   if (in_rows < 0) in_rows = by;
   if (in_cols < 0) in_cols = bx;
   if (precision == ApplyPrecision::kFloat) {
@@ -139,8 +139,8 @@ void SurfaceCompliance::AddCellRows(int ci, int cj, double d, int bx, int j0, in
 }
 
 MJTOUCH_TARGET_CLONES
-void SurfaceCompliance::AddCellRows4(const int* ci, const int* cj, const double* d, int bx,
-                                     int j0, int j1, double* u) const {
+void SurfaceCompliance::AddCellRows4(const int* ci, const int* cj, const double* d, int bx, int j0,
+                                     int j1, double* u) const {
   const size_t w = 2 * static_cast<size_t>(n_) - 1;
   const double d0 = d[0], d1 = d[1], d2 = d[2], d3 = d[3];
   for (int j = j0; j < j1; ++j) {

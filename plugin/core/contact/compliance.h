@@ -61,7 +61,7 @@ class SurfaceCompliance {
   // whole grid), built once per FFT size and shared (thread-safe).
   struct Spectrum {
     Fft2D fft;
-    std::vector<double> k_hat;  // real (K is even), already divided by nx ny
+    std::vector<double> k_hat;   // real (K is even), already divided by nx ny
     std::vector<float> k_hat_f;  // the same rounded to float (ApplyPrecision::kFloat)
     // The inverse operator on this FFT grid (1 / k_hat, Pa/m) in real space,
     // truncated to offsets |di|, |dj| <= kInverseHalfWidth: the contact
@@ -86,9 +86,8 @@ class SurfaceCompliance {
   // all): in is zero outside its first in_rows x in_cols block (fewer input
   // columns to transform; a spectrum of a smaller reach then suffices).
   // threads: ThreadPool callers of the FFTs (the same bits for any count).
-  void Apply(const Spectrum& s, const double* in, int bx, int by, double* out,
-             ComplianceWork* w, ApplyPrecision precision, int threads, int in_rows = -1,
-             int in_cols = -1) const;
+  void Apply(const Spectrum& s, const double* in, int bx, int by, double* out, ComplianceWork* w,
+             ApplyPrecision precision, int threads, int in_rows = -1, int in_cols = -1) const;
   // u += K * (d on cell c of the box) by direct sum (non-periodic only):
   // cheaper than an FFT when few cells change.
   void AddCell(int c, double d, int bx, int by, double* u) const {

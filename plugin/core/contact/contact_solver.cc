@@ -98,11 +98,18 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
     size_t nc = 0;
     double sum_g = 0.0;
     for (size_t b = 0; b < B; ++b)
-      if (p[b] > 0.0) { sum_g += g0[b] + u[b]; ++nc; }
+      if (p[b] > 0.0) {
+        sum_g += g0[b] + u[b];
+        ++nc;
+      }
     const double gbar = sum_g / static_cast<double>(nc);
     double G = 0.0;
     for (size_t b = 0; b < B; ++b) {
-      if (!std::isfinite(g0[b])) { g[b] = 0.0; t[b] = 0.0; continue; }
+      if (!std::isfinite(g0[b])) {
+        g[b] = 0.0;
+        t[b] = 0.0;
+        continue;
+      }
       g[b] = g0[b] + u[b] - gbar;
       if (p[b] > 0.0) G += g[b] * g[b];
     }
@@ -173,9 +180,8 @@ void PolonskyKeer(const Problem& P, double tol, int max_iter, ElasticSolveStats*
 // preconditioner only shapes the search direction, so its rounding moves
 // the iterates, not the converged solution).
 template <int L, typename T>
-MJTOUCH_TARGET_CLONES
-void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by, const int* lo,
-                  const int* hi, double* z_out) {
+MJTOUCH_TARGET_CLONES void ApplyStencil(const double* M, const T* g_pad, int px, int bx, int by,
+                                        const int* lo, const int* hi, double* z_out) {
   T m[L * L];
   for (int k = 0; k < L * L; ++k) m[k] = static_cast<T>(M[k]);
   for (int j = 0; j < by; ++j) {
@@ -336,8 +342,8 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
     // Step and project onto p >= 0 on S; off S, p and p_new are zero (p > 0
     // lies in S), so the rescaling and the stopping test run on S only.
     size_t nchg = 0;
-    const double sum_new = ws::StepProject(ns, tau, pS, tS, S, pnS, dl, w->set_changed.data(),
-                                                &nchg);
+    const double sum_new =
+        ws::StepProject(ns, tau, pS, tS, S, pnS, dl, w->set_changed.data(), &nchg);
     if (!(sum_new > 0.0)) {
       for (size_t k = 0; k < nchg; ++k) dl[w->set_changed[k]] = 0.0;  // delta stays zero
       break;
@@ -372,12 +378,12 @@ void Preconditioned(const Problem& P, double tol, int max_iter, double gap_sum, 
 ElasticContact::ElasticContact(std::shared_ptr<const SurfaceCompliance> compliance)
     : compliance_(std::move(compliance)) {}
 
-bool ElasticContact::Solve(const std::vector<double>& gap_m, const CellBox& box,
-                           double force_n, const ElasticSolveOptions& options,
-                           std::vector<double>* pressure_pa, ElasticWork* work,
-                           ElasticSolveStats* stats, const double* initial_u_m) const {
-  return SolveElasticContact(*compliance_, gap_m, box, force_n, options, pressure_pa, work,
-                             stats, initial_u_m);
+bool ElasticContact::Solve(const std::vector<double>& gap_m, const CellBox& box, double force_n,
+                           const ElasticSolveOptions& options, std::vector<double>* pressure_pa,
+                           ElasticWork* work, ElasticSolveStats* stats,
+                           const double* initial_u_m) const {
+  return SolveElasticContact(*compliance_, gap_m, box, force_n, options, pressure_pa, work, stats,
+                             initial_u_m);
 }
 
 bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& gap,
@@ -419,9 +425,9 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
   w->dropped.resize(std::max(w->dropped.size(), B));
   const int* dropped = w->dropped.data();
   size_t ndropped = 0;
-  double sum_p = working_set::LoadGuess(bx, by, nx, gap.data() + row_start(0),
-                                        pressure->data() + row_start(0), g0, p, &ncand,
-                                        w->dropped.data(), &ndropped);
+  double sum_p =
+      working_set::LoadGuess(bx, by, nx, gap.data() + row_start(0), pressure->data() + row_start(0),
+                             g0, p, &ncand, w->dropped.data(), &ndropped);
   // initial_u, corrected for the dropped cells (direct sums unless they
   // are many), or a fresh K p.
   bool have_u = initial_u != nullptr && !periodic && opt.method == ElasticMethod::kPreconditioned &&
@@ -434,8 +440,10 @@ bool SolveElasticContact(const SurfaceCompliance& K, const std::vector<double>& 
       for (size_t k = 0; k < ndropped; ++k) {
         const int c = dropped[k];
         const double given = (*pressure)[row_start(c / bx) + c % bx];
-        if (std::isfinite(given)) K.AddCell(c, p[c] - given, bx, by, w->u.data());
-        else have_u = false;
+        if (std::isfinite(given))
+          K.AddCell(c, p[c] - given, bx, by, w->u.data());
+        else
+          have_u = false;
       }
     }
   }

@@ -50,9 +50,9 @@ struct ElasticSolveOptions {
 
 struct ElasticSolveStats {
   int iterations = 0;
-  double change = 0;         // last relative L1 pressure change (the stopping test)
+  double change = 0;  // last relative L1 pressure change (the stopping test)
   bool converged = false;
-  double approach_m = 0;     // alpha: mean of g0 + u over the contact
+  double approach_m = 0;         // alpha: mean of g0 + u over the contact
   double max_contact_gap_m = 0;  // largest g0 among contact cells
   int contact_cells = 0;
   int fft_size_x = 0, fft_size_y = 0;
@@ -62,10 +62,10 @@ struct ElasticSolveStats {
 // Per-simulation scratch (no state that outlives a call).
 struct ElasticWork {
   std::vector<double> g0, p, u, g, t, r, p_new, delta;
-  std::vector<double> g_pad;  // preconditioner input with a zero border
-  std::vector<float> g_pad_f;  // the same in float (ApplyPrecision::kFloat)
-  std::vector<int> set;       // kPreconditioned: the cells of the working set
-  std::vector<size_t> set_rows;  // where each box row's cells start in set
+  std::vector<double> g_pad;        // preconditioner input with a zero border
+  std::vector<float> g_pad_f;       // the same in float (ApplyPrecision::kFloat)
+  std::vector<int> set;             // kPreconditioned: the cells of the working set
+  std::vector<size_t> set_rows;     // where each box row's cells start in set
   std::vector<int> set_lo, set_hi;  // each box row's span of set cells [lo, hi)
   // g, K^-1 g, t, t's last value, p and the step's p on the working set,
   // contiguous (index k of set; contact/working_set.h)

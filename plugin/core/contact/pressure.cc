@@ -39,12 +39,16 @@ void ClearTraction(const TaxelGrid& grid, TractionField* f) {
     }
   } else {
     for (auto* v : {&f->pressure_pa, &f->shear_x_pa, &f->shear_y_pa}) {
-      if (v->size() != N) v->assign(N, 0.0);
-      else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0; });
+      if (v->size() != N)
+        v->assign(N, 0.0);
+      else
+        ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0; });
     }
     for (auto* v : {&f->pressure, &f->shear_x, &f->shear_y}) {
-      if (v->size() != N) v->assign(N, 0.0f);
-      else ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0f; });
+      if (v->size() != N)
+        v->assign(N, 0.0f);
+      else
+        ForBox(grid, f->box, [&](size_t k) { (*v)[k] = 0.0f; });
     }
   }
   f->support_in_runs = false;
@@ -90,9 +94,7 @@ void FinishTraction(const TaxelGrid& grid, bool shear, TractionField* out) {
       std::fill(fx + i0, fx + i1, 0.0f);
       std::fill(fy + i0, fy + i1, 0.0f);
     }
-    auto on = [&](int i) {
-      return p[i] != 0.0 || (shear && (sx[i] != 0.0 || sy[i] != 0.0));
-    };
+    auto on = [&](int i) { return p[i] != 0.0 || (shear && (sx[i] != 0.0 || sy[i] != 0.0)); };
     ForEachRun(i0, i1, on, [&](int begin, int end) {
       out->runs.Add(j, begin, end);
       out->active_cells += end - begin;
@@ -134,13 +136,15 @@ void FinishUniformSlipTraction(const TaxelGrid& grid, double fn, double fx, doub
   for (int j = b.j0; j < b.j0 + b.ny; ++j) {
     const size_t row = static_cast<size_t>(j) * grid.n;
     const double* p = out->pressure_pa.data() + row;
-    ForEachRun(b.i0, b.i0 + b.nx, [&](int i) { return p[i] != 0.0; }, [&](int begin, int end) {
-      out->runs.Add(j, begin, end);
-      out->active_cells += end - begin;
-      SlipRun(p + begin, rx, ry, end - begin, out->shear_x_pa.data() + row + begin,
-              out->shear_y_pa.data() + row + begin, out->pressure.data() + row + begin,
-              out->shear_x.data() + row + begin, out->shear_y.data() + row + begin);
-    });
+    ForEachRun(
+        b.i0, b.i0 + b.nx, [&](int i) { return p[i] != 0.0; },
+        [&](int begin, int end) {
+          out->runs.Add(j, begin, end);
+          out->active_cells += end - begin;
+          SlipRun(p + begin, rx, ry, end - begin, out->shear_x_pa.data() + row + begin,
+                  out->shear_y_pa.data() + row + begin, out->pressure.data() + row + begin,
+                  out->shear_x.data() + row + begin, out->shear_y.data() + row + begin);
+        });
   }
 }
 
@@ -177,8 +181,8 @@ bool SplatContacts(const TaxelGrid& grid, const std::vector<ContactPoint>& conta
 }
 
 bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& gap,
-                     const std::vector<double>& cov, const CellBox& box, double k, double force,
-                     double guess, TractionField* out) {
+                              const std::vector<double>& cov, const CellBox& box, double k,
+                              double force, double guess, TractionField* out) {
   ClearTraction(grid, out);
   const double A = grid.Area();
   // Solve f(c) = sum cov_i max(c - g_i, 0) - force / (k A) = 0 over the
@@ -209,7 +213,10 @@ bool WinklerPressureReference(const TaxelGrid& grid, const std::vector<double>& 
     double f = -target, s = 0.0;
     for (size_t i = 0; i < M; ++i) {
       const double d = c - cg[i];
-      if (d > 0.0) { f += cc[i] * d; s += cc[i]; }
+      if (d > 0.0) {
+        f += cc[i] * d;
+        s += cc[i];
+      }
     }
     *slope = s;
     return f;

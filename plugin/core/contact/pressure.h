@@ -29,9 +29,9 @@ struct TractionField {
   std::vector<double> shear_y_pa;   // Pa, along pad y
   // float copies for the stress kernel (kernel.h)
   std::vector<float> pressure, shear_x, shear_y;
-  CellBox box;                  // support of every array
-  ActiveRuns runs;              // cells with nonzero traction, by grid row
-  double approach_m = 0;        // solved rigid approach of the pad
+  CellBox box;            // support of every array
+  ActiveRuns runs;        // cells with nonzero traction, by grid row
+  double approach_m = 0;  // solved rigid approach of the pad
   int active_cells = 0;
   // Set by UniformSlipShear: shear = slip ratio x pressure in every cell,
   // which lets stage 3 fold its tables (stress/stress_fold.h). Only
@@ -118,8 +118,7 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
 // Writes the arrays WriteWinklerSlipTraction left lazy, of those asked for
 // (pressure_pa; the shear arrays, double and float), with the values it
 // would have written; nothing for arrays already written.
-void MaterializeTraction(const TaxelGrid& grid, bool pressure_pa, bool shear,
-                         TractionField* field);
+void MaterializeTraction(const TaxelGrid& grid, bool pressure_pa, bool shear, TractionField* field);
 
 // The same solve without the fast path's shortcuts (every pass over every
 // candidate, then NormalizeLoad's scaling): the reference WinklerPressure is
@@ -143,8 +142,8 @@ inline double WinklerLaneSum(const double lane[4]) {
 // direction is the same everywhere), so that sum(q * A) equals the
 // tangential force (ft_x, ft_y) (N, pad frame) to round-off. Cells without
 // pressure are left as they are (zero after ClearTraction).
-void UniformSlipShear(const TaxelGrid& grid, double normal_force_n, double ft_x_n,
-                      double ft_y_n, TractionField* field);
+void UniformSlipShear(const TaxelGrid& grid, double normal_force_n, double ft_x_n, double ft_y_n,
+                      TractionField* field);
 
 // Scale pressure_pa so that sum * A equals normal_force_n exactly up to
 // round-off; returns false (and zeroes it) if the sum is not positive.

@@ -43,9 +43,9 @@ double Psi(double tx, double ty, double g) {
 
 // The loaded cells (p > 0) of a step, in index order, with their disk radii.
 struct Cells {
-  std::vector<int> index;  // grid index
-  std::vector<double> g;   // mu p, Pa
-  double pressure_sum = 0; // sum of p, Pa (force / cell area)
+  std::vector<int> index;   // grid index
+  std::vector<double> g;    // mu p, Pa
+  double pressure_sum = 0;  // sum of p, Pa (force / cell area)
   double g_sum = 0;
 };
 
@@ -68,9 +68,9 @@ Cells LoadedCells(const std::vector<double>& pressure_pa, double mu) {
 // the sum goes evenly to the cells inside their disks. slip[c] = 1 where the
 // projection clipped. Returns the Newton steps taken.
 int ProjectWithForce(const std::vector<double>& yx, const std::vector<double>& yy,
-                     const std::vector<double>& g, double k, double tx, double ty,
-                     double* lam_x, double* lam_y, std::vector<double>* qx,
-                     std::vector<double>* qy, std::vector<unsigned char>* slip) {
+                     const std::vector<double>& g, double k, double tx, double ty, double* lam_x,
+                     double* lam_y, std::vector<double>* qx, std::vector<double>* qy,
+                     std::vector<unsigned char>* slip) {
   const size_t m = g.size();
   qx->resize(m);
   qy->resize(m);
@@ -212,16 +212,15 @@ void Finish(const Cells& cells, const std::vector<unsigned char>& slip, size_t N
       result->stick[cells.index[c]] = 1;
       ++result->stick_cells;
     }
-  result->stuck_share =
-      result->loaded_cells > 0 ? static_cast<double>(result->stick_cells) / result->loaded_cells
-                               : 0.0;
+  result->stuck_share = result->loaded_cells > 0
+                            ? static_cast<double>(result->stick_cells) / result->loaded_cells
+                            : 0.0;
   result->full_slip = false;
 }
 
 }  // namespace
 
-TangentialCompliance::TangentialCompliance(double young_pa, double poisson, double pitch_m,
-                                           int n)
+TangentialCompliance::TangentialCompliance(double young_pa, double poisson, double pitch_m, int n)
     : n_(n), pitch_m_(pitch_m) {
   const double G = young_pa / (2.0 * (1.0 + poisson));
   const double c = 1.0 / (2.0 * kPi * G);
@@ -285,8 +284,8 @@ namespace {
 template <typename T>
 void ApplyIn(const Fft2D& fft, const std::vector<T>& kxx, const std::vector<T>& kyy,
              const std::vector<T>& kxy, const double* qx, const double* qy, int bx, int by,
-             double* ux, double* uy, std::vector<T>* sxr, std::vector<T>* sxi,
-             std::vector<T>* syr, std::vector<T>* syi, std::vector<T>* scratch) {
+             double* ux, double* uy, std::vector<T>* sxr, std::vector<T>* sxi, std::vector<T>* syr,
+             std::vector<T>* syi, std::vector<T>* scratch) {
   const size_t S = fft.spectrum_size();
   sxr->resize(S);
   sxi->resize(S);
@@ -315,11 +314,11 @@ void TangentialCompliance::Apply(const Spectra& s, const double* qx, const doubl
                                  int by, double* ux, double* uy, Work* w,
                                  ApplyPrecision precision) const {
   if (precision == ApplyPrecision::kFloat)
-    ApplyIn(s.fft, s.xx_f, s.yy_f, s.xy_f, qx, qy, bx, by, ux, uy, &w->sxr_f, &w->sxi_f,
-            &w->syr_f, &w->syi_f, &w->scratch_f);
+    ApplyIn(s.fft, s.xx_f, s.yy_f, s.xy_f, qx, qy, bx, by, ux, uy, &w->sxr_f, &w->sxi_f, &w->syr_f,
+            &w->syi_f, &w->scratch_f);
   else
-    ApplyIn(s.fft, s.xx, s.yy, s.xy, qx, qy, bx, by, ux, uy, &w->sxr, &w->sxi, &w->syr,
-            &w->syi, &w->scratch);
+    ApplyIn(s.fft, s.xx, s.yy, s.xy, qx, qy, bx, by, ux, uy, &w->sxr, &w->sxi, &w->syr, &w->syi,
+            &w->scratch);
 }
 
 double WinklerTangentialStiffness(double normal_stiffness_pa_per_m, double poisson) {
@@ -337,8 +336,7 @@ std::string CheckTangentialInputs(const TaxelGrid& grid, const std::vector<doubl
     return "pressure_pa has " + std::to_string(pressure_pa.size()) + " cells, the grid " +
            std::to_string(N);
   for (double p : pressure_pa)
-    if (!std::isfinite(p) || p < 0)
-      return "pressure_pa must be finite and >= 0, got " + Num(p);
+    if (!std::isfinite(p) || p < 0) return "pressure_pa must be finite and >= 0, got " + Num(p);
   if (!std::isfinite(mu) || mu < 0) return "friction mu = " + Num(mu) + " must be finite, >= 0";
   if (!std::isfinite(fx_n) || !std::isfinite(fy_n))
     return "tangential force (" + Num(fx_n) + ", " + Num(fy_n) + ") N must be finite";
@@ -355,8 +353,8 @@ bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pr
                             double tangential_stiffness_pa_per_m, TangentialState* state,
                             TangentialResult* result, std::string* error) {
   std::string e = CheckTangentialInputs(grid, pressure_pa, mu, fx_n, fy_n, *state);
-  if (e.empty() && !(tangential_stiffness_pa_per_m > 0 &&
-                     std::isfinite(tangential_stiffness_pa_per_m)))
+  if (e.empty() &&
+      !(tangential_stiffness_pa_per_m > 0 && std::isfinite(tangential_stiffness_pa_per_m)))
     e = "tangential stiffness " + Num(tangential_stiffness_pa_per_m) + " Pa/m must be > 0";
   if (!e.empty()) {
     if (error) *error = "tangential (winkler): " + e;
@@ -382,8 +380,8 @@ bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pr
     }
   std::vector<unsigned char> slip;
   double dwx = 0, dwy = 0;
-  result->iterations = result->projection_steps = ProjectWithForce(yx, yy, cells.g, tangential_stiffness_pa_per_m, tx, ty,
-                                        &dwx, &dwy, &qx, &qy, &slip);
+  result->iterations = result->projection_steps = ProjectWithForce(
+      yx, yy, cells.g, tangential_stiffness_pa_per_m, tx, ty, &dwx, &dwy, &qx, &qy, &slip);
   state->shear_x_pa.assign(N, 0.0);
   state->shear_y_pa.assign(N, 0.0);
   for (size_t c = 0; c < m; ++c) {

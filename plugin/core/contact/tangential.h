@@ -52,11 +52,11 @@ struct TangentialResult {
   std::vector<unsigned char> stick;  // n * n: 1 stick, 0 slip or unloaded
   int loaded_cells = 0;              // cells with p > 0
   int stick_cells = 0;
-  double stuck_share = 0;   // stick_cells / loaded_cells (0 without load)
-  bool full_slip = false;   // |F| >= mu P: q = p F / P on every loaded cell
-  int iterations = 0;       // elastic: CG iterations; winkler: Newton steps
-  int projection_steps = 0; // Newton steps of the force projections, in all
-  double change = 0;        // elastic: last relative L1 change of q
+  double stuck_share = 0;    // stick_cells / loaded_cells (0 without load)
+  bool full_slip = false;    // |F| >= mu P: q = p F / P on every loaded cell
+  int iterations = 0;        // elastic: CG iterations; winkler: Newton steps
+  int projection_steps = 0;  // Newton steps of the force projections, in all
+  double change = 0;         // elastic: last relative L1 change of q
 };
 
 // The half-space's tangential surface compliance on an n x n grid of pitch
@@ -80,7 +80,7 @@ class TangentialCompliance {
   // The three kernels' spectra on an mx x my FFT grid (shared, thread-safe).
   struct Spectra {
     Fft2D fft;
-    std::vector<double> xx, yy, xy;  // real, divided by mx my
+    std::vector<double> xx, yy, xy;       // real, divided by mx my
     std::vector<float> xx_f, yy_f, xy_f;  // the same rounded to float
     Spectra(int mx, int my) : fft(mx, my) {}
   };

@@ -62,9 +62,8 @@ inline v4l Candidates(const v4d& g, const v4d& w) {
 // zero: a zero minimum is taken again in box order, as std::min keeps it.
 // `covered_min`: the smallest gap of the cells with coverage > 0 (MinGap's,
 // -inf included) but for the sign of a zero.
-void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
-                    const CellBox& box, double* gmin, double* covmax, ActiveRuns* spans,
-                    double* covered_min) {
+void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov, const CellBox& box,
+                    double* gmin, double* covmax, ActiveRuns* spans, double* covered_min) {
   spans->Clear();
   double lo = kInf, hi = 0.0, lo_cov = kInf;
 #if MJTOUCH_X86_SIMD
@@ -77,7 +76,7 @@ void ScanCandidates(const TaxelGrid& grid, const double* gap, const double* cov,
     const __m128d covered = _mm_cmpgt_pd(wv, zero);
     const __m128d valid = _mm_and_pd(covered, _mm_cmplt_pd(_mm_and_pd(gv, abs_mask), inf));
     const __m128d gs = _mm_or_pd(_mm_and_pd(valid, gv), _mm_andnot_pd(valid, inf));
-    *l = _mm_min_pd(gs, *l);                   // gs < l ? gs : l
+    *l = _mm_min_pd(gs, *l);                     // gs < l ? gs : l
     *h = _mm_max_pd(_mm_and_pd(valid, wv), *h);  // w > h ? w : h
     // (a NaN gap: minpd returns the second operand)
     *all = _mm_min_pd(_mm_or_pd(_mm_and_pd(covered, gv), _mm_andnot_pd(covered, inf)), *all);
@@ -278,9 +277,8 @@ double WinklerLoads(const double* gap, const double* cov, int n, const ActiveRun
 // (pressure_pa too if kDouble), as NormalizeLoad then SlipRun leave them.
 // Returns whether some pressure is zero (underflow).
 template <bool kDouble>
-MJTOUCH_TARGET_CLONES
-bool ScaledPressureRun(const double* __restrict load, double scale, int len,
-                       double* __restrict p, float* __restrict fp) {
+MJTOUCH_TARGET_CLONES bool ScaledPressureRun(const double* __restrict load, double scale, int len,
+                                             double* __restrict p, float* __restrict fp) {
   const v4d sv = {scale, scale, scale, scale}, zero = {0, 0, 0, 0};
   v4l zeros = {0, 0, 0, 0};
   int k = 0;
@@ -448,8 +446,8 @@ bool SolveWinkler(const TaxelGrid& grid, const std::vector<double>& gap_m,
       while (i < e && l[i] == 0.0) ++i;
       if (i == e) break;
       const int start = i;
-      while (i + 4 <= e && (l[i] != 0.0) & (l[i + 1] != 0.0) & (l[i + 2] != 0.0) &
-                               (l[i + 3] != 0.0))
+      while (i + 4 <= e &&
+             (l[i] != 0.0) & (l[i + 1] != 0.0) & (l[i + 2] != 0.0) & (l[i + 3] != 0.0))
         i += 4;
       while (i < e && l[i] != 0.0) ++i;
       runs.Add(j, start, i);
@@ -518,8 +516,7 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
     zero |= write_pressure_pa
                 ? ScaledPressureRun<true>(load + a, scale, len, out->pressure_pa.data() + a,
                                           out->pressure.data() + a)
-                : ScaledPressureRun<false>(load + a, scale, len, nullptr,
-                                           out->pressure.data() + a);
+                : ScaledPressureRun<false>(load + a, scale, len, nullptr, out->pressure.data() + a);
     active += len;
   }
   for (size_t r = 0; r < last.row.size() && dropped; ++r) {
@@ -544,11 +541,12 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
     active = 0;
     for (size_t r = 0; r < now.row.size(); ++r) {
       const double* l = load + static_cast<size_t>(now.row[r]) * n;
-      ForEachRun(now.begin[r], now.end[r], [&](int i) { return l[i] * scale != 0.0; },
-                 [&](int begin, int end) {
-                   split.Add(now.row[r], begin, end);
-                   active += end - begin;
-                 });
+      ForEachRun(
+          now.begin[r], now.end[r], [&](int i) { return l[i] * scale != 0.0; },
+          [&](int begin, int end) {
+            split.Add(now.row[r], begin, end);
+            active += end - begin;
+          });
     }
     // the zero-pressure cells hold zeros in every field already
     std::swap(out->runs, split);
@@ -563,8 +561,7 @@ bool WriteWinklerSlipTraction(const TaxelGrid& grid, const CellBox& box, double 
   return true;
 }
 
-void MaterializeTraction(const TaxelGrid& grid, bool pressure_pa, bool shear,
-                         TractionField* f) {
+void MaterializeTraction(const TaxelGrid& grid, bool pressure_pa, bool shear, TractionField* f) {
   pressure_pa = pressure_pa && f->lazy_pressure_pa;
   shear = shear && f->lazy_shear;
   if (!pressure_pa && !shear) return;

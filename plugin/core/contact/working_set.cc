@@ -1,7 +1,7 @@
 #include "contact/working_set.h"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 
@@ -70,8 +70,7 @@ MJTOUCH_LANES size_t Count(v4l negated) {
 template <bool kAdd>
 MJTOUCH_LANES double UpdateAndSumT(size_t B, double s, double tau, const double* __restrict r,
                                    const double* __restrict kd, const double* __restrict g0,
-                                   const double* __restrict p, double* __restrict u,
-                                   size_t* nc) {
+                                   const double* __restrict p, double* __restrict u, size_t* nc) {
   const v4d zero = {0, 0, 0, 0}, sv = Splat(s), tv = Splat(tau);
   v4d acc = zero;
   v4l cnt = {0, 0, 0, 0};
@@ -103,39 +102,16 @@ MJTOUCH_LANES double UpdateAndSumT(size_t B, double s, double tau, const double*
 // For the 4-bit lane mask m: kLane[m], the set lanes first, in order;
 // kHalves[m], the same as 32-bit halves (one vpermd moves four doubles);
 // kCount[m], how many.
-constexpr v4i kLane[16] = {
-    {0, 0, 0, 0},
-    {0, 0, 0, 0},
-    {1, 0, 0, 0},
-    {0, 1, 0, 0},
-    {2, 0, 0, 0},
-    {0, 2, 0, 0},
-    {1, 2, 0, 0},
-    {0, 1, 2, 0},
-    {3, 0, 0, 0},
-    {0, 3, 0, 0},
-    {1, 3, 0, 0},
-    {0, 1, 3, 0},
-    {2, 3, 0, 0},
-    {0, 2, 3, 0},
-    {1, 2, 3, 0},
-    {0, 1, 2, 3}};
+constexpr v4i kLane[16] = {{0, 0, 0, 0}, {0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0},
+                           {2, 0, 0, 0}, {0, 2, 0, 0}, {1, 2, 0, 0}, {0, 1, 2, 0},
+                           {3, 0, 0, 0}, {0, 3, 0, 0}, {1, 3, 0, 0}, {0, 1, 3, 0},
+                           {2, 3, 0, 0}, {0, 2, 3, 0}, {1, 2, 3, 0}, {0, 1, 2, 3}};
 constexpr v8i kHalves[16] = {
-    {0, 1, 0, 1, 0, 1, 0, 1},
-    {0, 1, 0, 1, 0, 1, 0, 1},
-    {2, 3, 0, 1, 0, 1, 0, 1},
-    {0, 1, 2, 3, 0, 1, 0, 1},
-    {4, 5, 0, 1, 0, 1, 0, 1},
-    {0, 1, 4, 5, 0, 1, 0, 1},
-    {2, 3, 4, 5, 0, 1, 0, 1},
-    {0, 1, 2, 3, 4, 5, 0, 1},
-    {6, 7, 0, 1, 0, 1, 0, 1},
-    {0, 1, 6, 7, 0, 1, 0, 1},
-    {2, 3, 6, 7, 0, 1, 0, 1},
-    {0, 1, 2, 3, 6, 7, 0, 1},
-    {4, 5, 6, 7, 0, 1, 0, 1},
-    {0, 1, 4, 5, 6, 7, 0, 1},
-    {2, 3, 4, 5, 6, 7, 0, 1},
+    {0, 1, 0, 1, 0, 1, 0, 1}, {0, 1, 0, 1, 0, 1, 0, 1}, {2, 3, 0, 1, 0, 1, 0, 1},
+    {0, 1, 2, 3, 0, 1, 0, 1}, {4, 5, 0, 1, 0, 1, 0, 1}, {0, 1, 4, 5, 0, 1, 0, 1},
+    {2, 3, 4, 5, 0, 1, 0, 1}, {0, 1, 2, 3, 4, 5, 0, 1}, {6, 7, 0, 1, 0, 1, 0, 1},
+    {0, 1, 6, 7, 0, 1, 0, 1}, {2, 3, 6, 7, 0, 1, 0, 1}, {0, 1, 2, 3, 6, 7, 0, 1},
+    {4, 5, 6, 7, 0, 1, 0, 1}, {0, 1, 4, 5, 6, 7, 0, 1}, {2, 3, 4, 5, 6, 7, 0, 1},
     {0, 1, 2, 3, 4, 5, 6, 7}};
 constexpr int kCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
 
@@ -146,11 +122,10 @@ MJTOUCH_LANES v4d Compact(v4d x, v8i halves) {
 
 template <bool kFloat, bool kReadT>
 MJTOUCH_LANES size_t BuildSetT(int bx, int by, int px, int hw, const double* __restrict g0,
-                               const double* __restrict u, const double* __restrict p,
-                               double gbar, double* __restrict gp, float* __restrict gpf,
-                               double* __restrict t, int* __restrict S, double* __restrict gS,
-                               double* __restrict pS, double* __restrict oS,
-                               size_t* __restrict row_first) {
+                               const double* __restrict u, const double* __restrict p, double gbar,
+                               double* __restrict gp, float* __restrict gpf, double* __restrict t,
+                               int* __restrict S, double* __restrict gS, double* __restrict pS,
+                               double* __restrict oS, size_t* __restrict row_first) {
   const v4d zero = {0, 0, 0, 0}, gbarv = Splat(gbar);
   // the padded array's border: zero (a periodic caller overwrites it)
   auto zero_pad = [&](size_t from, size_t n) {
@@ -325,19 +300,19 @@ double UpdateAndSum(size_t B, double s, double tau, const double* r, const doubl
 }
 
 MJTOUCH_TARGET_CLONES
-size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* u,
-                const double* p, double gbar, double* gp, float* gpf, double* t, bool read_t,
-                int* S, double* gS, double* pS, double* oS, size_t* row_first) {
+size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* u, const double* p,
+                double gbar, double* gp, float* gpf, double* t, bool read_t, int* S, double* gS,
+                double* pS, double* oS, size_t* row_first) {
   if (gp) {
     return read_t ? BuildSetT<false, true>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS,
                                            oS, row_first)
-                  : BuildSetT<false, false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS,
-                                            pS, oS, row_first);
+                  : BuildSetT<false, false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS,
+                                            oS, row_first);
   }
   return read_t ? BuildSetT<true, true>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS,
                                         row_first)
-                : BuildSetT<true, false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS,
-                                         oS, row_first);
+                : BuildSetT<true, false>(bx, by, px, hw, g0, u, p, gbar, gp, gpf, t, S, gS, pS, oS,
+                                         row_first);
 }
 
 MJTOUCH_TARGET_CLONES
@@ -473,8 +448,8 @@ namespace {
 
 template <bool kScatter>
 MJTOUCH_LANES double CenterDotT(size_t ns, double mean, double* __restrict xS,
-                               const double* __restrict gS, const int* __restrict S,
-                               double* __restrict x_box) {
+                                const double* __restrict gS, const int* __restrict S,
+                                double* __restrict x_box) {
   const v4d mv = Splat(mean);
   v4d acc = {0, 0, 0, 0};
   size_t k = 0;
@@ -527,9 +502,9 @@ double AxpySum(size_t ns, double beta, const double* __restrict zS, const double
 }
 
 MJTOUCH_TARGET_CLONES
-double StepProject(size_t ns, double tau, const double* __restrict pS,
-                   const double* __restrict tS, const int* __restrict S, double* __restrict pnS,
-                   double* __restrict delta, int* __restrict changed, size_t* nchg) {
+double StepProject(size_t ns, double tau, const double* __restrict pS, const double* __restrict tS,
+                   const int* __restrict S, double* __restrict pnS, double* __restrict delta,
+                   int* __restrict changed, size_t* nchg) {
   const v4d zero = {0, 0, 0, 0}, tv = Splat(tau);
   v4d acc = zero;
   size_t n = 0;
@@ -566,8 +541,8 @@ double StepProject(size_t ns, double tau, const double* __restrict pS,
 }
 
 MJTOUCH_TARGET_CLONES
-double ScaleChange(size_t ns, double s, const double* __restrict pnS,
-                   const double* __restrict pS, const int* __restrict S, double* __restrict p) {
+double ScaleChange(size_t ns, double s, const double* __restrict pnS, const double* __restrict pS,
+                   const int* __restrict S, double* __restrict p) {
   const v4d sv = Splat(s);
   v4d acc = {0, 0, 0, 0};
   size_t k = 0;

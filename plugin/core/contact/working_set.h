@@ -36,9 +36,9 @@ double UpdateAndSum(size_t B, double s, double tau, const double* r, const doubl
 // (written four lanes at a time, never past the cell being read).
 // row_first (by + 1 entries): row j's cells are S[row_first[j] ..
 // row_first[j + 1]). Returns |S|.
-size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* u,
-                const double* p, double gbar, double* gp, float* gpf, double* t, bool read_t,
-                int* S, double* gS, double* pS, double* oS, size_t* row_first);
+size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* u, const double* p,
+                double gbar, double* gp, float* gpf, double* t, bool read_t, int* S, double* gS,
+                double* pS, double* oS, size_t* row_first);
 
 // The solve's start from a bx x by window of the grid (rows `stride`
 // apart): g0 = gap on candidates (finite gap), +inf elsewhere (one
@@ -46,8 +46,8 @@ size_t BuildSet(int bx, int by, int px, int hw, const double* g0, const double* 
 // candidates, 0 where not a candidate or not finite; the cells whose p
 // differs from given go to changed (box order, count in *nchanged; B
 // entries). Returns sum(p) in box order; the candidates' count in *ncand.
-double LoadGuess(int bx, int by, size_t stride, const double* gap, const double* given,
-                 double* g0, double* p, size_t* ncand, int* changed, size_t* nchanged);
+double LoadGuess(int bx, int by, size_t stride, const double* gap, const double* given, double* g0,
+                 double* p, size_t* ncand, int* changed, size_t* nchanged);
 
 // In box order over the contact (p > 0): the sum of g0 + u, the largest g0
 // (-inf if none) in *max_g0 and the count in *nc.

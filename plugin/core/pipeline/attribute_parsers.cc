@@ -13,7 +13,7 @@ namespace mjtouch {
 namespace {
 
 constexpr double kDefaultRadius = 5e-3;  // receptor population, m
-constexpr size_t kMaxLayers = 64;  // LayeredSubstrate::Create's limit
+constexpr size_t kMaxLayers = 64;        // LayeredSubstrate::Create's limit
 
 // One number of a layer or of the base, in [lo, hi] or (lo, hi].
 bool LayerNumber(AttributeParser* p, const char* key, const std::string& what,
@@ -21,7 +21,7 @@ bool LayerNumber(AttributeParser* p, const char* key, const std::string& what,
                  double* v) {
   double x;
   const bool number = ToDouble(word, &x);
-  const char* where = !number ? "is not a finite number;"
+  const char* where = !number                        ? "is not a finite number;"
                       : (lo_open ? x <= lo : x < lo) ? "is below the"
                       : x > hi                       ? "is above the"
                                                      : nullptr;
@@ -40,8 +40,10 @@ bool LayerNumber(AttributeParser* p, const char* key, const std::string& what,
 bool EntryList(AttributeParser* p, const char* key, const std::string& value, const char* form,
                std::vector<std::vector<std::string>>* entries) {
   if (value.find(',') != std::string::npos)
-    return p->Fail(Fmt("attribute `%s`: ',' is not a separator; valid: %s, words separated by "
-                       "spaces, entries by ';'", key, form));
+    return p->Fail(
+        Fmt("attribute `%s`: ',' is not a separator; valid: %s, words separated by "
+            "spaces, entries by ';'",
+            key, form));
   entries->clear();
   size_t start = 0;
   while (true) {
@@ -49,8 +51,10 @@ bool EntryList(AttributeParser* p, const char* key, const std::string& value, co
     const std::string entry = value.substr(start, end == std::string::npos ? end : end - start);
     const auto w = Words(entry);
     if (w.empty())
-      return p->Fail(Fmt("attribute `%s`: entry %zu is empty (a ';' with nothing on one side); "
-                         "valid: %s separated by ';'", key, entries->size() + 1, form));
+      return p->Fail(
+          Fmt("attribute `%s`: entry %zu is empty (a ';' with nothing on one side); "
+              "valid: %s separated by ';'",
+              key, entries->size() + 1, form));
     entries->push_back(w);
     if (end == std::string::npos) return true;
     start = end + 1;
@@ -70,8 +74,8 @@ int ClassIndex(const std::string& word) {
 // r / thickness and (pitch / thickness)^2. Bounded before it starts so that
 // no `layers` value costs more than a few seconds (at the bounds, ~1-2 s on
 // one core; a 1e-30 m layer never returned).
-constexpr double kMaxSpanPerThickness = 5e3;   // half-diagonal / thickness
-constexpr double kMaxPitchPerThickness = 50;   // pitch / thickness
+constexpr double kMaxSpanPerThickness = 5e3;  // half-diagonal / thickness
+constexpr double kMaxPitchPerThickness = 50;  // pitch / thickness
 
 bool CheckKernelBuildWork(const SkinConfig& cfg, std::string* error) {
   if (!cfg.layered || cfg.layers.empty()) return true;
@@ -80,11 +84,12 @@ bool CheckKernelBuildWork(const SkinConfig& cfg, std::string* error) {
   const double t = cfg.layers[0].thickness_m;
   const double need = std::max(span / kMaxSpanPerThickness, pitch / kMaxPitchPerThickness);
   if (t >= need) return true;
-  *error = Fmt("mjtouch.skin: attribute `layers`: layer 1 thickness = %g m is below %g m, the "
-               "least the kernel build allows on this grid (its work grows as the grid's "
-               "half-diagonal %g m / thickness, at most %g, and pitch / thickness, at most %g); "
-               "valid: layer 1 thickness >= %g m, or a smaller `nx` x `pitch`",
-               t, need, span, kMaxSpanPerThickness, kMaxPitchPerThickness, need);
+  *error =
+      Fmt("mjtouch.skin: attribute `layers`: layer 1 thickness = %g m is below %g m, the "
+          "least the kernel build allows on this grid (its work grows as the grid's "
+          "half-diagonal %g m / thickness, at most %g, and pitch / thickness, at most %g); "
+          "valid: layer 1 thickness >= %g m, or a smaller `nx` x `pitch`",
+          t, need, span, kMaxSpanPerThickness, kMaxPitchPerThickness, need);
   return false;
 }
 
@@ -101,13 +106,14 @@ bool CheckReceptorCounts(const SkinConfig& cfg, std::string* error) {
     const ClassConfig& k = cfg.classes[c];
     if (!k.present || count[c] > 0) continue;
     const char* name = ClassName(static_cast<ReceptorClass>(c));
-    *error = Fmt("mjtouch.skin: no %s receptor: `density` entry %d (%g per cm^2) x pi `radius`^2 "
-                 "(%g m%s) = %g receptors rounds to 0; valid: density x pi radius^2 >= 0.5 "
-                 "(radius in cm): raise `density` or `radius`%s, or remove %s from `classes`",
-                 name, c + 1, k.density_per_cm2, r,
-                 cfg.radius_is_default ? " (default): min(5e-3, `nx` * `pitch` / 2 - `pitch`)" : "",
-                 k.density_per_cm2 * 3.14159265358979 * r * r * 1e4,
-                 cfg.radius_is_default ? " (or `nx` * `pitch`)" : "", name);
+    *error =
+        Fmt("mjtouch.skin: no %s receptor: `density` entry %d (%g per cm^2) x pi `radius`^2 "
+            "(%g m%s) = %g receptors rounds to 0; valid: density x pi radius^2 >= 0.5 "
+            "(radius in cm): raise `density` or `radius`%s, or remove %s from `classes`",
+            name, c + 1, k.density_per_cm2, r,
+            cfg.radius_is_default ? " (default): min(5e-3, `nx` * `pitch` / 2 - `pitch`)" : "",
+            k.density_per_cm2 * 3.14159265358979 * r * r * 1e4,
+            cfg.radius_is_default ? " (or `nx` * `pitch`)" : "", name);
     return false;
   }
   return true;
@@ -119,8 +125,10 @@ bool ListWords(AttributeParser* p, const char* key, const std::string& value, co
                std::vector<std::string>* words) {
   for (const char sep : {',', ';'})
     if (value.find(sep) != std::string::npos)
-      return p->Fail(Fmt("attribute `%s` = '%s': '%c' is not a separator here; valid: %s, "
-                         "separated by spaces", key, value.c_str(), sep, form));
+      return p->Fail(
+          Fmt("attribute `%s` = '%s': '%c' is not a separator here; valid: %s, "
+              "separated by spaces",
+              key, value.c_str(), sep, form));
   *words = Words(value);
   return true;
 }
@@ -133,8 +141,10 @@ bool ParseOversampleAttribute(const std::string& v, SkinConfig* cfg, AttributePa
   if (v == "auto") return true;  // 0: ResolveOversample picks the count
   double count = 0;
   if (!ToDouble(v, &count) || count != std::floor(count) || count < 1 || count > 64)
-    return p->Fail(Fmt("attribute `oversample` = '%s' is not valid; valid: auto or an integer "
-                       "in [1, 64]", v.c_str()));
+    return p->Fail(
+        Fmt("attribute `oversample` = '%s' is not valid; valid: auto or an integer "
+            "in [1, 64]",
+            v.c_str()));
   cfg->oversample = static_cast<int>(count);
   return true;
 }
@@ -147,8 +157,8 @@ bool ParseClassesAttribute(const std::string& v, SkinConfig* cfg, AttributeParse
   for (const auto& w : words) {
     const int k = ClassIndex(w);
     if (k < 0)
-      return p->Fail(Fmt("attribute `classes`: unknown receptor class '%s'; valid: SA1 RA PC",
-                         w.c_str()));
+      return p->Fail(
+          Fmt("attribute `classes`: unknown receptor class '%s'; valid: SA1 RA PC", w.c_str()));
     cfg->classes[k].present = true;
   }
   return true;
@@ -161,13 +171,15 @@ bool ParseQuantityAttribute(const std::string& v, SkinConfig* cfg, AttributePars
   std::vector<std::string> w;
   if (!ListWords(p, "quantity", v, "3 names (SA1 RA PC)", &w)) return false;
   if (w.size() != kNumClasses)
-    return p->Fail("attribute `quantity` needs 3 names (SA1 RA PC); valid: szz maxcomp "
-                   "vonmises maxshear sed strain");
+    return p->Fail(
+        "attribute `quantity` needs 3 names (SA1 RA PC); valid: szz maxcomp "
+        "vonmises maxshear sed strain");
   for (int c = 0; c < kNumClasses; ++c) {
     if (!ParseQuantity(w[c], &cfg->classes[c].quantity))
-      return p->Fail(Fmt("attribute `quantity`: unknown quantity '%s' for %s; valid: szz "
-                         "maxcomp vonmises maxshear sed strain", w[c].c_str(),
-                         ClassName(static_cast<ReceptorClass>(c))));
+      return p->Fail(
+          Fmt("attribute `quantity`: unknown quantity '%s' for %s; valid: szz "
+              "maxcomp vonmises maxshear sed strain",
+              w[c].c_str(), ClassName(static_cast<ReceptorClass>(c))));
   }
   // SA1 gains default to the Wang 2016 Table 1 row of the SA1 quantity.
   DefaultSA1Gains(cfg->classes[0].quantity, &cfg->receptor.sa1);
@@ -187,8 +199,10 @@ bool ParseOutputsAttribute(const std::string& v, SkinConfig* cfg, AttributeParse
     for (int b = 0; b < kNumOutputs; ++b)
       if (w == OutputName(b)) k = b;
     if (k < 0)
-      return p->Fail(Fmt("attribute `outputs`: unknown output '%s'; valid: spikes stress "
-                         "voltage force pressure rate", w.c_str()));
+      return p->Fail(
+          Fmt("attribute `outputs`: unknown output '%s'; valid: spikes stress "
+              "voltage force pressure rate",
+              w.c_str()));
     cfg->outputs[k] = true;
   }
   return true;
@@ -221,8 +235,10 @@ bool ParseSeedAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* 
   errno = 0;
   const unsigned long long seed = std::strtoull(v.c_str(), &end, 10);
   if (v[0] == '-' || *end != '\0' || errno == ERANGE)
-    return p->Fail(Fmt("attribute `seed` = '%s' is not an integer in [0, "
-                       "18446744073709551615]", v.c_str()));
+    return p->Fail(
+        Fmt("attribute `seed` = '%s' is not an integer in [0, "
+            "18446744073709551615]",
+            v.c_str()));
   cfg->receptor.noise.seed = seed;
   return true;
 }
@@ -233,9 +249,11 @@ void WriteSeedKey(const SkinConfig& cfg, std::ostream& out) { out << cfg.recepto
 bool ParseSitesAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p) {
   for (const char* key : {"classes", "density", "depth", "radius"}) {
     if (p->Present(key))
-      return p->Fail(Fmt("attribute `sites` places the receptors explicitly; remove `%s` "
-                         "(valid with `sites`: per-class `quantity` and the afferent "
-                         "parameters)", key));
+      return p->Fail(
+          Fmt("attribute `sites` places the receptors explicitly; remove `%s` "
+              "(valid with `sites`: per-class `quantity` and the afferent "
+              "parameters)",
+              key));
   }
   const char* form = "entries 'CLASS x y depth' (CLASS in SA1 RA PC; x, y, depth in m)";
   std::vector<std::vector<std::string>> entries;
@@ -246,25 +264,31 @@ bool ParseSitesAttribute(const std::string& v, SkinConfig* cfg, AttributeParser*
   for (size_t e = 0; e < entries.size(); ++e) {
     const auto& w = entries[e];
     if (w.size() != 4)
-      return p->Fail(Fmt("attribute `sites` entry %zu has %zu words; it needs 4: %s separated "
-                         "by ';'", e + 1, w.size(), form));
+      return p->Fail(
+          Fmt("attribute `sites` entry %zu has %zu words; it needs 4: %s separated "
+              "by ';'",
+              e + 1, w.size(), form));
     const int c = ClassIndex(w[0]);
     double x, y, depth;
     if (c < 0 || !ToDouble(w[1], &x) || !ToDouble(w[2], &y) || !ToDouble(w[3], &depth))
       return p->Fail(Fmt("attribute `sites` entry %zu ('%s %s %s %s') is not one of %s", e + 1,
                          w[0].c_str(), w[1].c_str(), w[2].c_str(), w[3].c_str(), form));
     if (std::abs(x) > limit || std::abs(y) > limit)
-      return p->Fail(Fmt("attribute `sites` entry %zu (%s at x = %g, y = %g m) is outside the "
-                         "taxel grid; valid range |x|, |y| <= nx * pitch / 2 - pitch = %g m",
-                         e + 1, w[0].c_str(), x, y, limit));
+      return p->Fail(
+          Fmt("attribute `sites` entry %zu (%s at x = %g, y = %g m) is outside the "
+              "taxel grid; valid range |x|, |y| <= nx * pitch / 2 - pitch = %g m",
+              e + 1, w[0].c_str(), x, y, limit));
     ClassConfig& k = cfg->classes[c];
     if (!(depth > 0 && depth <= 0.02))
-      return p->Fail(Fmt("attribute `sites` entry %zu (%s) depth = %g m is out of range; valid "
-                         "range (0, 0.02] m", e + 1, w[0].c_str(), depth));
+      return p->Fail(
+          Fmt("attribute `sites` entry %zu (%s) depth = %g m is out of range; valid "
+              "range (0, 0.02] m",
+              e + 1, w[0].c_str(), depth));
     if (depth_set[c] && depth != k.depth_m)
-      return p->Fail(Fmt("attribute `sites` entry %zu: every %s site must have the same depth "
-                         "(its kernel table and material); got %g and %g m", e + 1,
-                         w[0].c_str(), k.depth_m, depth));
+      return p->Fail(
+          Fmt("attribute `sites` entry %zu: every %s site must have the same depth "
+              "(its kernel table and material); got %g and %g m",
+              e + 1, w[0].c_str(), k.depth_m, depth));
     depth_set[c] = true;
     k.present = true;
     k.depth_m = depth;
@@ -288,12 +312,14 @@ bool ParseLayersAttribute(const std::string& v, SkinConfig* cfg, AttributeParser
   for (const auto& w : entries) {
     const int k = static_cast<int>(stack.size()) + 1;
     if (w.size() != 3)
-      return p->Fail(Fmt("attribute `layers`: layer %d has %zu words; it needs 3 numbers: "
-                         "thickness (m), Young's modulus E (Pa), Poisson's ratio nu; layers "
-                         "are separated by ';'", k, w.size()));
+      return p->Fail(
+          Fmt("attribute `layers`: layer %d has %zu words; it needs 3 numbers: "
+              "thickness (m), Young's modulus E (Pa), Poisson's ratio nu; layers "
+              "are separated by ';'",
+              k, w.size()));
     ElasticLayer l;
-    if (!LayerNumber(p, "layers", Fmt("layer %d thickness", k), w[0], kMinLayerThicknessM,
-                     false, kMaxLayerThicknessM, "m", &l.thickness_m) ||
+    if (!LayerNumber(p, "layers", Fmt("layer %d thickness", k), w[0], kMinLayerThicknessM, false,
+                     kMaxLayerThicknessM, "m", &l.thickness_m) ||
         !LayerNumber(p, "layers", Fmt("layer %d E", k), w[1], kMinLayerModulusPa, false,
                      kMaxLayerModulusPa, "Pa", &l.young_pa) ||
         !LayerNumber(p, "layers", Fmt("layer %d nu", k), w[2], -1, true, 0.5, "", &l.poisson))
@@ -318,9 +344,10 @@ bool ParseBaseAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* 
   LayeredBase b;
   b.rigid = false;
   if (w.size() != 2)
-    return p->Fail(Fmt("attribute `base` = '%s' must be 'rigid' (bone) or 'E nu' (an elastic "
-                       "half-space: E in [%g, %g] Pa, nu in (-1, 0.5])", v.c_str(),
-                       kMinLayerModulusPa, kMaxLayerModulusPa));
+    return p->Fail(
+        Fmt("attribute `base` = '%s' must be 'rigid' (bone) or 'E nu' (an elastic "
+            "half-space: E in [%g, %g] Pa, nu in (-1, 0.5])",
+            v.c_str(), kMinLayerModulusPa, kMaxLayerModulusPa));
   if (!LayerNumber(p, "base", "E", w[0], kMinLayerModulusPa, false, kMaxLayerModulusPa, "Pa",
                    &b.young_pa) ||
       !LayerNumber(p, "base", "nu", w[1], -1, true, 0.5, "", &b.poisson))
@@ -338,22 +365,29 @@ bool CheckAttributeCombinations(const AttributeParser& p, SkinConfig* cfg, std::
     return false;
   };
   if (cfg->oversample > 1 && cfg->pressure_model == PressureModel::kContacts)
-    return fail("attribute `oversample` needs pressure=\"winkler\" or \"elastic\" (the "
-                "contacts model has no geometry to interpolate over the step); valid with "
-                "contacts: 1");
+    return fail(
+        "attribute `oversample` needs pressure=\"winkler\" or \"elastic\" (the "
+        "contacts model has no geometry to interpolate over the step); valid with "
+        "contacts: 1");
   if (p.Present("stress_theta") && cfg->stress_method != StressMethod::kTree)
-    return fail(Fmt("attribute `stress_theta` applies to stress_method=\"tree\" only "
-                    "(stress_method is \"%s\")", StressMethodName(cfg->stress_method)));
+    return fail(
+        Fmt("attribute `stress_theta` applies to stress_method=\"tree\" only "
+            "(stress_method is \"%s\")",
+            StressMethodName(cfg->stress_method)));
   if (!cfg->layered) {
     for (const char* key : {"layers", "base", "interface_side"})
       if (p.Present(key))
-        return fail(Fmt("attribute `%s` applies to skin=\"layered\" only (skin is "
-                        "\"halfspace\")", key));
+        return fail(
+            Fmt("attribute `%s` applies to skin=\"layered\" only (skin is "
+                "\"halfspace\")",
+                key));
   } else {
     for (const char* key : {"poisson", "young"})
       if (p.Present(key))
-        return fail(Fmt("attribute `%s` applies to skin=\"halfspace\" only; the layered skin "
-                        "takes its moduli from `layers` (and `base`)", key));
+        return fail(
+            Fmt("attribute `%s` applies to skin=\"halfspace\" only; the layered skin "
+                "takes its moduli from `layers` (and `base`)",
+                key));
   }
   if (!CheckKernelBuildWork(*cfg, error) || !CheckElasticSkin(*cfg, error)) return false;
   const double half = cfg->grid.HalfExtent();
@@ -361,16 +395,18 @@ bool CheckAttributeCombinations(const AttributeParser& p, SkinConfig* cfg, std::
     cfg->population_radius_m = std::min(kDefaultRadius, half - cfg->grid.pitch_m);
     cfg->radius_is_default = true;
   } else if (cfg->population_radius_m > half - cfg->grid.pitch_m) {
-    return fail(Fmt("attribute `radius` = %g m exceeds the taxel grid (nx * pitch / 2 - pitch "
-                    "= %g m); valid range [0, %g] m", cfg->population_radius_m,
-                    half - cfg->grid.pitch_m, half - cfg->grid.pitch_m));
+    return fail(
+        Fmt("attribute `radius` = %g m exceeds the taxel grid (nx * pitch / 2 - pitch "
+            "= %g m); valid range [0, %g] m",
+            cfg->population_radius_m, half - cfg->grid.pitch_m, half - cfg->grid.pitch_m));
   }
   if (cfg->ridges.enabled && cfg->ridges.pitch_m < 2 * cfg->grid.pitch_m)
-    return fail(Fmt("attribute `ridge_pitch` = %g m%s is below two taxels (2 x `pitch` = %g "
-                    "m); the grid cannot resolve the ridges: valid `ridge_pitch` >= %g m, or "
-                    "`pitch` <= %g m, or ridges=\"false\"", cfg->ridges.pitch_m,
-                    cfg->ridge_pitch_is_default ? " (default)" : "", 2 * cfg->grid.pitch_m,
-                    2 * cfg->grid.pitch_m, cfg->ridges.pitch_m / 2));
+    return fail(
+        Fmt("attribute `ridge_pitch` = %g m%s is below two taxels (2 x `pitch` = %g "
+            "m); the grid cannot resolve the ridges: valid `ridge_pitch` >= %g m, or "
+            "`pitch` <= %g m, or ridges=\"false\"",
+            cfg->ridges.pitch_m, cfg->ridge_pitch_is_default ? " (default)" : "",
+            2 * cfg->grid.pitch_m, 2 * cfg->grid.pitch_m, cfg->ridges.pitch_m / 2));
   return CheckReceptorCounts(*cfg, error);
 }
 

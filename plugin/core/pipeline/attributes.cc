@@ -22,11 +22,11 @@ using K = AttributeKind;
 using S = AttributeScope;
 
 // Accessors of one SkinConfig field (the parsed value, index unused).
-#define FIELD(expr)                                                        \
-  [](const SkinConfig& c, int) { return static_cast<double>(c.expr); },    \
+#define FIELD(expr)                                                     \
+  [](const SkinConfig& c, int) { return static_cast<double>(c.expr); }, \
       [](SkinConfig* c, int, double v) { c->expr = static_cast<decltype(c->expr)>(v); }
-#define CLASS_FIELD(expr)                                                        \
-  [](const SkinConfig& c, int k) { return static_cast<double>(c.expr); },        \
+#define CLASS_FIELD(expr)                                                 \
+  [](const SkinConfig& c, int k) { return static_cast<double>(c.expr); }, \
       [](SkinConfig* c, int k, double v) { c->expr = v; }
 #define NO_FIELD nullptr, nullptr
 #define NO_PARSE nullptr, nullptr
@@ -63,8 +63,8 @@ const std::vector<AttributeRow>& Rows() {
        "textures rendered by the skin (any geom type but sdf, not on the pad's body)",
        "names of geoms in the model", NO_FIELD, ParseTextureAttribute, nullptr, S::kAdapter},
       {"texture_group", K::kInteger, 0, 5, false, false, "", "(none)",
-       "non-colliding geoms in this geom group are textures", nullptr,
-       FIELD(texture_group), NO_PARSE, S::kModel},
+       "non-colliding geoms in this geom group are textures", nullptr, FIELD(texture_group),
+       NO_PARSE, S::kModel},
       {"nx", K::kInteger, 4, 512, false, false, "cells", "128", "taxels per side", nullptr,
        FIELD(grid.n), NO_PARSE, S::kModel},
       {"pitch", K::kNumber, kMinPitchM, 1e-2, false, false, "m", "1e-4", "taxel pitch", nullptr,
@@ -85,8 +85,8 @@ const std::vector<AttributeRow>& Rows() {
       {"ridge_angle", K::kNumber, -180, 180, false, false, "deg", "0",
        "ridge lines vs the pad's y axis (0: perpendicular to pad x)", nullptr,
        [](const SkinConfig& c, int) { return c.ridges.angle_rad; },
-       [](SkinConfig* c, int, double deg) { c->ridges.angle_rad = deg * kPi / 180.0; },
-       NO_PARSE, S::kModel},
+       [](SkinConfig* c, int, double deg) { c->ridges.angle_rad = deg * kPi / 180.0; }, NO_PARSE,
+       S::kModel},
       {"ridge_profile", K::kChoice, 0, 0, false, false, "", "sine", "ridge cross-section",
        "sine triangle square", FIELD(ridges.profile), NO_PARSE, S::kModel},
       // -- contact (stage 2) -------------------------------------------------
@@ -105,24 +105,25 @@ const std::vector<AttributeRow>& Rows() {
        FIELD(tolerance), NO_PARSE, S::kModel},
       {"contact_solver", K::kChoice, 0, 0, false, false, "", "pcg",
        "`elastic`: `pcg` preconditioned CG, warm start extrapolated from the last two steps; "
-       "`pk` Polonsky & Keer's CG from the last step (the reference path)", "pcg pk",
-       FIELD(elastic_method), NO_PARSE, S::kModel},
+       "`pk` Polonsky & Keer's CG from the last step (the reference path)",
+       "pcg pk", FIELD(elastic_method), NO_PARSE, S::kModel},
       {"elastic_precision", K::kChoice, 0, 0, false, false, "", "float",
        "`elastic`: arithmetic of the compliance FFTs; `float` (FFTs 1.7-2x, stages 1-2 1.5x "
        "faster; ~1e-7 relative on the displacement, below the float kernel table and the CG "
-       "`tolerance`) or `double` (the reference path)", "float double", FIELD(elastic_precision), NO_PARSE, S::kModel},
+       "`tolerance`) or `double` (the reference path)",
+       "float double", FIELD(elastic_precision), NO_PARSE, S::kModel},
       {"grid_shift", K::kBool, 0, 0, false, false, "", "false",
        "`elastic`: solve again on the grid shifted by half a cell in x and y and average "
        "(cancels the V / pitch line that texture edges sharper than a cell put in the stress; "
-       "a step ~1.8x as long at 128 x 0.1 mm)", nullptr, FIELD(grid_shift), NO_PARSE, S::kModel},
+       "a step ~1.8x as long at 128 x 0.1 mm)",
+       nullptr, FIELD(grid_shift), NO_PARSE, S::kModel},
       {"stiffness", K::kNumber, kMinStiffnessPaPerM, 1e12, false, false, "Pa/m", "2e7",
        "Winkler foundation stiffness (sets the contact size, not the force)", nullptr,
        FIELD(stiffness_pa_per_m), NO_PARSE, S::kModel},
       {"poisson", K::kNumber, -1, 0.5, true, false, "", "0.48",
        "skin=\"halfspace\": Poisson's ratio", nullptr, FIELD(poisson), NO_PARSE, S::kModel},
       {"shear", K::kBool, 0, 0, false, false, "", "true",
-       "shear traction from MuJoCo's friction force", nullptr, FIELD(shear), NO_PARSE,
-       S::kModel},
+       "shear traction from MuJoCo's friction force", nullptr, FIELD(shear), NO_PARSE, S::kModel},
       {"visual", K::kChoice, 0, 0, false, false, "", "both",
        "drawing: `pad` (heatmap on the skin, seen from below), `above` (a copy 2 mm over the "
        "pad), `both`, `none`",
@@ -166,17 +167,17 @@ const std::vector<AttributeRow>& Rows() {
        ParseMerkelAttribute, WriteMerkelKey, S::kModel},
       {"sa1_k0", K::kNumber, 0, 1e-6, false, false, "A per unit of q", "9.8e-16",
        "SA1 static gain (`filtered`: 7 x the Wang 2016 Table 1 row of the SA1 `quantity`; "
-       "`wang2016`: the row, 1.40e-16 for stress)", nullptr,
-       FIELD(receptor.sa1.k0_a_per_pa), NO_PARSE, S::kModel},
+       "`wang2016`: the row, 1.40e-16 for stress)",
+       nullptr, FIELD(receptor.sa1.k0_a_per_pa), NO_PARSE, S::kModel},
       {"sa1_k1", K::kNumber, 0, 1e-6, false, false, "A s per unit of q", "4.9e-17",
        "SA1 dynamic gain (`filtered`: 0.05 s x `sa1_k0`; `wang2016`: the Table 1 row, 1.68e-16 "
-       "for stress)", nullptr,
-       FIELD(receptor.sa1.k1_a_s_per_pa), NO_PARSE, S::kModel},
+       "for stress)",
+       nullptr, FIELD(receptor.sa1.k1_a_s_per_pa), NO_PARSE, S::kModel},
       {"sa1_i0", K::kNumber, -1e-6, 1e-6, false, false, "A", "4.94e-12",
        "SA1 bias current (Wang 2016 Table 1 row of the SA1 `quantity`)", nullptr,
        FIELD(receptor.sa1.i0_a), NO_PARSE, S::kModel},
-      {"sa1_c", K::kNumber, 0, 1, true, false, "F", "1e-11", "SA1 membrane capacitance",
-       nullptr, FIELD(receptor.sa1.capacitance_f), NO_PARSE, S::kModel},
+      {"sa1_c", K::kNumber, 0, 1, true, false, "F", "1e-11", "SA1 membrane capacitance", nullptr,
+       FIELD(receptor.sa1.capacitance_f), NO_PARSE, S::kModel},
       {"sa1_r", K::kNumber, 0, 1e15, true, false, "Ohm", "1.5e9", "SA1 membrane resistance",
        nullptr, FIELD(receptor.sa1.resistance_ohm), NO_PARSE, S::kModel},
       {"sa1_vth", K::kNumber, 0, 10, true, false, "V", "0.03", "SA1 spike threshold", nullptr,
@@ -186,54 +187,54 @@ const std::vector<AttributeRow>& Rows() {
        FIELD(receptor.sa1.lowpass_hz), NO_PARSE, S::kModel},
       {"sa1_saturation", K::kNumber, 0, 1e12, false, false, "units of q", "60508.9285714",
        "SA1 (`filtered`): input saturation q / (1 + abs(q) / s) (0: none); default 4.5 x the "
-       "Wang 2016 row's rheobase (60.5 kPa for the stress quantities)", nullptr,
-       FIELD(receptor.sa1.saturation), NO_PARSE, S::kModel},
+       "Wang 2016 row's rheobase (60.5 kPa for the stress quantities)",
+       nullptr, FIELD(receptor.sa1.saturation), NO_PARSE, S::kModel},
       {"ra_gain", K::kNumber, 0, 1, false, false, "s/Pa", "5.92e-5", "RA drive gain", nullptr,
        FIELD(receptor.ra.gain_s_per_pa), NO_PARSE, S::kModel},
-      {"ra_lowpass", K::kNumber, 0, 1e4, true, false, "Hz", "40", "RA low-pass corner",
-       nullptr, FIELD(receptor.ra.lowpass_hz), NO_PARSE, S::kModel},
+      {"ra_lowpass", K::kNumber, 0, 1e4, true, false, "Hz", "40", "RA low-pass corner", nullptr,
+       FIELD(receptor.ra.lowpass_hz), NO_PARSE, S::kModel},
       {"ra_saturation", K::kNumber, 0, 1e6, false, false, "(threshold units)", "8",
-       "RA drive saturation s: d s / (s + abs(d)), d the drive (0: none)",
-       nullptr, FIELD(receptor.ra.saturation), NO_PARSE, S::kModel},
-      {"ra_tau", K::kNumber, 0, 10, true, false, "s", "5e-3", "RA membrane time constant",
-       nullptr, FIELD(receptor.ra.tau_s), NO_PARSE, S::kModel},
-      {"pc_gain", K::kNumber, 0, 1, false, false, "s^2/Pa", "4.12e-6", "PC drive gain",
-       nullptr, FIELD(receptor.pc.gain_s2_per_pa), NO_PARSE, S::kModel},
+       "RA drive saturation s: d s / (s + abs(d)), d the drive (0: none)", nullptr,
+       FIELD(receptor.ra.saturation), NO_PARSE, S::kModel},
+      {"ra_tau", K::kNumber, 0, 10, true, false, "s", "5e-3", "RA membrane time constant", nullptr,
+       FIELD(receptor.ra.tau_s), NO_PARSE, S::kModel},
+      {"pc_gain", K::kNumber, 0, 1, false, false, "s^2/Pa", "4.12e-6", "PC drive gain", nullptr,
+       FIELD(receptor.pc.gain_s2_per_pa), NO_PARSE, S::kModel},
       {"pc_highpass", K::kNumber, 0, 1e5, true, false, "Hz", "150", "PC capsule high-pass corner",
        nullptr, FIELD(receptor.pc.highpass_hz), NO_PARSE, S::kModel},
-      {"pc_lowpass", K::kNumber, 0, 1e5, true, false, "Hz", "250", "PC low-pass corner",
-       nullptr, FIELD(receptor.pc.lowpass_hz), NO_PARSE, S::kModel},
+      {"pc_lowpass", K::kNumber, 0, 1e5, true, false, "Hz", "250", "PC low-pass corner", nullptr,
+       FIELD(receptor.pc.lowpass_hz), NO_PARSE, S::kModel},
       {"pc_tau", K::kNumber, 0, 10, true, false, "s", "1.5e-3", "PC membrane time constant",
        nullptr, FIELD(receptor.pc.tau_s), NO_PARSE, S::kModel},
       {"refractory", K::kNumber, 0, 1, true, false, "s", "1e-3",
        "absolute refractory period, every class", nullptr,
        [](const SkinConfig& c, int) { return c.receptor.sa1.refractory_s; },
        [](SkinConfig* c, int, double v) {
-         c->receptor.sa1.refractory_s = c->receptor.ra.refractory_s =
-             c->receptor.pc.refractory_s = v;
+         c->receptor.sa1.refractory_s = c->receptor.ra.refractory_s = c->receptor.pc.refractory_s =
+             v;
        },
        NO_PARSE, S::kModel},
       {"adapt", K::kPerClass, 0, 100, false, false, "(threshold units)", "3.5 1.3 1",
        "SA1 RA PC spike-triggered adaptation: the jump of an inhibitory current at each spike",
        nullptr, CLASS_FIELD(receptor.adapt[k].jump), NO_PARSE, S::kModel},
       {"adapt_tau", K::kPerClass, 0, 10, true, false, "s", "0.05 0.03 0.02",
-       "SA1 RA PC adaptation decay time", nullptr, CLASS_FIELD(receptor.adapt[k].tau_s),
-       NO_PARSE, S::kModel},
+       "SA1 RA PC adaptation decay time", nullptr, CLASS_FIELD(receptor.adapt[k].tau_s), NO_PARSE,
+       S::kModel},
       {"population", K::kChoice, 0, 0, false, false, "", "varied",
        "`varied`: each receptor takes one of 4 parameter sets of its class, picked from "
        "(`seed`, receptor index); `uniform`: the median set",
        "uniform varied", FIELD(receptor.varied), NO_PARSE, S::kModel},
       {"noise", K::kPerClass, 0, 100, false, false, "(threshold units)", "0.35 0.35 0.12",
-       "SA1 RA PC membrane noise standard deviation", nullptr,
-       CLASS_FIELD(receptor.noise.sd[k]), NO_PARSE, S::kModel},
+       "SA1 RA PC membrane noise standard deviation", nullptr, CLASS_FIELD(receptor.noise.sd[k]),
+       NO_PARSE, S::kModel},
       {"noise_tau", K::kNumber, 0, 10, true, false, "s", "2e-3", "membrane noise correlation time",
        nullptr, FIELD(receptor.noise.tau_s), NO_PARSE, S::kModel},
       {"seed", K::kCustom, 0, 0, false, false, "", "0", "membrane noise seed",
        "an integer in [0, 18446744073709551615]", NO_FIELD, ParseSeedAttribute, WriteSeedKey,
        S::kModel},
       {"rate_tau", K::kNumber, 0, 100, true, false, "s", "0.05",
-       "`rate` output: exponential smoothing time", nullptr, FIELD(receptor.rate_tau_s),
-       NO_PARSE, S::kModel},
+       "`rate` output: exponential smoothing time", nullptr, FIELD(receptor.rate_tau_s), NO_PARSE,
+       S::kModel},
       {"sites", K::kCustom, 0, 0, false, false, "m", "(none)",
        "explicit receptors \"CLASS x y depth; ...\" (pad frame), replacing the density "
        "population",
@@ -254,8 +255,8 @@ const std::vector<AttributeRow>& Rows() {
        },
        NO_PARSE, S::kModel},
       {"stress_theta", K::kNumber, 0, 2, true, false, "(block side / distance)", "0.5",
-       "`tree`'s opening angle; RMS stress error 3e-4 to 1e-3 at 0.5", nullptr,
-       FIELD(stress_theta), NO_PARSE, S::kModel},
+       "`tree`'s opening angle; RMS stress error 3e-4 to 1e-3 at 0.5", nullptr, FIELD(stress_theta),
+       NO_PARSE, S::kModel},
       {"threads", K::kInteger, 1, 64, false, false, "", "1",
        "threads per step for the `elastic` solve's FFTs and preconditioner and for stage 3 "
        "(a shared pool; the same bits for any count). 1: outer parallelism (rollout, sweeps) "
@@ -282,7 +283,8 @@ const std::vector<AttributeRow>& Rows() {
 }
 
 std::string NumberText(const AttributeRow& row) {
-  if (row.kind == K::kInteger) return Fmt("[%d, %d]", static_cast<int>(row.lo), static_cast<int>(row.hi));
+  if (row.kind == K::kInteger)
+    return Fmt("[%d, %d]", static_cast<int>(row.lo), static_cast<int>(row.hi));
   return Fmt("%s%g, %g%s", row.lo_open ? "(" : "[", row.lo, row.hi, row.hi_open ? ")" : "]");
 }
 
@@ -320,8 +322,14 @@ bool ParseValue(const AttributeRow& row, const std::string& raw, SkinConfig* cfg
       return true;
     }
     case K::kBool:
-      if (raw == "true" || raw == "1") { row.set(cfg, 0, 1); return true; }
-      if (raw == "false" || raw == "0") { row.set(cfg, 0, 0); return true; }
+      if (raw == "true" || raw == "1") {
+        row.set(cfg, 0, 1);
+        return true;
+      }
+      if (raw == "false" || raw == "0") {
+        row.set(cfg, 0, 0);
+        return true;
+      }
       return p->Fail(Fmt("attribute `%s` = '%s' must be true or false", key, raw.c_str()));
     case K::kChoice: {
       const auto choices = Words(row.choices_or_range);
@@ -336,21 +344,21 @@ bool ParseValue(const AttributeRow& row, const std::string& raw, SkinConfig* cfg
       std::vector<std::string> w;
       if (!ListWords(p, key, raw, "3 numbers (SA1 RA PC)", &w)) return false;
       if (w.size() != kNumClasses)
-        return p->Fail(Fmt("attribute `%s` = '%s' needs 3 numbers (SA1 RA PC), each in %s %s",
-                           key, raw.c_str(), NumberText(row).c_str(), row.units));
+        return p->Fail(Fmt("attribute `%s` = '%s' needs 3 numbers (SA1 RA PC), each in %s %s", key,
+                           raw.c_str(), NumberText(row).c_str(), row.units));
       double x[kNumClasses];
       for (int c = 0; c < kNumClasses; ++c) {
         if (!ToDouble(w[c], &x[c]) || !InRange(row, x[c]))
-          return p->Fail(Fmt("attribute `%s` entry %d ('%s', %s) is out of range; valid range "
-                             "%s %s", key, c + 1, w[c].c_str(),
-                             ClassName(static_cast<ReceptorClass>(c)), NumberText(row).c_str(),
-                             row.units));
+          return p->Fail(
+              Fmt("attribute `%s` entry %d ('%s', %s) is out of range; valid range "
+                  "%s %s",
+                  key, c + 1, w[c].c_str(), ClassName(static_cast<ReceptorClass>(c)),
+                  NumberText(row).c_str(), row.units));
       }
       for (int c = 0; c < kNumClasses; ++c) row.set(cfg, c, x[c]);
       return true;
     }
-    case K::kCustom:
-      return row.parse(raw, cfg, p);
+    case K::kCustom: return row.parse(raw, cfg, p);
   }
   return false;
 }
@@ -372,12 +380,10 @@ const std::vector<AttributeRow>& SkinAttributes() { return Rows(); }
 std::string ValidRangeText(const AttributeRow& row) {
   switch (row.kind) {
     case K::kNumber:
-    case K::kInteger:
-      return NumberText(row);
+    case K::kInteger: return NumberText(row);
     case K::kBool: return "true false";
     case K::kChoice: return row.choices_or_range;
-    case K::kPerClass:
-      return "3 numbers (SA1 RA PC), each in " + NumberText(row);
+    case K::kPerClass: return "3 numbers (SA1 RA PC), each in " + NumberText(row);
     case K::kCustom: {
       // {E}, {T}: the layer moduli's and thicknesses' ranges
       std::string text = row.choices_or_range;
@@ -458,8 +464,7 @@ std::string ConfigCacheKey(const SkinConfig& c) {
       case K::kPerClass:
         for (int k = 0; k < kNumClasses; ++k) s << row.get(c, k) << ' ';
         break;
-      default:
-        s << row.get(c, 0);
+      default: s << row.get(c, 0);
     }
   }
   return s.str();

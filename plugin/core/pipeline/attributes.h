@@ -40,7 +40,7 @@ struct AttributeRow {
   AttributeKind kind;
   double lo, hi;  // kNumber, kInteger, kPerClass
   bool lo_open, hi_open;
-  const char* units;    // "" when dimensionless
+  const char* units;  // "" when dimensionless
   const char* default_text;
   const char* meaning;
   // kChoice: the words, space-separated; kCustom: the valid values in words.

@@ -40,10 +40,11 @@ bool CheckElasticSkin(const SkinConfig& cfg, const LayeredSubstrate* sub, std::s
     const char* name = ClassName(static_cast<ReceptorClass>(c));
     if (!sub) {
       if (NeedsMaterial(k.quantity)) {
-        *error = Fmt("mjtouch.skin: attribute `quantity`: '%s' for %s needs skin=\"layered\" (a "
-                     "homogeneous half-space skin has no Young's modulus); valid with "
-                     "skin=\"halfspace\": szz maxcomp vonmises maxshear",
-                     QuantityName(k.quantity), name);
+        *error =
+            Fmt("mjtouch.skin: attribute `quantity`: '%s' for %s needs skin=\"layered\" (a "
+                "homogeneous half-space skin has no Young's modulus); valid with "
+                "skin=\"halfspace\": szz maxcomp vonmises maxshear",
+                QuantityName(k.quantity), name);
         return false;
       }
       continue;
@@ -59,10 +60,11 @@ bool CheckElasticSkin(const SkinConfig& cfg, const LayeredSubstrate* sub, std::s
           break;
         }
       }
-      *error = Fmt("mjtouch.skin: attribute %s (%s, %g m) is outside the elastic skin (%s); "
-                   "valid range (0, %g%s m for these `layers` over a rigid `base`%s",
-                   where.c_str(), name, k.depth_m, why.c_str(), sub->stack_depth_m(),
-                   upper ? "]" : ")", upper ? "" : " with interface_side=\"lower\"");
+      *error =
+          Fmt("mjtouch.skin: attribute %s (%s, %g m) is outside the elastic skin (%s); "
+              "valid range (0, %g%s m for these `layers` over a rigid `base`%s",
+              where.c_str(), name, k.depth_m, why.c_str(), sub->stack_depth_m(), upper ? "]" : ")",
+              upper ? "" : " with interface_side=\"lower\"");
       return false;
     }
   }
@@ -70,8 +72,8 @@ bool CheckElasticSkin(const SkinConfig& cfg, const LayeredSubstrate* sub, std::s
 }
 
 const char* OutputName(int block) {
-  static const char* names[kNumOutputs] = {"spikes", "stress", "voltage", "force", "pressure",
-                                           "rate"};
+  static const char* names[kNumOutputs] = {"spikes", "stress",   "voltage",
+                                           "force",  "pressure", "rate"};
   return names[block];
 }
 
@@ -91,25 +93,31 @@ bool CheckTactileRate(const SkinConfig& cfg, double timestep_s, std::string* err
       cfg.outputs[kOutSpikes] || cfg.outputs[kOutVoltage] || cfg.outputs[kOutRate];
   if (!(timestep_s > 0.0) || !afferents) return true;
   const double rate_hz = cfg.oversample / timestep_s;
-  const struct { ReceptorClass cls; double corner_hz; const char* key; } bands[] = {
-      {ReceptorClass::kPC, cfg.receptor.pc.lowpass_hz, "pc_lowpass"},
-      {ReceptorClass::kRA, cfg.receptor.ra.lowpass_hz, "ra_lowpass"}};
+  const struct {
+    ReceptorClass cls;
+    double corner_hz;
+    const char* key;
+  } bands[] = {{ReceptorClass::kPC, cfg.receptor.pc.lowpass_hz, "pc_lowpass"},
+               {ReceptorClass::kRA, cfg.receptor.ra.lowpass_hz, "ra_lowpass"}};
   for (const auto& b : bands) {
     if (!cfg.classes[static_cast<int>(b.cls)].present) continue;
     const double need_hz = 8.0 * b.corner_hz;
     if (rate_hz >= need_hz * (1 - 1e-12)) continue;
     const int k = static_cast<int>(std::ceil(need_hz * timestep_s * (1 - 1e-12)));
-    *error = Fmt("mjtouch.skin: %s afferents need tactile sampling of at least %g Hz (8 x `%s` "
-                 "= %g Hz: their band reaches a few times the corner); the timestep %g s with "
-                 "`oversample` = %d samples at %g Hz: ", ClassName(b.cls), need_hz, b.key,
-                 b.corner_hz, timestep_s, cfg.oversample, rate_hz);
+    *error =
+        Fmt("mjtouch.skin: %s afferents need tactile sampling of at least %g Hz (8 x `%s` "
+            "= %g Hz: their band reaches a few times the corner); the timestep %g s with "
+            "`oversample` = %d samples at %g Hz: ",
+            ClassName(b.cls), need_hz, b.key, b.corner_hz, timestep_s, cfg.oversample, rate_hz);
     // Advice that can be followed: `oversample` only while 64 suffices.
     if (k <= kMaxOversample)
       *error += Fmt("set `oversample` >= %d (valid [1, %d]), or ", k, kMaxOversample);
     else
-      *error += Fmt("even `oversample` = %d reaches %g Hz; set `%s` <= %g Hz, or the timestep "
-                    "<= %g s, or ", kMaxOversample, kMaxOversample / timestep_s, b.key,
-                    kMaxOversample / timestep_s / 8.0, kMaxOversample / need_hz);
+      *error +=
+          Fmt("even `oversample` = %d reaches %g Hz; set `%s` <= %g Hz, or the timestep "
+              "<= %g s, or ",
+              kMaxOversample, kMaxOversample / timestep_s, b.key, kMaxOversample / timestep_s / 8.0,
+              kMaxOversample / need_hz);
     *error += Fmt("remove %s from `classes`", ClassName(b.cls));
     return false;
   }
@@ -136,16 +144,18 @@ bool FinalizeSkinConfig(SkinConfig* cfg, std::string* error) {
   for (size_t e = 0; e < cfg->sites.size(); ++e) {
     const ExplicitSite& s = cfg->sites[e];
     if (std::hypot(s.x_m, s.y_m) > footprint) {
-      *error = Fmt("mjtouch.skin: attribute `sites` entry %zu (%s at x = %g, y = %g m) is not "
-                   "under the pad; valid: within %g m of the pole (0.9 x the smaller semi-axis)",
-                   e + 1, ClassName(s.cls), s.x_m, s.y_m, footprint);
+      *error =
+          Fmt("mjtouch.skin: attribute `sites` entry %zu (%s at x = %g, y = %g m) is not "
+              "under the pad; valid: within %g m of the pole (0.9 x the smaller semi-axis)",
+              e + 1, ClassName(s.cls), s.x_m, s.y_m, footprint);
       return false;
     }
   }
   if (cfg->sites.empty() && cfg->population_radius_m > footprint) {
-    *error = Fmt("mjtouch.skin: attribute `radius` = %g m%s exceeds 0.9 x the pad's smaller "
-                 "semi-axis; valid range [0, %g] m", cfg->population_radius_m,
-                 cfg->radius_is_default ? " (default)" : "", footprint);
+    *error =
+        Fmt("mjtouch.skin: attribute `radius` = %g m%s exceeds 0.9 x the pad's smaller "
+            "semi-axis; valid range [0, %g] m",
+            cfg->population_radius_m, cfg->radius_is_default ? " (default)" : "", footprint);
     return false;
   }
   return true;

@@ -19,7 +19,13 @@ namespace mjtouch {
 
 // Output blocks, in sensordata order.
 enum OutputBlock {
-  kOutSpikes = 0, kOutStress, kOutVoltage, kOutForce, kOutPressure, kOutRate, kNumOutputs
+  kOutSpikes = 0,
+  kOutStress,
+  kOutVoltage,
+  kOutForce,
+  kOutPressure,
+  kOutRate,
+  kNumOutputs
 };
 const char* OutputName(int block);
 // normal, tangential x, y (N, pad frame), indentation (m), and 1 when the
@@ -46,15 +52,15 @@ struct SkinConfig {
   TaxelGrid grid{128, 1e-4};
   PadGeometry pad;  // filled by the caller (MuJoCo: the pad geom's size)
   Ridges ridges;
-  bool ridge_pitch_is_default = true;  // (error messages)
+  bool ridge_pitch_is_default = true;                      // (error messages)
   PressureModel pressure_model = PressureModel::kElastic;  // `pressure`
-  double stiffness_pa_per_m = 2e7;  // Winkler foundation
-  double young_pa = 8e4;            // `elastic`: homogeneous skin (Shao 2010 epidermis)
-  double tolerance = 1e-4;          // `elastic`: relative L1 pressure change per iteration (~ its error)
+  double stiffness_pa_per_m = 2e7;                         // Winkler foundation
+  double young_pa = 8e4;    // `elastic`: homogeneous skin (Shao 2010 epidermis)
+  double tolerance = 1e-4;  // `elastic`: relative L1 pressure change per iteration (~ its error)
   ElasticMethod elastic_method = ElasticMethod::kPreconditioned;  // `contact_solver`
   ApplyPrecision elastic_precision = ApplyPrecision::kFloat;      // `elastic_precision`
   bool grid_shift = false;  // `elastic`: average with the half-cell shifted grid (grid_shift.h)
-  double poisson = 0.48;            // homogeneous skin (Shao 2010 epidermis)
+  double poisson = 0.48;    // homogeneous skin (Shao 2010 epidermis)
   // Elastic skin: a layered stack (`skin` = layered: `layers` over `base`,
   // default the Shao et al. 2010 fingertip) or a homogeneous half-space
   // (`skin` = halfspace, `poisson`).
@@ -63,16 +69,16 @@ struct SkinConfig {
   LayeredBase base = LayeredSubstrate::ShaoFingertipBase();
   InterfaceSide interface_side = InterfaceSide::kUpper;
   StressMethod stress_method = StressMethod::kAuto;  // `stress_method` (exact by default)
-  double stress_theta = 0.5;  // `stress_theta`: tree's opening angle
+  double stress_theta = 0.5;                         // `stress_theta`: tree's opening angle
   int threads = 1;  // `threads`: elastic solve's and stage 3's threads per step (same bits)
   // `oversample`: tactile evaluations per physics step (the pad's pose and
   // MuJoCo's contact force interpolated over the step); 0 (`auto`) until
   // ResolveOversample sets the smallest that resolves the afferents.
   int oversample = 0;
   bool shear = true;
-  int texture_group = -1;  // non-colliding geoms in this group are textures (-1: none)
+  int texture_group = -1;             // non-colliding geoms in this group are textures (-1: none)
   double population_radius_m = 5e-3;  // receptors within this distance of the pole
-  bool radius_is_default = false;    // unset: fitted to the grid and pad
+  bool radius_is_default = false;     // unset: fitted to the grid and pad
   ClassConfig classes[kNumClasses];
   ReceptorParams receptor;
   bool outputs[kNumOutputs] = {true, true, false, true, false, false};

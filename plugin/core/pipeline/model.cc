@@ -128,18 +128,19 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
   if (!CheckElasticSkin(cfg, layered.get(), error)) return nullptr;
   if (layered) {
     for (int c = 0; c < kNumClasses; ++c)
-      model->material_[c] = layered->MaterialAt(cfg.classes[c].depth_m,
-                                                cfg.interface_side == InterfaceSide::kUpper);
+      model->material_[c] =
+          layered->MaterialAt(cfg.classes[c].depth_m, cfg.interface_side == InterfaceSide::kUpper);
     model->layered_ = layered.get();
     model->substrate_ = std::move(layered);
   } else {
     model->substrate_ = std::make_shared<HalfSpace>(cfg.poisson);
   }
   for (const auto& s : model->sites_)
-    model->stress_sites_.push_back({s.i, s.j, s.depth_index, model->want_[static_cast<int>(s.cls)]});
+    model->stress_sites_.push_back(
+        {s.i, s.j, s.depth_index, model->want_[static_cast<int>(s.cls)]});
   if (need_stress && !depths.empty()) {
-    model->kernel_ = BuildKernelTables(*model->substrate_, cfg.grid.n, cfg.grid.pitch_m, depths,
-                                       comps);
+    model->kernel_ =
+        BuildKernelTables(*model->substrate_, cfg.grid.n, cfg.grid.pitch_m, depths, comps);
     const KernelTables& kt = *model->kernel_;
     if (cfg.stress_method == StressMethod::kTree) {
       model->tree_ = StressTree::Build(kt, model->stress_sites_, cfg.shear, cfg.stress_theta);
@@ -152,9 +153,10 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
           EstimateStressCost(kt, model->stress_sites_, cfg.grid.n * cfg.grid.n, cfg.shear,
                              cfg.pressure_model != PressureModel::kContacts || !cfg.shear);
       if (cfg.stress_method == StressMethod::kFft && bytes > kMaxSpectraBytes) {
-        *error = Fmt("mjtouch.skin: attribute `stress_method` = fft needs %.0f MiB of kernel "
-                     "spectra at nx = %d; the limit is %.0f MiB (use tree, auto or direct)",
-                     bytes / 1048576.0, cfg.grid.n, kMaxSpectraBytes / 1048576.0);
+        *error =
+            Fmt("mjtouch.skin: attribute `stress_method` = fft needs %.0f MiB of kernel "
+                "spectra at nx = %d; the limit is %.0f MiB (use tree, auto or direct)",
+                bytes / 1048576.0, cfg.grid.n, kMaxSpectraBytes / 1048576.0);
         return nullptr;
       }
       const bool fft = cfg.stress_method == StressMethod::kFft ||
@@ -176,9 +178,9 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
       sg->skin_z = SkinSurface(sg->grid, cfg.pad, cfg.ridges);
       sg->blocks = MakeSkinBlocks(sg->grid, sg->skin_z);
       sg->elastic = std::make_shared<ElasticContact>(
-          model->layered_ ? LayeredCompliance(*model->layered_, cfg.grid.pitch_m, sg->grid.n)
-                          : HalfSpaceCompliance(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m,
-                                                sg->grid.n));
+          model->layered_
+              ? LayeredCompliance(*model->layered_, cfg.grid.pitch_m, sg->grid.n)
+              : HalfSpaceCompliance(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m, sg->grid.n));
       model->shifted_ = std::move(sg);
     }
   }
@@ -189,13 +191,16 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
 std::string SkinModel::Describe() const {
   int count[kNumClasses] = {0, 0, 0};
   for (const auto& s : sites_) count[static_cast<int>(s.cls)]++;
-  return Fmt("mjtouch.skin: %dx%d taxels at %.3g mm, %d SA1 / %d RA / %d PC, kernel %.3f s "
-             "(%s%s)", cfg_.grid.n, cfg_.grid.n, cfg_.grid.pitch_m * 1e3, count[0], count[1],
-             count[2], kernel_build_seconds(), substrate_->Describe().c_str(),
-             spectra_ ? "; FFT spectra built"
-                      : (tree_ ? Fmt("; stress tree, theta %g, %.0f terms per receptor",
-                                     tree_->theta(), tree_->mean_terms()).c_str()
-                               : ""));
+  return Fmt(
+      "mjtouch.skin: %dx%d taxels at %.3g mm, %d SA1 / %d RA / %d PC, kernel %.3f s "
+      "(%s%s)",
+      cfg_.grid.n, cfg_.grid.n, cfg_.grid.pitch_m * 1e3, count[0], count[1], count[2],
+      kernel_build_seconds(), substrate_->Describe().c_str(),
+      spectra_ ? "; FFT spectra built"
+               : (tree_ ? Fmt("; stress tree, theta %g, %.0f terms per receptor", tree_->theta(),
+                              tree_->mean_terms())
+                              .c_str()
+                        : ""));
 }
 
 double SkinModel::kernel_build_seconds() const {

@@ -20,10 +20,10 @@ namespace mjtouch {
 
 struct ReceptorSite {
   ReceptorClass cls;
-  int i, j;           // taxel cell above the site
-  double x_m, y_m;    // pad frame (cell centre)
+  int i, j;         // taxel cell above the site
+  double x_m, y_m;  // pad frame (cell centre)
   double depth_m;
-  int depth_index;    // kernel table
+  int depth_index;  // kernel table
 };
 
 class SkinModel {

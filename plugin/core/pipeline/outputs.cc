@@ -15,12 +15,11 @@ double IndentationLimit(const SkinConfig& cfg) {
 }
 
 bool IndentationBeyondSkin(const SkinModel& model, const double* state) {
-  return state[kStContactValid] > 0.0 &&
-         state[kStContactDepth] > IndentationLimit(model.config());
+  return state[kStContactValid] > 0.0 && state[kStContactDepth] > IndentationLimit(model.config());
 }
 
-void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching,
-                  const double* state, const Workspace& ws, double* out) {
+void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching, const double* state,
+                  const Workspace& ws, double* out) {
   const SkinConfig& cfg = model.config();
   const int nrec = static_cast<int>(model.receptors().size());
   const StateLayout& layout = model.state_layout();
@@ -33,8 +32,10 @@ void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching,
     cursor += nrec;
   }
   if (cfg.outputs[kOutStress]) {
-    if (touching) std::copy(ws.quantity.begin(), ws.quantity.end(), cursor);
-    else std::fill(cursor, cursor + nrec, 0.0);
+    if (touching)
+      std::copy(ws.quantity.begin(), ws.quantity.end(), cursor);
+    else
+      std::fill(cursor, cursor + nrec, 0.0);
     cursor += nrec;
   }
   if (cfg.outputs[kOutVoltage]) {
@@ -51,13 +52,14 @@ void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching,
   }
   if (cfg.outputs[kOutPressure]) {
     const size_t N = cfg.grid.Size();
-    if (touching) std::copy(tf.pressure_pa.begin(), tf.pressure_pa.begin() + N, cursor);
-    else std::fill(cursor, cursor + N, 0.0);
+    if (touching)
+      std::copy(tf.pressure_pa.begin(), tf.pressure_pa.begin() + N, cursor);
+    else
+      std::fill(cursor, cursor + N, 0.0);
     cursor += N;
   }
   if (cfg.outputs[kOutRate]) {
-    for (int r = 0; r < nrec; ++r)
-      cursor[r] = ReceptorRate(layout.receptor(state, r));
+    for (int r = 0; r < nrec; ++r) cursor[r] = ReceptorRate(layout.receptor(state, r));
     cursor += nrec;
   }
 }

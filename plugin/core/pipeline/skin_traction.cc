@@ -10,8 +10,8 @@
 
 #include <time.h>
 
-#include "pipeline/skin.h"
 #include "pipeline/elastic/warm_start.h"
+#include "pipeline/skin.h"
 
 namespace mjtouch {
 namespace {

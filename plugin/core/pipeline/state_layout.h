@@ -24,16 +24,15 @@ enum StateSlot {
   kStateHeader
 };
 
-
 // `oversample` > 1: the last step's pad pose, MuJoCo force and whether they
 // are valid (StateLayout::last_pose).
 enum LastPoseSlot {
-  kLpPos = 0,         // pad position, 3 (world, m)
-  kLpMat = 3,         // pad rotation, 9 (row-major)
+  kLpPos = 0,           // pad position, 3 (world, m)
+  kLpMat = 3,           // pad rotation, 9 (row-major)
   kLpNormalForce = 12,  // N, pad +z (0 without contact)
-  kLpShearX,          // N, pad x
-  kLpShearY,          // N, pad y
-  kLpValid,           // 1 once recorded
+  kLpShearX,            // N, pad x
+  kLpShearY,            // N, pad y
+  kLpValid,             // 1 once recorded
   kLastPoseSize
 };
 
@@ -72,8 +71,14 @@ enum EvalStartSlot {
 enum HistorySlot {
   kHsValid = 0,  // touched
   kHsDepth,      // indentation, m
-  kHsPBoxI0, kHsPBoxJ0, kHsPBoxNx, kHsPBoxNy,              // box of the pressure
-  kHsURegionI0, kHsURegionJ0, kHsURegionNx, kHsURegionNy,  // box of the displacement
+  kHsPBoxI0,
+  kHsPBoxJ0,
+  kHsPBoxNx,
+  kHsPBoxNy,  // box of the pressure
+  kHsURegionI0,
+  kHsURegionJ0,
+  kHsURegionNx,
+  kHsURegionNy,  // box of the displacement
   kHistorySlots
 };
 constexpr int kHistoryBlocks = 3;
@@ -122,9 +127,9 @@ struct HistoryBlock {
 
 struct StateLayout {
   int receptors = 0, last_spikes = 0, last_voltage = 0, history = 0, last_pose = 0;
-  int history_block = 0;  // kHistorySlots + n*n; 0 without `elastic`
+  int history_block = 0;                       // kHistorySlots + n*n; 0 without `elastic`
   int shifted_history = 0, shifted_block = 0;  // kHistorySlots + (n+1)^2; 0 without `grid_shift`
-  int history_head = 0;   // slot of h
+  int history_head = 0;                        // slot of h
   // The state before the first evaluation at a time (EvalStartSlot, then
   // the header, the receptor blocks, the history head and the last pose): a
   // repeated evaluation at that time starts again from it (step.cc).
@@ -149,8 +154,8 @@ struct StateLayout {
     history_head = shifted_history + kHistoryBlocks * shifted_block;
     last_pose = history_head + (elastic ? 1 : 0);
     eval_start = last_pose + kLastPoseSize;
-    eval_start_size = kEvalStartSlots + kStateHeader + (history - receptors) +
-                      (eval_start - history_head);
+    eval_start_size =
+        kEvalStartSlots + kStateHeader + (history - receptors) + (eval_start - history_head);
     size = eval_start + eval_start_size;
   }
   // Block k steps back from the head (0: this time, 1: last step, 2: the one
@@ -173,8 +178,8 @@ struct StateLayout {
  private:
   HistoryBlock Block(double* state, int first, int block, size_t cells, int back) const {
     const int h = static_cast<int>(state[history_head]);
-    double* b = state + first +
-                static_cast<size_t>((h + kHistoryBlocks - back) % kHistoryBlocks) * block;
+    double* b =
+        state + first + static_cast<size_t>((h + kHistoryBlocks - back) % kHistoryBlocks) * block;
     return HistoryBlock{b, reinterpret_cast<char*>(b + kHistorySlots), cells};
   }
 };

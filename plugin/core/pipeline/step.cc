@@ -50,14 +50,12 @@ struct StressPlan {
   TractionNeeds reads;
 };
 
-StressPlan PlanStresses(const SkinModel& model, const KernelTables& kt,
-                        const TractionField& tf) {
+StressPlan PlanStresses(const SkinModel& model, const KernelTables& kt, const TractionField& tf) {
   const SkinConfig& cfg = model.config();
   StressPlan plan;
   plan.options = StressOptions{tf.uniform_slip, tf.slip_x, tf.slip_y, true, cfg.threads};
   plan.method = ResolveStressMethod(kt, model.spectra(), model.tree(), cfg.stress_method,
-                                    model.stress_sites(), tf.runs.Count(), cfg.shear,
-                                    plan.options);
+                                    model.stress_sites(), tf.runs.Count(), cfg.shear, plan.options);
   plan.reads.shear = PathReadsShear(kt, plan.method, cfg.shear, plan.options);
   return plan;
 }
@@ -109,11 +107,11 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
     // for what the plan reads.
     const StressPlan plan = PlanStresses(model, *kt, tf);
     MaterializeTraction(cfg.grid, plan.reads.pressure_pa, plan.reads.shear, &ws->traction);
-    ws->last_stress_method = ComputeStresses(
-        *kt, model.spectra(), model.tree(), plan.method, model.stress_sites(), tf.runs,
-        tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
-        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch, ws->stress.data(),
-        plan.options);
+    ws->last_stress_method =
+        ComputeStresses(*kt, model.spectra(), model.tree(), plan.method, model.stress_sites(),
+                        tf.runs, tf.pressure.data(), cfg.shear ? tf.shear_x.data() : nullptr,
+                        cfg.shear ? tf.shear_y.data() : nullptr, &ws->stress_scratch,
+                        ws->stress.data(), plan.options);
     // per run of one class's receptors; stress-based quantities at once
     static_assert(sizeof(Stress6) == 6 * sizeof(double), "stress tensors 6 doubles apart");
     for (int r = 0; r < nrec;) {
@@ -136,8 +134,7 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
         const ReceptorStepper catch_up(cfg.receptor, gap_s);
         double v;
         for (int r = 0; r < nrec; ++r)
-          catch_up.Advance(sites[r].cls, 0.0, r,
-                           layout.receptor(state, r), &v);
+          catch_up.Advance(sites[r].cls, 0.0, r, layout.receptor(state, r), &v);
       }
       state[kStReceptorsIdle] = 0.0;
     }
@@ -149,8 +146,7 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
     for (int r = 0; r < nrec;) {
       const int end = ClassRunEnd(sites, r, nrec);
       *fired += stepper.AdvanceBatch(sites[r].cls, end - r, ws->quantity.data() + r, r,
-                                     layout.receptor(state, r), last_spikes + r,
-                                     last_voltage + r);
+                                     layout.receptor(state, r), last_spikes + r, last_voltage + r);
       r = end;
     }
     bool quiescent = !touching && !cfg.outputs[kOutVoltage] && !cfg.outputs[kOutRate];
@@ -163,8 +159,7 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
     }
   } else if (need_receptors && !time_valid) {
     for (int r = 0; r < nrec; ++r)
-      PrimeReceptor(cfg.receptor, sites[r].cls, ws->quantity[r], r,
-                    layout.receptor(state, r));
+      PrimeReceptor(cfg.receptor, sites[r].cls, ws->quantity[r], r, layout.receptor(state, r));
   }
   return touching;
 }
@@ -201,9 +196,15 @@ void MatToQuat(const double* m, double* q) {
 
 void QuatToMat(const double* q, double* m) {
   const double w = q[0], x = q[1], y = q[2], z = q[3];
-  m[0] = 1 - 2 * (y * y + z * z); m[1] = 2 * (x * y - w * z); m[2] = 2 * (x * z + w * y);
-  m[3] = 2 * (x * y + w * z); m[4] = 1 - 2 * (x * x + z * z); m[5] = 2 * (y * z - w * x);
-  m[6] = 2 * (x * z - w * y); m[7] = 2 * (y * z + w * x); m[8] = 1 - 2 * (x * x + y * y);
+  m[0] = 1 - 2 * (y * y + z * z);
+  m[1] = 2 * (x * y - w * z);
+  m[2] = 2 * (x * z + w * y);
+  m[3] = 2 * (x * y + w * z);
+  m[4] = 1 - 2 * (x * x + z * z);
+  m[5] = 2 * (y * z - w * x);
+  m[6] = 2 * (x * z - w * y);
+  m[7] = 2 * (y * z + w * x);
+  m[8] = 1 - 2 * (x * x + y * y);
 }
 
 // Pose at fraction s of the way from a to b: position linear, rotation
@@ -244,7 +245,9 @@ Pose InterpolatePose(const Pose& a, const Pose& b, double s) {
 // agrees with the step alone to the solver's `tolerance`, not bit for bit.
 void SaveOrRestoreEvaluationStart(const StateLayout& lay, double time_s, double* state) {
   double* saved = state + lay.eval_start;
-  struct Span { int first, count; };
+  struct Span {
+    int first, count;
+  };
   const Span spans[] = {{0, kStateHeader},
                         {lay.receptors, lay.history - lay.receptors},
                         {lay.history_head, lay.eval_start - lay.history_head}};
@@ -264,8 +267,8 @@ void SaveOrRestoreEvaluationStart(const StateLayout& lay, double time_s, double*
 
 }  // namespace
 
-int Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
-         Workspace* ws, double* out) {
+int Step(const SkinModel& model, const StepInput& in, double time_s, double* state, Workspace* ws,
+         double* out) {
   const SkinConfig& cfg = model.config();
   const int K = cfg.oversample;
   int fired = 0;
@@ -297,8 +300,8 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
         sub.shear_y_n = last[kLpShearY] + s * (in.shear_y_n - last[kLpShearY]);
         use = &sub;
       }
-      touching = Evaluate(model, *use, k < K ? t0 + s * elapsed : time_s, in.timestep_s / K,
-                          state, ws, &fired);
+      touching = Evaluate(model, *use, k < K ? t0 + s * elapsed : time_s, in.timestep_s / K, state,
+                          ws, &fired);
       // (an idle evaluation leaves zero counts: idle follows a silent step)
       for (int r = 0; r < nrec; ++r) ws->spike_sum[r] += last_spikes[r];
     }

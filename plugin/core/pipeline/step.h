@@ -14,7 +14,7 @@ namespace mjtouch {
 struct StepInput {
   Pose pad_pose;
   std::vector<CounterSurface> surfaces;
-  double normal_force_n = 0;   // total contact force on the pad along pad +z
+  double normal_force_n = 0;            // total contact force on the pad along pad +z
   double shear_x_n = 0, shear_y_n = 0;  // along pad x, y
   bool in_contact = false;
   std::vector<ContactPoint> contacts;  // MuJoCo's contacts on the pad (pad frame)
@@ -29,19 +29,19 @@ struct Workspace {
   // Receptor propagators for the last step size (rebuilt when it changes).
   std::shared_ptr<const ReceptorStepper> stepper;
   std::vector<double> gap, coverage;
-  CellBox gap_written;  // outside it gap / coverage are +inf / 0 (RenderOutput::written)
+  CellBox gap_written;           // outside it gap / coverage are +inf / 0 (RenderOutput::written)
   RenderSummary render_summary;  // the last render's covered cells (winkler)
   RenderScratch render_scratch;
   TractionField traction;
-  std::vector<double> quantity;  // per receptor
-  ElasticStepWork elastic;  // `elastic`
-  ElasticSolveStats elastic_stats;  // the last `elastic` solve (diagnostics)
-  GridShiftWork grid_shift;  // `grid_shift`
+  std::vector<double> quantity;        // per receptor
+  ElasticStepWork elastic;             // `elastic`
+  ElasticSolveStats elastic_stats;     // the last `elastic` solve (diagnostics)
+  GridShiftWork grid_shift;            // `grid_shift`
   std::vector<double> pressure_guess;  // `elastic` initial guess, n*n
-  std::vector<Stress6> stress;   // per receptor, Pa
+  std::vector<Stress6> stress;         // per receptor, Pa
   StressScratch stress_scratch;
   StressMethod last_stress_method = StressMethod::kDirect;
-  StepInput substep;            // `oversample`: the interpolated input
+  StepInput substep;              // `oversample`: the interpolated input
   std::vector<double> spike_sum;  // `oversample`: spikes over the substeps
 };
 
@@ -83,16 +83,16 @@ double IndentationLimit(const SkinConfig& cfg);
 // Whether the last evaluation touched deeper than IndentationLimit.
 bool IndentationBeyondSkin(const SkinModel& model, const double* state);
 
-void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching,
-                  const double* state, const Workspace& ws, double* out);
+void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching, const double* state,
+                  const Workspace& ws, double* out);
 
 // Run the pipeline at simulation time time_s: receptors integrate over the
 // time elapsed since the previous call (none on the first call or a repeated
 // call at the same time). Writes the enabled output blocks to `out` (length
 // model.output_size()) and updates `state`. Returns the number of spikes
 // fired in this evaluation (all receptors).
-int Step(const SkinModel& model, const StepInput& in, double time_s, double* state,
-          Workspace* ws, double* out);
+int Step(const SkinModel& model, const StepInput& in, double time_s, double* state, Workspace* ws,
+         double* out);
 
 }  // namespace mjtouch
 

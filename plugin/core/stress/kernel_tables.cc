@@ -9,8 +9,7 @@
 namespace mjtouch {
 
 std::shared_ptr<const KernelTables> BuildKernelTables(
-    const Substrate& substrate, int n, double pitch_m,
-    const std::vector<double>& depths_m,
+    const Substrate& substrate, int n, double pitch_m, const std::vector<double>& depths_m,
     const std::array<bool, kNumStress>& components) {
   const auto t0 = std::chrono::steady_clock::now();
   auto kt = std::make_shared<KernelTables>();
@@ -43,8 +42,7 @@ std::shared_ptr<const KernelTables> BuildKernelTables(
         symmetric = symmetric && err <= 1e-6f * peak;
       }
   kt->mirror_symmetric = symmetric;
-  kt->build_seconds = std::chrono::duration<double>(
-                          std::chrono::steady_clock::now() - t0).count();
+  kt->build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return kt;
 }
 
@@ -75,9 +73,9 @@ float Dot3(const float* Kp, const float* Kx, const float* Ky, const float* p, co
 }  // namespace
 
 void StressAtReceptor(const KernelTables& kt, int depth_index, int ri, int rj,
-                      const ActiveRuns& runs, const float* pressure,
-                      const float* shear_x, const float* shear_y,
-                      const std::array<bool, kNumStress>& want, Stress6* out) {
+                      const ActiveRuns& runs, const float* pressure, const float* shear_x,
+                      const float* shear_y, const std::array<bool, kNumStress>& want,
+                      Stress6* out) {
   const int n = kt.n;
   const int L = 2 * n - 1;
   const bool shear = shear_x && shear_y;
@@ -95,9 +93,9 @@ void StressAtReceptor(const KernelTables& kt, int depth_index, int ri, int rj,
       // Table entry for source (i, j) at receptor (ri, rj): offset (i - ri, j - rj).
       const size_t krow = static_cast<size_t>(j - rj + n - 1) * L + (b - ri + n - 1);
       const size_t trow = static_cast<size_t>(j) * n + b;
-      total += Dot3(Kp + krow, Kx + krow, Ky + krow, pressure + trow,
-                    shear ? shear_x + trow : nullptr, shear ? shear_y + trow : nullptr,
-                    runs.end[r] - b);
+      total +=
+          Dot3(Kp + krow, Kx + krow, Ky + krow, pressure + trow, shear ? shear_x + trow : nullptr,
+               shear ? shear_y + trow : nullptr, runs.end[r] - b);
     }
     (*out)[c] = total;
   }

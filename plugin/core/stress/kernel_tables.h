@@ -16,8 +16,8 @@ namespace mjtouch {
 // Lattice tables for a set of depths, shared read-only by every MjData of one
 // model (built once per distinct configuration).
 struct KernelTables {
-  int n = 0;            // taxel grid is n x n
-  double pitch_m = 0;   // taxel pitch
+  int n = 0;                                  // taxel grid is n x n
+  double pitch_m = 0;                         // taxel pitch
   std::vector<double> depths_m;               // one table per depth
   std::vector<std::vector<float>> tables;     // layout as Substrate::LatticeTable
   std::array<bool, kNumStress> components{};  // components filled
@@ -29,8 +29,7 @@ struct KernelTables {
 
   const float* At(int depth_index, SurfaceLoad load, StressComponent comp) const {
     const int L = 2 * n - 1;
-    return tables[depth_index].data() +
-           static_cast<size_t>(load * kNumStress + comp) * L * L;
+    return tables[depth_index].data() + static_cast<size_t>(load * kNumStress + comp) * L * L;
   }
 };
 
@@ -52,8 +51,7 @@ inline float MirrorSign(int axis, SurfaceLoad load, StressComponent comp) {
 }
 
 std::shared_ptr<const KernelTables> BuildKernelTables(
-    const Substrate& substrate, int n, double pitch_m,
-    const std::vector<double>& depths_m,
+    const Substrate& substrate, int n, double pitch_m, const std::vector<double>& depths_m,
     const std::array<bool, kNumStress>& components);
 
 // Stress at one receptor (grid cell index ri, rj, table `depth_index`) from
@@ -61,9 +59,8 @@ std::shared_ptr<const KernelTables> BuildKernelTables(
 // row runs. pressure/shear arrays are n*n, row-major (j * n + i), Pa.
 
 void StressAtReceptor(const KernelTables& kt, int depth_index, int ri, int rj,
-                      const ActiveRuns& runs, const float* pressure,
-                      const float* shear_x, const float* shear_y,
-                      const std::array<bool, kNumStress>& want, Stress6* out);
+                      const ActiveRuns& runs, const float* pressure, const float* shear_x,
+                      const float* shear_y, const std::array<bool, kNumStress>& want, Stress6* out);
 
 }  // namespace mjtouch
 

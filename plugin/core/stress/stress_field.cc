@@ -11,8 +11,8 @@ namespace {
 // are its fitted constants on the reference machine, fixed here so that the
 // path taken, and so the output bits, depend on the inputs only).
 constexpr double kDirectSecondsPerMac = 0.17e-9;  // per site x load x comp x cell
-constexpr double kFftSecondsPerPoint = 0.35e-9;  // per N^2 log2(N^2), one 2D transform
-constexpr double kMulSecondsPerPoint = 2.5e-9;   // per N^2 x load, one output pair
+constexpr double kFftSecondsPerPoint = 0.35e-9;   // per N^2 log2(N^2), one 2D transform
+constexpr double kMulSecondsPerPoint = 2.5e-9;    // per N^2 x load, one output pair
 
 int CountWanted(const std::array<bool, kNumStress>& w) {
   int c = 0;
@@ -32,10 +32,22 @@ const char* StressMethodName(StressMethod m) {
 }
 
 bool ParseStressMethod(const std::string& s, StressMethod* m) {
-  if (s == "tree") { *m = StressMethod::kTree; return true; }
-  if (s == "auto") { *m = StressMethod::kAuto; return true; }
-  if (s == "direct") { *m = StressMethod::kDirect; return true; }
-  if (s == "fft") { *m = StressMethod::kFft; return true; }
+  if (s == "tree") {
+    *m = StressMethod::kTree;
+    return true;
+  }
+  if (s == "auto") {
+    *m = StressMethod::kAuto;
+    return true;
+  }
+  if (s == "direct") {
+    *m = StressMethod::kDirect;
+    return true;
+  }
+  if (s == "fft") {
+    *m = StressMethod::kFft;
+    return true;
+  }
   return false;
 }
 
@@ -89,8 +101,7 @@ std::shared_ptr<const KernelSpectra> BuildKernelSpectra(const KernelTables& kt,
         r.assign(sre.begin(), sre.end());
         i.assign(sim.begin(), sim.end());
       }
-  sp->build_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  sp->build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sp;
 }
 
@@ -237,14 +248,17 @@ void FftStresses(const KernelTables& kt, const KernelSpectra& sp,
         k2i[l] = c2 >= 0 ? sp.im[d][l * kNumStress + c2].data() : nullptr;
       }
       if (shear) {
-        if (c2 >= 0) PairProducts<kNumLoads, true>(k1r, k1i, k2r, k2i, tr, ti, S, Wr.data(), Wi.data());
-        else PairProducts<kNumLoads, false>(k1r, k1i, k2r, k2i, tr, ti, S, Wr.data(), Wi.data());
+        if (c2 >= 0)
+          PairProducts<kNumLoads, true>(k1r, k1i, k2r, k2i, tr, ti, S, Wr.data(), Wi.data());
+        else
+          PairProducts<kNumLoads, false>(k1r, k1i, k2r, k2i, tr, ti, S, Wr.data(), Wi.data());
       } else {
-        if (c2 >= 0) PairProducts<1, true>(k1r, k1i, k2r, k2i, tr, ti, S, Wr.data(), Wi.data());
-        else PairProducts<1, false>(k1r, k1i, k2r, k2i, tr, ti, S, Wr.data(), Wi.data());
+        if (c2 >= 0)
+          PairProducts<1, true>(k1r, k1i, k2r, k2i, tr, ti, S, Wr.data(), Wi.data());
+        else
+          PairProducts<1, false>(k1r, k1i, k2r, k2i, tr, ti, S, Wr.data(), Wi.data());
       }
-      fft.Inverse(Wr.data(), Wi.data(), rows, cols, w->in_re.data(), w->in_im.data(), n,
-                  &w->fft);
+      fft.Inverse(Wr.data(), Wi.data(), rows, cols, w->in_re.data(), w->in_im.data(), n, &w->fft);
       for (size_t s = 0; s < sites.size(); ++s) {
         const StressSite& site = sites[s];
         if (site.depth_index != static_cast<int>(d)) continue;
@@ -260,8 +274,8 @@ void FftStresses(const KernelTables& kt, const KernelSpectra& sp,
 
 StressMethod ResolveStressMethod(const KernelTables& kt, const KernelSpectra* spectra,
                                  const StressTree* tree, StressMethod method,
-                                 const std::vector<StressSite>& sites, int active_cells,
-                                 bool shear, const StressOptions& opt) {
+                                 const std::vector<StressSite>& sites, int active_cells, bool shear,
+                                 const StressOptions& opt) {
   if (method == StressMethod::kTree) {
     if (tree) return method;
     method = StressMethod::kAuto;
@@ -291,8 +305,8 @@ StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectr
   }
   if (method == StressMethod::kFft) {
     for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
-    FftStresses(kt, *spectra, sites, pressure, shear ? shear_x : nullptr,
-                shear ? shear_y : nullptr, scratch, out);
+    FftStresses(kt, *spectra, sites, pressure, shear ? shear_x : nullptr, shear ? shear_y : nullptr,
+                scratch, out);
     return method;
   }
   scratch->fold.fold_legacy = opt.fold_legacy;

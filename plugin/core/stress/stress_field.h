@@ -98,8 +98,8 @@ inline bool UsesFoldedPath(const KernelTables& kt, bool shear, const StressOptio
 // arrays the path reads) resolve it here and pass the result in.
 StressMethod ResolveStressMethod(const KernelTables& kt, const KernelSpectra* spectra,
                                  const StressTree* tree, StressMethod method,
-                                 const std::vector<StressSite>& sites, int active_cells,
-                                 bool shear, const StressOptions& opt);
+                                 const std::vector<StressSite>& sites, int active_cells, bool shear,
+                                 const StressOptions& opt);
 // Whether that path reads the shear arrays (all but the folded direct sum,
 // which takes shear = slip x pressure).
 inline bool PathReadsShear(const KernelTables& kt, StressMethod resolved, bool shear,
@@ -113,9 +113,10 @@ inline bool PathReadsShear(const KernelTables& kt, StressMethod resolved, bool s
 // back to direct when spectra is null, kTree when tree is null. Returns the
 // path taken.
 StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectra,
-                             const StressTree* tree, StressMethod method, const std::vector<StressSite>& sites,
-                             const ActiveRuns& runs, const float* pressure, const float* shear_x,
-                             const float* shear_y, StressScratch* scratch, Stress6* out,
+                             const StressTree* tree, StressMethod method,
+                             const std::vector<StressSite>& sites, const ActiveRuns& runs,
+                             const float* pressure, const float* shear_x, const float* shear_y,
+                             StressScratch* scratch, Stress6* out,
                              const StressOptions& options = StressOptions());
 
 // Active row runs of the cells where any traction is nonzero.

@@ -15,9 +15,8 @@ namespace mjtouch {
 using namespace fold_detail;
 
 void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
-                          const ActiveRuns& runs, const float* pressure, bool shear,
-                          double slip_x, double slip_y, int threads, FoldScratch* w,
-                          Stress6* out) {
+                          const ActiveRuns& runs, const float* pressure, bool shear, double slip_x,
+                          double slip_y, int threads, FoldScratch* w, Stress6* out) {
   for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
   if (runs.row.empty() || sites.empty()) return;
   const int n = kt.n;
@@ -117,16 +116,15 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
     // (every table load splits a cache line; the same bits).
     const int ew = (win.w + 4 * kSumLanes) / kSumLanes * kSumLanes;
     buf.resize(static_cast<size_t>(kNumStress) * band * ew + 32);
-    float* const base = AlignUp64(buf.data()) + kSumLanes + (win.x0 & (kSumLanes - 1)) +
-                        (legacy ? 1 : 0);
+    float* const base =
+        AlignUp64(buf.data()) + kSumLanes + (win.x0 & (kSumLanes - 1)) + (legacy ? 1 : 0);
     float* ebuf[kNumStress];
     bool comps[kNumStress] = {};
     for (int q = job.begin; q < job.end; ++q) {
       for (int c = 0; c < fs[q].nc; ++c) comps[fs[q].comp[c]] = true;
       std::memset(fs[q].d, 0, sizeof(fs[q].d[0]) * fs[q].nc);
     }
-    for (int c = 0; c < kNumStress; ++c)
-      ebuf[c] = base + static_cast<size_t>(c) * band * ew;
+    for (int c = 0; c < kNumStress; ++c) ebuf[c] = base + static_cast<size_t>(c) * band * ew;
     const int* blo = w->band_lo.data();  // a band's pressure rows' cells
     const int* bhi = w->band_hi.data();
     const int* col = w->site_col.data();  // fs[q].col, contiguous
@@ -155,14 +153,13 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
         if (!comps[c]) continue;
         if (use_h)
           FoldCachedRows(w->h.data() + w->h_pad + w->h_offset[d * kNumStress + c], n,
-                         static_cast<StressComponent>(c), T0 + win.y0, band, win.x0 + c0,
-                         c1 - c0, ry, ebuf[c] + c0, ew);
+                         static_cast<StressComponent>(c), T0 + win.y0, band, win.x0 + c0, c1 - c0,
+                         ry, ebuf[c] + c0, ew);
         else
-          FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, band,
-                           win.x0 + c0, c1 - c0, rx, ry, shear, ebuf[c] + c0, ew);
+          FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, band, win.x0 + c0,
+                           c1 - c0, rx, ry, shear, ebuf[c] + c0, ew);
       }
-      SumBand(fs, first, last, ebuf, ew, T0, P0, ps, w->row_lo.data(), w->row_hi.data(),
-              win.x0);
+      SumBand(fs, first, last, ebuf, ew, T0, P0, ps, w->row_lo.data(), w->row_hi.data(), win.x0);
     }
     // The 16 double lanes of each component, in one fixed order.
     for (int q = job.begin; q < job.end; ++q)
@@ -178,14 +175,15 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
 }
 
 void ReferenceDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
-                             const ActiveRuns& runs, const float* pressure,
-                             const float* shear_x, const float* shear_y, int threads,
-                             Stress6* out) {
+                             const ActiveRuns& runs, const float* pressure, const float* shear_x,
+                             const float* shear_y, int threads, Stress6* out) {
   for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
   // Component-major, depth by depth: the three tables of one (depth,
   // component), ~0.8 MB at n = 128, stay in cache while its sites read their
   // windows (site-major order would stream all 18 tables per site).
-  struct Job { int d, c, s0, s1; };
+  struct Job {
+    int d, c, s0, s1;
+  };
   std::vector<Job> jobs;
   std::vector<int> order;
   for (size_t d = 0; d < kt.depths_m.size(); ++d)

@@ -26,20 +26,22 @@ struct alignas(64) FoldSite {
 
 // Per-simulation scratch of the folded path (no meaning between calls).
 struct FoldScratch {
-  std::vector<float> pressure;       // padded window, rows of `width` cells
-  std::vector<int> row_lo, row_hi;   // per pressure row: its active cells
-  std::vector<int> band_lo, band_hi; // per band of pressure rows: the same
-  std::vector<int> sites_by_depth;   // site indices grouped by depth
-  std::vector<int> depth_begin;      // ranges into sites_by_depth
+  std::vector<float> pressure;        // padded window, rows of `width` cells
+  std::vector<int> row_lo, row_hi;    // per pressure row: its active cells
+  std::vector<int> band_lo, band_hi;  // per band of pressure rows: the same
+  std::vector<int> sites_by_depth;    // site indices grouped by depth
+  std::vector<int> depth_begin;       // ranges into sites_by_depth
   struct Window {
     int x0 = 0, y0 = 0, w = 0, h = 0;  // offsets (cell - site) of element 0; size
     int si1 = 0, sj1 = 0;              // largest site i, j at this depth
     std::array<bool, kNumStress> comps{};
   };
-  std::vector<Window> window;  // per depth
+  std::vector<Window> window;   // per depth
   std::vector<FoldSite> sites;  // by depth, then window row of their first read
-  std::vector<int> site_col;     // sites[q].col, contiguous (scanned per band)
-  struct Job { int begin, end; };  // a range of `sites` (one depth)
+  std::vector<int> site_col;    // sites[q].col, contiguous (scanned per band)
+  struct Job {
+    int begin, end;
+  };  // a range of `sites` (one depth)
   std::vector<Job> jobs;
   std::vector<std::vector<float>> rowbuf;  // per job: a band of folded rows per component
   std::vector<int> si0, sj0;               // per depth: smallest site i, j
@@ -61,7 +63,7 @@ struct FoldScratch {
   float h_rx = 0;
   int h_calls = 0;
   bool h_valid = false;
-  long h_pad = 0;  // h's cells from index h_pad (its first 64-byte boundary when built)
+  long h_pad = 0;      // h's cells from index h_pad (its first 64-byte boundary when built)
   double seconds = 0;  // the last call's fold + sums (diagnostics)
   // The table loads unaligned (every one splits a cache line) and no rx
   // cache (the same bits): for the benchmark's ratio and the tests.
@@ -69,20 +71,18 @@ struct FoldScratch {
 };
 
 // Stress (Pa) at every site into out[site] (components a site does not want
-// are zero). Needs kt.mirror_symmetric (every laterally isotropic substrate). shear: whether the tractions include the uniform-slip shear
-// (slip_x, slip_y: shear / pressure); false: pressure only. threads: callers
-// of ThreadPool::Shared(); any value gives the same bits.
+// are zero). Needs kt.mirror_symmetric (every laterally isotropic substrate). shear: whether the
+// tractions include the uniform-slip shear (slip_x, slip_y: shear / pressure); false: pressure
+// only. threads: callers of ThreadPool::Shared(); any value gives the same bits.
 void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
-                          const ActiveRuns& runs, const float* pressure, bool shear,
-                          double slip_x, double slip_y, int threads, FoldScratch* w,
-                          Stress6* out);
+                          const ActiveRuns& runs, const float* pressure, bool shear, double slip_x,
+                          double slip_y, int threads, FoldScratch* w, Stress6* out);
 
 // The reference direct sum (StressAtReceptor per site and component), with
 // the sites split over threads the same way (bit-identical for any count).
 void ReferenceDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
-                             const ActiveRuns& runs, const float* pressure,
-                             const float* shear_x, const float* shear_y, int threads,
-                             Stress6* out);
+                             const ActiveRuns& runs, const float* pressure, const float* shear_x,
+                             const float* shear_y, int threads, Stress6* out);
 
 // Seconds per evaluation of the folded path (one core): the fold of the
 // window and the sums; fitted by examples/bench_kernel.py.

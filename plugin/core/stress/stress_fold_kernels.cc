@@ -199,8 +199,8 @@ inline __attribute__((always_inline)) void SumBandBody(FoldSite* sites, int firs
 }
 
 MJTOUCH_ISA_COPIES(SumBand,
-                   (FoldSite* sites, int first, int last, const float* const* ebuf, int ew,
-                    int T0, const float* P, int ps, const int* rlo, const int* rhi, int x0),
+                   (FoldSite * sites, int first, int last, const float* const* ebuf, int ew, int T0,
+                    const float* P, int ps, const int* rlo, const int* rhi, int x0),
                    (sites, first, last, ebuf, ew, T0, P, ps, rlo, rhi, x0))
 
 inline __attribute__((always_inline)) void Store(float* p, v16f v) {
@@ -244,16 +244,15 @@ inline __attribute__((always_inline)) void FoldCells(int len, float* e, Chunk ch
 template <bool kFma, bool kReversed>
 inline __attribute__((always_inline)) void FoldRowCells(const float* kp, const float* kx,
                                                         const float* ky, float rx, float ry,
-                                                        float sign, bool shear, int len,
-                                                        float* e) {
+                                                        float sign, bool shear, int len, float* e) {
   const int d = kReversed ? -1 : 1;
   if (shear) {
     FoldCells(
         len, e,
         [&](int x) {
-          return sign * MulAdd<kFma>(ry, Cells<kReversed>(ky, x),
-                                     MulAdd<kFma>(rx, Cells<kReversed>(kx, x),
-                                                  Cells<kReversed>(kp, x)));
+          return sign *
+                 MulAdd<kFma>(ry, Cells<kReversed>(ky, x),
+                              MulAdd<kFma>(rx, Cells<kReversed>(kx, x), Cells<kReversed>(kp, x)));
         },
         [&](int x) {
           return sign * MulAdd<kFma>(ry, ky[d * x], MulAdd<kFma>(rx, kx[d * x], kp[d * x]));
@@ -294,7 +293,7 @@ inline __attribute__((always_inline)) void FoldCachedRowsBody(const float* h, in
     if (a > 0) std::fill(et, et + a, 0.0f);
     if (z < w) std::fill(et + z, et + w, 0.0f);
     const float* hr = h + static_cast<size_t>(ady) * stride + (x0 + half);  // at column 0
-    const float* ky = h + static_cast<size_t>(ady) * stride + 2 * half;      // at |dx| = 0
+    const float* ky = h + static_cast<size_t>(ady) * stride + 2 * half;     // at |dx| = 0
     for (int side = 1; side >= 0; --side) {  // dx >= 0 (its ky lines then in L1), dx < 0
       float sp = 1, sy = 1;
       if (side == 0) {
@@ -332,8 +331,8 @@ inline __attribute__((always_inline)) void FoldCachedRowsBody(const float* h, in
 }
 
 MJTOUCH_ISA_COPIES(FoldCachedRows,
-                   (const float* h, int n, StressComponent comp, int dy0, int rows, int x0,
-                    int w, float ry, float* e, int ew),
+                   (const float* h, int n, StressComponent comp, int dy0, int rows, int x0, int w,
+                    float ry, float* e, int ew),
                    (h, n, comp, dy0, rows, x0, w, ry, e, ew))
 
 // One row of a folded window (offset dy, columns dx = x0 .. x0 + w - 1) from
@@ -379,19 +378,21 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
     const float a = sp * sx * rx, b = sp * sy * ry;
     if (side == 0) {
       FoldRowCells<kFma, false>(Kp + lo, Kx + lo, Ky + lo, a, b, sp, shear, hi - lo + 1,
-                          e + (lo - x0));
+                                e + (lo - x0));
     } else {
       // e at dx = lo .. hi reads the positive-offset row at -lo .. -hi.
       FoldRowCells<kFma, true>(Kp - lo, Kx - lo, Ky - lo, a, b, sp, shear, hi - lo + 1,
-                         e + (lo - x0));
+                               e + (lo - x0));
     }
   }
 }
 
 template <int, bool kFma>
-inline __attribute__((always_inline)) void FoldMirroredRowsBody(
-    const KernelTables& kt, int d, StressComponent comp, int dy0, int rows, int x0, int w,
-    float rx, float ry, bool shear, float* e, int ew) {
+inline __attribute__((always_inline)) void FoldMirroredRowsBody(const KernelTables& kt, int d,
+                                                                StressComponent comp, int dy0,
+                                                                int rows, int x0, int w, float rx,
+                                                                float ry, bool shear, float* e,
+                                                                int ew) {
   for (int t = 0; t < rows; ++t)
     FoldMirroredRow<kFma>(kt, d, comp, dy0 + t, x0, w, rx, ry, shear,
                           e + static_cast<size_t>(t) * ew);
@@ -400,10 +401,9 @@ inline __attribute__((always_inline)) void FoldMirroredRowsBody(
 // Rows dy0 .. dy0 + rows - 1 of a folded window into e (rows ew apart): one
 // dispatch per band, not two per row side.
 MJTOUCH_ISA_COPIES(FoldMirroredRows,
-                   (const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
-                    int x0, int w, float rx, float ry, bool shear, float* e, int ew),
+                   (const KernelTables& kt, int d, StressComponent comp, int dy0, int rows, int x0,
+                    int w, float rx, float ry, bool shear, float* e, int ew),
                    (kt, d, comp, dy0, rows, x0, w, rx, ry, shear, e, ew))
-
 
 }  // namespace fold_detail
 }  // namespace mjtouch

@@ -139,12 +139,11 @@ void SortSites(const KernelTables& kt, const std::vector<StressSite>& sites, Fol
   for (size_t q = 0; q < w->sites.size(); ++q) w->site_col[q] = w->sites[q].col;
 }
 
-
 }  // namespace fold_detail
 
 namespace {
 
-constexpr int kLanes = 8;           // cells per chunk of the cost model
+constexpr int kLanes = 8;  // cells per chunk of the cost model
 // Cost model of the folded path (one core), fitted by examples/bench_kernel.py
 // --calibrate: seconds per site x component x active cell, and per folded
 // table cell.
@@ -175,6 +174,5 @@ double EstimateFoldedSeconds(const KernelTables& kt, const std::vector<StressSit
   const double window = (side + si1 - si0) * (side + sj1 - sj0);
   return kFoldedSecondsPerMac * macs * active_cells + kFoldSecondsPerCell * tables * window;
 }
-
 
 }  // namespace mjtouch

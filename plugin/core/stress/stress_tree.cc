@@ -24,8 +24,7 @@ uint32_t Pack(int level, int bi, int bj) {
 template <int S, int LD>
 inline void SiteSumT(const uint32_t* block, size_t nterm, const float* coef, int stride_loads,
                      int n, const int* box, const std::vector<float>* moments,
-                     const int* blocks_per_level, const float* const* traction,
-                     float* out_slots) {
+                     const int* blocks_per_level, const float* const* traction, float* out_slots) {
   constexpr int kAcc = S == 1 ? 3 * LD : S;
   float acc[kAcc] = {};
   const float* c = coef;
@@ -40,18 +39,22 @@ inline void SiteSumT(const uint32_t* block, size_t nterm, const float* coef, int
         const size_t k = static_cast<size_t>(bj) * n + bi;
         for (int ld = 0; ld < LD; ++ld) {
           const float v = traction[ld][k];
-          if (S == 1) acc[3 * ld] += c[ld] * v;
-          else for (int s = 0; s < S; ++s) acc[s] += c[ld * S + s] * v;
+          if (S == 1)
+            acc[3 * ld] += c[ld] * v;
+          else
+            for (int s = 0; s < S; ++s) acc[s] += c[ld * S + s] * v;
         }
       }
       c += static_cast<size_t>(stride_loads) * S;
     } else {
       if (in) {
-        const float* m = moments[level].data() +
-                         (static_cast<size_t>(bj) * blocks_per_level[level] + bi) * 9;
+        const float* m =
+            moments[level].data() + (static_cast<size_t>(bj) * blocks_per_level[level] + bi) * 9;
         for (int k = 0; k < 3 * LD; ++k) {
-          if (S == 1) acc[k] += c[k] * m[k];
-          else for (int s = 0; s < S; ++s) acc[s] += c[k * S + s] * m[k];
+          if (S == 1)
+            acc[k] += c[k] * m[k];
+          else
+            for (int s = 0; s < S; ++s) acc[s] += c[k * S + s] * m[k];
         }
       }
       c += static_cast<size_t>(stride_loads) * 3 * S;
@@ -101,7 +104,9 @@ std::shared_ptr<const StressTree> StressTree::Build(const KernelTables& kt,
   tree->levels_ = levels;
   const int loads = tree->loads_;
   tree->sites_.resize(sites.size());
-  struct Node { int level, bi, bj; };
+  struct Node {
+    int level, bi, bj;
+  };
   std::vector<Node> stack;
   for (size_t s = 0; s < sites.size(); ++s) {
     const StressSite& site = sites[s];
@@ -196,7 +201,10 @@ void StressTree::Compute(const ActiveRuns& runs, const float* pressure, const fl
   }
   for (int l = 0; l < levels_; ++l) {
     int* b = &w->box[4 * l];
-    b[0] = i0 >> l; b[1] = i1 >> l; b[2] = j0 >> l; b[3] = j1 >> l;
+    b[0] = i0 >> l;
+    b[1] = i1 >> l;
+    b[2] = j0 >> l;
+    b[3] = j1 >> l;
   }
   // Moments: level 1 from the cells, each further level from its children.
   w->moments.resize(levels_);

@@ -36,8 +36,8 @@ class StressTree {
   // theta > 0. `shear`: whether shear tractions load the skin (else only
   // pressure coefficients are built). Sites as for ComputeStresses.
   static std::shared_ptr<const StressTree> Build(const KernelTables& kt,
-                                                 const std::vector<StressSite>& sites,
-                                                 bool shear, double theta);
+                                                 const std::vector<StressSite>& sites, bool shear,
+                                                 double theta);
 
   // Stress (Pa) at every site into out[site] (unwanted components 0). Shear
   // arrays may be null (both or neither); if the tree was built without

@@ -11,10 +11,10 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 // 4-point Gauss-Legendre on [-1, 1].
-constexpr double kGaussX[4] = {-0.8611363115940526, -0.3399810435848563,
-                               0.3399810435848563, 0.8611363115940526};
-constexpr double kGaussW[4] = {0.3478548451374538, 0.6521451548625461,
-                               0.6521451548625461, 0.3478548451374538};
+constexpr double kGaussX[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
+                               0.8611363115940526};
+constexpr double kGaussW[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
+                               0.3478548451374538};
 
 // Antiderivative of 1/r: d^2 Phi / dX dY = 1 / sqrt(X^2 + Y^2).
 double Phi(double X, double Y) {
@@ -43,12 +43,9 @@ Stress6 HalfSpace::Boussinesq(double x, double y, double z) const {
   Stress6 s{};
   if (r2 > 0.0) {
     const double inv_r2 = 1.0 / r2;
-    s[kSxx] = c * (b * inv_r2 * (a * (x * x - y * y) + z * y * y / rho3) -
-                   3.0 * z * x * x / rho5);
-    s[kSyy] = c * (b * inv_r2 * (a * (y * y - x * x) + z * x * x / rho3) -
-                   3.0 * z * y * y / rho5);
-    s[kSxy] = c * (b * inv_r2 * (2.0 * a * x * y - x * y * z / rho3) -
-                   3.0 * x * y * z / rho5);
+    s[kSxx] = c * (b * inv_r2 * (a * (x * x - y * y) + z * y * y / rho3) - 3.0 * z * x * x / rho5);
+    s[kSyy] = c * (b * inv_r2 * (a * (y * y - x * x) + z * x * x / rho3) - 3.0 * z * y * y / rho5);
+    s[kSxy] = c * (b * inv_r2 * (2.0 * a * x * y - x * y * z / rho3) - 3.0 * x * y * z / rho5);
   } else {
     s[kSxx] = s[kSyy] = b / (4.0 * kPi * z * z);
   }
@@ -68,15 +65,12 @@ Stress6 HalfSpace::CerrutiX(double x, double y, double z) const {
   const double rz = rho + z;
   const double rz2 = rz * rz;
   Stress6 s{};
-  s[kSxx] = c * x / rho3 *
-            (-3.0 * x * x / rho2 +
-             b / rz2 * (rho2 - y * y - 2.0 * rho * y * y / rz));
+  s[kSxx] =
+      c * x / rho3 * (-3.0 * x * x / rho2 + b / rz2 * (rho2 - y * y - 2.0 * rho * y * y / rz));
   s[kSyy] = c * x / rho3 *
-            (-3.0 * y * y / rho2 +
-             b / rz2 * (3.0 * rho2 - x * x - 2.0 * rho * x * x / rz));
-  s[kSxy] = c * y / rho3 *
-            (-3.0 * x * x / rho2 +
-             b / rz2 * (-rho2 + x * x + 2.0 * rho * x * x / rz));
+            (-3.0 * y * y / rho2 + b / rz2 * (3.0 * rho2 - x * x - 2.0 * rho * x * x / rz));
+  s[kSxy] =
+      c * y / rho3 * (-3.0 * x * x / rho2 + b / rz2 * (-rho2 + x * x + 2.0 * rho * x * x / rz));
   s[kSzz] = -3.0 * c * x * z * z / rho5;
   s[kSxz] = -3.0 * c * x * x * z / rho5;
   s[kSyz] = -3.0 * c * x * y * z / rho5;
@@ -99,8 +93,7 @@ Stress6 HalfSpace::CerrutiY(double x, double y, double z) const {
   return s;
 }
 
-Stress6 HalfSpace::CellStress(SurfaceLoad load, double x, double y, double z,
-                              double h) const {
+Stress6 HalfSpace::CellStress(SurfaceLoad load, double x, double y, double z, double h) const {
   // Composite Gauss: split the cell so that every sub-cell is at most a third
   // of its distance to the receptor; 4x4 points per sub-cell then converge
   // to ~1e-7 relative.
@@ -140,8 +133,7 @@ std::string HalfSpace::Describe() const {
   return buf;
 }
 
-void Substrate::LatticeTable(double z, double h, int n,
-                             const std::array<bool, kNumStress>& want,
+void Substrate::LatticeTable(double z, double h, int n, const std::array<bool, kNumStress>& want,
                              std::vector<float>* table) const {
   const int L = 2 * n - 1;
   table->assign(static_cast<size_t>(kNumLoads) * kNumStress * L * L, 0.0f);
@@ -150,12 +142,11 @@ void Substrate::LatticeTable(double z, double h, int n,
       // Source at (+di, +dj) cells from the receptor: the receptor sits at
       // (-di h, -dj h) relative to the source cell's centre.
       for (int load = 0; load < kNumLoads; ++load) {
-        const Stress6 s = CellStress(static_cast<SurfaceLoad>(load), -di * h,
-                                     -dj * h, z, h);
+        const Stress6 s = CellStress(static_cast<SurfaceLoad>(load), -di * h, -dj * h, z, h);
         for (int c = 0; c < kNumStress; ++c) {
           if (!want[c]) continue;
-          (*table)[(static_cast<size_t>(load * kNumStress + c) * L +
-                    (dj + n - 1)) * L + (di + n - 1)] = static_cast<float>(s[c]);
+          (*table)[(static_cast<size_t>(load * kNumStress + c) * L + (dj + n - 1)) * L +
+                   (di + n - 1)] = static_cast<float>(s[c]);
         }
       }
     }
@@ -177,8 +168,8 @@ void HalfSpaceSurfaceComplianceTable(double young_pa, double poisson, double h, 
       // Field point at (x, y) = offset of the receptor cell from the loaded
       // one: minus (di, dj) h; the response is even in both.
       const double x = di * h, y = dj * h;
-      const double v = scale * (Phi(x + a, y + a) - Phi(x + a, y - a) - Phi(x - a, y + a) +
-                                Phi(x - a, y - a));
+      const double v =
+          scale * (Phi(x + a, y + a) - Phi(x + a, y - a) - Phi(x - a, y + a) + Phi(x - a, y - a));
       const float f = static_cast<float>(v);
       for (int sj : {-1, 1})
         for (int si : {-1, 1})

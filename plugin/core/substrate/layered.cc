@@ -51,16 +51,22 @@ void SolveDense(int n, int m, double* A, double* B) {
 // s_zz, s_xiz^ (= -i s_xiz), U_xi (= 2 mu_ref k (-i u_xi)), U_z
 // (= 2 mu_ref k u_z); r = mu_ref / mu.
 enum { kCSxx = 0, kCSyy, kCSzz, kCSxz, kCUx, kCUz, kNumComp };
-void InplaneBasis(double nu, double r, double k, double zeta, double h,
-                  double out[4][kNumComp]) {
+void InplaneBasis(double nu, double r, double k, double zeta, double h, double out[4][kNumComp]) {
   const double t = k * zeta, e = std::exp(-t);
   double* a = out[0];
-  a[kCSxx] = -e; a[kCSyy] = 0; a[kCSzz] = e; a[kCSxz] = -e;
-  a[kCUx] = r * e; a[kCUz] = -r * e;
+  a[kCSxx] = -e;
+  a[kCSyy] = 0;
+  a[kCSzz] = e;
+  a[kCSxz] = -e;
+  a[kCUx] = r * e;
+  a[kCUz] = -r * e;
   double* c = out[2];
-  c[kCSxx] = (2 * nu - t) * e; c[kCSyy] = 2 * nu * e;
-  c[kCSzz] = (2 - 2 * nu + t) * e; c[kCSxz] = -(1 - 2 * nu + t) * e;
-  c[kCUx] = r * t * e; c[kCUz] = -r * (3 - 4 * nu + t) * e;
+  c[kCSxx] = (2 * nu - t) * e;
+  c[kCSyy] = 2 * nu * e;
+  c[kCSzz] = (2 - 2 * nu + t) * e;
+  c[kCSxz] = -(1 - 2 * nu + t) * e;
+  c[kCUx] = r * t * e;
+  c[kCUz] = -r * (3 - 4 * nu + t) * e;
   double* b = out[1];
   double* d = out[3];
   if (h < 0) {
@@ -68,41 +74,62 @@ void InplaneBasis(double nu, double r, double k, double zeta, double h,
     return;
   }
   const double tp = k * (zeta - h), ep = std::exp(tp);  // tp <= 0
-  b[kCSxx] = -ep; b[kCSyy] = 0; b[kCSzz] = ep; b[kCSxz] = ep;
-  b[kCUx] = r * ep; b[kCUz] = r * ep;
-  d[kCSxx] = -(2 * nu + tp) * ep; d[kCSyy] = -2 * nu * ep;
-  d[kCSzz] = (tp - 2 + 2 * nu) * ep; d[kCSxz] = (tp - 1 + 2 * nu) * ep;
-  d[kCUx] = r * tp * ep; d[kCUz] = r * (tp - 3 + 4 * nu) * ep;
+  b[kCSxx] = -ep;
+  b[kCSyy] = 0;
+  b[kCSzz] = ep;
+  b[kCSxz] = ep;
+  b[kCUx] = r * ep;
+  b[kCUz] = r * ep;
+  d[kCSxx] = -(2 * nu + tp) * ep;
+  d[kCSyy] = -2 * nu * ep;
+  d[kCSzz] = (tp - 2 + 2 * nu) * ep;
+  d[kCSxz] = (tp - 1 + 2 * nu) * ep;
+  d[kCUx] = r * tp * ep;
+  d[kCUz] = r * (tp - 3 + 4 * nu) * ep;
 }
 
 // Antiplane basis: u_eta = (f e + g e') / (mu k). out[col][comp]: col f, g;
 // comp V (= mu_ref k u_eta), s_etaz, s_xieta^ (= -i s_xieta).
-void AntiplaneBasis(double r, double k, double zeta, double h,
-                    double out[2][3]) {
+void AntiplaneBasis(double r, double k, double zeta, double h, double out[2][3]) {
   const double e = std::exp(-k * zeta);
-  out[0][0] = r * e; out[0][1] = -e; out[0][2] = e;
+  out[0][0] = r * e;
+  out[0][1] = -e;
+  out[0][2] = e;
   if (h < 0) {
     out[1][0] = out[1][1] = out[1][2] = 0;
     return;
   }
   const double ep = std::exp(k * (zeta - h));
-  out[1][0] = r * ep; out[1][1] = ep; out[1][2] = ep;
+  out[1][0] = r * ep;
+  out[1][1] = ep;
+  out[1][2] = ep;
 }
 
 // Homogeneous half-space transfer functions (REFERENCE.md sec. 3).
 void HalfSpaceTransfer(double k, double z, double nu, double* t) {
   const double kz = k * z, e = std::exp(-kz);
-  t[kPxx] = -(1 - kz) * e; t[kPyy] = -2 * nu * e; t[kPzz] = -(1 + kz) * e;
+  t[kPxx] = -(1 - kz) * e;
+  t[kPyy] = -2 * nu * e;
+  t[kPzz] = -(1 + kz) * e;
   t[kPxz] = kz * e;
-  t[kQxx] = (2 - kz) * e; t[kQyy] = 2 * nu * e; t[kQzz] = kz * e;
+  t[kQxx] = (2 - kz) * e;
+  t[kQyy] = 2 * nu * e;
+  t[kQzz] = kz * e;
   t[kQxz] = (1 - kz) * e;
-  t[kAyz] = -e; t[kAxy] = e;
+  t[kAyz] = -e;
+  t[kAxy] = e;
 }
 
 void ToArray(const LayerTransfer& lt, double* t) {
-  t[kPxx] = lt.p_xixi; t[kPyy] = lt.p_etaeta; t[kPzz] = lt.p_zz;
-  t[kPxz] = lt.p_xiz; t[kQxx] = lt.q_xixi; t[kQyy] = lt.q_etaeta;
-  t[kQzz] = lt.q_zz; t[kQxz] = lt.q_xiz; t[kAyz] = lt.a_etaz;
+  t[kPxx] = lt.p_xixi;
+  t[kPyy] = lt.p_etaeta;
+  t[kPzz] = lt.p_zz;
+  t[kPxz] = lt.p_xiz;
+  t[kQxx] = lt.q_xixi;
+  t[kQyy] = lt.q_etaeta;
+  t[kQzz] = lt.q_zz;
+  t[kQxz] = lt.q_xiz;
+  t[kAyz] = lt.a_etaz;
   t[kAxy] = lt.a_xieta;
 }
 
@@ -117,8 +144,8 @@ std::string Fmt(const char* f, double a, double b = 0, double c = 0) {
 // ---------------------------------------------------------------------------
 // Construction.
 
-LayeredSubstrate::LayeredSubstrate(std::vector<ElasticLayer> layers,
-                                   LayeredBase base, InterfaceSide side)
+LayeredSubstrate::LayeredSubstrate(std::vector<ElasticLayer> layers, LayeredBase base,
+                                   InterfaceSide side)
     : layers_(std::move(layers)), base_(base), side_(side) {
   double z = 0;
   for (const ElasticLayer& l : layers_) {
@@ -126,14 +153,13 @@ LayeredSubstrate::LayeredSubstrate(std::vector<ElasticLayer> layers,
     interfaces_m_.push_back(z);
     mu_pa_.push_back(l.young_pa / (2 * (1 + l.poisson)));
   }
-  mu_pa_.push_back(base_.rigid ? 0.0
-                               : base_.young_pa / (2 * (1 + base_.poisson)));
+  mu_pa_.push_back(base_.rigid ? 0.0 : base_.young_pa / (2 * (1 + base_.poisson)));
   top_halfspace_ = std::make_unique<HalfSpace>(layers_[0].poisson);
 }
 
-std::unique_ptr<LayeredSubstrate> LayeredSubstrate::Create(
-    const std::vector<ElasticLayer>& layers, const LayeredBase& base,
-    InterfaceSide side, std::string* error) {
+std::unique_ptr<LayeredSubstrate> LayeredSubstrate::Create(const std::vector<ElasticLayer>& layers,
+                                                           const LayeredBase& base,
+                                                           InterfaceSide side, std::string* error) {
   auto fail = [&](const std::string& msg) {
     if (error) *error = msg;
     return std::unique_ptr<LayeredSubstrate>();
@@ -145,27 +171,22 @@ std::unique_ptr<LayeredSubstrate> LayeredSubstrate::Create(
     const ElasticLayer& l = layers[i];
     const double i1 = static_cast<double>(i);
     if (!(l.thickness_m > 0) || !std::isfinite(l.thickness_m))
-      return fail(Fmt("layer %g thickness: must be > 0 m (got %g)", i1,
-                      l.thickness_m));
+      return fail(Fmt("layer %g thickness: must be > 0 m (got %g)", i1, l.thickness_m));
     if (!(l.young_pa > 0) || !std::isfinite(l.young_pa))
-      return fail(Fmt("layer %g young: must be > 0 Pa (got %g)", i1,
-                      l.young_pa));
+      return fail(Fmt("layer %g young: must be > 0 Pa (got %g)", i1, l.young_pa));
     if (bad_nu(l.poisson))
-      return fail(Fmt("layer %g poisson: must be in (-1, 0.5] (got %g)", i1,
-                      l.poisson));
+      return fail(Fmt("layer %g poisson: must be in (-1, 0.5] (got %g)", i1, l.poisson));
   }
   if (!base.rigid) {
     if (!(base.young_pa > 0) || !std::isfinite(base.young_pa))
       return fail(Fmt("base young: must be > 0 Pa (got %g)", base.young_pa));
     if (bad_nu(base.poisson))
-      return fail(Fmt("base poisson: must be in (-1, 0.5] (got %g)",
-                      base.poisson));
+      return fail(Fmt("base poisson: must be in (-1, 0.5] (got %g)", base.poisson));
   }
   if (side != InterfaceSide::kUpper && side != InterfaceSide::kLower)
     return fail("interface side: must be upper or lower");
   if (error) error->clear();
-  return std::unique_ptr<LayeredSubstrate>(
-      new LayeredSubstrate(layers, base, side));
+  return std::unique_ptr<LayeredSubstrate>(new LayeredSubstrate(layers, base, side));
 }
 
 std::vector<ElasticLayer> LayeredSubstrate::ShaoFingertipLayers() {
@@ -177,23 +198,19 @@ LayeredBase LayeredSubstrate::ShaoFingertipBase() { return LayeredBase{}; }
 std::string LayeredSubstrate::Describe() const {
   std::string s = "layered:";
   for (const ElasticLayer& l : layers_)
-    s += Fmt(" [%.4g mm, E=%.4g kPa, nu=%.4g]", l.thickness_m * 1e3,
-             l.young_pa * 1e-3, l.poisson);
+    s += Fmt(" [%.4g mm, E=%.4g kPa, nu=%.4g]", l.thickness_m * 1e3, l.young_pa * 1e-3, l.poisson);
   if (base_.rigid)
     s += Fmt(" over rigid base at %.4g mm", interfaces_m_.back() * 1e3);
   else
-    s += Fmt(" over half-space E=%.4g kPa nu=%.4g", base_.young_pa * 1e-3,
-             base_.poisson);
-  s += side_ == InterfaceSide::kUpper ? "; interfaces: upper side"
-                                      : "; interfaces: lower side";
+    s += Fmt(" over half-space E=%.4g kPa nu=%.4g", base_.young_pa * 1e-3, base_.poisson);
+  s += side_ == InterfaceSide::kUpper ? "; interfaces: upper side" : "; interfaces: lower side";
   return s;
 }
 
 // ---------------------------------------------------------------------------
 // Depth bookkeeping.
 
-int LayeredSubstrate::Locate(double z, InterfaceSide side,
-                             double* local) const {
+int LayeredSubstrate::Locate(double z, InterfaceSide side, double* local) const {
   const int M = static_cast<int>(layers_.size());
   const double tol = 1e-9 * interfaces_m_.back();
   if (!(z > 0) || !std::isfinite(z)) return -1;
@@ -222,8 +239,7 @@ int LayeredSubstrate::Locate(double z, InterfaceSide side,
 
 std::string LayeredSubstrate::CheckDepth(double z, InterfaceSide side) const {
   double local;
-  if (!(z > 0) || !std::isfinite(z))
-    return Fmt("receptor depth must be > 0 m (got %g)", z);
+  if (!(z > 0) || !std::isfinite(z)) return Fmt("receptor depth must be > 0 m (got %g)", z);
   if (Locate(z, side, &local) < 0)
     return Fmt("receptor depth %g m is at or inside the rigid base (%g m)", z,
                interfaces_m_.back());
@@ -232,15 +248,12 @@ std::string LayeredSubstrate::CheckDepth(double z, InterfaceSide side) const {
 
 Material LayeredSubstrate::MaterialAt(double z, bool upper_side) const {
   double local;
-  const int j = Locate(z, upper_side ? InterfaceSide::kUpper
-                                     : InterfaceSide::kLower, &local);
+  const int j = Locate(z, upper_side ? InterfaceSide::kUpper : InterfaceSide::kLower, &local);
   if (j < 0) {
-    if (z <= 0 && !layers_.empty())
-      return {layers_[0].young_pa, layers_[0].poisson};
+    if (z <= 0 && !layers_.empty()) return {layers_[0].young_pa, layers_[0].poisson};
     return {0, 0};
   }
-  if (j == static_cast<int>(layers_.size()))
-    return {base_.young_pa, base_.poisson};
+  if (j == static_cast<int>(layers_.size())) return {base_.young_pa, base_.poisson};
   return {layers_[j].young_pa, layers_[j].poisson};
 }
 
@@ -294,8 +307,7 @@ void LayeredSubstrate::Solve(double k, Solution* sol) const {
       break;
     }
     for (int q = 0; q < 4; ++q)
-      for (int c = 0; c < 4; ++c)
-        A[(row + q) * n + 4 * j + c] = bb[c][comps[q]];
+      for (int c = 0; c < 4; ++c) A[(row + q) * n + 4 * j + c] = bb[c][comps[q]];
     for (int q = 0; q < 2; ++q)
       for (int c = 0; c < 2; ++c) Aa[(rowa + q) * na + 2 * j + c] = ab[c][q];
     // Next layer (or the half-space base) at its top face.
@@ -308,16 +320,13 @@ void LayeredSubstrate::Solve(double k, Solution* sol) const {
     if (next_is_base) {
       const int cols[2] = {0, 2};  // a, c
       for (int q = 0; q < 4; ++q)
-        for (int c = 0; c < 2; ++c)
-          A[(row + q) * n + 4 * M + c] = -bt[cols[c]][comps[q]];
+        for (int c = 0; c < 2; ++c) A[(row + q) * n + 4 * M + c] = -bt[cols[c]][comps[q]];
       for (int q = 0; q < 2; ++q) Aa[(rowa + q) * na + 2 * M] = -at[0][q];
     } else {
       for (int q = 0; q < 4; ++q)
-        for (int c = 0; c < 4; ++c)
-          A[(row + q) * n + 4 * (j + 1) + c] = -bt[c][comps[q]];
+        for (int c = 0; c < 4; ++c) A[(row + q) * n + 4 * (j + 1) + c] = -bt[c][comps[q]];
       for (int q = 0; q < 2; ++q)
-        for (int c = 0; c < 2; ++c)
-          Aa[(rowa + q) * na + 2 * (j + 1) + c] = -at[c][q];
+        for (int c = 0; c < 2; ++c) Aa[(rowa + q) * na + 2 * (j + 1) + c] = -at[c][q];
     }
   }
   SolveDense(n, 2, A, B);
@@ -329,8 +338,8 @@ void LayeredSubstrate::Solve(double k, Solution* sol) const {
   sol->surface_uz = uz;
 }
 
-LayerTransfer LayeredSubstrate::Evaluate(const Solution& sol, double k,
-                                         int layer, double local) const {
+LayerTransfer LayeredSubstrate::Evaluate(const Solution& sol, double k, int layer,
+                                         double local) const {
   const int M = static_cast<int>(layers_.size());
   const bool in_base = (layer == M);
   const double nu = in_base ? base_.poisson : layers_[layer].poisson;
@@ -370,8 +379,7 @@ LayerTransfer LayeredSubstrate::Evaluate(const Solution& sol, double k,
   return t;
 }
 
-LayerTransfer LayeredSubstrate::TransferAt(double k, double z,
-                                           InterfaceSide side) const {
+LayerTransfer LayeredSubstrate::TransferAt(double k, double z, InterfaceSide side) const {
   double local;
   const int j = Locate(z, side, &local);
   LayerTransfer t;
@@ -413,9 +421,8 @@ double LayeredSubstrate::SurfaceCompliance(double k) const {
 // ---------------------------------------------------------------------------
 // Tabulation at one depth.
 
-void LayeredSubstrate::TabulateTransfer(int layer, double local, double z,
-                                        bool subtract, double k_lo,
-                                        double k_hi, Tab* tab) const {
+void LayeredSubstrate::TabulateTransfer(int layer, double local, double z, bool subtract,
+                                        double k_lo, double k_hi, Tab* tab) const {
   tab->Init(kNumTransfer, k_lo, k_hi);
   Solution sol;
   const double nu0 = layers_[0].poisson;
@@ -428,8 +435,7 @@ void LayeredSubstrate::TabulateTransfer(int layer, double local, double z,
       HalfSpaceTransfer(k, z, nu0, h);
       for (int f = 0; f < kNumTransfer; ++f) t[f] -= h[f];
     }
-    double* dst = i < 0 ? tab->v0.data()
-                        : tab->v.data() + static_cast<size_t>(i) * kNumTransfer;
+    double* dst = i < 0 ? tab->v0.data() : tab->v.data() + static_cast<size_t>(i) * kNumTransfer;
     for (int f = 0; f < kNumTransfer; ++f) dst[f] = t[f];
   }
 }
@@ -442,9 +448,7 @@ double LayeredSubstrate::DecayLength(int layer, double z) const {
   return z;
 }
 
-double LayeredSubstrate::LowK(double z) const {
-  return 1e-4 / std::max(interfaces_m_.back(), z);
-}
+double LayeredSubstrate::LowK(double z) const { return 1e-4 / std::max(interfaces_m_.back(), z); }
 
 // ---------------------------------------------------------------------------
 // Strain and strain energy density.

@@ -92,9 +92,9 @@ class LayeredSubstrate : public Substrate {
   // Validates every field; on error returns null and sets *error to a message
   // naming the field and its valid range (E > 0, nu in (-1, 0.5],
   // thickness > 0, at least one layer). No exceptions.
-  static std::unique_ptr<LayeredSubstrate> Create(
-      const std::vector<ElasticLayer>& layers, const LayeredBase& base,
-      InterfaceSide side, std::string* error);
+  static std::unique_ptr<LayeredSubstrate> Create(const std::vector<ElasticLayer>& layers,
+                                                  const LayeredBase& base, InterfaceSide side,
+                                                  std::string* error);
 
   // Human fingertip of Shao et al. 2010 (Table 1): epidermis 0.7 mm (80 kPa,
   // 0.48), dermis 0.8 mm (50 kPa, 0.48), subcutis (24 kPa, 0.4) down to rigid
@@ -110,24 +110,22 @@ class LayeredSubstrate : public Substrate {
   // that CheckDepth rejects gives NaN stresses (NaN-filled tables).
   Stress6 CellStress(SurfaceLoad load, double x_m, double y_m, double z_m,
                      double pitch_m) const override;
-  void LatticeTable(double z_m, double pitch_m, int n,
-                    const std::array<bool, kNumStress>& want,
+  void LatticeTable(double z_m, double pitch_m, int n, const std::array<bool, kNumStress>& want,
                     std::vector<float>* table) const override;
   std::string Describe() const override;
 
   // Same, with an explicit interface side.
-  Stress6 CellStress(SurfaceLoad load, double x_m, double y_m, double z_m,
-                     double pitch_m, InterfaceSide side) const;
-  void LatticeTable(double z_m, double pitch_m, int n,
-                    const std::array<bool, kNumStress>& want,
+  Stress6 CellStress(SurfaceLoad load, double x_m, double y_m, double z_m, double pitch_m,
+                     InterfaceSide side) const;
+  void LatticeTable(double z_m, double pitch_m, int n, const std::array<bool, kNumStress>& want,
                     InterfaceSide side, std::vector<float>* table) const;
 
   // Stress (Pa) from a point force (1 N) at the origin, and from a unit (1 Pa)
   // uniform traction on a disc of radius radius_m centred at the origin.
   Stress6 PointStress(SurfaceLoad load, double x_m, double y_m, double z_m,
                       InterfaceSide side) const;
-  Stress6 DiscStress(SurfaceLoad load, double x_m, double y_m, double z_m,
-                     double radius_m, InterfaceSide side) const;
+  Stress6 DiscStress(SurfaceLoad load, double x_m, double y_m, double z_m, double radius_m,
+                     InterfaceSide side) const;
 
   // Surface normal displacement (m per Pa of pressure) at the centre of cell
   // (i, j) from unit pressure on cell (i + di, j + dj) of an n x n lattice of
@@ -135,8 +133,7 @@ class LayeredSubstrate : public Substrate {
   // LatticeTable layout with one slab). The 1/r part (top layer) and the
   // base's long-wave part are closed forms over the cell; the remainder goes
   // the radial route.
-  void SurfaceComplianceTable(double pitch_m, int n,
-                              std::vector<float>* table) const;
+  void SurfaceComplianceTable(double pitch_m, int n, std::vector<float>* table) const;
 
   // Direct (untabulated) transfer functions at wavenumber k_per_m >= 0.
   LayerTransfer TransferAt(double k_per_m, double z_m, InterfaceSide side) const;
@@ -162,27 +159,25 @@ class LayeredSubstrate : public Substrate {
   struct Solution;
 
  private:
-  LayeredSubstrate(std::vector<ElasticLayer> layers, LayeredBase base,
-                   InterfaceSide side);
+  LayeredSubstrate(std::vector<ElasticLayer> layers, LayeredBase base, InterfaceSide side);
 
   // Layer index at depth z (num layers = base half-space), local depth below
   // that layer's top face; -1 when invalid.
   int Locate(double z_m, InterfaceSide side, double* local_m) const;
   void Solve(double k, Solution* sol) const;
   struct Tab;
-  void TabulateTransfer(int layer, double local_m, double z_m, bool subtract,
-                        double k_lo, double k_hi, Tab* tab) const;
+  void TabulateTransfer(int layer, double local_m, double z_m, bool subtract, double k_lo,
+                        double k_hi, Tab* tab) const;
   double DecayLength(int layer, double z_m) const;
   double LowK(double z_m) const;
 
-  LayerTransfer Evaluate(const Solution& sol, double k, int layer,
-                         double local_m) const;
+  LayerTransfer Evaluate(const Solution& sol, double k, int layer, double local_m) const;
 
   std::vector<ElasticLayer> layers_;
   LayeredBase base_;
   InterfaceSide side_;
-  std::vector<double> interfaces_m_;  // depth of each layer's bottom face
-  std::vector<double> mu_pa_;         // shear modulus per layer (+ base)
+  std::vector<double> interfaces_m_;          // depth of each layer's bottom face
+  std::vector<double> mu_pa_;                 // shear modulus per layer (+ base)
   std::unique_ptr<HalfSpace> top_halfspace_;  // nu of layer 0
 };
 

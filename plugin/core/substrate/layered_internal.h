@@ -14,14 +14,11 @@
 namespace mjtouch {
 namespace layered_internal {
 
-
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Transfer-function slots in a table row (LayerTransfer order).
-enum {
-  kPxx = 0, kPyy, kPzz, kPxz, kQxx, kQyy, kQzz, kQxz, kAyz, kAxy, kNumTransfer
-};
+enum { kPxx = 0, kPyy, kPzz, kPxz, kQxx, kQyy, kQzz, kQxz, kAyz, kAxy, kNumTransfer };
 
 // Tabulation: points per table, and where a decaying function is dropped
 // (exp(-50) times the polynomial growth of a few layers is below 1e-16).
@@ -67,8 +64,7 @@ struct LayeredSubstrate::Tab {
     const double w3 = s * (s - 1) * (s - 2) / 6.0;
     const double* p = v.data() + static_cast<size_t>(i) * nf;
     for (int f = 0; f < nf; ++f)
-      out[f] = w0 * p[f] + w1 * p[nf + f] + w2 * p[2 * nf + f] +
-               w3 * p[3 * nf + f];
+      out[f] = w0 * p[f] + w1 * p[nf + f] + w2 * p[2 * nf + f] + w3 * p[3 * nf + f];
   }
   double KAt(int i) const { return k_lo * std::exp(i / inv_du); }
   void Init(int nfunc, double lo, double hi) {

@@ -15,19 +15,17 @@ using namespace layered_internal;
 namespace {
 
 // 8-point Gauss-Legendre on [-1, 1].
-constexpr double kGl8X[8] = {-0.9602898564975363, -0.7966664774136267,
-                             -0.5255324099163290, -0.1834346424956498,
-                             0.1834346424956498,  0.5255324099163290,
+constexpr double kGl8X[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290,
+                             -0.1834346424956498, 0.1834346424956498,  0.5255324099163290,
                              0.7966664774136267,  0.9602898564975363};
-constexpr double kGl8W[8] = {0.1012285362903763, 0.2223810344533745,
-                             0.3137066458778873, 0.3626837833783620,
-                             0.3626837833783620, 0.3137066458778873,
+constexpr double kGl8W[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873,
+                             0.3626837833783620, 0.3626837833783620, 0.3137066458778873,
                              0.2223810344533745, 0.1012285362903763};
 // 4-point Gauss-Legendre on [-1, 1] (cell quadrature).
-constexpr double kGl4X[4] = {-0.8611363115940526, -0.3399810435848563,
-                             0.3399810435848563, 0.8611363115940526};
-constexpr double kGl4W[4] = {0.3478548451374538, 0.6521451548625461,
-                             0.6521451548625461, 0.3478548451374538};
+constexpr double kGl4X[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
+                             0.8611363115940526};
+constexpr double kGl4W[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
+                             0.3478548451374538};
 
 // Parity of each (load, component) field in x and in y (1 = odd).
 constexpr int kOddX[kNumLoads][kNumStress] = {
@@ -64,8 +62,12 @@ void BesselJ0123(double x, double* j) {
 // (x, y) (as HalfSpace::CerrutiY).
 Stress6 RotateShearXToY(const Stress6& p) {
   Stress6 s{};
-  s[kSxx] = p[kSyy]; s[kSyy] = p[kSxx]; s[kSzz] = p[kSzz];
-  s[kSxy] = -p[kSxy]; s[kSxz] = -p[kSyz]; s[kSyz] = p[kSxz];
+  s[kSxx] = p[kSyy];
+  s[kSyy] = p[kSxx];
+  s[kSzz] = p[kSzz];
+  s[kSxy] = -p[kSxy];
+  s[kSxz] = -p[kSyz];
+  s[kSyz] = p[kSxz];
   return s;
 }
 
@@ -108,17 +110,25 @@ namespace {
 // The 11 radial integrals I_i = int_0^inf F_i(k) W(k) J_n(k r) k dk, with
 // W = 1 (point force) or 2 pi R J1(k R) / k (unit traction on a disc).
 enum {
-  kIPzz = 0, kIPsum, kIPdif, kIPxz,   // pressure
-  kIX1a, kIX1b, kIX1c, kIXzz, kIX3, kIXz0, kIXz2,  // shear x
+  kIPzz = 0,
+  kIPsum,
+  kIPdif,
+  kIPxz,  // pressure
+  kIX1a,
+  kIX1b,
+  kIX1c,
+  kIXzz,
+  kIX3,
+  kIXz0,
+  kIXz2,  // shear x
   kNumRadial
 };
 
 // single: the table holds one function (compliance), integrated with J0
 // into I[0].
 template <typename TabT>
-void RadialIntegrals(const TabT& tab, double r, double radius, double decay,
-                     bool pressure, bool shear, double* I,
-                     bool single = false) {
+void RadialIntegrals(const TabT& tab, double r, double radius, double decay, bool pressure,
+                     bool shear, double* I, bool single = false) {
   for (int i = 0; i < kNumRadial; ++i) I[i] = 0;
   const double k_end = tab.k_hi;
   const double osc = r + radius;
@@ -189,23 +199,23 @@ Stress6 AssembleRadial(SurfaceLoad load, double x, double y, const double* I) {
 }
 
 template <typename TabT>
-Stress6 RadialStress(const TabT& tab, SurfaceLoad load, double x, double y,
-                     double radius, double decay) {
+Stress6 RadialStress(const TabT& tab, SurfaceLoad load, double x, double y, double radius,
+                     double decay) {
   double I[kNumRadial];
   if (load == kLoadShearY) {
     // +y solution at (x, y) = rotated +x solution at (y, -x).
     RadialIntegrals(tab, std::hypot(x, y), radius, decay, false, true, I);
     return RotateShearXToY(AssembleRadial(kLoadShearX, y, -x, I));
   }
-  RadialIntegrals(tab, std::hypot(x, y), radius, decay,
-                  load == kLoadPressure, load != kLoadPressure, I);
+  RadialIntegrals(tab, std::hypot(x, y), radius, decay, load == kLoadPressure,
+                  load != kLoadPressure, I);
   return AssembleRadial(load, x, y, I);
 }
 
 }  // namespace
 
-Stress6 LayeredSubstrate::PointStress(SurfaceLoad load, double x, double y,
-                                      double z, InterfaceSide side) const {
+Stress6 LayeredSubstrate::PointStress(SurfaceLoad load, double x, double y, double z,
+                                      InterfaceSide side) const {
   double local;
   const int j = Locate(z, side, &local);
   if (j < 0) return NaNStress();
@@ -226,8 +236,7 @@ Stress6 LayeredSubstrate::PointStress(SurfaceLoad load, double x, double y,
   return s;
 }
 
-Stress6 LayeredSubstrate::DiscStress(SurfaceLoad load, double x, double y,
-                                     double z, double radius,
+Stress6 LayeredSubstrate::DiscStress(SurfaceLoad load, double x, double y, double z, double radius,
                                      InterfaceSide side) const {
   double local;
   const int j = Locate(z, side, &local);
@@ -237,13 +246,12 @@ Stress6 LayeredSubstrate::DiscStress(SurfaceLoad load, double x, double y,
   return RadialStress(tab, load, x, y, radius, z);
 }
 
-Stress6 LayeredSubstrate::CellStress(SurfaceLoad load, double x, double y,
-                                     double z, double h) const {
+Stress6 LayeredSubstrate::CellStress(SurfaceLoad load, double x, double y, double z,
+                                     double h) const {
   return CellStress(load, x, y, z, h, side_);
 }
 
-Stress6 LayeredSubstrate::CellStress(SurfaceLoad load, double x, double y,
-                                     double z, double h,
+Stress6 LayeredSubstrate::CellStress(SurfaceLoad load, double x, double y, double z, double h,
                                      InterfaceSide side) const {
   double local;
   const int j = Locate(z, side, &local);
@@ -346,10 +354,8 @@ template <typename Fn>
 void CellQuadrature(double x, double y, double h, double scale, Fn&& fn) {
   static constexpr double kG2X[2] = {-0.5773502691896258, 0.5773502691896258};
   static constexpr double kG2W[2] = {1.0, 1.0};
-  static constexpr double kG3X[3] = {-0.7745966692414834, 0.0,
-                                     0.7745966692414834};
-  static constexpr double kG3W[3] = {0.5555555555555556, 0.8888888888888888,
-                                     0.5555555555555556};
+  static constexpr double kG3X[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
+  static constexpr double kG3W[3] = {0.5555555555555556, 0.8888888888888888, 0.5555555555555556};
   if (h <= 0.1 * scale) {
     const bool two = h <= scale / 30;
     const int np = two ? 2 : 3;
@@ -357,12 +363,10 @@ void CellQuadrature(double x, double y, double h, double scale, Fn&& fn) {
     const double* gw = two ? kG2W : kG3W;
     for (int a = 0; a < np; ++a)
       for (int b = 0; b < np; ++b)
-        fn(x - 0.5 * h * gx[a], y - 0.5 * h * gx[b],
-           0.25 * h * h * gw[a] * gw[b]);
+        fn(x - 0.5 * h * gx[a], y - 0.5 * h * gx[b], 0.25 * h * h * gw[a] * gw[b]);
     return;
   }
-  const int m =
-      std::clamp(static_cast<int>(std::ceil(4.0 * h / scale)), 1, 64);
+  const int m = std::clamp(static_cast<int>(std::ceil(4.0 * h / scale)), 1, 64);
   const double hs = h / m;
   for (int ia = 0; ia < m; ++ia)
     for (int ib = 0; ib < m; ++ib) {
@@ -386,16 +390,14 @@ void LayeredSubstrate::LatticeTable(double z, double h, int n,
 }
 
 void LayeredSubstrate::LatticeTable(double z, double h, int n,
-                                    const std::array<bool, kNumStress>& want,
-                                    InterfaceSide side,
+                                    const std::array<bool, kNumStress>& want, InterfaceSide side,
                                     std::vector<float>* table) const {
   const int L = 2 * n - 1;
   table->assign(static_cast<size_t>(kNumLoads) * kNumStress * L * L, 0.0f);
   double local;
   const int j = Locate(z, side, &local);
   if (j < 0 || !(h > 0) || n < 1) {
-    std::fill(table->begin(), table->end(),
-              std::numeric_limits<float>::quiet_NaN());
+    std::fill(table->begin(), table->end(), std::numeric_limits<float>::quiet_NaN());
     return;
   }
   const bool subtract = (j == 0);
@@ -414,15 +416,13 @@ void LayeredSubstrate::LatticeTable(double z, double h, int n,
       const double lx = std::max(0.0, x - 0.5 * h);
       const double ly = std::max(0.0, y - 0.5 * h);
       const double dlat = std::hypot(lx, ly);
-      const double scale = subtract ? std::max(a, 0.5 * dlat)
-                                    : std::hypot(dlat, z);
+      const double scale = subtract ? std::max(a, 0.5 * dlat) : std::hypot(dlat, z);
       Stress6 acc[kNumLoads] = {};
       CellQuadrature(x, y, h, scale, [&](double px, double py, double w) {
         rt.At(std::hypot(px, py), I);
         const Stress6 sp = AssembleRadial(kLoadPressure, px, py, I);
         const Stress6 sx = AssembleRadial(kLoadShearX, px, py, I);
-        const Stress6 sy =
-            RotateShearXToY(AssembleRadial(kLoadShearX, py, -px, I));
+        const Stress6 sy = RotateShearXToY(AssembleRadial(kLoadShearX, py, -px, I));
         for (int c = 0; c < kNumStress; ++c) {
           acc[0][c] += w * sp[c];
           acc[1][c] += w * sx[c];
@@ -431,14 +431,13 @@ void LayeredSubstrate::LatticeTable(double z, double h, int n,
       });
       if (subtract) {
         for (int load = 0; load < kNumLoads; ++load) {
-          const Stress6 hsv = top_halfspace_->CellStress(
-              static_cast<SurfaceLoad>(load), x, y, z, h);
+          const Stress6 hsv =
+              top_halfspace_->CellStress(static_cast<SurfaceLoad>(load), x, y, z, h);
           for (int c = 0; c < kNumStress; ++c) acc[load][c] += hsv[c];
         }
       }
       for (int load = 0; load < kNumLoads; ++load)
-        quarter[(static_cast<size_t>(dy) * n + dx) * kNumLoads + load] =
-            acc[load];
+        quarter[(static_cast<size_t>(dy) * n + dx) * kNumLoads + load] = acc[load];
     }
   }
   // Scatter with parity; table index (di, dj) = (-X, -Y) for receptor offset
@@ -447,17 +446,15 @@ void LayeredSubstrate::LatticeTable(double z, double h, int n,
     for (int comp = 0; comp < kNumStress; ++comp) {
       if (!want[comp]) continue;
       const bool ox = kOddX[load][comp], oy = kOddY[load][comp];
-      float* out = table->data() +
-                   static_cast<size_t>(load * kNumStress + comp) * L * L;
+      float* out = table->data() + static_cast<size_t>(load * kNumStress + comp) * L * L;
       for (int dj = -(n - 1); dj <= n - 1; ++dj)
         for (int di = -(n - 1); di <= n - 1; ++di) {
           const int X = -di, Y = -dj;
-          double v = quarter[(static_cast<size_t>(std::abs(Y)) * n +
-                              std::abs(X)) * kNumLoads + load][comp];
+          double v = quarter[(static_cast<size_t>(std::abs(Y)) * n + std::abs(X)) * kNumLoads +
+                             load][comp];
           if (X < 0 && ox) v = -v;
           if (Y < 0 && oy) v = -v;
-          out[static_cast<size_t>(dj + n - 1) * L + (di + n - 1)] =
-              static_cast<float>(v);
+          out[static_cast<size_t>(dj + n - 1) * L + (di + n - 1)] = static_cast<float>(v);
         }
     }
 }
@@ -465,13 +462,11 @@ void LayeredSubstrate::LatticeTable(double z, double h, int n,
 // ---------------------------------------------------------------------------
 // Surface compliance lattice.
 
-void LayeredSubstrate::SurfaceComplianceTable(double h, int n,
-                                              std::vector<float>* table) const {
+void LayeredSubstrate::SurfaceComplianceTable(double h, int n, std::vector<float>* table) const {
   const int L = 2 * n - 1;
   table->assign(static_cast<size_t>(L) * L, 0.0f);
   if (!(h > 0) || n < 1) {
-    std::fill(table->begin(), table->end(),
-              std::numeric_limits<float>::quiet_NaN());
+    std::fill(table->begin(), table->end(), std::numeric_limits<float>::quiet_NaN());
     return;
   }
   // Reference with the singular parts in closed form (real space):
@@ -481,9 +476,7 @@ void LayeredSubstrate::SurfaceComplianceTable(double h, int n,
   // decays like exp(-2 k h1) and goes through the radial route.
   const ElasticLayer& top = layers_[0];
   const double C1 = 2 * (1 - top.poisson * top.poisson) / top.young_pa;
-  const double Cb =
-      base_.rigid ? 0.0
-                  : 2 * (1 - base_.poisson * base_.poisson) / base_.young_pa;
+  const double Cb = base_.rigid ? 0.0 : 2 * (1 - base_.poisson * base_.poisson) / base_.young_pa;
   const double b = 2 * top.thickness_m;
   const double a = 2 * top.thickness_m;
   Tab tab;
@@ -504,14 +497,12 @@ void LayeredSubstrate::SurfaceComplianceTable(double h, int n,
   for (int dy = 0; dy < n; ++dy)
     for (int dx = 0; dx < n; ++dx) {
       const double x = dx * h, y = dy * h;
-      const double dlat = std::hypot(std::max(0.0, x - 0.5 * h),
-                                     std::max(0.0, y - 0.5 * h));
+      const double dlat = std::hypot(std::max(0.0, x - 0.5 * h), std::max(0.0, y - 0.5 * h));
       double acc = 0;
-      CellQuadrature(x, y, h, std::max(a, 0.5 * dlat),
-                     [&](double px, double py, double w) {
-                       rt.At(std::hypot(px, py), I);
-                       acc += w * I[0];
-                     });
+      CellQuadrature(x, y, h, std::max(a, 0.5 * dlat), [&](double px, double py, double w) {
+        rt.At(std::hypot(px, py), I);
+        acc += w * I[0];
+      });
       const double I0 = CellPotential(x, y, h, 0.0);
       const double Ib = CellPotential(x, y, h, b);
       quarter[static_cast<size_t>(dy) * n + dx] =
@@ -520,8 +511,7 @@ void LayeredSubstrate::SurfaceComplianceTable(double h, int n,
   for (int dj = -(n - 1); dj <= n - 1; ++dj)
     for (int di = -(n - 1); di <= n - 1; ++di)
       (*table)[static_cast<size_t>(dj + n - 1) * L + (di + n - 1)] =
-          static_cast<float>(
-              quarter[static_cast<size_t>(std::abs(dj)) * n + std::abs(di)]);
+          static_cast<float>(quarter[static_cast<size_t>(std::abs(dj)) * n + std::abs(di)]);
 }
 
 }  // namespace mjtouch

@@ -33,8 +33,8 @@ class Substrate {
   // Stress (Pa) at offset (x_m, y_m) from the centre of a square cell of side
   // pitch_m and at depth z_m > 0, for a unit (1 Pa) uniform traction `load` on
   // that cell.
-  virtual Stress6 CellStress(SurfaceLoad load, double x_m, double y_m,
-                             double z_m, double pitch_m) const = 0;
+  virtual Stress6 CellStress(SurfaceLoad load, double x_m, double y_m, double z_m,
+                             double pitch_m) const = 0;
 
   // Lattice influence table at depth z_m for cells of side pitch_m on a grid
   // of n x n cells: table[((load * 6 + comp) * L + (dj + n - 1)) * L +

@@ -26,13 +26,13 @@ struct RowSpan {
 // kOverwrite: the cells' old values are taken as +inf / 0 (not read), as
 // after a clear (RenderGap's exclusive surface).
 template <bool kPlane, bool kOverwrite>
-MJTOUCH_TARGET_CLONES
-void AlignedRow(const RowSpan& r, int i0, int i1, const double* z, const double* qz0,
-                const double* ox, const double* mean, double* __restrict gp,
-                double* __restrict cp, double* __restrict took) {
+MJTOUCH_TARGET_CLONES void AlignedRow(const RowSpan& r, int i0, int i1, const double* z,
+                                      const double* qz0, const double* ox, const double* mean,
+                                      double* __restrict gp, double* __restrict cp,
+                                      double* __restrict took) {
   for (int i = i0; i < i1; ++i) {
     const double zi = z[i];
-    const double qz = qz0[i] + r.r7v + r.r8 * zi;  // qz0 = t_z + R[6] u per column
+    const double qz = qz0[i] + r.r7v + r.r8 * zi;             // qz0 = t_z + R[6] u per column
     const double cov = kPlane ? 1.0 : ox[i] * r.oy / r.area;  // area > 0 (IsAlignedFace)
     const bool reach = (std::abs(zi) < kInf) & !(qz - r.top > r.cull) & (cov > 0.0);
     const double gap = qz - mean[i];  // NaN (per-cell mean) never takes
@@ -86,8 +86,7 @@ bool IsAlignedFace(const CounterSurface& s, const double R[9], double hx, double
 bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
                        const AlignedFace& f, const SkinBlocks& blocks, const double* block_lb,
                        double* gap_m, double* coverage, Extent* ext, bool covers_only,
-                       Extrema* extrema, ActiveRuns* spans,
-                       CellBox* overwrite) {
+                       Extrema* extrema, ActiveRuns* spans, CellBox* overwrite) {
   // overwrite: the cells hold stale values; every cell of the rows and
   // columns of the blocks within reach is written (+inf / 0 where nothing
   // takes), and *overwrite is set to that rectangle.
@@ -183,11 +182,15 @@ bool RenderAlignedFace(const TaxelGrid& grid, const std::vector<double>& skin_z,
       double* cp = coverage + base;
       const RowSpan row{r7 * v, r8, top, cull, oyj, area};
       if (overwrite) {
-        if (plane) AlignedRow<true, true>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
-        else AlignedRow<false, true>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
+        if (plane)
+          AlignedRow<true, true>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
+        else
+          AlignedRow<false, true>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
       } else {
-        if (plane) AlignedRow<true, false>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
-        else AlignedRow<false, false>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
+        if (plane)
+          AlignedRow<true, false>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
+        else
+          AlignedRow<false, false>(row, i0, i1, z, qz0, ox, mean, gp, cp, took);
       }
       int a = i0, b = i1 - 1;
       while (a <= b && took[a] == 0.0) ++a;

@@ -116,8 +116,8 @@ double MeshRayCaster::Cast(const double o[3], const double d[3]) const {
   return std::isfinite(best) ? best : -1.0;
 }
 
-bool RayCellGap(const CounterSurface& s, const Pose& pad, double u, double v, double z,
-                double h, int rays_per_side, double* gap_m, double* coverage) {
+bool RayCellGap(const CounterSurface& s, const Pose& pad, double u, double v, double z, double h,
+                int rays_per_side, double* gap_m, double* coverage) {
   if (!s.ray || rays_per_side < 1) return false;
   const double d_world[3] = {-pad.mat[2], -pad.mat[5], -pad.mat[8]};
   const int k = rays_per_side;

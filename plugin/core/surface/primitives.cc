@@ -69,8 +69,7 @@ std::vector<double> HeightFieldRowPrefix(int nrow, int ncol, const float* sample
   return prefix;
 }
 
-double HeightFieldBoxMean(const CounterSurface& s, double x0, double x1,
-                          double y0, double y1) {
+double HeightFieldBoxMean(const CounterSurface& s, double x0, double x1, double y0, double y1) {
   const double scx = (s.ncol - 1) / (2.0 * s.half_x_m);
   const double scy = (s.nrow - 1) / (2.0 * s.half_y_m);
   const double sx0 = std::clamp((x0 + s.half_x_m) * scx, 0.0, s.ncol - 1.0);

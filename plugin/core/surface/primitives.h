@@ -39,7 +39,7 @@ inline bool SphereInterval(const double o[3], const double d[3], double r, doubl
 
 // Finite cylinder of radius r, axis local z in [-hh, hh].
 inline bool CylinderInterval(const double o[3], const double d[3], double r, double hh, double* lo,
-                      double* hi) {
+                             double* hi) {
   const double a = d[0] * d[0] + d[1] * d[1];
   const double c = o[0] * o[0] + o[1] * o[1] - r * r;
   double l = -kInf, u = kInf;
@@ -64,7 +64,7 @@ inline bool CylinderInterval(const double o[3], const double d[3], double r, dou
 
 // The convex body's extent along the line o + s d (local frame).
 inline bool LineInterval(const CounterSurface& s, const double o[3], const double d[3], double* lo,
-                  double* hi) {
+                         double* hi) {
   using T = CounterSurface::Type;
   switch (s.type) {
     case T::kSphere: return SphereInterval(o, d, s.size_m[0], lo, hi);
@@ -80,7 +80,10 @@ inline bool LineInterval(const CounterSurface& s, const double o[3], const doubl
     case T::kCapsule: {
       // Convex: the union of the pieces' intervals is one interval.
       double l = kInf, u = -kInf, a, b;
-      if (CylinderInterval(o, d, s.size_m[0], s.size_m[1], &a, &b)) { l = a; u = b; }
+      if (CylinderInterval(o, d, s.size_m[0], s.size_m[1], &a, &b)) {
+        l = a;
+        u = b;
+      }
       for (double zc : {-s.size_m[1], s.size_m[1]}) {
         const double oc[3] = {o[0], o[1], o[2] - zc};
         if (SphereInterval(oc, d, s.size_m[0], &a, &b)) {

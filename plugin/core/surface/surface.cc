@@ -119,7 +119,10 @@ std::vector<double> SkinSurface(const TaxelGrid& grid, const PadGeometry& pad,
       for (int sx = -1; sx <= 1 && inside; sx += 2) {
         for (int sy = -1; sy <= 1; sy += 2) {
           double zz;
-          if (!shape(u + sx * g, v + sy * g, &zz)) { inside = false; break; }
+          if (!shape(u + sx * g, v + sy * g, &zz)) {
+            inside = false;
+            break;
+          }
           sum += zz;
         }
       }

@@ -75,8 +75,16 @@ struct Pose {
 //    analytic bodies are averaged over the cell at 2x2 Gauss points
 //    (coverage: the fraction that hit), kRay over 4x4 rays (mesh_surface.h).
 struct CounterSurface {
-  enum class Type { kPlane, kRectangle, kHeightField, kSphere, kEllipsoid, kCapsule, kCylinder,
-                    kRay };
+  enum class Type {
+    kPlane,
+    kRectangle,
+    kHeightField,
+    kSphere,
+    kEllipsoid,
+    kCapsule,
+    kCylinder,
+    kRay
+  };
   Type type = Type::kPlane;
   Pose pose;
   // kRectangle: half sizes of the face (x, y); kPlane ignores them.
@@ -102,7 +110,7 @@ struct CounterSurface {
   // Every row equal (a 1D texture): cell means need one row only.
   bool rows_identical = false;
   double max_height_m = 0;  // highest point above the local z = 0 plane
-  int id = -1;  // caller's tag (e.g. MuJoCo geom id)
+  int id = -1;              // caller's tag (e.g. MuJoCo geom id)
 };
 
 struct SkinBlocks;
@@ -195,8 +203,7 @@ std::vector<double> HeightFieldRowPrefix(int nrow, int ncol, const float* sample
 
 // Exact average of a bilinear height field over the axis-aligned box
 // [x0, x1] x [y0, y1] (surface frame), exposed for tests.
-double HeightFieldBoxMean(const CounterSurface& s, double x0, double x1,
-                          double y0, double y1);
+double HeightFieldBoxMean(const CounterSurface& s, double x0, double x1, double y0, double y1);
 
 }  // namespace mjtouch
 

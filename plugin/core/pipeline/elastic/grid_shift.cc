@@ -59,8 +59,7 @@ bool AverageWithShiftedGrid(const ShiftedGrid& sg, const TaxelGrid& grid, const 
       if (sbox.empty()) sbox = rbox;
     }
     touching = SolveElasticWarm(g, *sg.elastic, rbox, w->coverage, history, force_n, options,
-                                &w->gap, &w->pressure, &w->elastic, &w->stats, &sbox,
-                                &u_region);
+                                &w->gap, &w->pressure, &w->elastic, &w->stats, &sbox, &u_region);
     if (!touching) return false;
     if (pass == 0 && w->stats.approach_m >= level) touching = false;  // render all, solve again
   }

@@ -33,8 +33,8 @@ struct HistoryBlock;  // state_layout.h
 
 // The shifted grid's immutable tables (SkinModel, with `grid_shift`).
 struct ShiftedGrid {
-  TaxelGrid grid;                  // n + 1 cells of the taxel grid's pitch
-  std::vector<double> skin_z;      // SkinSurface on it
+  TaxelGrid grid;              // n + 1 cells of the taxel grid's pitch
+  std::vector<double> skin_z;  // SkinSurface on it
   SkinBlocks blocks;
   std::shared_ptr<const ElasticContact> elastic;  // the skin's compliance on it
 };

@@ -217,8 +217,7 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
       lin[i] = v;
     }
   }
-  if (!support.empty())
-    *solve_box = GrowBox(box, support.i0, support.i1, support.j0, support.j1);
+  if (!support.empty()) *solve_box = GrowBox(box, support.i0, support.i1, support.j0, support.j1);
   const CellBox sb = *solve_box;
   // the guess zero on sb outside the rows just written
   if (!periodic) {
@@ -256,8 +255,8 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
 // `box` or the corrections would cost more than an FFT.
 bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
                               const HistoryBlock& last, const HistoryBlock& prev,
-                              const std::vector<double>& guess, const CellBox& box,
-                              int threads, ElasticStepWork* w) {
+                              const std::vector<double>& guess, const CellBox& box, int threads,
+                              ElasticStepWork* w) {
   const CellBox rl = last.u_box(), rp = prev.u_box();
   auto covers = [&](const CellBox& r) {
     return r.nx > 0 && r.ny > 0 && box.i0 >= r.i0 && box.j0 >= r.j0 &&
@@ -292,14 +291,13 @@ bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
   for (size_t f = 0; f < nfix; ++f) {
     const int k = w->u0_fix[f];
     const int i = k % grid.n, j = k / grid.n;
-    const double lin = 2.0 * HistoryPressure(last, lb, i, j, grid.n) -
-                       HistoryPressure(prev, pb, i, j, grid.n);
+    const double lin =
+        2.0 * HistoryPressure(last, lb, i, j, grid.n) - HistoryPressure(prev, pb, i, j, grid.n);
     w->fix_i[f] = i - box.i0;
     w->fix_j[f] = j - box.j0;
     w->fix_d[f] = (Inside(box, i, j) ? guess[k] : 0.0) - lin;
   }
-  K.AddCellsAt(w->fix_i.data(), w->fix_j.data(), w->fix_d.data(), nfix, box.nx, box.ny, u,
-               threads);
+  K.AddCellsAt(w->fix_i.data(), w->fix_j.data(), w->fix_d.data(), nfix, box.nx, box.ny, u, threads);
   return true;
 }
 
@@ -323,8 +321,8 @@ bool SolveOnGrowingBox(const TaxelGrid& grid, const ElasticContact& ec,
     const bool whole = sb.i0 == box.i0 && sb.j0 == box.j0 && sb.nx == box.nx && sb.ny == box.ny;
     if (whole) break;
     CellBox grown = box;
-    if (touching && BoxHoldsContact(grid, ec.compliance(), gap, box, sb, *pressure,
-                                    st->approach_m, lift_m, opt, w, &grown, u_region))
+    if (touching && BoxHoldsContact(grid, ec.compliance(), gap, box, sb, *pressure, st->approach_m,
+                                    lift_m, opt, w, &grown, u_region))
       break;
     *u_region = CellBox{0, 0, 0, 0};
     // the solution on the smaller box is a good start on the grown one
@@ -341,10 +339,9 @@ bool HasWarmStart(const HistoryBlock* history) {
 
 bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const CellBox& box,
                       const std::vector<double>& coverage, const HistoryBlock* history,
-                      double force_n, const ElasticSolveOptions& opt,
-                      std::vector<double>* gap, std::vector<double>* pressure,
-                      ElasticStepWork* w, ElasticSolveStats* st, CellBox* solve_box,
-                      CellBox* u_region) {
+                      double force_n, const ElasticSolveOptions& opt, std::vector<double>* gap,
+                      std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
+                      CellBox* solve_box, CellBox* u_region) {
   // Cells without coverage never touch (every cell stored, the select
   // vectorises).
   for (int j = box.j0; j < box.j0 + box.ny; ++j) {
@@ -371,14 +368,13 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
   if (last)
     WarmStart(grid, box, last, extrapolate ? &history[2] : nullptr, ec.compliance().periodic(),
               pressure, w, solve_box);
-  const bool have_u0 = extrapolate && ExtrapolatedDisplacement(grid, ec.compliance(), *last,
-                                                               history[2], *pressure,
-                                                               *solve_box, opt.threads, w);
+  const bool have_u0 =
+      extrapolate && ExtrapolatedDisplacement(grid, ec.compliance(), *last, history[2], *pressure,
+                                              *solve_box, opt.threads, w);
   // Upward bulge bound: max_lift times the whole load on one cell.
   const double lift = ec.max_lift_m_per_pa() * force_n / grid.Area();
   return SolveOnGrowingBox(grid, ec, *gap, box, force_n, lift, opt,
-                           have_u0 ? w->u0.data() : nullptr, pressure, w, st, solve_box,
-                           u_region);
+                           have_u0 ? w->u0.data() : nullptr, pressure, w, st, solve_box, u_region);
 }
 
 void StoreElasticHistory(const TaxelGrid& grid, const std::vector<double>& pressure,

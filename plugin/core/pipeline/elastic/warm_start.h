@@ -8,8 +8,8 @@
 
 #include <vector>
 
-#include "pipeline/model.h"
 #include "pipeline/elastic/warm_start_work.h"
+#include "pipeline/model.h"
 
 namespace mjtouch {
 
@@ -41,10 +41,9 @@ bool HasWarmStart(const HistoryBlock* history);
 // which w->check_u holds K p of the solution (nx = 0: none).
 bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const CellBox& box,
                       const std::vector<double>& coverage, const HistoryBlock* history,
-                      double force_n, const ElasticSolveOptions& options,
-                      std::vector<double>* gap, std::vector<double>* pressure,
-                      ElasticStepWork* w, ElasticSolveStats* st, CellBox* solve_box,
-                      CellBox* u_region);
+                      double force_n, const ElasticSolveOptions& options, std::vector<double>* gap,
+                      std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
+                      CellBox* solve_box, CellBox* u_region);
 
 // Writes a solution to a history block: the pressure on p_box (zero
 // outside it), its K p u over u_region (row-major), the depth; marks it valid.
