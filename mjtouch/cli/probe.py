@@ -128,7 +128,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
         default=1e-4,
         help="simulation timestep (s), default 1e-4",
     )
-    p.add_argument("--nx", type=int, default=48, help="taxels per side, default 48")
+    p.add_argument(
+        "--nx",
+        type=int,
+        default=49,
+        help="taxels per side, default 49 (odd: a taxel centre on the probe's axis)",
+    )
     p.add_argument(
         "--pitch",
         type=positive_float("--pitch"),
@@ -192,6 +197,10 @@ def print_human(o: dict) -> None:
         f"force {o['force_steady_mean_n']:.4g} N; displacement achieved to "
         f"{o['max_displacement_error_m'] * 1e6:.3g} um of commanded; finger moved "
         f"{o['finger_motion_max_m'] * 1e6:.3g} um"
+    )
+    print(
+        "centred units' distance from the probe's axis (um): "
+        + ", ".join(f"{c} {d * 1e6:.3g}" for c, d in o["centred_offaxis_m"].items())
     )
 
 

@@ -85,6 +85,10 @@ def print_human(o: dict) -> None:
             )
             cells.append(f"{a * 1e6:8.3g} /{e * 1e6:8.3g} [{b * 1e6:6.3g}]")
         print(f"  {f:6.1f} " + "".join(f"{x:>26s}" for x in cells))
+    print(
+        "  centred units' distance from the probe's axis (um): "
+        + ", ".join(f"{c} {d * 1e6:.3g}" for c, d in th["centred_offaxis_m"].items())
+    )
     ri = o["rate_intensity"]
     print(
         "rate-intensity (centred unit, Hz): depth (mm) "

@@ -351,7 +351,10 @@ def press_force_controls(
 # --- scenes ----------------------------------------------------------------------------------
 
 HOLD_KP = 1e6  # N/m: the held finger's servo; ~1 um per N of probe force
-PROBE_TIP = scenes.Fingertip(nx=48, pitch_m=1.5e-4, ridges=False)  # 7.2 mm of skin, smooth
+# 7.35 mm of smooth skin; odd nx: a taxel centre on the pad's axis, under the default probe
+PROBE_TIP = scenes.Fingertip(nx=49, pitch_m=1.5e-4, ridges=False)
+# `sites` replaces the density population; these attributes then go
+_POPULATION_KEYS = ("classes", "density", "depth", "radius")
 OUTPUTS = "spikes stress force"  # the blocks every runner needs
 ProbeShape = Literal["pin", "sphere", "geom"]
 _GEOM_TYPES = {
@@ -555,14 +558,16 @@ class StimulusResult:
 
     def centred_units(self) -> dict[str, int]:
         """Per class, the receptor nearest the stimulus centre (the afferent
-        a physiologist would record: receptive field centred on the probe)."""
-        out = {}
-        for c in ("SA1", "RA", "PC"):
-            idx = np.nonzero(self.layout.classes == c)[0]
-            if idx.size:
-                d = np.hypot(*(self.layout.positions_m[idx, :2] - self.centre_m).T)
-                out[c] = int(idx[np.argmin(d)])
-        return out
+        a physiologist would record: receptive field centred on the probe;
+        on the probe's axis in a :class:`ProbeScene` with ``axis_units``)."""
+        return centred_units(self.layout, self.centre_m)
+
+    def centred_offaxis_m(self) -> dict[str, float]:
+        """Per class, the centred unit's distance (m) from the stimulus centre."""
+        return {
+            c: float(np.hypot(*(self.layout.positions_m[u, :2] - self.centre_m)))
+            for c, u in self.centred_units().items()
+        }
 
     def rates_hz(self, part: str = "steady") -> dict[str, dict[str, float]]:
         """Per class: ``mean`` over all its receptors, ``max`` over receptors,
@@ -700,7 +705,12 @@ class ProbeScene(_Scene):
     """The probe scene (:func:`probe_spec`) compiled and settled: the probe
     ramps to ``preindent_m`` over ``settle_s`` / 2 and holds for the rest, so
     sines and noise start in contact. ``run(waveform)`` then moves the probe
-    by the waveform (m, positive into the skin) about the pre-indentation."""
+    by the waveform (m, positive into the skin) about the pre-indentation.
+    ``axis_units``: the unit of each class nearest the probe's axis is moved
+    onto it (:func:`axis_sites`; unless the skin sets ``sites``), so the
+    centred unit is the one a recording centres the probe on; its distance
+    from the axis is ``centred_offaxis_m()`` (0 at a taxel centre, e.g. the
+    default probe on :data:`PROBE_TIP`)."""
 
     def __init__(
         self,
@@ -715,9 +725,19 @@ class ProbeScene(_Scene):
         self.tip = tip or PROBE_TIP
         self.preindent_m = in_range("preindent_m", preindent_m, 0, 3e-3, "m")
         settle = in_range("settle_s", settle_s, 0, 10, "s")
-        self.spec = probe_spec(self.probe, self.tip, timestep_s, skin)
-        self.z_contact = float(next(b for b in self.spec.bodies if b.name == "probe").pos[2])
         self.centre_m = (self.probe.x_m, self.probe.y_m)
+        self.spec = probe_spec(self.probe, self.tip, timestep_s, skin)
+        if axis_units and "sites" not in {**self.tip.skin, **(skin or {})}:
+            sites = axis_sites(SkinLayout.from_model(self.spec.compile()), self.centre_m)
+            keep = {k: v for k, v in self.tip.skin.items() if k not in _POPULATION_KEYS}
+            skin = {k: v for k, v in (skin or {}).items() if k not in _POPULATION_KEYS}
+            self.spec = probe_spec(
+                self.probe,
+                dataclasses.replace(self.tip, skin=keep),
+                timestep_s,
+                dict(skin, sites=sites),
+            )
+        self.z_contact = float(next(b for b in self.spec.bodies if b.name == "probe").pos[2])
         n = int(round(settle / timestep_s))
         depth = self.preindent_m * np.clip(np.arange(n) * timestep_s / max(settle / 2, 1e-9), 0, 1)
         self.dt_s = timestep_s

@@ -169,7 +169,7 @@ class TuningConfig:
     depths_m: Sequence[float] = (0.05e-3, 0.1e-3, 0.2e-3, 0.4e-3, 0.7e-3, 1.0e-3, 1.5e-3)
     hold_s: float = 0.3
     timestep_s: float = 1e-4
-    nx: int = 48
+    nx: int = 49  # odd: a taxel centre, and so the centred units, on the pin's axis
     pitch_m: float = 1.5e-4
     threads: int = 2
 
@@ -514,3 +514,111 @@ def plot(result: dict, path: str) -> None:
     b.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+
+
+# --- the same pin as TouchSim's reference (tests/data/touchsim_reference.json) -------------
+
+# TouchSim's protocol (examples/touchsim_reference.py): a 1 mm flat pin, 1 s
+# stimuli with 50 ms ramps, whole-second counts, noise off and the median
+# parameter set, one receptor per class on the pin's axis (a taxel centre
+# of the odd grid) at mjtouch's depths.
+PIN_SITES = "SA1 0 0 7.5e-4; RA 0 0 7.5e-4; PC 0 0 2e-3"
+PIN_AFFERENTS = {"noise": "0 0 0", "population": "uniform"}
+
+
+def pin_reference_stress(
+    depths_m: Sequence[float],
+    freqs_hz: Sequence[float],
+    duration_s: float = 1.0,
+    ramp_s: float = 0.05,
+    preindent_m: float = 0.5e-3,
+    ref_m: float = 10e-6,
+    timestep_s: float = 1e-4,
+    nx: int = 49,
+    pitch_m: float = 1.5e-4,
+    threads: int = 2,
+) -> dict:
+    """Receptor stress (Pa, one column per class) under the 1 mm pin:
+    ramp-and-holds to each depth from first touch (``duration_s`` in all,
+    ``ramp_s`` ramps), and per frequency a sine of 0 and of ``ref_m`` about
+    ``preindent_m`` (the stress is linear in the amplitude:
+    tests/science/test_tuning.py). Input of :func:`pin_reference_table`."""
+    tip = scenes.Fingertip(nx=int(nx), pitch_m=pitch_m, ridges=False)
+    skin = dict(PIN_AFFERENTS, sites=PIN_SITES)
+    pin = stimuli.Probe("pin", radius_m=0.5e-3)
+    touch = stimuli.ProbeScene(
+        pin, tip, preindent_m=0.0, settle_s=0.0, timestep_s=timestep_s, skin=skin
+    )
+    hold = duration_s - 2 * ramp_s
+    ramps = touch.run(
+        [stimuli.ramp_and_hold(d, ramp_s=ramp_s, hold_s=hold, rest_s=0.0) for d in depths_m],
+        threads=threads,
+    )
+    vib = stimuli.ProbeScene(
+        pin, tip, preindent_m=preindent_m, settle_s=0.1, timestep_s=timestep_s, skin=skin
+    )
+    # TouchSim's sines: linear ramps (its apply_ramp), sampled at every step
+    t = np.arange(int(round(duration_s / timestep_s)) + 1) * timestep_s
+    env = np.clip(np.minimum(t, duration_s - t) / ramp_s, 0, 1)
+    waves = [
+        stimuli.trace(a * env * np.sin(2 * np.pi * f * t), timestep_s)
+        for f in freqs_hz
+        for a in (0.0, ref_m)
+    ]
+    sines = vib.run(waves, threads=threads)
+    classes = list(touch.layout.classes)
+    offaxis = np.hypot(*touch.layout.positions_m[:, :2].T)
+    return dict(
+        classes=classes,
+        offaxis_m=offaxis.tolist(),
+        dt_s=touch.dt_s,
+        depths_m=[float(d) for d in depths_m],
+        freqs_hz=[float(f) for f in freqs_hz],
+        preindent_m=preindent_m,
+        ref_m=ref_m,
+        ramp=[r.stress for r in ramps],
+        sine={
+            float(f): (sines[2 * i].stress, sines[2 * i + 1].stress) for i, f in enumerate(freqs_hz)
+        },
+    )
+
+
+def pin_reference_table(
+    stress: dict, afferents: dict | None = None, scale_range=(1e-4, 45.0), iters: int = 24
+) -> dict:
+    """From :func:`pin_reference_stress`, TouchSim's table for our receptors:
+    whole-stimulus rates (Hz) of the ramp-and-holds, the stress mid-hold
+    (kPa), and per frequency the absolute (>= 1 spike more than the
+    pre-indentation alone) and entrainment (>= 0.9 f spikes/s more)
+    thresholds (um; inf: not within ``scale_range`` x ``ref_m``, by default
+    1 nm-0.45 mm as TouchSim's reference searched), by
+    bisection on the sine's stress change through core.receptor_run with
+    :data:`PIN_AFFERENTS` updated by ``afferents``."""
+    cfg = dict(PIN_AFFERENTS, **(afferents or {}))
+    dt = stress["dt_s"]
+    out = {}
+    for r, c in enumerate(stress["classes"]):
+
+        def count(q, c=c, r=r):
+            return int(core.receptor_run(c, q, dt, cfg, stream=r)[0].sum())
+
+        rates, kpa = [], []
+        for q in stress["ramp"]:
+            rates.append(count(q[:, r]) / (q.shape[0] * dt))
+            kpa.append(float(q[q.shape[0] // 2, r]) / 1e3)
+        thr = dict(absolute_um=[], entrainment_um=[])
+        for f, (q0, q1) in stress["sine"].items():
+            q0, dq = q0[:, r], q1[:, r] - q0[:, r]
+            rest = count(q0)
+            dur = q0.size * dt
+            for key, need in (("absolute_um", rest + 1), ("entrainment_um", rest + 0.9 * f * dur)):
+                lo, hi = scale_range
+                if count(q0 + hi * dq) < need:
+                    thr[key].append(math.inf)
+                    continue
+                for _ in range(iters):
+                    mid = math.sqrt(lo * hi)
+                    lo, hi = (lo, mid) if count(q0 + mid * dq) >= need else (mid, hi)
+                thr[key].append(hi * stress["ref_m"] * 1e6)
+        out[c] = dict(rates_hz=rates, stress_kpa=kpa, offaxis_m=stress["offaxis_m"][r], **thr)
+    return out

@@ -89,7 +89,7 @@ def _evaluate(xml: str, steps: int) -> dict:
         except Exception:  # noqa: BLE001 - another plugin
             pass
     press = m.actuator("press").id if "press" in [m.actuator(i).name for i in range(m.nu)] else None
-    for k in range(steps):
+    for _ in range(steps):
         if press is not None:
             d.ctrl[press] = -0.5
         mujoco.mj_step(m, d)

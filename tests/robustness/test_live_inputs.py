@@ -84,7 +84,7 @@ def test_non_finite_sample_edited_in_is_warned_once_and_left_out(capfd):
     capfd.readouterr()
     edited, _ = press(m, 0.5, 300, d=d)
     out = "".join(capfd.readouterr())
-    assert out.count("has sample inf at row 0, col %d" % col) == 1, out
+    assert out.count(f"has sample inf at row 0, col {col}") == 1, out
     assert "edited after the MjData was made" in out
     ref, _ = press(plain, 0.5, 300)
     assert ref[:, 0].any()

@@ -60,8 +60,9 @@ def onset_sine(t, mean_pa, amp_pa, freq_hz):
 # (tests/unit/test_afferent_tuning.py): above the 1:1 threshold (locked) and
 # between the absolute and 1:1 thresholds (cycles skipped).
 DT_STIMULI = {
-    ("SA1", "ramp"): lambda t: ramp_and_hold(t, 150e3, 0.1, 0.7, 1.0),
-    ("SA1", "sine"): lambda t: onset_sine(t, 100e3, 40e3, 5.0),
+    # SA1: >= 100 spikes in 2 s (noise-free, median set)
+    ("SA1", "ramp"): lambda t: ramp_and_hold(t, 300e3, 0.1, 0.7, 1.0),
+    ("SA1", "sine"): lambda t: onset_sine(t, 200e3, 80e3, 5.0),
     ("RA", "ramp"): lambda t: ramp_and_hold(t, 60e3, 0.1, 0.05, 0.3),
     ("RA", "sine"): lambda t: onset_sine(t, 0.0, 3100.0, 40.0),
     # 7.6x RA's noise-free absolute threshold at 150 Hz (522 Pa; 1:1 is never

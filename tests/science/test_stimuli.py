@@ -46,6 +46,55 @@ def test_probe_achieves_commanded_indentation_and_finger_stays_put():
     assert depth == pytest.approx(0.5e-3, abs=1e-6)
 
 
+def test_probe_puts_one_unit_of_each_class_on_its_axis(probe_scene):
+    # the default probe presses at the pad's centre, a taxel centre of the
+    # odd 49-taxel PROBE_TIP: the centred unit of each class is on the axis
+    r = probe_scene.run(stimuli.ramp_and_hold(0.1e-3, ramp_s=0.01, hold_s=0.01))
+    assert r.centred_offaxis_m() == {"SA1": 0.0, "RA": 0.0, "PC": 0.0}
+    assert r.summary()["centred_offaxis_m"] == r.centred_offaxis_m()
+    # the rest of the population is the density population, unchanged
+    # (same count and order; only the three centred units moved)
+    plain = stimuli.ProbeScene(
+        stimuli.Probe("pin", radius_m=0.5e-3),
+        preindent_m=0.3e-3,
+        settle_s=0.0,
+        timestep_s=DT,
+        axis_units=False,
+    )
+    a, b = probe_scene.layout, plain.layout
+    assert list(a.classes) == list(b.classes)
+    moved = np.nonzero(np.any(a.positions_m != b.positions_m, axis=1))[0]
+    assert sorted(moved) == sorted(r.centred_units().values())
+    np.testing.assert_array_equal(a.positions_m[moved, 2], b.positions_m[moved, 2])
+    # without it the nearest units sit up to 0.9 mm off (the PC)
+    assert (
+        max(
+            plain.run(stimuli.ramp_and_hold(0.1e-3, ramp_s=0.01, hold_s=0.01))
+            .centred_offaxis_m()
+            .values()
+        )
+        > 0.3e-3
+    )
+
+
+def test_probe_off_a_taxel_centre_puts_the_unit_within_half_a_taxel_diagonal():
+    # a probe between taxel centres: the site snaps to the nearest centre
+    tip = scenes.Fingertip(nx=48, pitch_m=1.5e-4, ridges=False, skin={"density": "70 140 30"})
+    probe = stimuli.Probe("pin", radius_m=0.5e-3, x_m=0.31e-3, y_m=-0.2e-3)
+    r = stimuli.ProbeScene(probe, tip, settle_s=0.0, timestep_s=DT).run(
+        stimuli.ramp_and_hold(0.1e-3, ramp_s=0.01, hold_s=0.01)
+    )
+    # nearest centres: x 0.375 mm (0.065 off), y -0.225 mm (0.025 off)
+    for d in r.centred_offaxis_m().values():
+        assert d == pytest.approx(math.hypot(0.065e-3, 0.025e-3), rel=1e-9)
+        assert d <= 1.5e-4 / math.sqrt(2)
+    # the tip's density is kept (its population, then the moved units)
+    plain = stimuli.ProbeScene(probe, tip, settle_s=0.0, timestep_s=DT, axis_units=False)
+    assert list(r.layout.classes) == list(plain.layout.classes)
+    default = stimuli.ProbeScene(probe, settle_s=0.0, timestep_s=DT).layout
+    assert (r.layout.classes == "PC").sum() > (default.classes == "PC").sum()
+
+
 def test_probe_ramp_and_hold_stress_follows_indentation(probe_scene):
     r = probe_scene.run(stimuli.ramp_and_hold(0.2e-3, ramp_s=0.05, hold_s=0.1))
     unit = r.centred_units()["SA1"]

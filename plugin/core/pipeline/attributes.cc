@@ -236,7 +236,7 @@ const std::vector<AttributeRow>& Rows() {
              v;
        },
        NO_PARSE, S::kModel},
-      {"adapt", K::kPerClass, 0, 100, false, false, "(threshold units)", "3.5 1.3 1",
+      {"adapt", K::kPerClass, 0, 100, false, false, "(threshold units)", "4.5 1.3 1",
        "SA1 RA PC spike-triggered adaptation: the jump of an inhibitory current at each spike",
        nullptr, CLASS_FIELD(receptor.adapt[k].jump), NO_PARSE, S::kModel},
       {"adapt_tau", K::kPerClass, 0, 10, true, false, "s", "0.05 0.03 0.02",
