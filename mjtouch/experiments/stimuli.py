@@ -596,8 +596,32 @@ class StimulusResult:
             max_displacement_error_m=float(err.max()),
             finger_motion_max_m=float(np.abs(self.finger_m).max()),
             force_steady_mean_n=float(self.force_n[w].mean()),
+            centred_offaxis_m=self.centred_offaxis_m(),
             receptors={c: int((self.layout.classes == c).sum()) for c in ("SA1", "RA", "PC")},
         )
+
+
+def centred_units(layout: SkinLayout, centre_m) -> dict[str, int]:
+    """Per class, the index of the receptor nearest centre_m (pad frame, m)."""
+    out = {}
+    for c in ("SA1", "RA", "PC"):
+        idx = np.nonzero(layout.classes == c)[0]
+        if idx.size:
+            d = np.hypot(*(layout.positions_m[idx, :2] - np.asarray(centre_m)).T)
+            out[c] = int(idx[np.argmin(d)])
+    return out
+
+
+def axis_sites(layout: SkinLayout, centre_m) -> str:
+    """The `sites` attribute of layout's receptors with the unit of each
+    class nearest centre_m moved onto it (the plugin snaps a site to the
+    nearest taxel centre: on centre_m when it is one, else within pitch /
+    sqrt 2). Receptor count and order are unchanged, so each keeps its
+    noise stream and population variant."""
+    pos = layout.positions_m.copy()
+    for u in centred_units(layout, centre_m).values():
+        pos[u, :2] = centre_m
+    return "; ".join(f"{c} {x:.17g} {y:.17g} {z:.17g}" for c, (x, y, z) in zip(layout.classes, pos))
 
 
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -720,6 +744,7 @@ class ProbeScene(_Scene):
         settle_s: float = 0.1,
         timestep_s: float = 1e-4,
         skin: dict | None = None,
+        axis_units: bool = True,
     ):
         self.probe = probe or Probe()
         self.tip = tip or PROBE_TIP

@@ -186,7 +186,7 @@ class TuningConfig:
             depths_m=(0.1e-3, 0.4e-3, 1.0e-3),
             hold_s=0.1,
             timestep_s=2e-4,
-            nx=24,
+            nx=25,
             pitch_m=3e-4,
         )
 
@@ -321,6 +321,7 @@ def threshold_curves(cfg: TuningConfig, scene: stimuli.ProbeScene) -> dict:
         thresholds_m=thresholds,
         grid_m=grid.tolist(),
         grid_rates_centred_hz=rates,
+        centred_offaxis_m=res[0].centred_offaxis_m(),
         floor_m=cfg.amp_range_m[0],
         precision=float((grid[1] / grid[0]) ** (0.5**cfg.refine)),
     )
@@ -350,7 +351,11 @@ def rate_intensity(cfg: TuningConfig, scene: stimuli.ProbeScene) -> dict:
                 )
                 out[c]["ramp_hz"].append(float(r.spikes[ramps, u].sum() / (ramps.size * dt)))
     return dict(
-        depths_m=[float(d) for d in cfg.depths_m], ramp_s=ramp, hold_s=cfg.hold_s, rates=out
+        depths_m=[float(d) for d in cfg.depths_m],
+        ramp_s=ramp,
+        hold_s=cfg.hold_s,
+        rates=out,
+        centred_offaxis_m=res[0].centred_offaxis_m(),
     )
 
 
@@ -453,7 +458,9 @@ def run(cfg: TuningConfig | None = None) -> dict:
             f"max({cfg.steady_s}, {cfg.min_cycles} / f) s",
             entrainment=">= 1 spike per cycle more than unstimulated, or >= 1 "
             "phase-locked spike per cycle",
-            centred="the unit nearest the probe's axis",
+            centred="the unit of the class on the probe's axis (stimuli."
+            "ProbeScene's axis_units; its distance in thresholds."
+            "centred_offaxis_m)",
             best="the class's most sensitive unit",
         ),
         receptors={c: int((vib.layout.classes == c).sum()) for c in CLASSES},
