@@ -22,7 +22,7 @@ extern "C" {
 
 /* Bumped on any change of the declarations below or of their meaning. A host
  * compares it with mjtouch_c_api_version() of the library it loaded. */
-#define MJTOUCH_C_API_VERSION 1
+#define MJTOUCH_C_API_VERSION 2
 
 /* Receptor classes, in their sensordata order. */
 typedef enum mjtouch_class_ {
@@ -40,7 +40,9 @@ typedef enum mjtouch_block_ {
   MJTOUCH_BLOCK_FORCE = 3,    /* normal, tangential x, y (N, pad frame), indentation (m) */
   MJTOUCH_BLOCK_PRESSURE = 4, /* nx * nx taxel pressures (Pa), row-major */
   MJTOUCH_BLOCK_RATE = 5,     /* smoothed firing rate per receptor (Hz) */
-  MJTOUCH_NUM_BLOCKS = 6
+  MJTOUCH_BLOCK_COVERAGE = 6, /* share of MuJoCo's normal force on the pad on the skin's patch,
+                                 and that normal force (N) */
+  MJTOUCH_NUM_BLOCKS = 7
 } mjtouch_block_t;
 
 /* The layout of one skin (one mjtouch.skin plugin instance). */
@@ -72,7 +74,8 @@ int mjtouch_layout(const mjModel* m, int instance, mjtouch_layout_t* out, char* 
 /* "SA1", "RA", "PC"; NULL out of range. */
 const char* mjtouch_class_name(int cls);
 
-/* "spikes", "stress", "voltage", "force", "pressure", "rate"; NULL out of range. */
+/* "spikes", "stress", "voltage", "force", "pressure", "rate", "coverage"; NULL out of
+ * range. */
 const char* mjtouch_block_name(int block);
 
 /* The layout as JSON, with every receptor's class and site (x, y, depth in m):

@@ -11,11 +11,15 @@ surface over the cell centred on it, as a box filter of the mesh: no aliasing
 of features finer than a cell, and a faceted mesh gives the same samples as
 its exact geometry.
 
-The top surface must be single-valued over the plate: every cell covered
-exactly once by upward triangles. Meshes made of overlapping shells (a plate
-with separate dot spheres through it) or with overhangs cover cells twice;
-they are refused with the cell's position (merge the shells first, e.g.
-``trimesh.boolean.union``).
+The skin touches a mesh's upper envelope. Where one upward triangle layer
+covers a cell, its sample is that exact cell mean. Meshes made by
+concatenating parts (boxes or dots on a base slab, overlapping shells,
+overhangs) cover some cells more than once, with hidden faces under the
+upper ones; such a cell's sample is the mean of the upper envelope (the
+highest upward triangle) at ENVELOPE_SAMPLES x ENVELOPE_SAMPLES points of
+the cell (a box filter to within 1 / ENVELOPE_SAMPLES of the cell per edge
+crossing it). A cell no upward triangle covers whole is a hole and refused
+with its position.
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ UP_AXES = ("+z", "-z", "+x", "-x", "+y", "-y")
 FOOTPRINT_RANGE_M = (2e-3, 0.5)
 RELIEF_RANGE_M = (1e-7, 5e-3)
 MAX_SAMPLES = 8_000_000  # as textures.Texture
+ENVELOPE_SAMPLES = 8  # points per cell side where parts overlap
 
 
 @dataclasses.dataclass(frozen=True)
@@ -194,23 +199,22 @@ def from_mesh(
         top[:, :, :2] - centre + [0.5 * L + 0.5 * resolution_m, 0.5 * W + 0.5 * resolution_m]
     ) / resolution_m
     integral, cover = cell_integrals(uv, top[:, :, 2], nrow, ncol)
-    bad_cover = np.abs(cover - 1.0) > 1e-6
-    if bad_cover.any():
-        r, col = np.argwhere(bad_cover)[0]
+    h = integral / np.maximum(cover, 1e-300)
+    layered = cover > 1.0 + 1e-6  # hidden faces under the upper envelope
+    hole = cover < 1.0 - 1e-6
+    if layered.any():
+        env = envelope_means(uv, top[:, :, 2], np.flatnonzero(layered), nrow, ncol)
+        hole[layered] = ~np.isfinite(env)
+        h[layered] = env
+    if hole.any():
+        r, col = np.argwhere(hole)[0]
         x, y = -L / 2 + col * resolution_m, -W / 2 + r * resolution_m
-        what = (
-            "covered more than once by upward triangles (overlapping shells or an "
-            "overhang: merge the shells, e.g. trimesh.boolean.union)"
-            if cover[r, col] > 1
-            else "not covered (a hole, or outside a non-rectangular top: crop with "
-            "length_m / width_m)"
-        )
         raise ValueError(
-            f"mesh {source!r} top surface is not a single-valued height map: "
-            f"{int(bad_cover.sum())} cells, the first at x = {x:.4g}, y = {y:.4g} m "
-            f"(coverage {cover[r, col]:.4g}), {what}"
+            f"mesh {source!r} top surface has a hole: {int(hole.sum())} cells no "
+            f"upward triangle covers whole, the first at x = {x:.4g}, y = {y:.4g} m "
+            f"(coverage {cover[r, col]:.4g}; outside a non-rectangular top? crop "
+            "with length_m / width_m)"
         )
-    h = integral / cover
     h -= h.min()
     relief = float(h.max())
     if relief < RELIEF_RANGE_M[0]:
@@ -338,6 +342,59 @@ def cell_integrals(
         integral += np.bincount(cell_e, area * (a[te] * cx + b[te] * cy + c0[te]), minlength=N)
         cover += np.bincount(cell_e, area, minlength=N)
     return integral.reshape(nrow, ncol), cover.reshape(nrow, ncol)
+
+
+def envelope_means(
+    uv: np.ndarray,
+    z: np.ndarray,
+    cells: np.ndarray,
+    nrow: int,
+    ncol: int,
+    n: int = ENVELOPE_SAMPLES,
+    chunk: int = 20_000,
+) -> np.ndarray:
+    """Mean over each unit cell in ``cells`` (flat indices r * ncol + c) of the
+    upper envelope of the triangles (uv: (nt, 3, 2) grid units, z: (nt, 3)),
+    sampled at n x n points; inf where some point lies under no triangle."""
+    e1, e2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    c_lo = np.clip(np.floor(uv[:, :, 0].min(1)), 0, ncol).astype(np.int64)
+    c_hi = np.clip(np.ceil(uv[:, :, 0].max(1)), 0, ncol).astype(np.int64)
+    r_lo = np.clip(np.floor(uv[:, :, 1].min(1)), 0, nrow).astype(np.int64)
+    r_hi = np.clip(np.ceil(uv[:, :, 1].max(1)), 0, nrow).astype(np.int64)
+    nc, nr = np.maximum(c_hi - c_lo, 0), np.maximum(r_hi - r_lo, 0)
+    npair = nc * nr
+    slot = np.full(nrow * ncol, -1)  # cell -> its row in `env`
+    slot[cells] = np.arange(len(cells))
+    env = np.full((len(cells), n * n), -np.inf)
+    off = (np.arange(n) + 0.5) / n
+    pu, pv = (g.ravel() for g in np.meshgrid(off, off))
+    # triangles in runs of about `chunk` (triangle, cell) pairs of their boxes
+    ends = np.searchsorted(np.cumsum(npair), np.arange(chunk, npair.sum() + chunk, chunk))
+    start = 0
+    for stop in np.unique(np.minimum(ends + 1, len(uv))):
+        cnt = npair[start:stop]
+        t = np.repeat(np.arange(start, stop), cnt)
+        start = stop
+        j = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        col = c_lo[t] + j % np.maximum(nc[t], 1)
+        row = r_lo[t] + j // np.maximum(nc[t], 1)
+        k = slot[row * ncol + col]
+        keep = k >= 0
+        t, k, col, row = t[keep], k[keep], col[keep], row[keep]
+        if len(t) == 0:
+            continue
+        u = col[:, None] + pu[None, :] - uv[t, 0, 0, None]
+        v = row[:, None] + pv[None, :] - uv[t, 0, 1, None]
+        b1 = (u * e2[t, 1, None] - v * e2[t, 0, None]) / det[t, None]
+        b2 = (v * e1[t, 0, None] - u * e1[t, 1, None]) / det[t, None]
+        eps = 1e-9  # points on a shared edge belong to both triangles
+        inside = (b1 >= -eps) & (b2 >= -eps) & (b1 + b2 <= 1 + eps)
+        zz = z[t, 0, None] + b1 * (z[t, 1] - z[t, 0])[:, None] + b2 * (z[t, 2] - z[t, 0])[:, None]
+        np.maximum.at(env, k, np.where(inside, zz, -np.inf))
+    out = env.mean(1)
+    out[~np.isfinite(env).all(1)] = np.inf
+    return out
 
 
 def _orient(verts: np.ndarray, faces: np.ndarray, outward: np.ndarray) -> np.ndarray:

@@ -3,17 +3,29 @@ fingertip geom of a user's ``mujoco.MjSpec`` (several fingertips, each its
 own plugin instance and sensor), and :func:`layouts` reads every skin's
 :class:`~mjtouch.scene.sensor.SkinLayout` by sensor name.
 
-The skin touches the -z side of its geom (sphere, ellipsoid, capsule or
-box; plugin/README.md): turn the geom so its local -z points out of the
-fingertip's pad. A texture the skin feels but MuJoCo does not collide is a
-non-colliding geom (contype = conaffinity = 0) in the skin's
-``texture_group`` (default here: scenes.TEXTURE_GROUP), or named by the
-``texture`` attribute.
+The skin touches the side of its geom (sphere, ellipsoid, capsule or box)
+that ``facing`` names, in the geom's frame; default its -z side. The pad's
+surface is the geom's exact near side seen along ``facing`` (a sideways
+capsule's cylinder), its curvature entering through the gap to what it
+touches; the elastic skin under it is a flat layered half-space
+(plugin/README.md). A texture the skin feels but MuJoCo does not collide is a
+non-colliding geom (contype = conaffinity = 0) that the user names in the
+``texture`` attribute, or any such geom of a group the user opts into with
+``texture_group``. :func:`attach` sets no group: a robot's own visual
+meshes (often in group 3, non-colliding) never become textures unasked.
+
+``MjSpec.attach(child, prefix=..., suffix=...)`` renames the child's geoms;
+the skin's ``texture`` names follow, because :func:`attach` records the pad
+geom's name as written (attribute ``pad_geom``) and the plugin applies the
+prefix and suffix the pad's compiled name gained to each texture name.
 """
 
 from __future__ import annotations
 
+import numbers
+
 import mujoco
+import numpy as np
 
 from mjtouch.scene import scenes
 from mjtouch.scene.sensor import SkinLayout
@@ -27,10 +39,12 @@ PAD_TYPES = {
 
 
 def _value(key: str, v) -> str:
-    if isinstance(v, bool):
+    if isinstance(v, (bool, np.bool_)):
         return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return scenes.fmt_number(v)
+    if isinstance(v, numbers.Real):
+        return scenes.fmt_number(float(v))
+    if isinstance(v, np.ndarray):
+        v = v.tolist()
     if isinstance(v, (list, tuple)):
         return " ".join(_value(key, x) for x in v)
     if isinstance(v, str):
@@ -38,39 +52,130 @@ def _value(key: str, v) -> str:
     raise ValueError(f"attribute {key} = {v!r}: give a str, number, bool or a list of them")
 
 
-def attach(
-    spec: mujoco.MjSpec, geom: str, name: str | None = None, **attributes
-) -> mujoco.MjsPlugin:
-    """Add an ``mjtouch.skin`` sensor named ``name`` (default ``skin_<geom>``)
-    on ``geom`` with the given plugin attributes (``nx=48, pitch=2e-4,
-    ridges=True, outputs="spikes stress force"``, ...; values as Python
-    numbers, bools, strings or lists; None leaves one out). Without
-    ``texture`` the skin feels the non-colliding geoms of group
-    scenes.TEXTURE_GROUP; with several fingers on one object, name each
-    skin's own texture geoms instead. Returns its plugin instance (named
-    like the sensor): edit ``.config`` to change attributes later.
-    Attribute values are checked when the spec compiles."""
-    if not isinstance(geom, str) or not geom:
-        raise ValueError(f"geom = {geom!r} must be the name of a geom in the spec")
-    g = spec.geom(geom)
-    if g is None:
-        names = [x.name for x in spec.geoms if x.name]
-        raise ValueError(f"geom = {geom!r} is not in the spec; named geoms: {names}")
-    if g.type not in PAD_TYPES:
+def _geom_label(g: mujoco.MjsGeom, k: int) -> str:
+    return repr(g.name) if g.name else f"(unnamed geom {k} of the body, a {g.type.name})"
+
+
+def _pad_geom(spec: mujoco.MjSpec, geom, body) -> mujoco.MjsGeom:
+    """The pad geom: `geom` (a name or an MjsGeom) or `body`'s one colliding
+    geom (a name or an MjsBody)."""
+    if (geom is None) == (body is None):
         raise ValueError(
-            f"geom {geom!r} is a {g.type.name}; a skin needs a pad geom of type "
+            f"geom = {geom!r}, body = {body!r}: give exactly one (a geom's name "
+            "or MjsGeom, or a body's name or MjsBody)"
+        )
+    if geom is not None:
+        if isinstance(geom, mujoco.MjsGeom):
+            return geom
+        if not isinstance(geom, str) or not geom:
+            raise ValueError(
+                f"geom = {geom!r} must be the name of a geom in the spec, or an MjsGeom"
+            )
+        g = spec.geom(geom)
+        if g is None:
+            names = [x.name for x in spec.geoms if x.name]
+            raise ValueError(f"geom = {geom!r} is not in the spec; named geoms: {names}")
+        return g
+    if isinstance(body, str):
+        b = spec.body(body) if body else None
+        if b is None:
+            names = [x.name for x in spec.bodies if x.name]
+            raise ValueError(f"body = {body!r} is not in the spec; named bodies: {names}")
+        body = b
+    if not isinstance(body, mujoco.MjsBody):
+        raise ValueError(f"body = {body!r} must be the name of a body in the spec, or an MjsBody")
+    colliding = [g for g in body.geoms if g.contype or g.conaffinity]
+    label = repr(body.name) if body.name else "(unnamed body)"
+    if len(colliding) != 1:
+        listed = ", ".join(
+            _geom_label(g, k) for k, g in enumerate(body.geoms) if g.contype or g.conaffinity
+        )
+        raise ValueError(
+            f"body {label} has {len(colliding)} colliding geoms"
+            f"{': ' + listed if listed else ''}; valid: exactly one, or pass "
+            "geom= (a name or the MjsGeom)"
+        )
+    return colliding[0]
+
+
+def _name_geom(spec: mujoco.MjSpec, g: mujoco.MjsGeom) -> str:
+    """g's name; an unnamed geom is named `<body>_pad` (or `<body>_pad_2`,
+    ...; `pad` on an unnamed body): a sensor names the geom it is on."""
+    if g.name:
+        return g.name
+    base = f"{g.parent.name}_pad" if g.parent.name else "pad"
+    name, k = base, 1
+    while spec.geom(name) is not None:
+        k += 1
+        name = f"{base}_{k}"
+    g.name = name
+    return name
+
+
+def _facing_from_site(spec: mujoco.MjSpec, g: mujoco.MjsGeom, site: str) -> list[float]:
+    """The site's -z axis in the geom's frame (at the model's initial pose)."""
+    if spec.site(site) is None:
+        names = [x.name for x in spec.sites if x.name]
+        raise ValueError(
+            f"facing = {site!r} is not a site of the spec; named sites: {names} "
+            "(or give a 3-vector in the geom's frame)"
+        )
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    gmat = data.geom(g.name).xmat.reshape(3, 3)
+    smat = data.site(site).xmat.reshape(3, 3)
+    f = gmat.T @ (-smat[:, 2])
+    return [0.0 if abs(x) < 1e-12 else float(x) for x in f]
+
+
+def attach(
+    spec: mujoco.MjSpec,
+    geom: str | mujoco.MjsGeom | None = None,
+    name: str | None = None,
+    *,
+    body: str | mujoco.MjsBody | None = None,
+    facing=None,
+    **attributes,
+) -> mujoco.MjsPlugin:
+    """Add an ``mjtouch.skin`` sensor named ``name`` (default
+    ``skin_<geom>``) on a fingertip geom with the given plugin attributes
+    (``nx=48, pitch=2e-4, ridges=True, outputs="spikes stress force"``,
+    ...; values as Python numbers, bools, strings or lists; None leaves one
+    out).
+
+    The pad: ``geom`` (its name or the ``MjsGeom``) or ``body`` (its name or
+    the ``MjsBody``; its one colliding geom, an error listing them if it has
+    several). An unnamed pad geom is named ``<body>_pad`` (a sensor needs the
+    geom's name). ``facing``: the skin's outward direction in the geom's
+    frame (a 3-vector), or a site's name (the site's -z axis, the way MuJoCo
+    marks a frame); default (0, 0, -1), the geom's -z side.
+
+    The skin feels the geoms MuJoCo reports in contact with the pad plus the
+    textures the user asks for: ``texture="geom names"`` and/or
+    ``texture_group=k`` (every non-colliding geom of group k); none by
+    default. Returns its plugin instance (named like the sensor): edit
+    ``.config`` to change attributes later. Attribute values are checked
+    when the spec compiles."""
+    g = _pad_geom(spec, geom, body)
+    if g.type not in PAD_TYPES:
+        label = repr(g.name) if g.name else "(unnamed)"
+        raise ValueError(
+            f"geom {label} is a {g.type.name}; a skin needs a pad geom of type "
             f"{', '.join(PAD_TYPES.values())}"
         )
-    name = name or f"skin_{geom}"
+    geom_name = _name_geom(spec, g)
+    name = name or f"skin_{geom_name}"
     if any(s.name == name for s in spec.sensors) or any(p.name == name for p in spec.plugins):
         raise ValueError(
             f"name = {name!r} is taken by a sensor or plugin of the spec; pass another name"
         )
-    # Textures: named ones only when named (a skin would otherwise also feel
-    # the group's textures on the far side of an object, seen from behind as
-    # deep overlap); else the non-colliding geoms of scenes.TEXTURE_GROUP.
-    config = {} if "texture" in attributes else {"texture_group": str(scenes.TEXTURE_GROUP)}
-    config.update({str(k): _value(k, v) for k, v in attributes.items() if v is not None})
+    if isinstance(facing, str):
+        facing = _facing_from_site(spec, g, facing)
+    if facing is not None:
+        attributes["facing"] = facing
+    config = {str(k): _value(k, v) for k, v in attributes.items() if v is not None}
+    config.setdefault("pad_geom", geom_name)  # texture names follow MjSpec.attach's renaming
     spec.activate_plugin(scenes.SKIN_PLUGIN)  # the <extension> entry
     plugin = spec.add_plugin(name=name, plugin_name=scenes.SKIN_PLUGIN, active=True)
     plugin.config = config
@@ -78,7 +183,7 @@ def attach(
         name=name,
         type=mujoco.mjtSensor.mjSENS_PLUGIN,
         objtype=mujoco.mjtObj.mjOBJ_GEOM,
-        objname=geom,
+        objname=geom_name,
     )
     # the sensor keeps a copy of the reference: assign after naming the plugin
     sensor.plugin = plugin

@@ -5,13 +5,17 @@ enables: ``spikes`` (count per receptor in the step), ``stress`` (receptor
 quantity, Pa, compressive positive), ``voltage`` (membrane potential over
 threshold), ``force`` (normal, tangential x, y in N in the pad frame, the
 solved approach in m, 1 when it exceeds the skin else 0), ``pressure``
-(nx*nx taxel pressures, Pa).
+(nx*nx taxel pressures, Pa), ``rate`` (smoothed rate per receptor, Hz),
+``coverage`` (the share of MuJoCo's normal force on the pad geom that lands
+on the skin's patch, 1 without contact, and that normal force in N;
+:meth:`SkinLayout.coverage` reads it and warns).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import json
+import warnings
 
 import mujoco
 import numpy as np
@@ -20,6 +24,10 @@ import mjtouch.core  # noqa: F401  (first: a clear error when the compiled modul
 from mjtouch import _core, _loader
 
 CLASSES = ("SA1", "RA", "PC")
+
+
+class OffPatchWarning(UserWarning):
+    """MuJoCo's contact on a skin's pad geom lands off the skin's patch."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,6 +82,27 @@ class SkinLayout:
             )
         s = self.blocks[name]
         return sensordata[..., self.sensor_adr + s.start : self.sensor_adr + s.stop]
+
+    def coverage(self, sensordata: np.ndarray) -> np.ndarray:
+        """The share of MuJoCo's normal force on the pad geom that the skin's
+        patch carries (the ``coverage`` block's first value; 1 without
+        contact), for sensordata of any leading shape; an OffPatchWarning
+        when some of it lands off the patch (outside the grid or on the
+        geom's far side), where the skin feels nothing."""
+        block = self.block(sensordata, "coverage")
+        share, normal_n = block[..., 0], block[..., 1]
+        off = (share < 1.0 - 1e-6) & (normal_n > 0)
+        if np.any(off):
+            k = np.argmin(np.where(off, share, np.inf))
+            warnings.warn(
+                f"skin sensor {self.sensor_id}: contact off the skin's patch: it carries "
+                f"{float(np.ravel(share)[k]):.3g} of MuJoCo's {float(np.ravel(normal_n)[k]):.3g} "
+                f"N normal force on its pad geom (worst of {int(np.sum(off))} off-patch "
+                "rows); widen the grid (nx, pitch) or turn the skin (facing)",
+                OffPatchWarning,
+                stacklevel=2,
+            )
+        return share
 
     def last_evaluation(self, data: mujoco.MjData) -> dict:
         """Diagnostics of this instance's last evaluation in ``data`` (the

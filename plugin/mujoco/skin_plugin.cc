@@ -1,5 +1,8 @@
 #include "skin_plugin.h"
 
+#include "geom_names.h"
+#include "pad_frame.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -285,12 +288,23 @@ bool SkinPlugin::ResolveTextures(const mjModel* m, int instance, const SkinConfi
   auto renderable = [&](int g) { return m->geom_type[g] != mjGEOM_SDF; };
   auto on_pad = [&](int g) { return m->body_weldid[m->geom_bodyid[g]] == pad_body; };
   std::istringstream words(Config(m, instance, "texture"));
+  const std::string pad_as_written = Config(m, instance, "pad_geom");
+  const char* pad_name = mj_id2name(m, mjOBJ_GEOM, pad);
+  if (!pad_as_written.empty() &&
+      (!pad_name || std::string(pad_name).find(pad_as_written) == std::string::npos)) {
+    *error =
+        Fmt("mjtouch.skin: attribute `pad_geom` = '%s' is not part of the pad geom's name "
+            "'%s'; valid: the pad's name as written, before MjSpec.attach's prefix and suffix",
+            pad_as_written.c_str(), pad_name ? pad_name : "(unnamed)");
+    return false;
+  }
   std::string name;
   while (words >> name) {
-    const int g = mj_name2id(m, mjOBJ_GEOM, name.c_str());
+    const int g = ResolveWrittenGeom(m, pad, pad_as_written, name);
     if (g < 0) {
-      *error = Fmt("mjtouch.skin: attribute `texture` names geom '%s', which does not exist",
-                   name.c_str());
+      *error =
+          Fmt("mjtouch.skin: attribute `texture` names geom '%s', which does not exist%s",
+              name.c_str(), pad_as_written.empty() ? "" : " (with the pad's prefix and suffix)");
       return false;
     }
     if (!renderable(g)) {
@@ -418,9 +432,11 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
   in.surfaces.clear();
   in.contacts.clear();
   in.in_contact = false;
+  in.contact_normal_n = in.patch_normal_n = 0;
   const int pad = pad_geom_;
   const mjtNum* ppos = d->geom_xpos + 3 * pad;
-  const mjtNum* pmat = d->geom_xmat + 9 * pad;
+  mjtNum turned[9];
+  const mjtNum* pmat = PadFrameMat(d, pad, model_->config().pad, turned);
   CopyPose(ppos, pmat, &in.pad_pose);
   mjtNum total[3] = {0, 0, 0};
   for (int i = 0; i < d->ncon; ++i) {
@@ -442,6 +458,8 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     const mjtNum sign = (c.geom[1] == pad) ? 1 : -1;
     mju_addToScl3(total, f_world, sign);
     in.in_contact = true;
+    in.contact_normal_n += f_local[0];
+    if (OnPatch(c, pmat, ppos, -sign)) in.patch_normal_n += f_local[0];
     {  // the contact in the pad frame, for the `contacts` pressure model
       mjtNum rel[3], loc[3], f_pad[3];
       mju_sub3(rel, c.pos, ppos);
@@ -475,6 +493,43 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
   in.shear_x_n = total[0] * pmat[0] + total[1] * pmat[3] + total[2] * pmat[6];
   in.shear_y_n = total[0] * pmat[1] + total[1] * pmat[4] + total[2] * pmat[7];
   in.normal_force_n = total[0] * pmat[2] + total[1] * pmat[5] + total[2] * pmat[8];
+}
+
+bool SkinPlugin::OnPatch(const mjContact& c, const mjtNum* pmat, const mjtNum* ppos,
+                         mjtNum normal_sign) const {
+  // The normal from the pad into the other geom must point out of the skin:
+  // within ~75 degrees of its outward -z (a contact on the pad's rim, seen
+  // edge-on along z, is not one the grid can render), and the point lie
+  // over a taxel the skin covers.
+  const mjtNum n_z =
+      normal_sign * (c.frame[0] * pmat[2] + c.frame[1] * pmat[5] + c.frame[2] * pmat[8]);
+  if (!(n_z < -0.25)) return false;
+  mjtNum rel[3], loc[3];
+  mju_sub3(rel, c.pos, ppos);
+  mju_mulMatTVec3(loc, pmat, rel);
+  const TaxelGrid& grid = model_->config().grid;
+  const double half = 0.5 * grid.n * grid.pitch_m;
+  if (!(std::abs(loc[0]) < half && std::abs(loc[1]) < half)) return false;
+  const int i = std::min(grid.n - 1, static_cast<int>((loc[0] + half) / grid.pitch_m));
+  const int j = std::min(grid.n - 1, static_cast<int>((loc[1] + half) / grid.pitch_m));
+  return std::isfinite(model_->skin_z()[static_cast<size_t>(j) * grid.n + i]);
+}
+
+void SkinPlugin::WarnOffPatch(const mjModel* m) {
+  const StepInput& in = input_;
+  if (warned_off_patch_ || !(in.contact_normal_n > 0.0) ||
+      !(in.patch_normal_n < (1.0 - 1e-6) * in.contact_normal_n))
+    return;
+  warned_off_patch_ = true;
+  const char* sensor = mj_id2name(m, mjOBJ_SENSOR, sensor_id_);
+  const char* geom = mj_id2name(m, mjOBJ_GEOM, pad_geom_);
+  mju_warning(
+      "mjtouch.skin '%s': %.3g of MuJoCo's %.3g N normal force on pad geom '%s' lands "
+      "off the skin's patch (outside the nx x pitch grid or on the geom's far side) "
+      "and is not felt; enable the `coverage` output to follow it, widen the grid or "
+      "turn the skin with `facing` (warned once)",
+      sensor ? sensor : "(unnamed)", in.contact_normal_n - in.patch_normal_n, in.contact_normal_n,
+      geom ? geom : "(unnamed)");
 }
 
 const MeshRayCaster* SkinPlugin::MeshCaster(const mjModel* m, int geom) {
@@ -545,6 +600,7 @@ void SkinPlugin::WarnOnce(const mjModel* m, const double* state) {
 
 void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {
   GatherInput(m, d);
+  WarnOffPatch(m);
   mjtNum* state = d->plugin_state + m->plugin_stateadr[instance];
   mjtNum* out = d->sensordata + m->sensor_adr[sensor_id_];
   const int fired = Step(*model_, input_, d->time, state, &workspace_, out);

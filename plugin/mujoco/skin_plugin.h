@@ -68,6 +68,12 @@ class SkinPlugin {
  private:
   SkinPlugin() = default;
   void GatherInput(const mjModel* m, const mjData* d);
+  // Whether contact c (normal_sign: +1 if its frame normal points from the
+  // pad into the other geom) lies over the skin's patch on its facing side.
+  bool OnPatch(const mjContact& c, const mjtNum* pmat, const mjtNum* ppos,
+               mjtNum normal_sign) const;
+  // mju_warning once when MuJoCo's normal force on the pad lands off the patch.
+  void WarnOffPatch(const mjModel* m);
   const HeightFieldCache* HeightField(const mjModel* m, int geom);
   void WarnOnce(const mjModel* m, const double* state);
   const MeshRayCaster* MeshCaster(const mjModel* m, int geom);
@@ -86,6 +92,7 @@ class SkinPlugin {
   // contact state of the last evaluation and each receptor's last spike time.
   VisualMode visual_ = VisualMode::kBoth;
   bool touching_ = false;
+  bool warned_off_patch_ = false;          // contact off the skin's patch: warned once per data
   std::vector<double> last_spike_time_s_;  // s, per receptor; -inf: none yet
 };
 

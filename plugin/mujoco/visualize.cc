@@ -8,6 +8,7 @@
 #include <limits>
 #include <vector>
 
+#include "pad_frame.h"
 #include "skin_plugin.h"
 
 namespace mjtouch {
@@ -70,8 +71,11 @@ void SkinPlugin::Visualize(const mjModel* m, mjData* d, const mjvOption* opt, mj
   const int n = grid.n;
   const std::vector<double>& skin_z = model_->skin_z();
   const mjtNum* ppos = d->geom_xpos + 3 * pad_geom_;
-  const mjtNum* pmat = d->geom_xmat + 9 * pad_geom_;
-  const double top_z = cfg.pad.semi_axes_m[2] + kAboveGapM;  // pad frame
+  mjtNum turned[9];
+  const mjtNum* pmat = PadFrameMat(d, pad_geom_, cfg.pad, turned);
+  const double* ax = cfg.pad.semi_axes_m;
+  const double top_z =  // pad frame: above the pad's far side
+      (cfg.pad.rotated ? std::max({ax[0], ax[1], ax[2]}) : ax[2]) + kAboveGapM;
   auto to_world = [&](double x, double y, double z, mjtNum out[3]) {
     const mjtNum local[3] = {x, y, z};
     mju_mulMatVec3(out, pmat, local);

@@ -3,6 +3,7 @@
 import json
 
 import pytest
+import trimesh
 from conftest import fast_tip
 from test_mesh_texture import W_PLATEAU, D, H, grating_points
 
@@ -40,6 +41,25 @@ def test_stl_grating_gives_the_generated_gratings_VD_line(grating_stl):
     f_mesh, bin_hz = strongest_peak(mt.texture(width_m=generated.width_m))
     f_gen, _ = strongest_peak(generated)
     assert abs(f_mesh - f_gen) <= bin_hz
+    assert abs(f_mesh - SPEED / D) <= bin_hz
+
+
+def test_concatenated_parts_stl_grating_slides_with_its_VD_line(tmp_path):
+    # the way trimesh users build one: plateau boxes dropped onto a base slab
+    # (the slab's top face runs on, hidden, under every plateau)
+    length, width = 0.0401, 0.004
+    slab = trimesh.creation.box([length, width, 1e-3])
+    slab.apply_translation([0, 0, -5e-4])
+    parts = [slab]
+    for k in range(-19, 20):
+        box = trimesh.creation.box([W_PLATEAU, width, H + 2e-4])
+        box.apply_translation([k * D, 0, (H - 2e-4) / 2])  # 0.2 mm into the slab
+        parts.append(box)
+    path = tmp_path / "parts.stl"
+    trimesh.util.concatenate(parts).export(path)
+    mt = meshes.from_mesh(path, resolution_m=2e-5, width_m=0.002)
+    assert mt.relief_m == pytest.approx(H, rel=1e-6)
+    f_mesh, bin_hz = strongest_peak(mt.texture(width_m=0.02))
     assert abs(f_mesh - SPEED / D) <= bin_hz
 
 

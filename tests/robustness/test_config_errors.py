@@ -26,6 +26,8 @@ CASES = [
     ({"texture": "nonexistent"}, "`texture`", "does not exist"),
     ({"texture": "pad"}, "`texture` geom 'pad'", "moves with the pad"),
     ({"texture_group": "9"}, "`texture_group`", "[0, 5]"),
+    ({"facing": "0 0 0"}, "`facing`", "3 finite numbers, not all zero"),
+    ({"pad_geom": "thumb"}, "`pad_geom` = 'thumb'", "the pad's name as written"),
     ({"nx": "1024"}, "`nx`", "[4, 512]"),
     ({"pressure": "fem"}, "`pressure`", "valid: contacts winkler elastic"),
     ({"young": "0"}, "`young`", "[100, 1e+10] Pa"),

@@ -62,10 +62,12 @@ CHOICES = {
     "texture": ["", "texture", "plate", "texture plate"],
     "sa1_model": ["filtered", "wang2016"],
     "population": ["uniform", "varied"],
+    "facing": ["0 0 -1", "1 0 0", "0 -1 1", "0 0 1"],
+    "pad_geom": ["", "pad"],
 }
 CLASSES = ["SA1", "RA", "PC"]
 QUANTITIES = ["szz", "maxcomp", "vonmises", "maxshear", "sed", "strain"]
-OUTPUTS = ["spikes", "stress", "voltage", "force", "pressure", "rate"]
+OUTPUTS = ["spikes", "stress", "voltage", "force", "pressure", "rate", "coverage"]
 
 anything = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True, width=64).map(repr),

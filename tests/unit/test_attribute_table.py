@@ -105,11 +105,12 @@ NON_DEFAULT = {
     "ra_saturation": "4",
     "sa1_saturation": "3e4",
     "population": "uniform",
+    "facing": "0 1 0",
     # not physics (the same bits for any count), but read from the shared
     # SkinModel's config, so models with different counts must not share one
     "threads": "2",
 }
-NOT_PHYSICS = {"texture", "visual"}  # adapter and drawing only
+NOT_PHYSICS = {"texture", "pad_geom", "visual"}  # adapter and drawing only
 
 
 def _cache_key(attrs: dict) -> str:

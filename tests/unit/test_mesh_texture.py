@@ -112,12 +112,7 @@ def test_bad_meshes_get_clear_errors(tmp_path, grating_stl):
         meshes.from_mesh(grating_stl, scale=1000)
     with pytest.raises(ValueError, match="valid footprint"):
         meshes.from_mesh(grating_stl, scale=0.01)
-    # a plate with a separate box on it: cells covered twice
     plate = trimesh.creation.box([0.01, 0.01, 0.001])
-    bump = trimesh.creation.box([0.002, 0.002, 0.001])
-    bump.apply_translation([0, 0, 0.0008])
-    with pytest.raises(ValueError, match="covered more than once"):
-        meshes.from_mesh(trimesh.util.concatenate([plate, bump]), resolution_m=1e-4)
     with pytest.raises(ValueError, match="flat"):
         meshes.from_mesh(plate, resolution_m=1e-4)
     with pytest.raises(ValueError, match="up = '\\+w'"):
@@ -142,3 +137,38 @@ def test_every_format_trimesh_reads_gives_the_same_heights(grating_stl, tmp_path
     # the vertices as the STL's float32 values (OBJ writes them as decimal
     # text): the same heights to a float32 step of the 6 mm coordinates
     assert np.abs(other.heights - stl.heights).max() < H * 1e-4
+
+
+def test_concatenated_parts_are_read_as_their_upper_envelope():
+    # a 2 x 2 mm box sunk into a 10 x 10 mm plate (tops 0.8 mm apart): the
+    # plate's top face runs on under the box, hidden; edges fall mid-cell
+    plate = trimesh.creation.box([0.01, 0.01, 0.001])  # top at z = 0.5 mm
+    bump = trimesh.creation.box([0.002, 0.002, 0.001])
+    x0 = 3.3e-5  # edges 1/3 of a cell off the cell boundaries
+    bump.apply_translation([x0, 0, 0.0008])  # top at 1.3 mm
+    r = 1e-4
+    mt = meshes.from_mesh(trimesh.util.concatenate([plate, bump]), resolution_m=r)
+    ny, nx = mt.heights.shape
+    x = -mt.length_m / 2 + np.arange(nx) * r
+    y = -mt.width_m / 2 + np.arange(ny) * r
+
+    # analytic cell means of the envelope: the box's covered share of each cell
+    def share(c, half, lo_edge):  # overlap of [c - r/2, c + r/2] with [lo, lo + 2 half]
+        return (
+            np.clip(
+                np.minimum(c + r / 2, lo_edge + 2 * half) - np.maximum(c - r / 2, lo_edge), 0, r
+            )
+            / r
+        )
+
+    ref = 8e-4 * np.outer(share(y, 1e-3, -1e-3), share(x, 1e-3, x0 - 1e-3))
+    # at most 1/ENVELOPE_SAMPLES of a cell off per edge crossing a cell
+    err = np.abs(mt.heights - ref)
+    assert err.max() <= 8e-4 * 2 / meshes.ENVELOPE_SAMPLES + 1e-12
+    assert mt.heights.max() == pytest.approx(8e-4, rel=1e-9)  # the box's top, whole cells
+    assert err[ref == 0].max() < 1e-12  # the plate around it: exact
+    # a hole (one of the plate's two top triangles gone) is still refused
+    top = [f for f in range(len(plate.faces)) if plate.face_normals[f][2] > 0.5]
+    holed = trimesh.Trimesh(plate.vertices, np.delete(plate.faces, top[:1], axis=0), process=False)
+    with pytest.raises(ValueError, match="has a hole"):
+        meshes.from_mesh(trimesh.util.concatenate([holed, bump]), resolution_m=r)

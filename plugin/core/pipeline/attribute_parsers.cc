@@ -201,7 +201,7 @@ bool ParseOutputsAttribute(const std::string& v, SkinConfig* cfg, AttributeParse
     if (k < 0)
       return p->Fail(
           Fmt("attribute `outputs`: unknown output '%s'; valid: spikes stress "
-              "voltage force pressure rate",
+              "voltage force pressure rate coverage",
               w.c_str()));
     cfg->outputs[k] = true;
   }

@@ -56,6 +56,28 @@ constexpr double kMinPitchM = 1e-6;
 constexpr double kMinModulusPa = kMinLayerModulusPa;
 constexpr double kMinStiffnessPaPerM = 1e5;
 
+// `facing`: the skin's outward direction in the pad geom's frame.
+bool ParseFacingAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p) {
+  const auto w = Words(v);
+  double f[3];
+  bool ok = w.size() == 3;
+  for (size_t k = 0; ok && k < 3; ++k) ok = ToDouble(w[k], &f[k]) && std::isfinite(f[k]);
+  const double norm = ok ? std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) : 0.0;
+  if (!ok || !(norm > 1e-9) || !std::isfinite(norm))
+    return p->Fail(
+        Fmt("attribute `facing` = '%s' must be 3 finite numbers, not all zero: the "
+            "skin's outward direction in the pad geom's frame",
+            v.c_str()));
+  for (double& x : f) x /= norm;
+  SetPadFacing(f, &cfg->pad);
+  return true;
+}
+
+void WriteFacingKey(const SkinConfig& cfg, std::ostream& out) {
+  const double* R = cfg.pad.rotation;  // the skin's -z: minus the third column
+  out << -R[2] << ' ' << -R[5] << ' ' << -R[8];
+}
+
 const std::vector<AttributeRow>& Rows() {
   static const std::vector<AttributeRow> rows = {
       // -- adapter and grid --------------------------------------------------
@@ -149,8 +171,8 @@ const std::vector<AttributeRow>& Rows() {
        ParseQuantityAttribute, WriteQuantityKey, S::kModel},
       {"outputs", K::kCustom, 0, 0, false, false, "", "spikes stress force",
        "sensordata blocks (\"Sensordata layout\" below)",
-       "words of: spikes stress voltage force pressure rate", NO_FIELD, ParseOutputsAttribute,
-       WriteOutputsKey, S::kModel},
+       "words of: spikes stress voltage force pressure rate coverage", NO_FIELD,
+       ParseOutputsAttribute, WriteOutputsKey, S::kModel},
       // -- afferents (stage 4; README "Afferent models") ---------------------
       {"sa1_model", K::kChoice, 0, 0, false, false, "", "filtered",
        "SA1 model: `filtered` (rate term low-passed and signed, adaptation, variants) or "
@@ -278,6 +300,19 @@ const std::vector<AttributeRow>& Rows() {
       {"interface_side", K::kChoice, 0, 0, false, false, "", "upper",
        "a receptor exactly on an interface takes the layer `upper` or `lower`", "upper lower",
        FIELD(interface_side), NO_PARSE, S::kModel},
+      // -- robots --------------------------------------------------------------
+      {"pad_geom", K::kCustom, 0, 0, false, false, "geom name", "(none)",
+       "the pad geom's name as written beside `texture` (mjtouch.attach sets it): the prefix "
+       "and suffix MjSpec.attach adds to the pad's name are added to each `texture` name",
+       "the pad's name without MjSpec.attach's prefix and suffix", NO_FIELD,
+       [](const std::string&, SkinConfig*, AttributeParser*) { return true; }, nullptr,
+       S::kAdapter},
+      {"facing", K::kCustom, 0, 0, false, false, "(direction)", "0 0 -1",
+       "the skin's outward direction in the pad geom's frame: the skin's frame is the geom's "
+       "turned by the smallest rotation taking -z to it (+z: a half turn about x); the pad's "
+       "surface is the geom's exact near side seen along it",
+       "3 finite numbers, not all zero (normalised)", NO_FIELD, ParseFacingAttribute,
+       WriteFacingKey, S::kModel},
   };
   return rows;
 }

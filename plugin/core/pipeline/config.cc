@@ -72,8 +72,8 @@ bool CheckElasticSkin(const SkinConfig& cfg, const LayeredSubstrate* sub, std::s
 }
 
 const char* OutputName(int block) {
-  static const char* names[kNumOutputs] = {"spikes", "stress",   "voltage",
-                                           "force",  "pressure", "rate"};
+  static const char* names[kNumOutputs] = {"spikes",   "stress", "voltage", "force",
+                                           "pressure", "rate",   "coverage"};
   return names[block];
 }
 
@@ -140,7 +140,7 @@ bool FinalizeSkinConfig(SkinConfig* cfg, std::string* error) {
   }
   // Receptor sites must lie under the pad's skin (the receptor count depends
   // on attributes only, so this is a check, not a refit).
-  const double footprint = 0.9 * std::min(ax[0], ax[1]);
+  const double footprint = 0.9 * PadFootprintSemiAxis(cfg->pad);
   for (size_t e = 0; e < cfg->sites.size(); ++e) {
     const ExplicitSite& s = cfg->sites[e];
     if (std::hypot(s.x_m, s.y_m) > footprint) {

@@ -25,12 +25,16 @@ enum OutputBlock {
   kOutForce,
   kOutPressure,
   kOutRate,
+  kOutCoverage,
   kNumOutputs
 };
 const char* OutputName(int block);
 // normal, tangential x, y (N, pad frame), indentation (m), and 1 when the
 // indentation exceeds the skin (IndentationLimit) else 0
 constexpr int kForceBlockSize = 5;
+// Share of MuJoCo's normal force on the pad geom that lands on the skin's
+// patch (1 without contact), and that normal force (N).
+constexpr int kCoverageBlockSize = 2;
 
 // `visual` attribute: none, pad (on the skin), above (a copy over the pad), both.
 enum class VisualMode { kNone = 0, kPad, kAbove, kBoth };
@@ -81,7 +85,7 @@ struct SkinConfig {
   bool radius_is_default = false;     // unset: fitted to the grid and pad
   ClassConfig classes[kNumClasses];
   ReceptorParams receptor;
-  bool outputs[kNumOutputs] = {true, true, false, true, false, false};
+  bool outputs[kNumOutputs] = {true, true, false, true, false, false, false};
   // `sites`: explicit receptors (replace the density population when set).
   std::vector<ExplicitSite> sites;
   // Where the MuJoCo adapter draws the pressure heatmap and receptor flashes

@@ -82,6 +82,7 @@ int SkinModel::BlockSize(const SkinConfig& cfg, int nrec, int block) {
   switch (block) {
     case kOutForce: return kForceBlockSize;
     case kOutPressure: return static_cast<int>(cfg.grid.Size());
+    case kOutCoverage: return kCoverageBlockSize;
     default: return nrec;
   }
 }

@@ -62,6 +62,11 @@ void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching, co
     for (int r = 0; r < nrec; ++r) cursor[r] = ReceptorRate(layout.receptor(state, r));
     cursor += nrec;
   }
+  if (cfg.outputs[kOutCoverage]) {
+    cursor[0] = in.contact_normal_n > 0.0 ? in.patch_normal_n / in.contact_normal_n : 1.0;
+    cursor[1] = in.contact_normal_n;
+    cursor += kCoverageBlockSize;
+  }
 }
 
 }  // namespace mjtouch

@@ -18,6 +18,9 @@ struct StepInput {
   double shear_x_n = 0, shear_y_n = 0;  // along pad x, y
   bool in_contact = false;
   std::vector<ContactPoint> contacts;  // MuJoCo's contacts on the pad (pad frame)
+  // Sums of MuJoCo's contact normal forces on the pad geom (N): all, and
+  // those at points over the skin's patch on its facing side.
+  double contact_normal_n = 0, patch_normal_n = 0;
   // The physics timestep (s; 0: unknown). Time advanced by one step differs
   // from it by rounding (t accumulates dt); receptors then integrate over
   // exactly this step, as receptor_run does, and keep one propagator.

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "surface/primitives.h"
+
 namespace mjtouch {
 namespace {
 
@@ -80,13 +82,109 @@ double RidgeCellMean(const Ridges& r, double sc, double h) {
   return mean;
 }
 
+void SetPadFacing(const double facing[3], PadGeometry* pad) {
+  const double a[3] = {-facing[0], -facing[1], -facing[2]};  // the skin's +z
+  double* R = pad->rotation;
+  pad->rotated = !(a[0] == 0.0 && a[1] == 0.0 && a[2] == 1.0);
+  if (!pad->rotated) {
+    const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    std::copy(identity, identity + 9, R);
+    return;
+  }
+  if (a[2] < -1.0 + 1e-12) {  // facing +z: a half turn about x
+    const double half_turn[9] = {1, 0, 0, 0, -1, 0, 0, 0, -1};
+    std::copy(half_turn, half_turn + 9, R);
+    return;
+  }
+  // Rodrigues: R = I + [v]x + [v]x^2 / (1 + c), v = z x a, c = z . a
+  const double v[3] = {-a[1], a[0], 0.0}, k = 1.0 / (1.0 + a[2]);
+  const double V[9] = {0, -v[2], v[1], v[2], 0, -v[0], -v[1], v[0], 0};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) {
+      double vv = 0.0;
+      for (int m = 0; m < 3; ++m) vv += V[3 * r + m] * V[3 * m + c];
+      R[3 * r + c] = (r == c ? 1.0 : 0.0) + V[3 * r + c] + k * vv;
+    }
+}
+
+double PadFootprintSemiAxis(const PadGeometry& pad) {
+  const double* ax = pad.semi_axes_m;
+  if (!pad.rotated) return std::min(ax[0], ax[1]);
+  // The shape's half extent along the skin's x and y axes (geom frame u).
+  auto extent = [&](int column) {
+    const double u[3] = {pad.rotation[column], pad.rotation[3 + column], pad.rotation[6 + column]};
+    switch (pad.shape) {
+      case PadShape::kBox:
+        return std::abs(u[0]) * ax[0] + std::abs(u[1]) * ax[1] + std::abs(u[2]) * ax[2];
+      case PadShape::kCapsule: return ax[0] + (ax[2] - ax[0]) * std::abs(u[2]);
+      default:
+        return std::sqrt(u[0] * u[0] * ax[0] * ax[0] + u[1] * u[1] * ax[1] * ax[1] +
+                         u[2] * u[2] * ax[2] * ax[2]);
+    }
+  };
+  return std::min(extent(0), extent(1));
+}
+
+namespace {
+
+// The near side (smallest s) of the pad's shape on the line o + s d (geom
+// frame): the exact surface of a rotated pad, one line per sample point.
+bool PadNearSide(const PadGeometry& pad, const double o[3], const double d[3], double* s_near) {
+  const double* ax = pad.semi_axes_m;
+  double lo, hi;
+  switch (pad.shape) {
+    case PadShape::kBox: {
+      lo = -kInf;
+      hi = kInf;
+      for (int k = 0; k < 3; ++k) {
+        if (std::abs(d[k]) < 1e-15) {
+          if (std::abs(o[k]) > ax[k]) return false;
+          continue;
+        }
+        double t0 = (-ax[k] - o[k]) / d[k], t1 = (ax[k] - o[k]) / d[k];
+        if (t0 > t1) std::swap(t0, t1);
+        lo = std::max(lo, t0);
+        hi = std::min(hi, t1);
+      }
+      if (!(lo <= hi)) return false;
+      break;
+    }
+    case PadShape::kCapsule: {
+      CounterSurface c;
+      c.type = CounterSurface::Type::kCapsule;
+      c.size_m[0] = ax[0];
+      c.size_m[1] = ax[2] - ax[0];
+      if (!surface_detail::LineInterval(c, o, d, &lo, &hi)) return false;
+      break;
+    }
+    default: {  // sphere, ellipsoid
+      double os[3], ds[3];
+      for (int k = 0; k < 3; ++k) {
+        os[k] = o[k] / ax[k];
+        ds[k] = d[k] / ax[k];
+      }
+      if (!surface_detail::SphereInterval(os, ds, 1.0, &lo, &hi)) return false;
+    }
+  }
+  *s_near = lo;
+  return true;
+}
+
+}  // namespace
+
 std::vector<double> SkinSurface(const TaxelGrid& grid, const PadGeometry& pad,
                                 const Ridges& ridges) {
   std::vector<double> z(grid.Size(), kInf);
   const double* ax = pad.semi_axes_m;
+  const double* R = pad.rotation;
   // Shape of the touching side as a height field z(x, y) <= 0 in the pad
   // frame; false outside its footprint.
   auto shape = [&](double x, double y, double* zz) {
+    if (pad.rotated) {  // the line (x, y, s) of the skin's frame, in the geom's
+      const double o[3] = {R[0] * x + R[1] * y, R[3] * x + R[4] * y, R[6] * x + R[7] * y};
+      const double d[3] = {R[2], R[5], R[8]};
+      return PadNearSide(pad, o, d, zz);
+    }
     switch (pad.shape) {
       case PadShape::kBox:
         if (std::abs(x) > ax[0] || std::abs(y) > ax[1]) return false;

@@ -25,7 +25,20 @@ struct PadGeometry {
   // Half extents along x, y, z: sphere (r, r, r), ellipsoid (a, b, c),
   // capsule (r, r, r + half length), box (MuJoCo's size).
   double semi_axes_m[3] = {0, 0, 0};
+  // The skin's frame in the geom's (`facing`): row-major, columns the skin's
+  // x, y, z axes in the geom frame; the skin faces its -z. Identity unless
+  // `rotated`: the shape above stays in the geom frame, and the skin's
+  // surface is the shape's near side seen along the skin's z.
+  bool rotated = false;
+  double rotation[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
 };
+
+// Sets pad->rotation to the smallest rotation taking the skin's -z to the
+// unit vector `facing` (geom frame); facing = +z: a half turn about x.
+// `rotated` is false exactly for facing = (0, 0, -1).
+void SetPadFacing(const double facing[3], PadGeometry* pad);
+// The smaller half extent of the pad's shape along the skin's x and y.
+double PadFootprintSemiAxis(const PadGeometry& pad);
 
 // Ridge relief across the ridge direction s (period pitch, crest at s = 0,
 // mean zero): sine (H/2) cos(2 pi s / pitch); triangle (sharp crests and

@@ -1,0 +1,104 @@
+"""Five skins on Gymnasium-Robotics' Shadow hand, one attach(spec, body=...)
+call each, on the capsule fingertips' pad side (`facing`): fingertips pressed
+by fixed plates report MuJoCo's normal force on their geom and spike; the
+untouched one stays silent."""
+
+import importlib.util
+import pathlib
+
+import mujoco
+import numpy as np
+import pytest
+
+import mjtouch
+
+# the assets only (importing gymnasium_robotics registers every env)
+_SPEC = importlib.util.find_spec("gymnasium_robotics")
+assert _SPEC is not None, "Gymnasium-Robotics is missing: pip install -e '.[test]' (or [robots])"
+HAND_XML = (
+    pathlib.Path(_SPEC.submodule_search_locations[0]) / "envs" / "assets" / "hand" / "reach.xml"
+)
+FINGERS = ("ff", "mf", "rf", "lf", "th")
+PRESSED = ("ff", "mf", "rf", "th")  # lf stays free
+RL = dict(nx=65, pitch=2e-4, pressure="winkler")  # the bench's `rl` preset grid
+DEPTH_M = 1.5e-3  # each plate starts this far into its fingertip
+
+
+def pad_facing(model, data, finger: str) -> np.ndarray:
+    """The side of the distal capsule that flexing the finger moves forward
+    (the pad), in the geom frame, rounded to the nearest geom axis."""
+    g = model.geom(f"robot0:C_{finger}distal").id
+    x0, R0 = data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()
+    flexed = mujoco.MjData(model)
+    joints = ["THJ0"] if finger == "th" else [f"{finger.upper()}J{k}" for k in (0, 1, 2)]
+    for j in joints:
+        flexed.qpos[model.joint(f"robot0:{j}").qposadr[0]] = 0.3
+    mujoco.mj_forward(model, flexed)
+    move = R0.T @ (flexed.geom_xpos[g] - x0)
+    move[2] = 0.0  # across the capsule's axis: its cylinder
+    axis = np.argmax(np.abs(move))
+    f = np.zeros(3)
+    f[axis] = np.sign(move[axis])
+    return f
+
+
+def test_five_shadow_fingertips_report_mujocos_normal_force():
+    spec = mujoco.MjSpec.from_file(str(HAND_XML))
+    spec.option.gravity = [0, 0, 0]  # the weak servos (kp 1-5) would let the fingers sag
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    facing = {f: pad_facing(model, data, f) for f in FINGERS}
+    for f in PRESSED:  # a fixed plate against each pad, normal along the pad's outward
+        g = model.geom(f"robot0:C_{f}distal")
+        R = data.geom_xmat[g.id].reshape(3, 3)
+        n = R @ facing[f]
+        centre = data.geom_xpos[g.id] + n * (g.size[0] - DEPTH_M + 2e-3)
+        x = R[:, 2]  # along the capsule: 8 mm of it, inside the 13 mm grid
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, np.column_stack([x, np.cross(n, x), n]).ravel())
+        spec.worldbody.add_geom(
+            name=f"plate_{f}",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[4e-3, 8e-3, 2e-3],
+            pos=centre,
+            quat=quat,
+        )
+    for f in FINGERS:  # one call each: the body's one colliding geom, its pad side
+        mjtouch.attach(
+            spec,
+            body=f"robot0:{f}distal",
+            name=f"skin_{f}",
+            facing=facing[f],
+            outputs="spikes force coverage",
+            **RL,
+        )
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    data.qpos[:] = model.qpos0
+    skins = mjtouch.layouts(model)
+    spikes = {f: 0.0 for f in FINGERS}
+    steps = 250  # 0.5 s at the env's 2 ms
+    for _ in range(steps):
+        data.ctrl[:] = 0.0
+        mujoco.mj_step(model, data)
+        for f in FINGERS:
+            spikes[f] += skins[f"skin_{f}"].block(data.sensordata, "spikes").sum()
+    for f in FINGERS:
+        lay = skins[f"skin_{f}"]
+        g = model.geom(f"robot0:C_{f}distal").id
+        mj = 0.0
+        for i in range(data.ncon):
+            if g in data.contact[i].geom:
+                fc = np.zeros(6)
+                mujoco.mj_contactForce(model, data, i, fc)
+                mj += fc[0]
+        force = lay.block(data.sensordata, "force")
+        cov = lay.block(data.sensordata, "coverage")
+        if f in PRESSED:
+            assert mj > 0.01, (f, mj)  # pressed (weak servos: 0.03-0.3 N)
+            assert force[0] == pytest.approx(mj, rel=0.05), f
+            assert cov[0] == 1.0 and cov[1] == pytest.approx(mj, rel=1e-9), (f, cov)
+            assert spikes[f] > 0, f
+        else:
+            assert mj == 0.0 and force[0] == 0.0 and spikes[f] == 0, (f, mj, spikes[f])
