@@ -42,7 +42,10 @@ typedef enum mjtouch_block_ {
   MJTOUCH_BLOCK_RATE = 5,     /* smoothed firing rate per receptor (Hz) */
   MJTOUCH_BLOCK_COVERAGE = 6, /* share of MuJoCo's normal force on the pad on the skin's patch,
                                  and that normal force (N) */
-  MJTOUCH_NUM_BLOCKS = 7
+  MJTOUCH_BLOCK_STICK = 7,    /* shear="partial": nx * nx, 1 stick, 0 slip, -1 unloaded */
+  MJTOUCH_BLOCK_SLIP = 8,     /* shear="partial": stuck share, mu, shift x, y (m) */
+  MJTOUCH_BLOCK_SHEAR = 9,    /* 2 * nx * nx tangential tractions x then y (Pa, pad frame) */
+  MJTOUCH_NUM_BLOCKS = 10
 } mjtouch_block_t;
 
 /* The layout of one skin (one mjtouch.skin plugin instance). */
@@ -74,8 +77,8 @@ int mjtouch_layout(const mjModel* m, int instance, mjtouch_layout_t* out, char* 
 /* "SA1", "RA", "PC"; NULL out of range. */
 const char* mjtouch_class_name(int cls);
 
-/* "spikes", "stress", "voltage", "force", "pressure", "rate", "coverage"; NULL out of
- * range. */
+/* "spikes", "stress", "voltage", "force", "pressure", "rate", "coverage", "stick", "slip",
+ * "shear"; NULL out of range. */
 const char* mjtouch_block_name(int block);
 
 /* The layout as JSON, with every receptor's class and site (x, y, depth in m):

@@ -8,7 +8,10 @@ solved approach in m, 1 when it exceeds the skin else 0), ``pressure``
 (nx*nx taxel pressures, Pa), ``rate`` (smoothed rate per receptor, Hz),
 ``coverage`` (the share of MuJoCo's normal force on the pad geom that lands
 on the skin's patch, 1 without contact, and that normal force in N;
-:meth:`SkinLayout.coverage` reads it and warns).
+:meth:`SkinLayout.coverage` reads it and warns); with ``shear="partial"``
+``stick`` (nx*nx: 1 stick, 0 slip, -1 unloaded) and ``slip`` (stuck share of
+the loaded cells, mu, shift x and y in m); ``shear`` (tangential tractions
+along pad x then y, 2*nx*nx, Pa).
 """
 
 from __future__ import annotations
@@ -103,6 +106,15 @@ class SkinLayout:
                 stacklevel=2,
             )
         return share
+
+    def image(self, sensordata: np.ndarray, name: str) -> np.ndarray:
+        """A taxel block as images: ``pressure`` and ``stick`` (..., nx, nx),
+        ``shear`` (..., 2, nx, nx) with x then y; row j is pad y."""
+        if name not in ("pressure", "stick", "shear"):
+            raise ValueError(f"block {name!r} is not a taxel image; valid: pressure stick shear")
+        values = self.block(sensordata, name)
+        shape = (2, self.nx, self.nx) if name == "shear" else (self.nx, self.nx)
+        return values.reshape(values.shape[:-1] + shape)
 
     def last_evaluation(self, data: mujoco.MjData) -> dict:
         """Diagnostics of this instance's last evaluation in ``data`` (the

@@ -439,6 +439,10 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
   const mjtNum* pmat = PadFrameMat(d, pad, model_->config().pad, turned);
   CopyPose(ppos, pmat, &in.pad_pose);
   mjtNum total[3] = {0, 0, 0};
+  // Coulomb's mu for shear="partial": the contacts' friction[0] weighted by
+  // their normal forces (the plain mean if none pushes).
+  double mu_weighted = 0, weight = 0, mu_sum = 0;
+  int mu_count = 0;
   for (int i = 0; i < d->ncon; ++i) {
     const mjContact& c = d->contact[i];
     if (c.exclude || c.efc_address < 0) continue;
@@ -460,6 +464,11 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     in.in_contact = true;
     in.contact_normal_n += f_local[0];
     if (OnPatch(c, pmat, ppos, -sign)) in.patch_normal_n += f_local[0];
+    const double normal_n = std::max<double>(f_local[0], 0.0);
+    mu_weighted += normal_n * c.friction[0];
+    weight += normal_n;
+    mu_sum += c.friction[0];
+    ++mu_count;
     {  // the contact in the pad frame, for the `contacts` pressure model
       mjtNum rel[3], loc[3], f_pad[3];
       mju_sub3(rel, c.pos, ppos);
@@ -489,6 +498,7 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
       in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos, field, MeshCaster(m, g)));
     }
   }
+  in.friction_mu = weight > 0 ? mu_weighted / weight : mu_count > 0 ? mu_sum / mu_count : 0.0;
   // Force on the pad in the pad frame (columns of the row-major xmat).
   in.shear_x_n = total[0] * pmat[0] + total[1] * pmat[3] + total[2] * pmat[6];
   in.shear_y_n = total[0] * pmat[1] + total[1] * pmat[4] + total[2] * pmat[7];

@@ -44,7 +44,7 @@ CASES = [
     ({"pitch": "inf"}, "`pitch`", "[1e-06, 0.01] m"),
     ({"pitch": "1e-4 2e-4"}, "`pitch`", "[1e-06, 0.01] m"),
     ({"ridge_angle": "181"}, "`ridge_angle`", "[-180, 180] deg"),
-    ({"shear": "yes"}, "`shear`", "true or false"),
+    ({"shear": "yes"}, "`shear`", "valid: true (full slip) false partial"),
     ({"grid_shift": "half"}, "`grid_shift`", "true or false"),
     ({"texture_group": "2.5"}, "`texture_group`", "not an integer; valid range [0, 5]"),
     ({"stiffness": "stiff"}, "`stiffness`", "[100000, 1e+12] Pa/m"),

@@ -175,6 +175,14 @@ int ProjectWithForce(const std::vector<double>& yx, const std::vector<double>& y
         (*qx)[c] += ex;
         (*qy)[c] += ey;
       }
+  } else if (g_sum > 0) {
+    // Every cell slips (|t| just below sum g): Newton's residual, up to
+    // 1e-8 of the load, goes to all cells in proportion to their disks.
+    const double ex = (tx - sx) / g_sum, ey = (ty - sy) / g_sum;
+    for (size_t c = 0; c < m; ++c) {
+      (*qx)[c] += g[c] * ex;
+      (*qy)[c] += g[c] * ey;
+    }
   }
   *lam_x = lx;
   *lam_y = ly;

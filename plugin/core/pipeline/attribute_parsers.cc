@@ -191,7 +191,8 @@ void WriteQuantityKey(const SkinConfig& cfg, std::ostream& out) {
 
 bool ParseOutputsAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p) {
   std::vector<std::string> words;
-  if (!ListWords(p, "outputs", v, "words of spikes stress voltage force pressure rate", &words))
+  if (!ListWords(p, "outputs", v,
+                 "words of spikes stress voltage force pressure rate stick slip shear", &words))
     return false;
   for (bool& o : cfg->outputs) o = false;
   for (const auto& w : words) {
@@ -201,7 +202,7 @@ bool ParseOutputsAttribute(const std::string& v, SkinConfig* cfg, AttributeParse
     if (k < 0)
       return p->Fail(
           Fmt("attribute `outputs`: unknown output '%s'; valid: spikes stress "
-              "voltage force pressure rate coverage",
+              "voltage force pressure rate coverage stick slip shear",
               w.c_str()));
     cfg->outputs[k] = true;
   }
@@ -209,6 +210,23 @@ bool ParseOutputsAttribute(const std::string& v, SkinConfig* cfg, AttributeParse
 }
 void WriteOutputsKey(const SkinConfig& cfg, std::ostream& out) {
   for (bool o : cfg.outputs) out << o << ' ';
+}
+
+bool ParseShearAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p) {
+  cfg->shear_partial = v == "partial";
+  if (v == "true" || v == "1" || v == "partial")
+    cfg->shear = true;
+  else if (v == "false" || v == "0")
+    cfg->shear = false;
+  else
+    return p->Fail(
+        Fmt("attribute `shear` = '%s' is unknown; valid: true (full slip) false "
+            "partial",
+            v.c_str()));
+  return true;
+}
+void WriteShearKey(const SkinConfig& cfg, std::ostream& out) {
+  out << cfg.shear << (cfg.shear_partial ? " partial" : "");
 }
 
 bool ParseMerkelAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p) {
@@ -369,6 +387,20 @@ bool CheckAttributeCombinations(const AttributeParser& p, SkinConfig* cfg, std::
         "attribute `oversample` needs pressure=\"winkler\" or \"elastic\" (the "
         "contacts model has no geometry to interpolate over the step); valid with "
         "contacts: 1");
+  if (cfg->shear_partial && cfg->pressure_model == PressureModel::kContacts)
+    return fail(
+        "attribute `shear` = partial needs pressure=\"winkler\" or \"elastic\" (the "
+        "contacts model has no pressure field to stick or slip on); valid with "
+        "contacts: true false");
+  if ((cfg->outputs[kOutStick] || cfg->outputs[kOutSlip]) && !cfg->shear_partial)
+    return fail(
+        Fmt("attribute `outputs`: `%s` needs shear=\"partial\" (full slip has no stick "
+            "zone); valid without it: spikes stress voltage force pressure rate coverage",
+            cfg->outputs[kOutStick] ? "stick" : "slip"));
+  if (cfg->outputs[kOutShear] && !cfg->shear)
+    return fail(
+        "attribute `outputs`: `shear` needs shear=\"true\" or \"partial\" (shear is "
+        "false: no tangential traction)");
   if (p.Present("stress_theta") && cfg->stress_method != StressMethod::kTree)
     return fail(
         Fmt("attribute `stress_theta` applies to stress_method=\"tree\" only "

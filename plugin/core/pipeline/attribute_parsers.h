@@ -29,6 +29,7 @@ bool ParseOversampleAttribute(const std::string& v, SkinConfig* cfg, AttributePa
 bool ParseClassesAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p);
 bool ParseQuantityAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p);
 bool ParseOutputsAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p);
+bool ParseShearAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p);
 bool ParseMerkelAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p);
 bool ParseSeedAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p);
 bool ParseSitesAttribute(const std::string& v, SkinConfig* cfg, AttributeParser* p);
@@ -39,6 +40,7 @@ void WriteOversampleKey(const SkinConfig& cfg, std::ostream& out);
 void WriteClassesKey(const SkinConfig& cfg, std::ostream& out);
 void WriteQuantityKey(const SkinConfig& cfg, std::ostream& out);
 void WriteOutputsKey(const SkinConfig& cfg, std::ostream& out);
+void WriteShearKey(const SkinConfig& cfg, std::ostream& out);
 void WriteMerkelKey(const SkinConfig& cfg, std::ostream& out);
 void WriteSeedKey(const SkinConfig& cfg, std::ostream& out);
 void WriteSitesKey(const SkinConfig& cfg, std::ostream& out);

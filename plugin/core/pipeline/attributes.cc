@@ -144,8 +144,11 @@ const std::vector<AttributeRow>& Rows() {
        FIELD(stiffness_pa_per_m), NO_PARSE, S::kModel},
       {"poisson", K::kNumber, -1, 0.5, true, false, "", "0.48",
        "skin=\"halfspace\": Poisson's ratio", nullptr, FIELD(poisson), NO_PARSE, S::kModel},
-      {"shear", K::kBool, 0, 0, false, false, "", "true",
-       "shear traction from MuJoCo's friction force", nullptr, FIELD(shear), NO_PARSE, S::kModel},
+      {"shear", K::kCustom, 0, 0, false, false, "", "true",
+       "shear traction from MuJoCo's friction force: `true` uniform full slip (q = p F / P), "
+       "`partial` Coulomb stick and slip per cell with memory (mu from the contacts' geoms; "
+       "winkler and elastic), `false` none",
+       "true false partial", NO_FIELD, ParseShearAttribute, WriteShearKey, S::kModel},
       {"visual", K::kChoice, 0, 0, false, false, "", "both",
        "drawing: `pad` (heatmap on the skin, seen from below), `above` (a copy 2 mm over the "
        "pad), `both`, `none`",
@@ -171,7 +174,7 @@ const std::vector<AttributeRow>& Rows() {
        ParseQuantityAttribute, WriteQuantityKey, S::kModel},
       {"outputs", K::kCustom, 0, 0, false, false, "", "spikes stress force",
        "sensordata blocks (\"Sensordata layout\" below)",
-       "words of: spikes stress voltage force pressure rate coverage", NO_FIELD,
+       "words of: spikes stress voltage force pressure rate coverage stick slip shear", NO_FIELD,
        ParseOutputsAttribute, WriteOutputsKey, S::kModel},
       // -- afferents (stage 4; README "Afferent models") ---------------------
       {"sa1_model", K::kChoice, 0, 0, false, false, "", "filtered",

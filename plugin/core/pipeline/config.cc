@@ -72,8 +72,8 @@ bool CheckElasticSkin(const SkinConfig& cfg, const LayeredSubstrate* sub, std::s
 }
 
 const char* OutputName(int block) {
-  static const char* names[kNumOutputs] = {"spikes",   "stress", "voltage", "force",
-                                           "pressure", "rate",   "coverage"};
+  static const char* names[kNumOutputs] = {"spikes", "stress",   "voltage", "force", "pressure",
+                                           "rate",   "coverage", "stick",   "slip",  "shear"};
   return names[block];
 }
 

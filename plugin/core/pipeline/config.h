@@ -26,6 +26,9 @@ enum OutputBlock {
   kOutPressure,
   kOutRate,
   kOutCoverage,
+  kOutStick,
+  kOutSlip,
+  kOutShear,
   kNumOutputs
 };
 const char* OutputName(int block);
@@ -35,6 +38,9 @@ constexpr int kForceBlockSize = 5;
 // Share of MuJoCo's normal force on the pad geom that lands on the skin's
 // patch (1 without contact), and that normal force (N).
 constexpr int kCoverageBlockSize = 2;
+// shear="partial": the stuck share of the loaded cells, the friction
+// coefficient used, the counter-body's tangential shift x, y (m, pad frame)
+constexpr int kSlipBlockSize = 4;
 
 // `visual` attribute: none, pad (on the skin), above (a copy over the pad), both.
 enum class VisualMode { kNone = 0, kPad, kAbove, kBoth };
@@ -80,12 +86,15 @@ struct SkinConfig {
   // ResolveOversample sets the smallest that resolves the afferents.
   int oversample = 0;
   bool shear = true;
+  // shear="partial": Coulomb partial slip per cell with memory (tangential.h)
+  // instead of uniform full slip; needs `shear`.
+  bool shear_partial = false;
   int texture_group = -1;             // non-colliding geoms in this group are textures (-1: none)
   double population_radius_m = 5e-3;  // receptors within this distance of the pole
   bool radius_is_default = false;     // unset: fitted to the grid and pad
   ClassConfig classes[kNumClasses];
   ReceptorParams receptor;
-  bool outputs[kNumOutputs] = {true, true, false, true, false, false, false};
+  bool outputs[kNumOutputs] = {true, true, false, true, false, false, false, false, false, false};
   // `sites`: explicit receptors (replace the density population when set).
   std::vector<ExplicitSite> sites;
   // Where the MuJoCo adapter draws the pressure heatmap and receptor flashes

@@ -83,6 +83,9 @@ int SkinModel::BlockSize(const SkinConfig& cfg, int nrec, int block) {
     case kOutForce: return kForceBlockSize;
     case kOutPressure: return static_cast<int>(cfg.grid.Size());
     case kOutCoverage: return kCoverageBlockSize;
+    case kOutStick: return static_cast<int>(cfg.grid.Size());
+    case kOutSlip: return kSlipBlockSize;
+    case kOutShear: return 2 * static_cast<int>(cfg.grid.Size());
     default: return nrec;
   }
 }
@@ -150,9 +153,9 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
       // contact, every cell active) and fits in memory.
       constexpr double kMaxSpectraBytes = 256.0 * 1024 * 1024;
       const double bytes = KernelSpectraBytes(kt, model->stress_sites_);
-      const StressCost widest =
-          EstimateStressCost(kt, model->stress_sites_, cfg.grid.n * cfg.grid.n, cfg.shear,
-                             cfg.pressure_model != PressureModel::kContacts || !cfg.shear);
+      const StressCost widest = EstimateStressCost(
+          kt, model->stress_sites_, cfg.grid.n * cfg.grid.n, cfg.shear,
+          !cfg.shear || (cfg.pressure_model != PressureModel::kContacts && !cfg.shear_partial));
       if (cfg.stress_method == StressMethod::kFft && bytes > kMaxSpectraBytes) {
         *error =
             Fmt("mjtouch.skin: attribute `stress_method` = fft needs %.0f MiB of kernel "

@@ -67,6 +67,30 @@ void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching, co
     cursor[1] = in.contact_normal_n;
     cursor += kCoverageBlockSize;
   }
+  if (cfg.outputs[kOutStick]) {  // 1 stick, 0 slip, -1 unloaded (or no contact)
+    const size_t N = cfg.grid.Size();
+    const auto& stick = ws.tangential_result.stick;
+    for (size_t k = 0; k < N; ++k)
+      cursor[k] = touching && tf.pressure_pa[k] > 0.0 ? (stick[k] ? 1.0 : 0.0) : -1.0;
+    cursor += N;
+  }
+  if (cfg.outputs[kOutSlip]) {  // all zero without contact
+    cursor[0] = touching ? ws.tangential_result.stuck_share : 0.0;
+    cursor[1] = touching ? in.friction_mu : 0.0;
+    cursor[2] = touching ? ws.tangential.shift_x_m : 0.0;
+    cursor[3] = touching ? ws.tangential.shift_y_m : 0.0;
+    cursor += kSlipBlockSize;
+  }
+  if (cfg.outputs[kOutShear]) {  // x then y, Pa
+    const size_t N = cfg.grid.Size();
+    if (touching) {
+      std::copy(tf.shear_x_pa.begin(), tf.shear_x_pa.begin() + N, cursor);
+      std::copy(tf.shear_y_pa.begin(), tf.shear_y_pa.begin() + N, cursor + N);
+    } else {
+      std::fill(cursor, cursor + 2 * N, 0.0);
+    }
+    cursor += 2 * N;
+  }
 }
 
 }  // namespace mjtouch

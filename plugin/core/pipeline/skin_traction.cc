@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <mutex>
+#include <tuple>
 #include <utility>
 
 #include <time.h>
@@ -23,6 +26,8 @@ constexpr int kElasticMaxIterations = 500;
 // 20 um). Any level gives the same result (a level the approach reaches
 // renders again without culling); a tight one renders and scans fewer cells.
 constexpr double kWinklerCullDepths = 1.1, kWinklerCullM = 3e-6;
+// shear="partial": full slip from this share of mu P below it up.
+constexpr double kFullSlipMargin = 1e-6;
 
 // The `elastic` solves' settings, threads included.
 ElasticSolveOptions ElasticOptions(const SkinConfig& cfg) {
@@ -107,13 +112,102 @@ bool RenderAndSolve(const TractionStep& s, double cull_rel, bool summary, CellBo
   return touching;
 }
 
-// The shear (full-slip Coulomb, uniform ratio) of a solved pressure field,
-// the float copies and the active runs.
+// The half-space tangential compliance of the skin's top (a layered stack:
+// its top layer's; the stick zone's shape depends on nu alone, the shift on
+// E too), shared by every simulation of equal grids and moduli.
+std::shared_ptr<const TangentialCompliance> SkinTangentialCompliance(const SkinConfig& cfg) {
+  const double young = cfg.layered ? cfg.layers[0].young_pa : cfg.young_pa;
+  const double nu = cfg.layered ? cfg.layers[0].poisson : cfg.poisson;
+  static std::mutex mu;
+  static std::map<std::tuple<double, double, double, int>,
+                  std::shared_ptr<const TangentialCompliance>>
+      cache;
+  std::lock_guard<std::mutex> lock(mu);
+  auto& slot = cache[{young, nu, cfg.grid.pitch_m, cfg.grid.n}];
+  if (!slot)
+    slot = std::make_shared<const TangentialCompliance>(young, nu, cfg.grid.pitch_m, cfg.grid.n);
+  return slot;
+}
+
+// shear="partial": the tangential tractions of the solved pressure by
+// Coulomb partial slip (tangential.h), from the state's buffer at the head
+// into the buffer this step writes (StateLayout). On invalid input (not
+// expected from MuJoCo's contacts) uniform full slip stands.
+void PartialSlipTraction(const TractionStep& s) {
+  const SkinConfig& cfg = s.cfg;
+  const TaxelGrid& grid = cfg.grid;
+  const StateLayout& lay = s.model.state_layout();
+  Workspace* ws = s.ws;
+  TractionField* tf = &ws->traction;
+  const size_t N = grid.Size();
+  const double* from = lay.tangential_at(s.state, static_cast<int>(s.state[lay.tangential_head]));
+  double* to = lay.tangential_at(s.state, static_cast<int>(s.state[lay.tangential_write]));
+  TangentialState& ts = ws->tangential;
+  if (from[kTgValid] > 0.0) {
+    const double* q = from + kTangentialSlots;
+    ts.shear_x_pa.assign(q, q + N);
+    ts.shear_y_pa.assign(q + N, q + 2 * N);
+    ts.shift_x_m = from[kTgShiftX];
+    ts.shift_y_m = from[kTgShiftY];
+  } else {
+    ts = TangentialState();
+  }
+  // MuJoCo's sliding friction reaches mu P to its solver's tolerance (~1e-8):
+  // within kFullSlipMargin of it the contact slips as a whole (the stick
+  // zone left, c/a = margin^(1/3) = 1% of the contact, is below any grid)
+  // with mu = |F| / P, so that q = p F / P.
+  double mu = s.in.friction_mu;
+  const double force_t = std::hypot(s.in.shear_x_n, s.in.shear_y_n);
+  if (force_t >= (1.0 - kFullSlipMargin) * mu * s.in.normal_force_n)
+    mu = std::min(mu, force_t / s.in.normal_force_n);
+  TangentialResult& res = ws->tangential_result;
+  std::string error;
+  bool ok;
+  if (cfg.pressure_model == PressureModel::kWinkler) {
+    const double nu = cfg.layered ? cfg.layers[0].poisson : cfg.poisson;
+    ok = SolveTangentialWinkler(grid, tf->pressure_pa, mu, s.in.shear_x_n, s.in.shear_y_n,
+                                WinklerTangentialStiffness(cfg.stiffness_pa_per_m, nu), &ts, &res,
+                                &error);
+  } else {
+    if (!ws->tangential_compliance) ws->tangential_compliance = SkinTangentialCompliance(cfg);
+    ok = SolveTangentialElastic(grid, tf->pressure_pa, mu, s.in.shear_x_n, s.in.shear_y_n,
+                                *ws->tangential_compliance, cfg.tolerance, kElasticMaxIterations,
+                                &ts, &res, &error, cfg.elastic_precision);
+  }
+  if (!ok) {
+    res = TangentialResult();
+    res.stick.assign(N, 0);
+    to[kTgValid] = 0.0;
+    UniformSlipShear(grid, s.in.normal_force_n, s.in.shear_x_n, s.in.shear_y_n, tf);
+    tf->uniform_slip = false;
+    FinishTraction(grid, true, tf);
+    return;
+  }
+  // The tractions lie on the loaded cells, inside the pressure's box.
+  const CellBox& b = tf->box;
+  for (int j = b.j0; j < b.j0 + b.ny; ++j) {
+    const size_t k = static_cast<size_t>(j) * grid.n + b.i0;
+    std::copy_n(ts.shear_x_pa.begin() + k, b.nx, tf->shear_x_pa.begin() + k);
+    std::copy_n(ts.shear_y_pa.begin() + k, b.nx, tf->shear_y_pa.begin() + k);
+  }
+  tf->uniform_slip = false;  // stage 3 takes the unfolded paths
+  FinishTraction(grid, true, tf);
+  to[kTgValid] = 1.0;
+  to[kTgShiftX] = ts.shift_x_m;
+  to[kTgShiftY] = ts.shift_y_m;
+  std::copy(ts.shear_x_pa.begin(), ts.shear_x_pa.end(), to + kTangentialSlots);
+  std::copy(ts.shear_y_pa.begin(), ts.shear_y_pa.end(), to + kTangentialSlots + N);
+}
+
+// The shear (full-slip Coulomb, uniform ratio; or partial slip) of a solved
+// pressure field, the float copies and the active runs.
 void FinishSolvedTraction(const TractionStep& s) {
   const TaxelGrid& grid = s.cfg.grid;
   TractionField* tf = &s.ws->traction;
   const StepInput& in = s.in;
-  if (!s.cfg.shear) {
+  if (s.cfg.shear && s.cfg.shear_partial) {
+    PartialSlipTraction(s);
+  } else if (!s.cfg.shear) {
     FinishTraction(grid, false, tf);
   } else if (!s.fast) {
     UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, tf);
@@ -274,9 +368,20 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, const Traction
   const bool warm = history ? HasWarmStart(taxel) : state[kStContactValid] > 0.0;
   const double depth_prev = history ? taxel[1].slots[kHsDepth] : state[kStContactDepth];
   state[kStContactValid] = 0.0;
-  if (!(in.in_contact && in.normal_force_n > 0.0)) return false;
+  // shear="partial": the buffer written becomes the head; without contact
+  // it holds no memory.
+  auto finish = [&](bool touching) {
+    if (lay.tangential_block > 0) {
+      const int to = static_cast<int>(state[lay.tangential_write]);
+      if (!touching) lay.tangential_at(state, to)[kTgValid] = 0.0;
+      state[lay.tangential_head] = to;
+    }
+    if (touching) state[kStContactValid] = 1.0;
+    return touching;
+  };
+  if (!(in.in_contact && in.normal_force_n > 0.0)) return finish(false);
   const bool contacts = cfg.pressure_model == PressureModel::kContacts;
-  if (!contacts && in.surfaces.empty()) return false;
+  if (!contacts && in.surfaces.empty()) return finish(false);
 
   const TractionStep step{model,
                           cfg,
@@ -294,12 +399,12 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, const Traction
   switch (cfg.pressure_model) {
     case PressureModel::kContacts: touching = ContactsTraction(step); break;
     case PressureModel::kWinkler:
-      touching = step.fast && cfg.shear ? WinklerSlipTraction(step) : WinklerTraction(step);
+      touching = step.fast && cfg.shear && !cfg.shear_partial ? WinklerSlipTraction(step)
+                                                              : WinklerTraction(step);
       break;
     default: touching = ElasticTraction(step); break;
   }
-  if (touching) state[kStContactValid] = 1.0;
-  return touching;
+  return finish(touching);
 }
 
 }  // namespace mjtouch

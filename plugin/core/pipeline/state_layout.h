@@ -36,6 +36,20 @@ enum LastPoseSlot {
   kLastPoseSize
 };
 
+// shear="partial": two buffers of the tangential state (TangentialState),
+// each these slots then the tractions x, y (Pa, n*n doubles each). The head
+// slot names the buffer holding the last evaluation's state; a step reads it
+// and writes the other buffer, except that the substeps after a step's first
+// read and write that one: the buffer the step started from stays intact,
+// so a repeated evaluation (the head restored from eval_start) reads the
+// same state and gives the same bits, oversampled or not.
+enum TangentialSlot {
+  kTgValid = 0,  // 1 if the tractions hold a contact's
+  kTgShiftX,     // counter-body shift, m (pad frame)
+  kTgShiftY,
+  kTangentialSlots
+};
+
 enum EvalStartSlot {
   kEsValid = 0,  // 1 once saved
   kEsTime,       // the time of the evaluation it precedes, s
@@ -130,6 +144,9 @@ struct StateLayout {
   int history_block = 0;                       // kHistorySlots + n*n; 0 without `elastic`
   int shifted_history = 0, shifted_block = 0;  // kHistorySlots + (n+1)^2; 0 without `grid_shift`
   int history_head = 0;                        // slot of h
+  // shear="partial": the two tangential buffers (0 without), their head slot
+  // (saved in eval_start) and the buffer this step writes (set by Step).
+  int tangential = 0, tangential_block = 0, tangential_head = 0, tangential_write = 0;
   // The state before the first evaluation at a time (EvalStartSlot, then
   // the header, the receptor blocks, the history head and the last pose): a
   // repeated evaluation at that time starts again from it (step.cc).
@@ -151,8 +168,13 @@ struct StateLayout {
       shifted_ncell = static_cast<size_t>(cfg.grid.n + 1) * (cfg.grid.n + 1);
       shifted_block = kHistorySlots + static_cast<int>(shifted_ncell);
     }
-    history_head = shifted_history + kHistoryBlocks * shifted_block;
-    last_pose = history_head + (elastic ? 1 : 0);
+    tangential = shifted_history + kHistoryBlocks * shifted_block;
+    const bool partial = cfg.shear && cfg.shear_partial;
+    tangential_block = partial ? kTangentialSlots + 2 * static_cast<int>(ncell) : 0;
+    history_head = tangential + 2 * tangential_block;
+    tangential_head = history_head + (elastic ? 1 : 0);
+    tangential_write = tangential_head + (partial ? 1 : 0);
+    last_pose = tangential_write + (partial ? 1 : 0);
     eval_start = last_pose + kLastPoseSize;
     eval_start_size =
         kEvalStartSlots + kStateHeader + (history - receptors) + (eval_start - history_head);
@@ -166,6 +188,10 @@ struct StateLayout {
   // The same for the shifted grid (`grid_shift` only).
   HistoryBlock shifted_history_at(double* state, int back) const {
     return Block(state, shifted_history, shifted_block, shifted_ncell, back);
+  }
+  // Tangential buffer b (0 or 1): its slots, then x and y tractions.
+  double* tangential_at(double* state, int b) const {
+    return state + tangential + static_cast<size_t>(b) * tangential_block;
   }
   // Receptor r's membrane block.
   double* receptor(double* state, int r) const {

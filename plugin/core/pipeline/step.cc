@@ -83,8 +83,10 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
   // Stages 1-2: gap and tractions (skin_traction.cc).
   TractionNeeds outputs_read;
   outputs_read.pressure_pa = cfg.outputs[kOutPressure];
+  outputs_read.shear = cfg.outputs[kOutShear];
   const bool touching =
       ComputeTraction(model, in, outputs_read, state, ws, !(time_valid && elapsed == 0.0));
+  if (touching && outputs_read.shear) MaterializeTraction(cfg.grid, false, true, &ws->traction);
   const bool need_receptors =
       cfg.outputs[kOutSpikes] || cfg.outputs[kOutVoltage] || cfg.outputs[kOutRate];
   // Idle receptors: untouched, quiescent receptors (ReceptorStepper::Quiescent)
@@ -272,7 +274,10 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   const SkinConfig& cfg = model.config();
   const int K = cfg.oversample;
   int fired = 0;
-  SaveOrRestoreEvaluationStart(model.state_layout(), time_s, state);
+  const StateLayout& lay = model.state_layout();
+  SaveOrRestoreEvaluationStart(lay, time_s, state);
+  if (lay.tangential_block > 0)  // this step writes the buffer it did not start from
+    state[lay.tangential_write] = 1.0 - state[lay.tangential_head];
   bool touching;
   double* last = K > 1 ? state + model.state_layout().last_pose : nullptr;
   const double elapsed = state[kStTimeValid] > 0.0 ? time_s - state[kStLastTime] : 0.0;
@@ -289,6 +294,7 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
     sub.surfaces = in.surfaces;
     sub.contacts = in.contacts;
     sub.in_contact = in.in_contact;
+    sub.friction_mu = in.friction_mu;
     const double t0 = time_s - elapsed;
     for (int k = 1; k <= K; ++k) {
       const double s = static_cast<double>(k) / K;

@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "contact/tangential.h"
 #include "pipeline/model.h"
 
 namespace mjtouch {
@@ -21,6 +22,9 @@ struct StepInput {
   // Sums of MuJoCo's contact normal forces on the pad geom (N): all, and
   // those at points over the skin's patch on its facing side.
   double contact_normal_n = 0, patch_normal_n = 0;
+  // shear="partial": Coulomb's mu between the skin and the counter-bodies
+  // (the adapter's normal-force-weighted mean over the pad's contacts).
+  double friction_mu = 0;
   // The physics timestep (s; 0: unknown). Time advanced by one step differs
   // from it by rounding (t accumulates dt); receptors then integrate over
   // exactly this step, as receptor_run does, and keep one propagator.
@@ -44,6 +48,11 @@ struct Workspace {
   std::vector<Stress6> stress;         // per receptor, Pa
   StressScratch stress_scratch;
   StressMethod last_stress_method = StressMethod::kDirect;
+  // shear="partial": the tractions read from and written to plugin_state,
+  // the last solve's outcome and the half-space compliance (shared).
+  TangentialState tangential;
+  TangentialResult tangential_result;
+  std::shared_ptr<const TangentialCompliance> tangential_compliance;
   StepInput substep;              // `oversample`: the interpolated input
   std::vector<double> spike_sum;  // `oversample`: spikes over the substeps
 };
