@@ -2,8 +2,8 @@
 under a 1 mm flat pin, the reference tests/science/test_touchsim_reference.py
 holds mjtouch's median units to.
 
-    git --git-dir=<mirror of hsaal/touchsim> archive HEAD | tar -x -C /tmp/touchsim
-    python examples/touchsim_reference.py /tmp/touchsim --out tests/data/touchsim_reference.json
+    git --git-dir=<mirror of hsaal/touchsim> archive HEAD | tar -x -C touchsim
+    python examples/touchsim_reference.py touchsim --out tests/data/touchsim_reference.json
 
 TouchSim is not on the package index; it is imported from its source tree with
 three shims applied here, none to its files: numba's ``guvectorize`` is
