@@ -3,13 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 import time
 
 import numpy as np
 
-from mjtouch.cli.types import positive_float
+from mjtouch.cli.types import positive_float, run_and_print
 
 EXAMPLE = """example:
   mjtouch probe --waveform ramp --probe pin --depth 0.5e-3
@@ -205,13 +203,4 @@ def print_human(o: dict) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    try:
-        out = run(args)
-    except ValueError as e:
-        print(f"mjtouch: error: {e}", file=sys.stderr)
-        return 2
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print_human(out)
-    return 0
+    return run_and_print(args, run, print_human)

@@ -1,9 +1,13 @@
-"""Argument types of the command line, on the checks of :mod:`mjtouch._validate`."""
+"""Argument types of the command line, on the checks of :mod:`mjtouch._validate`,
+and the run-then-print shape the subcommands share."""
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import sys
+from collections.abc import Callable
 
 from mjtouch import _validate
 
@@ -22,3 +26,22 @@ def positive_float(name: str):
             raise argparse.ArgumentTypeError(str(e).removeprefix(f"{name} = ")) from None
 
     return parse
+
+
+def run_and_print(
+    args: argparse.Namespace,
+    run: Callable[[argparse.Namespace], dict],
+    print_human: Callable[[dict], None],
+) -> int:
+    """Run a subcommand; print its result as JSON (``--json``) or as text.
+    A ValueError is the user's input: printed as an error, exit status 2."""
+    try:
+        out = run(args)
+    except ValueError as e:
+        print(f"mjtouch: error: {e}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print_human(out)
+    return 0
