@@ -566,37 +566,50 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
       *wym = ay / m;
     }
   };
+  // Active-set iterations: conjugate gradients on the stick cells with the
+  // slip cells held (zero-mean steps keep the force; the shift increment is
+  // the stick cells' mean displacement), until q changes by less than the
+  // tolerance; then one projected step of every cell (stick cells whose
+  // traction passes mu p start slipping, slip cells turn toward their slip
+  // or stick where it reverses) with the force restored. Done when that
+  // step keeps the sets and changes q by less than the tolerance. Every CG
+  // iteration and every step costs one compliance application.
   residual();
-  double gg_old = 0, tau_ref = 0;
-  bool restart = true;
+  double tau_ref = 0;
   int it = 0;
   double change = 0;
-  for (; it < max_iterations;) {
-    double dwx, dwy;
-    shift_increment(&dwx, &dwy);
-    // Gradient on the stick cells (zero mean there), conjugate direction.
-    double gg = 0;
-    for (size_t c = 0; c < m; ++c)
-      if (!slip[c]) {
-        const double gx = rx[cb[c]] - dwx, gy = ry[cb[c]] - dwy;
-        gg += gx * gx + gy * gy;
-      }
-    const double beta = restart || gg_old <= 0 ? 0.0 : gg / gg_old;
-    double mx = 0, my = 0;
-    int count = 0;
-    for (size_t c = 0; c < m; ++c) {
-      if (slip[c]) {
-        tcx[c] = tcy[c] = 0.0;
-        continue;
-      }
-      tcx[c] = rx[cb[c]] - dwx + beta * tcx[c];
-      tcy[c] = ry[cb[c]] - dwy + beta * tcy[c];
-      mx += tcx[c];
-      my += tcy[c];
-      ++count;
-    }
-    double tau = 0;
-    if (count > 0) {
+  auto l1 = [&]() {
+    double norm = 0;
+    for (size_t c = 0; c < m; ++c) norm += std::fabs(qx[c]) + std::fabs(qy[c]);
+    return norm;
+  };
+  while (it < max_iterations) {
+    // CG on the stick cells (slip cells held).
+    double gg_old = 0;
+    bool first = true;
+    while (it < max_iterations) {
+      double dwx, dwy;
+      shift_increment(&dwx, &dwy);
+      double gg = 0;
+      int count = 0;
+      for (size_t c = 0; c < m; ++c)
+        if (!slip[c]) {
+          const double gx = rx[cb[c]] - dwx, gy = ry[cb[c]] - dwy;
+          gg += gx * gx + gy * gy;
+          ++count;
+        }
+      if (count == 0 || !(gg > 0)) break;
+      const double beta = first ? 0.0 : gg / gg_old;
+      first = false;
+      gg_old = gg;
+      double mx = 0, my = 0;
+      for (size_t c = 0; c < m; ++c)
+        if (!slip[c]) {
+          tcx[c] = rx[cb[c]] - dwx + beta * tcx[c];
+          tcy[c] = ry[cb[c]] - dwy + beta * tcy[c];
+          mx += tcx[c];
+          my += tcy[c];
+        }
       mx /= count;
       my /= count;
       std::fill(tbx.begin(), tbx.end(), 0.0);
@@ -609,46 +622,53 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
           tby[cb[c]] = tcy[c];
         }
       K.Apply(*spectra, tbx.data(), tby.data(), bx, by, wx.data(), wy.data(), &work, precision);
-      double tw = 0, tg = 0;
+      ++it;
+      double tw = 0, tg = 0, step = 0;
       for (size_t c = 0; c < m; ++c)
         if (!slip[c]) {
           tw += tcx[c] * wx[cb[c]] + tcy[c] * wy[cb[c]];
           tg += tcx[c] * (rx[cb[c]] - dwx) + tcy[c] * (ry[cb[c]] - dwy);
+          step += std::fabs(tcx[c]) + std::fabs(tcy[c]);
         }
-      if (tw > 0) tau = tg / tw;
+      if (!(tw > 0) || !(tg > 0)) break;
+      const double tau = tg / tw;
+      if (tau_ref == 0.0) tau_ref = tau;
+      for (size_t c = 0; c < m; ++c)
+        if (!slip[c]) {
+          qx[c] -= tau * tcx[c];
+          qy[c] -= tau * tcy[c];
+        }
+      for (size_t b = 0; b < B; ++b) {
+        rx[b] -= tau * wx[b];
+        ry[b] -= tau * wy[b];
+      }
+      const double norm = l1();
+      if (!(norm > 0) || tau * step < tolerance * norm) break;
     }
-    // Slip cells step along their slip by the first iteration's
-    // (steepest-descent) step at most: the stick cells' conjugate steps grow
-    // long as they converge, and would flip slip directions.
-    if (!(tau > 0) || !std::isfinite(tau)) tau = 0.0;
-    if (tau_ref == 0.0) tau_ref = tau > 0 ? tau : 1.0 / K.Kxx(0, 0);
-    const double tau_slip = std::min(tau > 0 ? tau : tau_ref, tau_ref);
-    // Stick cells along the conjugate direction, slip cells along their
-    // slip (q + tau s, s = dW - r), then onto the disks with the force.
+    if (it >= max_iterations) break;
+    // The projected step of every cell, slip cells along their slip by half
+    // the first steepest-descent step: a longer one overshoots the slip
+    // cells' directions, which then circle without converging (above ~0.75
+    // mu P on a 0.5 N fingertip).
+    double dwx, dwy;
+    shift_increment(&dwx, &dwy);
+    const double tau_slip = 0.5 * (tau_ref > 0 ? tau_ref : 1.0 / K.Kxx(0, 0));
     for (size_t c = 0; c < m; ++c) {
       oldx[c] = qx[c];
       oldy[c] = qy[c];
-      if (!slip[c]) {
-        yx[c] = qx[c] - tau * tcx[c];
-        yy[c] = qy[c] - tau * tcy[c];
-      } else {
-        yx[c] = qx[c] - tau_slip * (rx[cb[c]] - dwx);
-        yy[c] = qy[c] - tau_slip * (ry[cb[c]] - dwy);
-      }
+      yx[c] = qx[c] - tau_slip * (rx[cb[c]] - dwx);
+      yy[c] = qy[c] - tau_slip * (ry[cb[c]] - dwy);
     }
-    const std::vector<unsigned char> slip_before = slip;
     lx = ly = 0;
     projection_steps += ProjectWithForce(yx, yy, cells.g, 1.0, tx, ty, &lx, &ly, &qx, &qy, &slip);
-    restart = slip != slip_before;
-    gg_old = gg;
-    ++it;
-    double diff = 0, norm = 0;
-    for (size_t c = 0; c < m; ++c) {
-      diff += std::fabs(qx[c] - oldx[c]) + std::fabs(qy[c] - oldy[c]);
-      norm += std::fabs(qx[c]) + std::fabs(qy[c]);
-    }
+    double diff = 0;
+    for (size_t c = 0; c < m; ++c) diff += std::fabs(qx[c] - oldx[c]) + std::fabs(qy[c] - oldy[c]);
+    const double norm = l1();
     change = norm > 0 ? diff / norm : 0.0;
     residual();
+    ++it;
+    // (cells that change sets without changing q, at the disk's edge with
+    // no slip, do not hold it up)
     if (change < tolerance) break;
   }
   double dwx, dwy;
