@@ -302,3 +302,24 @@ def test_bad_values_name_the_valid_set(attrs, needle):
     with pytest.raises(ValueError, match="mjtouch.skin") as err:
         _model(skin)
     assert needle in str(err.value)
+
+
+def test_bench_example_times_and_checks_the_ramp():
+    # examples/bench_partial_slip.py on a short ramp: every configuration
+    # timed, partial slip met (0 < stuck share < 1 below the limit), and the
+    # Winkler solve exact (its tangential solve has no tolerance).
+    import pathlib
+    import runpy
+
+    ex = runpy.run_path(
+        str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_partial_slip.py")
+    )
+    start = ex["settled"]("slide_flat", "ramp")
+    times = ex["timing"]("slide_flat", "ramp", start, 5, 1)
+    assert set(times) == set(ex["CONFIGS"]) and all(v[0] > 0 for v in times.values())
+    acc = ex["accuracy"]("slide_flat", "ramp", start, 60)
+    for k in ("winkler+partial", "elastic+partial"):
+        assert 0.0 < acc[k]["q_over_mu_p_max"] < 1.0
+        assert 0.0 < acc[k]["stuck_share"] < 1.0
+    assert acc["winkler+partial"]["stress_rms_rel"] == 0.0
+    assert acc["winkler+partial"]["stuck_share_max_diff"] == 0.0
