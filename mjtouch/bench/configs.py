@@ -129,6 +129,23 @@ def default_knobs(cfg: BenchConfig) -> list[Knob]:
             {"timestep_s": 1e-4, "skin.oversample": 1},
             base=grid,
         ),
+        # shear="partial" (Coulomb stick and slip per cell) against full slip,
+        # and against its own tight tangential (and, elastic, normal) solve
+        Knob(
+            "partial_winkler",
+            ({"skin.shear": "true"}, {"skin.shear": "partial"}),
+            {"skin.shear": "partial", "skin.tolerance": 1e-10},
+            base={**grid, "skin.pressure": "winkler"},
+            labels=("full slip", "partial", "partial, tolerance 1e-10"),
+        ),
+        Knob(
+            "partial_elastic",
+            ({"skin.shear": "true"}, {"skin.shear": "partial"}),
+            {"skin.shear": "partial", "skin.tolerance": 1e-10},
+            base={**coarse, "skin.pressure": "elastic"},
+            steps=cfg.elastic_steps,
+            labels=("full slip", "partial", "partial, tolerance 1e-10"),
+        ),
         Knob(
             "presets",
             (PRESETS["rl"], PRESETS["interactive"]),
@@ -193,6 +210,7 @@ def default_effects(cfg: BenchConfig) -> list[tuple[str, str, dict]]:
         ("alone", "minimal: winkler, half-space, no ridges/shear, SA1, spikes", m),
         ("alone", "+ ridges", {**m, "ridges": True}),
         ("alone", "+ shear", {**m, "skin.shear": "true"}),
+        ("alone", "+ shear partial (stick and slip)", {**m, "skin.shear": "partial"}),
         ("alone", "+ layered skin", {**m, "skin.skin": "layered"}),
         ("alone", "pressure contacts", {**m, "skin.pressure": "contacts"}),
         ("alone", "pressure elastic", {**m, "skin.pressure": "elastic"}),
@@ -213,6 +231,7 @@ def default_effects(cfg: BenchConfig) -> list[tuple[str, str, dict]]:
     rows += [
         ("without", "- ridges", {"ridges": False}),
         ("without", "- shear", {"skin.shear": "false"}),
+        ("without", "shear partial (stick and slip)", {"skin.shear": "partial"}),
         ("without", "half-space skin", {"skin.skin": "halfspace"}),
         ("without", "pressure contacts", {"skin.pressure": "contacts"}),
         ("without", "pressure winkler", {"skin.pressure": "winkler"}),

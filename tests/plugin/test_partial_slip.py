@@ -133,6 +133,26 @@ def test_stuck_share_follows_cattaneo(ramp):
     assert shares[-1] < 0.4
 
 
+def test_stick_zone_shrinks_monotonically_under_a_rising_load(ramp):
+    # Cattaneo under a monotone tangential load: the stick zone only
+    # shrinks, so no loaded cell goes from slip back to stick between steps,
+    # up to the friction limit (rim cells at |q| ~ mu p flickered when the
+    # elastic solve stopped short of convergence above ~0.75 mu P).
+    name, lay, out = ramp
+    b = _blocks(lay, out)
+    force, slip, stick = b["force"], b["slip"], b["stick"]
+    ratio = np.hypot(force[:, 1], force[:, 2]) / (slip[:, 1] * force[:, 0] + 1e-300)
+    rising = (
+        np.flatnonzero((ratio[1:] > ratio[:-1]) & (ratio[:-1] > 0.05) & (ratio[1:] < 1 - 1e-3)) + 1
+    )
+    rising = rising[rising > PRESS_STEPS]
+    assert ratio[rising].max() > 0.97 and len(rising) > 500
+    back = [np.count_nonzero((stick[k - 1] == 0) & (stick[k] == 1)) for k in rising]
+    assert max(back) == 0, (name, int(np.argmax(back)), max(back))
+    high = rising[ratio[rising] > 0.9]
+    assert np.all(np.diff(slip[high, 0]) <= 0.0)  # the stuck share falls there too
+
+
 def test_tractions_sum_to_mujocos_force_and_obey_coulomb(ramp):
     _, lay, out = ramp
     b = _blocks(lay, out)
@@ -282,3 +302,24 @@ def test_bad_values_name_the_valid_set(attrs, needle):
     with pytest.raises(ValueError, match="mjtouch.skin") as err:
         _model(skin)
     assert needle in str(err.value)
+
+
+def test_bench_example_times_and_checks_the_ramp():
+    # examples/bench_partial_slip.py on a short ramp: every configuration
+    # timed, partial slip met (0 < stuck share < 1 below the limit), and the
+    # Winkler solve exact (its tangential solve has no tolerance).
+    import pathlib
+    import runpy
+
+    ex = runpy.run_path(
+        str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_partial_slip.py")
+    )
+    start = ex["settled"]("slide_flat", "ramp")
+    times = ex["timing"]("slide_flat", "ramp", start, 5, 1)
+    assert set(times) == set(ex["CONFIGS"]) and all(v[0] > 0 for v in times.values())
+    acc = ex["accuracy"]("slide_flat", "ramp", start, 60)
+    for k in ("winkler+partial", "elastic+partial"):
+        assert 0.0 < acc[k]["q_over_mu_p_max"] < 1.0
+        assert 0.0 < acc[k]["stuck_share"] < 1.0
+    assert acc["winkler+partial"]["stress_rms_rel"] == 0.0
+    assert acc["winkler+partial"]["stuck_share_max_diff"] == 0.0

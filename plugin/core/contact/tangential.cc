@@ -49,16 +49,58 @@ struct Cells {
   double g_sum = 0;
 };
 
-Cells LoadedCells(const std::vector<double>& pressure_pa, double mu) {
+// The box to scan: the given pressure box, else the whole grid.
+CellBox ScanBox(const TaxelGrid& grid, const CellBox* box) {
+  return box ? *box : CellBox::All(grid);
+}
+
+Cells LoadedCells(const TaxelGrid& grid, const std::vector<double>& pressure_pa, double mu,
+                  const CellBox& box) {
   Cells c;
-  for (size_t k = 0; k < pressure_pa.size(); ++k)
-    if (pressure_pa[k] > 0.0) {
-      c.index.push_back(static_cast<int>(k));
-      c.g.push_back(mu * pressure_pa[k]);
-      c.pressure_sum += pressure_pa[k];
-      c.g_sum += mu * pressure_pa[k];
+  for (int j = box.j0; j < box.j0 + box.ny; ++j)
+    for (int i = box.i0; i < box.i0 + box.nx; ++i) {
+      const size_t k = static_cast<size_t>(j) * grid.n + i;
+      if (pressure_pa[k] > 0.0) {
+        c.index.push_back(static_cast<int>(k));
+        c.g.push_back(mu * pressure_pa[k]);
+        c.pressure_sum += pressure_pa[k];
+        c.g_sum += mu * pressure_pa[k];
+      }
     }
   return c;
+}
+
+// The state's tractions zeroed (sized to the grid), over their support
+// when known.
+void ClearTractions(const TaxelGrid& grid, TangentialState* state) {
+  const size_t N = grid.Size();
+  if (state->shear_x_pa.size() != N || state->shear_y_pa.size() != N || !state->support_known) {
+    state->shear_x_pa.assign(N, 0.0);
+    state->shear_y_pa.assign(N, 0.0);
+  } else {
+    const CellBox& b = state->support;
+    for (int j = b.j0; j < b.j0 + b.ny; ++j) {
+      const size_t k = static_cast<size_t>(j) * grid.n + b.i0;
+      std::fill_n(state->shear_x_pa.begin() + k, b.nx, 0.0);
+      std::fill_n(state->shear_y_pa.begin() + k, b.nx, 0.0);
+    }
+  }
+  state->support = CellBox{};
+  state->support_known = true;
+}
+
+// The new tractions (qx, qy on the loaded cells) into the cleared state.
+void StoreTractions(const TaxelGrid& grid, const Cells& cells, const std::vector<double>& qx,
+                    const std::vector<double>& qy, TangentialState* state) {
+  ClearTractions(grid, state);
+  CellBounds bounds;
+  for (size_t c = 0; c < cells.index.size(); ++c) {
+    const int k = cells.index[c];
+    state->shear_x_pa[k] = qx[c];
+    state->shear_y_pa[k] = qy[c];
+    bounds.Add(k % grid.n, k / grid.n);
+  }
+  state->support = bounds.Box();
 }
 
 // q_c = Proj_{|q| <= g_c}(y_c + k lam): lam (2-D) such that sum_c q_c =
@@ -193,16 +235,16 @@ int ProjectWithForce(const std::vector<double>& yx, const std::vector<double>& y
 void FullSlip(const TaxelGrid& grid, const std::vector<double>& pressure_pa, const Cells& cells,
               double fx_n, double fy_n, TangentialState* state, TangentialResult* result) {
   const size_t N = grid.Size();
-  state->shear_x_pa.assign(N, 0.0);
-  state->shear_y_pa.assign(N, 0.0);
+  std::vector<double> qx(cells.index.size()), qy(cells.index.size());
   if (cells.pressure_sum > 0.0) {
     const double force_per_pa = cells.pressure_sum * grid.Area();
     const double rx = fx_n / force_per_pa, ry = fy_n / force_per_pa;
-    for (int k : cells.index) {
-      state->shear_x_pa[k] = rx * pressure_pa[k];
-      state->shear_y_pa[k] = ry * pressure_pa[k];
+    for (size_t c = 0; c < cells.index.size(); ++c) {
+      qx[c] = rx * pressure_pa[cells.index[c]];
+      qy[c] = ry * pressure_pa[cells.index[c]];
     }
   }
+  StoreTractions(grid, cells, qx, qy, state);
   result->stick.assign(N, 0);
   result->loaded_cells = static_cast<int>(cells.index.size());
   result->stick_cells = 0;
@@ -334,8 +376,8 @@ double WinklerTangentialStiffness(double normal_stiffness_pa_per_m, double poiss
 }
 
 std::string CheckTangentialInputs(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
-                                  double mu, double fx_n, double fy_n,
-                                  const TangentialState& state) {
+                                  double mu, double fx_n, double fy_n, const TangentialState& state,
+                                  const CellBox* pressure_box) {
   const size_t N = grid.Size();
   if (grid.n <= 0 || !(grid.pitch_m > 0))
     return "grid: n = " + std::to_string(grid.n) + ", pitch_m = " + Num(grid.pitch_m) +
@@ -343,8 +385,16 @@ std::string CheckTangentialInputs(const TaxelGrid& grid, const std::vector<doubl
   if (pressure_pa.size() != N)
     return "pressure_pa has " + std::to_string(pressure_pa.size()) + " cells, the grid " +
            std::to_string(N);
-  for (double p : pressure_pa)
-    if (!std::isfinite(p) || p < 0) return "pressure_pa must be finite and >= 0, got " + Num(p);
+  const CellBox box = ScanBox(grid, pressure_box);
+  if (box.i0 < 0 || box.j0 < 0 || box.i0 + box.nx > grid.n || box.j0 + box.ny > grid.n)
+    return "pressure box [" + std::to_string(box.i0) + ", " + std::to_string(box.i0 + box.nx) +
+           ") x [" + std::to_string(box.j0) + ", " + std::to_string(box.j0 + box.ny) +
+           ") must lie in the grid [0, " + std::to_string(grid.n) + ")^2";
+  for (int j = box.j0; j < box.j0 + box.ny; ++j)
+    for (int i = box.i0; i < box.i0 + box.nx; ++i) {
+      const double p = pressure_pa[static_cast<size_t>(j) * grid.n + i];
+      if (!std::isfinite(p) || p < 0) return "pressure_pa must be finite and >= 0, got " + Num(p);
+    }
   if (!std::isfinite(mu) || mu < 0) return "friction mu = " + Num(mu) + " must be finite, >= 0";
   if (!std::isfinite(fx_n) || !std::isfinite(fy_n))
     return "tangential force (" + Num(fx_n) + ", " + Num(fy_n) + ") N must be finite";
@@ -359,8 +409,9 @@ std::string CheckTangentialInputs(const TaxelGrid& grid, const std::vector<doubl
 bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
                             double mu, double fx_n, double fy_n,
                             double tangential_stiffness_pa_per_m, TangentialState* state,
-                            TangentialResult* result, std::string* error) {
-  std::string e = CheckTangentialInputs(grid, pressure_pa, mu, fx_n, fy_n, *state);
+                            TangentialResult* result, std::string* error,
+                            const CellBox* pressure_box) {
+  std::string e = CheckTangentialInputs(grid, pressure_pa, mu, fx_n, fy_n, *state, pressure_box);
   if (e.empty() &&
       !(tangential_stiffness_pa_per_m > 0 && std::isfinite(tangential_stiffness_pa_per_m)))
     e = "tangential stiffness " + Num(tangential_stiffness_pa_per_m) + " Pa/m must be > 0";
@@ -369,7 +420,7 @@ bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pr
     return false;
   }
   const size_t N = grid.Size();
-  const Cells cells = LoadedCells(pressure_pa, mu);
+  const Cells cells = LoadedCells(grid, pressure_pa, mu, ScanBox(grid, pressure_box));
   const double tx = fx_n / grid.Area(), ty = fy_n / grid.Area();
   result->iterations = 0;
   result->projection_steps = 0;
@@ -390,12 +441,7 @@ bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pr
   double dwx = 0, dwy = 0;
   result->iterations = result->projection_steps = ProjectWithForce(
       yx, yy, cells.g, tangential_stiffness_pa_per_m, tx, ty, &dwx, &dwy, &qx, &qy, &slip);
-  state->shear_x_pa.assign(N, 0.0);
-  state->shear_y_pa.assign(N, 0.0);
-  for (size_t c = 0; c < m; ++c) {
-    state->shear_x_pa[cells.index[c]] = qx[c];
-    state->shear_y_pa[cells.index[c]] = qy[c];
-  }
+  StoreTractions(grid, cells, qx, qy, state);
   state->shift_x_m += dwx;
   state->shift_y_m += dwy;
   Finish(cells, slip, N, result);
@@ -405,9 +451,9 @@ bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pr
 bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
                             double mu, double fx_n, double fy_n, const TangentialCompliance& K,
                             double tolerance, int max_iterations, TangentialState* state,
-                            TangentialResult* result, std::string* error,
-                            ApplyPrecision precision) {
-  std::string e = CheckTangentialInputs(grid, pressure_pa, mu, fx_n, fy_n, *state);
+                            TangentialResult* result, std::string* error, ApplyPrecision precision,
+                            const CellBox* pressure_box) {
+  std::string e = CheckTangentialInputs(grid, pressure_pa, mu, fx_n, fy_n, *state, pressure_box);
   if (e.empty() && (K.n() != grid.n || K.pitch_m() != grid.pitch_m))
     e = "compliance built for n = " + std::to_string(K.n()) + ", pitch " + Num(K.pitch_m()) +
         " m, not the grid's";
@@ -421,7 +467,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   }
   const size_t N = grid.Size();
   const int n = grid.n;
-  const Cells cells = LoadedCells(pressure_pa, mu);
+  const Cells cells = LoadedCells(grid, pressure_pa, mu, ScanBox(grid, pressure_box));
   const double tx = fx_n / grid.Area(), ty = fy_n / grid.Area();
   result->iterations = 0;
   result->projection_steps = 0;
@@ -436,7 +482,13 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   // removal moves the surface too).
   CellBounds bounds;
   for (int k : cells.index) bounds.Add(k % n, k / n);
-  if (have_prev)
+  if (have_prev && state->support_known) {
+    if (!state->support.empty()) {
+      const CellBox& b = state->support;
+      bounds.AddRow(b.i0, b.i0 + b.nx - 1, b.j0);
+      bounds.AddRow(b.i0, b.i0 + b.nx - 1, b.j0 + b.ny - 1);
+    }
+  } else if (have_prev) {
     for (int j = 0; j < n; ++j) {
       const double* sx = state->shear_x_pa.data() + static_cast<size_t>(j) * n;
       const double* sy = state->shear_y_pa.data() + static_cast<size_t>(j) * n;
@@ -446,6 +498,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
       while (sx[hi] == 0.0 && sy[hi] == 0.0) --hi;
       bounds.AddRow(lo, hi, j);
     }
+  }
   const CellBox box = bounds.Box();
   const int bx = box.nx, by = box.ny;
   const size_t B = static_cast<size_t>(bx) * by;
@@ -513,37 +566,50 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
       *wym = ay / m;
     }
   };
+  // Active-set iterations: conjugate gradients on the stick cells with the
+  // slip cells held (zero-mean steps keep the force; the shift increment is
+  // the stick cells' mean displacement), until q changes by less than the
+  // tolerance; then one projected step of every cell (stick cells whose
+  // traction passes mu p start slipping, slip cells turn toward their slip
+  // or stick where it reverses) with the force restored. Done when that
+  // step keeps the sets and changes q by less than the tolerance. Every CG
+  // iteration and every step costs one compliance application.
   residual();
-  double gg_old = 0, tau_ref = 0;
-  bool restart = true;
+  double tau_ref = 0;
   int it = 0;
   double change = 0;
-  for (; it < max_iterations;) {
-    double dwx, dwy;
-    shift_increment(&dwx, &dwy);
-    // Gradient on the stick cells (zero mean there), conjugate direction.
-    double gg = 0;
-    for (size_t c = 0; c < m; ++c)
-      if (!slip[c]) {
-        const double gx = rx[cb[c]] - dwx, gy = ry[cb[c]] - dwy;
-        gg += gx * gx + gy * gy;
-      }
-    const double beta = restart || gg_old <= 0 ? 0.0 : gg / gg_old;
-    double mx = 0, my = 0;
-    int count = 0;
-    for (size_t c = 0; c < m; ++c) {
-      if (slip[c]) {
-        tcx[c] = tcy[c] = 0.0;
-        continue;
-      }
-      tcx[c] = rx[cb[c]] - dwx + beta * tcx[c];
-      tcy[c] = ry[cb[c]] - dwy + beta * tcy[c];
-      mx += tcx[c];
-      my += tcy[c];
-      ++count;
-    }
-    double tau = 0;
-    if (count > 0) {
+  auto l1 = [&]() {
+    double norm = 0;
+    for (size_t c = 0; c < m; ++c) norm += std::fabs(qx[c]) + std::fabs(qy[c]);
+    return norm;
+  };
+  while (it < max_iterations) {
+    // CG on the stick cells (slip cells held).
+    double gg_old = 0;
+    bool first = true;
+    while (it < max_iterations) {
+      double dwx, dwy;
+      shift_increment(&dwx, &dwy);
+      double gg = 0;
+      int count = 0;
+      for (size_t c = 0; c < m; ++c)
+        if (!slip[c]) {
+          const double gx = rx[cb[c]] - dwx, gy = ry[cb[c]] - dwy;
+          gg += gx * gx + gy * gy;
+          ++count;
+        }
+      if (count == 0 || !(gg > 0)) break;
+      const double beta = first ? 0.0 : gg / gg_old;
+      first = false;
+      gg_old = gg;
+      double mx = 0, my = 0;
+      for (size_t c = 0; c < m; ++c)
+        if (!slip[c]) {
+          tcx[c] = rx[cb[c]] - dwx + beta * tcx[c];
+          tcy[c] = ry[cb[c]] - dwy + beta * tcy[c];
+          mx += tcx[c];
+          my += tcy[c];
+        }
       mx /= count;
       my /= count;
       std::fill(tbx.begin(), tbx.end(), 0.0);
@@ -556,65 +622,63 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
           tby[cb[c]] = tcy[c];
         }
       K.Apply(*spectra, tbx.data(), tby.data(), bx, by, wx.data(), wy.data(), &work, precision);
-      double tw = 0, tg = 0;
+      ++it;
+      double tw = 0, tg = 0, step = 0;
       for (size_t c = 0; c < m; ++c)
         if (!slip[c]) {
           tw += tcx[c] * wx[cb[c]] + tcy[c] * wy[cb[c]];
           tg += tcx[c] * (rx[cb[c]] - dwx) + tcy[c] * (ry[cb[c]] - dwy);
+          step += std::fabs(tcx[c]) + std::fabs(tcy[c]);
         }
-      if (tw > 0) tau = tg / tw;
+      if (!(tw > 0) || !(tg > 0)) break;
+      const double tau = tg / tw;
+      if (tau_ref == 0.0) tau_ref = tau;
+      for (size_t c = 0; c < m; ++c)
+        if (!slip[c]) {
+          qx[c] -= tau * tcx[c];
+          qy[c] -= tau * tcy[c];
+        }
+      for (size_t b = 0; b < B; ++b) {
+        rx[b] -= tau * wx[b];
+        ry[b] -= tau * wy[b];
+      }
+      const double norm = l1();
+      if (!(norm > 0) || tau * step < tolerance * norm) break;
     }
-    // Slip cells step along their slip by the first iteration's
-    // (steepest-descent) step at most: the stick cells' conjugate steps grow
-    // long as they converge, and would flip slip directions.
-    if (!(tau > 0) || !std::isfinite(tau)) tau = 0.0;
-    if (tau_ref == 0.0) tau_ref = tau > 0 ? tau : 1.0 / K.Kxx(0, 0);
-    const double tau_slip = std::min(tau > 0 ? tau : tau_ref, tau_ref);
-    // Stick cells along the conjugate direction, slip cells along their
-    // slip (q + tau s, s = dW - r), then onto the disks with the force.
+    if (it >= max_iterations) break;
+    // The projected step of every cell, slip cells along their slip by half
+    // the first steepest-descent step: a longer one overshoots the slip
+    // cells' directions, which then circle without converging (above ~0.75
+    // mu P on a 0.5 N fingertip).
+    double dwx, dwy;
+    shift_increment(&dwx, &dwy);
+    const double tau_slip = 0.5 * (tau_ref > 0 ? tau_ref : 1.0 / K.Kxx(0, 0));
     for (size_t c = 0; c < m; ++c) {
       oldx[c] = qx[c];
       oldy[c] = qy[c];
-      if (!slip[c]) {
-        yx[c] = qx[c] - tau * tcx[c];
-        yy[c] = qy[c] - tau * tcy[c];
-      } else {
-        yx[c] = qx[c] - tau_slip * (rx[cb[c]] - dwx);
-        yy[c] = qy[c] - tau_slip * (ry[cb[c]] - dwy);
-      }
+      yx[c] = qx[c] - tau_slip * (rx[cb[c]] - dwx);
+      yy[c] = qy[c] - tau_slip * (ry[cb[c]] - dwy);
     }
-    const std::vector<unsigned char> slip_before = slip;
     lx = ly = 0;
     projection_steps += ProjectWithForce(yx, yy, cells.g, 1.0, tx, ty, &lx, &ly, &qx, &qy, &slip);
-    restart = slip != slip_before;
-    gg_old = gg;
-    ++it;
-    double diff = 0, norm = 0;
-    for (size_t c = 0; c < m; ++c) {
-      diff += std::fabs(qx[c] - oldx[c]) + std::fabs(qy[c] - oldy[c]);
-      norm += std::fabs(qx[c]) + std::fabs(qy[c]);
-    }
+    double diff = 0;
+    for (size_t c = 0; c < m; ++c) diff += std::fabs(qx[c] - oldx[c]) + std::fabs(qy[c] - oldy[c]);
+    const double norm = l1();
     change = norm > 0 ? diff / norm : 0.0;
     residual();
+    ++it;
+    // (cells that change sets without changing q, at the disk's edge with
+    // no slip, do not hold it up)
     if (change < tolerance) break;
   }
   double dwx, dwy;
   shift_increment(&dwx, &dwy);
-  // The box holds the old and the new tractions: clearing it suffices.
+  // The box holds the old and the new tractions.
   if (have_prev) {
-    for (int j = 0; j < by; ++j) {
-      const size_t k = static_cast<size_t>(box.j0 + j) * n + box.i0;
-      std::fill_n(state->shear_x_pa.begin() + k, bx, 0.0);
-      std::fill_n(state->shear_y_pa.begin() + k, bx, 0.0);
-    }
-  } else {
-    state->shear_x_pa.assign(N, 0.0);
-    state->shear_y_pa.assign(N, 0.0);
+    state->support = box;
+    state->support_known = true;
   }
-  for (size_t c = 0; c < m; ++c) {
-    state->shear_x_pa[cells.index[c]] = qx[c];
-    state->shear_y_pa[cells.index[c]] = qy[c];
-  }
+  StoreTractions(grid, cells, qx, qy, state);
   state->shift_x_m += dwx;
   state->shift_y_m += dwy;
   result->iterations = it;

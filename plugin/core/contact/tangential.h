@@ -41,10 +41,14 @@ namespace mjtouch {
 // The memory carried from step to step (plugin_state): the tangential
 // tractions of the last step (Pa, n * n, empty: none yet) and the rigid
 // tangential shift of the counter-body relative to the skin's base (m).
-// Only shift increments enter the solution.
+// Only shift increments enter the solution. support: when support_known,
+// the tractions are zero outside it, so that a step reads and clears that
+// box only (the solvers keep it; unknown: the whole grid).
 struct TangentialState {
   std::vector<double> shear_x_pa, shear_y_pa;
   double shift_x_m = 0, shift_y_m = 0;
+  CellBox support;
+  bool support_known = false;
 };
 
 // One step's outputs besides the new state.
@@ -114,18 +118,21 @@ class TangentialCompliance {
 double WinklerTangentialStiffness(double normal_stiffness_pa_per_m, double poisson);
 
 // Checks shared by both solvers; an empty string when valid, else what is
-// wrong and its valid range.
+// wrong and its valid range. pressure_box: the pressure is zero outside it
+// (null: the whole grid is checked).
 std::string CheckTangentialInputs(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
-                                  double mu, double fx_n, double fy_n,
-                                  const TangentialState& state);
+                                  double mu, double fx_n, double fy_n, const TangentialState& state,
+                                  const CellBox* pressure_box = nullptr);
 
 // Winkler / FASTSIM partial slip: updates *state (tractions, shift) in
 // place and fills *result. The tractions sum to (fx_n, fy_n) to round-off.
-// Returns false (with *error) on invalid input.
+// pressure_box: the pressure is zero outside it (null: anywhere). Returns
+// false (with *error) on invalid input.
 bool SolveTangentialWinkler(const TaxelGrid& grid, const std::vector<double>& pressure_pa,
                             double mu, double fx_n, double fy_n,
                             double tangential_stiffness_pa_per_m, TangentialState* state,
-                            TangentialResult* result, std::string* error);
+                            TangentialResult* result, std::string* error,
+                            const CellBox* pressure_box = nullptr);
 
 // Elastic half-space partial slip on K (same grid). tolerance: relative L1
 // change of q per iteration at which to stop; max_iterations caps the CG.
@@ -133,7 +140,8 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
                             double mu, double fx_n, double fy_n, const TangentialCompliance& K,
                             double tolerance, int max_iterations, TangentialState* state,
                             TangentialResult* result, std::string* error,
-                            ApplyPrecision precision = ApplyPrecision::kDouble);
+                            ApplyPrecision precision = ApplyPrecision::kDouble,
+                            const CellBox* pressure_box = nullptr);
 
 }  // namespace mjtouch
 

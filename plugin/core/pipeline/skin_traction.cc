@@ -129,74 +129,175 @@ std::shared_ptr<const TangentialCompliance> SkinTangentialCompliance(const SkinC
   return slot;
 }
 
-// shear="partial": the tangential tractions of the solved pressure by
-// Coulomb partial slip (tangential.h), from the state's buffer at the head
-// into the buffer this step writes (StateLayout). On invalid input (not
-// expected from MuJoCo's contacts) uniform full slip stands.
+// A tangential buffer's box (kTgBox*): its tractions are zero outside it.
+CellBox TangentialBufferBox(const double* buf) {
+  return CellBox{static_cast<int>(buf[kTgBoxI0]), static_cast<int>(buf[kTgBoxJ0]),
+                 static_cast<int>(buf[kTgBoxNx]), static_cast<int>(buf[kTgBoxNy])};
+}
+
+// The tractions x, y (n*n each, after the slots) of buffer `buf` over box b:
+// op(buffer x row, buffer y row, row offset in the grid) per row.
+template <typename Op>
+void ForBufferRows(const TaxelGrid& grid, double* buf, const CellBox& b, Op op) {
+  const size_t N = grid.Size();
+  double* qx = buf + kTangentialSlots;
+  for (int j = b.j0; j < b.j0 + b.ny; ++j) {
+    const size_t k = static_cast<size_t>(j) * grid.n + b.i0;
+    op(qx + k, qx + N + k, k);
+  }
+}
+
+// The head buffer into the workspace's TangentialState (zero outside its
+// support, which it tracks): cleared over its last support, then the
+// buffer's box copied in. Without a valid buffer, zero tractions and shift
+// (no memory).
+void LoadTangentialState(const TaxelGrid& grid, const double* from, TangentialState* ts) {
+  const size_t N = grid.Size();
+  if (ts->shear_x_pa.size() != N || ts->shear_y_pa.size() != N || !ts->support_known) {
+    ts->shear_x_pa.assign(N, 0.0);
+    ts->shear_y_pa.assign(N, 0.0);
+  } else {
+    const CellBox& b = ts->support;
+    for (int j = b.j0; j < b.j0 + b.ny; ++j) {
+      const size_t k = static_cast<size_t>(j) * grid.n + b.i0;
+      std::fill_n(ts->shear_x_pa.begin() + k, b.nx, 0.0);
+      std::fill_n(ts->shear_y_pa.begin() + k, b.nx, 0.0);
+    }
+  }
+  ts->support_known = true;
+  ts->support = CellBox{};
+  ts->shift_x_m = ts->shift_y_m = 0.0;
+  if (!(from[kTgValid] > 0.0)) return;
+  ts->support = TangentialBufferBox(from);
+  ts->shift_x_m = from[kTgShiftX];
+  ts->shift_y_m = from[kTgShiftY];
+  ForBufferRows(grid, const_cast<double*>(from), ts->support, [&](double* x, double* y, size_t k) {
+    std::copy_n(x, ts->support.nx, ts->shear_x_pa.begin() + k);
+    std::copy_n(y, ts->support.nx, ts->shear_y_pa.begin() + k);
+  });
+}
+
+// The workspace's TangentialState into buffer `to`: its old box cleared,
+// the state's support copied, the slots set.
+void StoreTangentialState(const TaxelGrid& grid, const TangentialState& ts, double* to) {
+  const CellBox old = TangentialBufferBox(to);
+  ForBufferRows(grid, to, old, [&](double* x, double* y, size_t) {
+    std::fill_n(x, old.nx, 0.0);
+    std::fill_n(y, old.nx, 0.0);
+  });
+  const CellBox& b = ts.support;
+  ForBufferRows(grid, to, b, [&](double* x, double* y, size_t k) {
+    std::copy_n(ts.shear_x_pa.begin() + k, b.nx, x);
+    std::copy_n(ts.shear_y_pa.begin() + k, b.nx, y);
+  });
+  to[kTgValid] = 1.0;
+  to[kTgShiftX] = ts.shift_x_m;
+  to[kTgShiftY] = ts.shift_y_m;
+  to[kTgBoxI0] = b.i0;
+  to[kTgBoxJ0] = b.j0;
+  to[kTgBoxNx] = b.nx;
+  to[kTgBoxNy] = b.ny;
+}
+
+// shear="partial": whether MuJoCo's force is at the friction limit. Its
+// sliding friction reaches mu P to its solver's tolerance (~1e-8): within
+// kFullSlipMargin of it the contact slips as a whole (the stick zone left,
+// c/a = margin^(1/3) = 1% of the contact, is below any grid) with q = p F / P.
+bool PartialFullSlip(const StepInput& in) {
+  const double force_t = std::hypot(in.shear_x_n, in.shear_y_n);
+  return force_t >= (1.0 - kFullSlipMargin) * in.friction_mu * in.normal_force_n;
+}
+
+// shear="partial", on a field holding the uniform-slip shear (shear=true's,
+// runs = the loaded cells): in full slip that field stands (stage 3 folds
+// it) and becomes the memory; below it, the tangential tractions by Coulomb
+// partial slip (tangential.h) replace it on the runs. The memory goes from
+// the state's buffer at the head to the buffer this step writes
+// (StateLayout); every pass is over the contact's runs or box. On invalid
+// input (not expected from MuJoCo's contacts) the uniform field stands.
 void PartialSlipTraction(const TractionStep& s) {
   const SkinConfig& cfg = s.cfg;
   const TaxelGrid& grid = cfg.grid;
   const StateLayout& lay = s.model.state_layout();
   Workspace* ws = s.ws;
   TractionField* tf = &ws->traction;
-  const size_t N = grid.Size();
   const double* from = lay.tangential_at(s.state, static_cast<int>(s.state[lay.tangential_head]));
   double* to = lay.tangential_at(s.state, static_cast<int>(s.state[lay.tangential_write]));
   TangentialState& ts = ws->tangential;
-  if (from[kTgValid] > 0.0) {
-    const double* q = from + kTangentialSlots;
-    ts.shear_x_pa.assign(q, q + N);
-    ts.shear_y_pa.assign(q + N, q + 2 * N);
-    ts.shift_x_m = from[kTgShiftX];
-    ts.shift_y_m = from[kTgShiftY];
-  } else {
-    ts = TangentialState();
-  }
-  // MuJoCo's sliding friction reaches mu P to its solver's tolerance (~1e-8):
-  // within kFullSlipMargin of it the contact slips as a whole (the stick
-  // zone left, c/a = margin^(1/3) = 1% of the contact, is below any grid)
-  // with mu = |F| / P, so that q = p F / P.
-  double mu = s.in.friction_mu;
-  const double force_t = std::hypot(s.in.shear_x_n, s.in.shear_y_n);
-  if (force_t >= (1.0 - kFullSlipMargin) * mu * s.in.normal_force_n)
-    mu = std::min(mu, force_t / s.in.normal_force_n);
   TangentialResult& res = ws->tangential_result;
+  const ActiveRuns& runs = tf->runs;
+  if (PartialFullSlip(s.in)) {
+    res.stick.assign(grid.Size(), 0);
+    res.loaded_cells = tf->active_cells;
+    res.stick_cells = 0;
+    res.stuck_share = 0.0;
+    res.full_slip = tf->active_cells > 0;
+    res.iterations = res.projection_steps = 0;
+    res.change = 0.0;
+    const bool valid = from[kTgValid] > 0.0;
+    ts.shift_x_m = valid ? from[kTgShiftX] : 0.0;
+    ts.shift_y_m = valid ? from[kTgShiftY] : 0.0;
+    const CellBox old = TangentialBufferBox(to);
+    ForBufferRows(grid, to, old, [&](double* x, double* y, size_t) {
+      std::fill_n(x, old.nx, 0.0);
+      std::fill_n(y, old.nx, 0.0);
+    });
+    const double rx = tf->slip_x, ry = tf->slip_y;
+    const size_t N = grid.Size();
+    double* qx = to + kTangentialSlots;
+    CellBounds bounds;
+    for (size_t r = 0; r < runs.row.size(); ++r) {
+      const size_t row = static_cast<size_t>(runs.row[r]) * grid.n;
+      bounds.AddRow(runs.begin[r], runs.end[r] - 1, runs.row[r]);
+      for (size_t k = row + runs.begin[r]; k < row + runs.end[r]; ++k) {
+        qx[k] = rx * tf->pressure_pa[k];  // UniformSlipShear's
+        qx[N + k] = ry * tf->pressure_pa[k];
+      }
+    }
+    const CellBox b = bounds.Box();
+    to[kTgValid] = 1.0;
+    to[kTgShiftX] = ts.shift_x_m;
+    to[kTgShiftY] = ts.shift_y_m;
+    to[kTgBoxI0] = b.i0;
+    to[kTgBoxJ0] = b.j0;
+    to[kTgBoxNx] = b.nx;
+    to[kTgBoxNy] = b.ny;
+    return;
+  }
+  LoadTangentialState(grid, from, &ts);
   std::string error;
   bool ok;
+  const double mu = s.in.friction_mu;
   if (cfg.pressure_model == PressureModel::kWinkler) {
     const double nu = cfg.layered ? cfg.layers[0].poisson : cfg.poisson;
     ok = SolveTangentialWinkler(grid, tf->pressure_pa, mu, s.in.shear_x_n, s.in.shear_y_n,
                                 WinklerTangentialStiffness(cfg.stiffness_pa_per_m, nu), &ts, &res,
-                                &error);
+                                &error, &tf->box);
   } else {
     if (!ws->tangential_compliance) ws->tangential_compliance = SkinTangentialCompliance(cfg);
     ok = SolveTangentialElastic(grid, tf->pressure_pa, mu, s.in.shear_x_n, s.in.shear_y_n,
                                 *ws->tangential_compliance, cfg.tolerance, kElasticMaxIterations,
-                                &ts, &res, &error, cfg.elastic_precision);
+                                &ts, &res, &error, cfg.elastic_precision, &tf->box);
   }
   if (!ok) {
     res = TangentialResult();
-    res.stick.assign(N, 0);
+    res.stick.assign(grid.Size(), 0);
     to[kTgValid] = 0.0;
-    UniformSlipShear(grid, s.in.normal_force_n, s.in.shear_x_n, s.in.shear_y_n, tf);
-    tf->uniform_slip = false;
-    FinishTraction(grid, true, tf);
     return;
   }
-  // The tractions lie on the loaded cells, inside the pressure's box.
-  const CellBox& b = tf->box;
-  for (int j = b.j0; j < b.j0 + b.ny; ++j) {
-    const size_t k = static_cast<size_t>(j) * grid.n + b.i0;
-    std::copy_n(ts.shear_x_pa.begin() + k, b.nx, tf->shear_x_pa.begin() + k);
-    std::copy_n(ts.shear_y_pa.begin() + k, b.nx, tf->shear_y_pa.begin() + k);
+  // The tractions lie on the loaded cells: the runs.
+  for (size_t r = 0; r < runs.row.size(); ++r) {
+    const size_t row = static_cast<size_t>(runs.row[r]) * grid.n;
+    for (size_t k = row + runs.begin[r]; k < row + runs.end[r]; ++k) {
+      tf->shear_x_pa[k] = ts.shear_x_pa[k];
+      tf->shear_y_pa[k] = ts.shear_y_pa[k];
+      tf->shear_x[k] = static_cast<float>(ts.shear_x_pa[k]);
+      tf->shear_y[k] = static_cast<float>(ts.shear_y_pa[k]);
+    }
   }
-  tf->uniform_slip = false;  // stage 3 takes the unfolded paths
-  FinishTraction(grid, true, tf);
-  to[kTgValid] = 1.0;
-  to[kTgShiftX] = ts.shift_x_m;
-  to[kTgShiftY] = ts.shift_y_m;
-  std::copy(ts.shear_x_pa.begin(), ts.shear_x_pa.end(), to + kTangentialSlots);
-  std::copy(ts.shear_y_pa.begin(), ts.shear_y_pa.end(), to + kTangentialSlots + N);
+  tf->lazy_shear = false;
+  tf->uniform_slip = false;  // stage 3 sums the shear fields
+  StoreTangentialState(grid, ts, to);
 }
 
 // The shear (full-slip Coulomb, uniform ratio; or partial slip) of a solved
@@ -206,6 +307,12 @@ void FinishSolvedTraction(const TractionStep& s) {
   TractionField* tf = &s.ws->traction;
   const StepInput& in = s.in;
   if (s.cfg.shear && s.cfg.shear_partial) {
+    if (s.fast) {
+      FinishUniformSlipTraction(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, tf);
+    } else {
+      UniformSlipShear(grid, in.normal_force_n, in.shear_x_n, in.shear_y_n, tf);
+      FinishTraction(grid, true, tf);
+    }
     PartialSlipTraction(s);
   } else if (!s.cfg.shear) {
     FinishTraction(grid, false, tf);
@@ -254,6 +361,7 @@ bool WinklerTraction(const TractionStep& s) {
 // `winkler` with shear, fast path: solved first, then the field written over
 // the last one (WriteWinklerSlipTraction), which clears only what the new
 // contact does not cover; the arrays no later stage needs stay lazy.
+// shear="partial": then the partial-slip shear over the uniform one.
 bool WinklerSlipTraction(const TractionStep& s) {
   const TaxelGrid& grid = s.cfg.grid;
   const StepInput& in = s.in;
@@ -286,8 +394,11 @@ bool WinklerSlipTraction(const TractionStep& s) {
       },
       [] {});
   if (touching) {
-    touching = WriteWinklerSlipTraction(grid, box, solved_approach, in.normal_force_n, in.shear_x_n,
-                                        in.shear_y_n, s.needs.pressure_pa, &tf);
+    // (partial slip reads the pressure)
+    touching =
+        WriteWinklerSlipTraction(grid, box, solved_approach, in.normal_force_n, in.shear_x_n,
+                                 in.shear_y_n, s.needs.pressure_pa || s.cfg.shear_partial, &tf);
+    if (touching && s.cfg.shear_partial) PartialSlipTraction(s);
   } else {
     ClearTraction(grid, &tf);
   }
@@ -399,8 +510,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, const Traction
   switch (cfg.pressure_model) {
     case PressureModel::kContacts: touching = ContactsTraction(step); break;
     case PressureModel::kWinkler:
-      touching = step.fast && cfg.shear && !cfg.shear_partial ? WinklerSlipTraction(step)
-                                                              : WinklerTraction(step);
+      touching = step.fast && cfg.shear ? WinklerSlipTraction(step) : WinklerTraction(step);
       break;
     default: touching = ElasticTraction(step); break;
   }

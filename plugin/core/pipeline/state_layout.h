@@ -47,6 +47,10 @@ enum TangentialSlot {
   kTgValid = 0,  // 1 if the tractions hold a contact's
   kTgShiftX,     // counter-body shift, m (pad frame)
   kTgShiftY,
+  kTgBoxI0,  // the box outside which the tractions are zero (valid or not)
+  kTgBoxJ0,
+  kTgBoxNx,
+  kTgBoxNy,
   kTangentialSlots
 };
 

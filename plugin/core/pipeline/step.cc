@@ -54,6 +54,7 @@ StressPlan PlanStresses(const SkinModel& model, const KernelTables& kt, const Tr
   const SkinConfig& cfg = model.config();
   StressPlan plan;
   plan.options = StressOptions{tf.uniform_slip, tf.slip_x, tf.slip_y, true, cfg.threads};
+  plan.options.fold_general = cfg.shear_partial;  // partial slip: its shear folded too
   plan.method = ResolveStressMethod(kt, model.spectra(), model.tree(), cfg.stress_method,
                                     model.stress_sites(), tf.runs.Count(), cfg.shear, plan.options);
   plan.reads.shear = PathReadsShear(kt, plan.method, cfg.shear, plan.options);

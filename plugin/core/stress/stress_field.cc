@@ -106,13 +106,14 @@ std::shared_ptr<const KernelSpectra> BuildKernelSpectra(const KernelTables& kt,
 }
 
 StressCost EstimateStressCost(const KernelTables& kt, const std::vector<StressSite>& sites,
-                              int active_cells, bool shear, bool folded) {
+                              int active_cells, bool shear, bool folded, bool general) {
   StressCost c;
   const int loads = shear ? kNumLoads : 1;
   double macs = 0;
   for (const StressSite& s : sites) macs += CountWanted(s.want);
-  c.direct_s = folded ? EstimateFoldedSeconds(kt, sites, active_cells)
-                      : kDirectSecondsPerMac * macs * loads * active_cells;
+  c.direct_s = folded    ? EstimateFoldedSeconds(kt, sites, active_cells)
+               : general ? 3.0 * EstimateFoldedSeconds(kt, sites, active_cells)
+                         : kDirectSecondsPerMac * macs * loads * active_cells;
   const double N = NextFftSize(2 * kt.n - 1);
   const double points = N * N;
   int pairs = 0;
@@ -283,7 +284,8 @@ StressMethod ResolveStressMethod(const KernelTables& kt, const KernelSpectra* sp
   if (method == StressMethod::kAuto) {
     if (!spectra) return StressMethod::kDirect;
     const StressCost c =
-        EstimateStressCost(kt, sites, active_cells, shear, UsesFoldedPath(kt, shear, opt));
+        EstimateStressCost(kt, sites, active_cells, shear, UsesFoldedPath(kt, shear, opt),
+                           UsesGeneralFoldedPath(kt, shear, opt));
     return c.fft_s < c.direct_s ? StressMethod::kFft : StressMethod::kDirect;
   }
   if (method == StressMethod::kFft && !spectra) return StressMethod::kDirect;
@@ -313,6 +315,9 @@ StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectr
   if (folded)
     FoldedDirectStresses(kt, sites, runs, pressure, shear, opt.slip_x, opt.slip_y, opt.threads,
                          &scratch->fold, out);
+  else if (UsesGeneralFoldedPath(kt, shear, opt))
+    FoldedGeneralStresses(kt, sites, runs, pressure, shear_x, shear_y, opt.threads, &scratch->fold,
+                          out);
   else
     ReferenceDirectStresses(kt, sites, runs, pressure, shear ? shear_x : nullptr,
                             shear ? shear_y : nullptr, opt.threads, out);

@@ -58,12 +58,13 @@ std::shared_ptr<const KernelSpectra> BuildKernelSpectra(const KernelTables& kt,
 double KernelSpectraBytes(const KernelTables& kt, const std::vector<StressSite>& sites);
 
 // Estimated seconds per evaluation of each path (one core). folded: the
-// direct path is the folded one (stress_fold.h).
+// direct path is the folded one (stress_fold.h); general: three of them.
 struct StressCost {
   double direct_s = 0, fft_s = 0;
 };
 StressCost EstimateStressCost(const KernelTables& kt, const std::vector<StressSite>& sites,
-                              int active_cells, bool shear, bool folded = false);
+                              int active_cells, bool shear, bool folded = false,
+                              bool general = false);
 
 // Per-simulation scratch (no state that outlives a call).
 struct StressScratch {
@@ -85,11 +86,19 @@ struct StressOptions {
   bool fold = true;
   int threads = 1;
   bool fold_legacy = false;
+  // Any shear fields folded too (FoldedGeneralStresses) instead of the
+  // reference sum: the partial-slip skin's.
+  bool fold_general = false;
 };
 // Whether the direct path is the folded one for these tables, fields and
 // options (tables that are not mirror images take the reference sum).
 inline bool UsesFoldedPath(const KernelTables& kt, bool shear, const StressOptions& opt) {
   return opt.fold && (!shear || opt.uniform_slip) && kt.mirror_symmetric;
+}
+// Whether it is the folded path of any shear fields (FoldedGeneralStresses:
+// three folded sums, which read the shear arrays).
+inline bool UsesGeneralFoldedPath(const KernelTables& kt, bool shear, const StressOptions& opt) {
+  return opt.fold && opt.fold_general && shear && !opt.uniform_slip && kt.mirror_symmetric;
 }
 
 // The path ComputeStresses takes for `method`: kAuto picks direct or FFT by

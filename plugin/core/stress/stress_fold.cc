@@ -14,9 +14,14 @@ namespace mjtouch {
 
 using namespace fold_detail;
 
-void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
-                          const ActiveRuns& runs, const float* pressure, bool shear, double slip_x,
-                          double slip_y, int threads, FoldScratch* w, Stress6* out) {
+namespace {
+
+// The folded sums of one field: with shear, the pressure field against
+// Kp + slip_x Kx + slip_y Ky; without, the field against load `single`'s
+// table alone.
+void FoldedSums(const KernelTables& kt, const std::vector<StressSite>& sites,
+                const ActiveRuns& runs, const float* pressure, bool shear, double slip_x,
+                double slip_y, SurfaceLoad single, int threads, FoldScratch* w, Stress6* out) {
   for (size_t s = 0; s < sites.size(); ++s) out[s].fill(0.0);
   if (runs.row.empty() || sites.empty()) return;
   const int n = kt.n;
@@ -157,7 +162,7 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
                          ry, ebuf[c] + c0, ew);
         else
           FoldMirroredRows(kt, d, static_cast<StressComponent>(c), T0 + win.y0, band, win.x0 + c0,
-                           c1 - c0, rx, ry, shear, ebuf[c] + c0, ew);
+                           c1 - c0, rx, ry, shear, single, ebuf[c] + c0, ew);
       }
       SumBand(fs, first, last, ebuf, ew, T0, P0, ps, w->row_lo.data(), w->row_hi.data(), win.x0);
     }
@@ -172,6 +177,32 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
       }
   });
   w->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
+                          const ActiveRuns& runs, const float* pressure, bool shear, double slip_x,
+                          double slip_y, int threads, FoldScratch* w, Stress6* out) {
+  FoldedSums(kt, sites, runs, pressure, shear, slip_x, slip_y, kLoadPressure, threads, w, out);
+}
+
+void FoldedGeneralStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
+                           const ActiveRuns& runs, const float* pressure, const float* shear_x,
+                           const float* shear_y, int threads, FoldScratch* w, Stress6* out) {
+  FoldedSums(kt, sites, runs, pressure, false, 0, 0, kLoadPressure, threads, w, out);
+  double seconds = w->seconds;
+  std::vector<Stress6>& part = w->general_part;
+  part.resize(sites.size());
+  const float* fields[2] = {shear_x, shear_y};
+  const SurfaceLoad loads[2] = {kLoadShearX, kLoadShearY};
+  for (int l = 0; l < 2; ++l) {
+    FoldedSums(kt, sites, runs, fields[l], false, 0, 0, loads[l], threads, w, part.data());
+    seconds += w->seconds;
+    for (size_t s = 0; s < sites.size(); ++s)
+      for (int c = 0; c < kNumStress; ++c) out[s][c] += part[s][c];
+  }
+  w->seconds = seconds;
 }
 
 void ReferenceDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,

@@ -68,6 +68,7 @@ struct FoldScratch {
   // The table loads unaligned (every one splits a cache line) and no rx
   // cache (the same bits): for the benchmark's ratio and the tests.
   bool fold_legacy = false;
+  std::vector<Stress6> general_part;  // FoldedGeneralStresses: one load's sums
 };
 
 // Stress (Pa) at every site into out[site] (components a site does not want
@@ -77,6 +78,13 @@ struct FoldScratch {
 void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
                           const ActiveRuns& runs, const float* pressure, bool shear, double slip_x,
                           double slip_y, int threads, FoldScratch* w, Stress6* out);
+
+// The same for any shear fields (partial slip): three folded sums, the
+// pressure against Kp, shear x against Kx and shear y against Ky, added in
+// that order (each one fixed sequence of float operations, as above).
+void FoldedGeneralStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
+                           const ActiveRuns& runs, const float* pressure, const float* shear_x,
+                           const float* shear_y, int threads, FoldScratch* w, Stress6* out);
 
 // The reference direct sum (StressAtReceptor per site and component), with
 // the sites split over threads the same way (bit-identical for any count).

@@ -50,9 +50,11 @@ void SumBand(FoldSite* sites, int first, int last, const float* const* ebuf, int
 // from the rx cache h of one (depth, component).
 void FoldCachedRows(const float* h, int n, StressComponent comp, int dy0, int rows, int x0, int w,
                     float ry, float* e, int ew);
-// The same rows folded from the tables (mirror symmetric) at ratios rx, ry.
+// The same rows folded from the tables (mirror symmetric) at ratios rx, ry;
+// without shear, the table of load `single` alone.
 void FoldMirroredRows(const KernelTables& kt, int d, StressComponent comp, int dy0, int rows,
-                      int x0, int w, float rx, float ry, bool shear, float* e, int ew);
+                      int x0, int w, float rx, float ry, bool shear, SurfaceLoad single, float* e,
+                      int ew);
 
 // Planning (stress_fold_plan.cc).
 // FoldScratch::h for float rx: built on the second consecutive call with the

@@ -344,7 +344,7 @@ template <bool kFma>
 inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& kt, int d,
                                                            StressComponent comp, int dy, int x0,
                                                            int w, float rx, float ry, bool shear,
-                                                           float* e) {
+                                                           SurfaceLoad single, float* e) {
   const int n = kt.n, L = 2 * n - 1;
   const int ady = dy < 0 ? -dy : dy;
   if (ady > n - 1) {
@@ -357,7 +357,9 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
   if (z0 > 0) std::fill(e, e + z0, 0.0f);
   if (z1 < w) std::fill(e + z1, e + w, 0.0f);
   const size_t row = static_cast<size_t>(ady + n - 1) * L + (n - 1);  // offset (0, |dy|)
-  const float* Kp = kt.At(d, kLoadPressure, comp) + row;
+  // without shear: the table of load `single` alone (its mirror signs)
+  const SurfaceLoad lp = shear ? kLoadPressure : single;
+  const float* Kp = kt.At(d, lp, comp) + row;
   const float* Kx = kt.At(d, kLoadShearX, comp) + row;
   const float* Ky = kt.At(d, kLoadShearY, comp) + row;
   for (int side = 0; side < 2; ++side) {  // dx >= 0, then dx < 0
@@ -366,12 +368,12 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
     if (lo > hi) continue;
     float sp = 1, sx = 1, sy = 1;
     if (side == 1) {
-      sp *= MirrorSign(0, kLoadPressure, comp);
+      sp *= MirrorSign(0, lp, comp);
       sx *= MirrorSign(0, kLoadShearX, comp);
       sy *= MirrorSign(0, kLoadShearY, comp);
     }
     if (dy < 0) {
-      sp *= MirrorSign(1, kLoadPressure, comp);
+      sp *= MirrorSign(1, lp, comp);
       sx *= MirrorSign(1, kLoadShearX, comp);
       sy *= MirrorSign(1, kLoadShearY, comp);
     }
@@ -388,13 +390,11 @@ inline __attribute__((always_inline)) void FoldMirroredRow(const KernelTables& k
 }
 
 template <int, bool kFma>
-inline __attribute__((always_inline)) void FoldMirroredRowsBody(const KernelTables& kt, int d,
-                                                                StressComponent comp, int dy0,
-                                                                int rows, int x0, int w, float rx,
-                                                                float ry, bool shear, float* e,
-                                                                int ew) {
+inline __attribute__((always_inline)) void FoldMirroredRowsBody(
+    const KernelTables& kt, int d, StressComponent comp, int dy0, int rows, int x0, int w, float rx,
+    float ry, bool shear, SurfaceLoad single, float* e, int ew) {
   for (int t = 0; t < rows; ++t)
-    FoldMirroredRow<kFma>(kt, d, comp, dy0 + t, x0, w, rx, ry, shear,
+    FoldMirroredRow<kFma>(kt, d, comp, dy0 + t, x0, w, rx, ry, shear, single,
                           e + static_cast<size_t>(t) * ew);
 }
 
@@ -402,8 +402,8 @@ inline __attribute__((always_inline)) void FoldMirroredRowsBody(const KernelTabl
 // dispatch per band, not two per row side.
 MJTOUCH_ISA_COPIES(FoldMirroredRows,
                    (const KernelTables& kt, int d, StressComponent comp, int dy0, int rows, int x0,
-                    int w, float rx, float ry, bool shear, float* e, int ew),
-                   (kt, d, comp, dy0, rows, x0, w, rx, ry, shear, e, ew))
+                    int w, float rx, float ry, bool shear, SurfaceLoad single, float* e, int ew),
+                   (kt, d, comp, dy0, rows, x0, w, rx, ry, shear, single, e, ew))
 
 }  // namespace fold_detail
 }  // namespace mjtouch
