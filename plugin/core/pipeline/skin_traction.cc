@@ -130,9 +130,15 @@ std::shared_ptr<const TangentialCompliance> SkinTangentialCompliance(const SkinC
 }
 
 // A tangential buffer's box (kTgBox*): its tractions are zero outside it.
-CellBox TangentialBufferBox(const double* buf) {
-  return CellBox{static_cast<int>(buf[kTgBoxI0]), static_cast<int>(buf[kTgBoxJ0]),
-                 static_cast<int>(buf[kTgBoxNx]), static_cast<int>(buf[kTgBoxNy])};
+// plugin_state is writable from Python, so a box that does not fit the grid
+// reads as the whole grid rather than indexing past it.
+CellBox TangentialBufferBox(const TaxelGrid& grid, const double* buf) {
+  const double i0 = buf[kTgBoxI0], j0 = buf[kTgBoxJ0], nx = buf[kTgBoxNx], ny = buf[kTgBoxNy];
+  const double n = grid.n;
+  const bool fits = i0 >= 0 && j0 >= 0 && nx >= 0 && ny >= 0 && i0 + nx <= n && j0 + ny <= n;
+  if (!fits) return CellBox::All(grid);
+  return CellBox{static_cast<int>(i0), static_cast<int>(j0), static_cast<int>(nx),
+                 static_cast<int>(ny)};
 }
 
 // The tractions x, y (n*n each, after the slots) of buffer `buf` over box b:
@@ -168,7 +174,7 @@ void LoadTangentialState(const TaxelGrid& grid, const double* from, TangentialSt
   ts->support = CellBox{};
   ts->shift_x_m = ts->shift_y_m = 0.0;
   if (!(from[kTgValid] > 0.0)) return;
-  ts->support = TangentialBufferBox(from);
+  ts->support = TangentialBufferBox(grid, from);
   ts->shift_x_m = from[kTgShiftX];
   ts->shift_y_m = from[kTgShiftY];
   ForBufferRows(grid, const_cast<double*>(from), ts->support, [&](double* x, double* y, size_t k) {
@@ -180,7 +186,7 @@ void LoadTangentialState(const TaxelGrid& grid, const double* from, TangentialSt
 // The workspace's TangentialState into buffer `to`: its old box cleared,
 // the state's support copied, the slots set.
 void StoreTangentialState(const TaxelGrid& grid, const TangentialState& ts, double* to) {
-  const CellBox old = TangentialBufferBox(to);
+  const CellBox old = TangentialBufferBox(grid, to);
   ForBufferRows(grid, to, old, [&](double* x, double* y, size_t) {
     std::fill_n(x, old.nx, 0.0);
     std::fill_n(y, old.nx, 0.0);
@@ -237,7 +243,7 @@ void PartialSlipTraction(const TractionStep& s) {
     const bool valid = from[kTgValid] > 0.0;
     ts.shift_x_m = valid ? from[kTgShiftX] : 0.0;
     ts.shift_y_m = valid ? from[kTgShiftY] : 0.0;
-    const CellBox old = TangentialBufferBox(to);
+    const CellBox old = TangentialBufferBox(grid, to);
     ForBufferRows(grid, to, old, [&](double* x, double* y, size_t) {
       std::fill_n(x, old.nx, 0.0);
       std::fill_n(y, old.nx, 0.0);
