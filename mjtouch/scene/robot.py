@@ -35,6 +35,7 @@ PAD_TYPES = {
     mujoco.mjtGeom.mjGEOM_ELLIPSOID: "ellipsoid",
     mujoco.mjtGeom.mjGEOM_CAPSULE: "capsule",
     mujoco.mjtGeom.mjGEOM_BOX: "box",
+    mujoco.mjtGeom.mjGEOM_MESH: "mesh",
 }
 
 
@@ -124,6 +125,12 @@ def _facing_from_site(spec: mujoco.MjSpec, g: mujoco.MjsGeom, site: str) -> list
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     gmat = data.geom(g.name).xmat.reshape(3, 3)
+    if g.type == mujoco.mjtGeom.mjGEOM_MESH:
+        # the geom's frame as written: MuJoCo turns a mesh geom's compiled
+        # frame to the mesh's principal axes (mesh_quat)
+        turn = np.zeros(9)
+        mujoco.mju_quat2Mat(turn, model.mesh_quat[model.geom(g.name).dataid[0]])
+        gmat = gmat @ turn.reshape(3, 3).T
     smat = data.site(site).xmat.reshape(3, 3)
     f = gmat.T @ (-smat[:, 2])
     return [0.0 if abs(x) < 1e-12 else float(x) for x in f]

@@ -490,6 +490,7 @@ std::string ConfigCacheKey(const SkinConfig& c) {
   s.precision(17);
   s << "pad " << static_cast<int>(c.pad.shape) << ' ' << c.pad.semi_axes_m[0] << ' '
     << c.pad.semi_axes_m[1] << ' ' << c.pad.semi_axes_m[2];
+  if (c.pad.mesh) s << " mesh " << c.pad.mesh->key;
   for (const auto& row : Rows()) {
     if (row.scope != S::kModel) continue;
     s << " | " << row.key << ' ';
