@@ -36,6 +36,7 @@ import mujoco
 import numpy as np
 
 import mjtouch
+from mjtouch.scene.robot import flexion_facing
 
 FINGERS = ("ff", "mf", "rf", "lf", "th")
 FEATURES = ("SA1", "RA", "PC", "force_n", "coverage")
@@ -90,20 +91,11 @@ def _make_sensor_env_class():
 
 def shadow_pad_facing(model: mujoco.MjModel, finger: str) -> np.ndarray:
     """The pad side of Shadow fingertip `finger`'s distal capsule
-    (``robot0:C_<finger>distal``) in the geom's frame: the direction across
-    the capsule's axis that flexing the finger (0.3 rad at each of its
-    joints) moves the capsule, rounded to the nearest geom axis."""
-    g = model.geom(f"robot0:C_{finger}distal").id
-    rest = mujoco.MjData(model)
-    mujoco.mj_kinematics(model, rest)
-    flexed = mujoco.MjData(model)
-    joints = ["THJ0"] if finger == "th" else [f"{finger.upper()}J{k}" for k in (0, 1, 2)]
-    for j in joints:
-        flexed.qpos[model.joint(f"robot0:{j}").qposadr[0]] += 0.3
-    mujoco.mj_kinematics(model, flexed)
-    R0 = rest.geom_xmat[g].reshape(3, 3)
-    move = R0.T @ (flexed.geom_xpos[g] - rest.geom_xpos[g])
-    move[2] = 0.0  # across the capsule's axis: its cylinder
+    (``robot0:C_<finger>distal``) in the geom's frame: where flexing its
+    distal joint moves it (mjtouch.scene.robot.flexion_facing), across the capsule's
+    axis (its cylinder) and rounded to the nearest geom axis."""
+    move = flexion_facing(model, f"robot0:C_{finger}distal")
+    move[2] = 0.0
     axis = int(np.argmax(np.abs(move)))
     f = np.zeros(3)
     f[axis] = np.sign(move[axis])

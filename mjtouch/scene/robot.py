@@ -102,7 +102,7 @@ def _pad_geom(spec: mujoco.MjSpec, geom, body, facing) -> mujoco.MjsGeom:
 TIE_M = 1e-4
 
 
-def _written_xmat(model: mujoco.MjModel, data: mujoco.MjData, gid: int) -> np.ndarray:
+def geom_written_xmat(model: mujoco.MjModel, data: mujoco.MjData, gid: int) -> np.ndarray:
     """Geom gid's world rotation in its frame as written: a mesh geom's
     compiled frame is turned to the mesh's principal axes (mesh_quat)."""
     xmat = data.geom_xmat[gid].reshape(3, 3)
@@ -113,7 +113,7 @@ def _written_xmat(model: mujoco.MjModel, data: mujoco.MjData, gid: int) -> np.nd
     return xmat @ turn.reshape(3, 3).T
 
 
-def _support_m(model: mujoco.MjModel, data: mujoco.MjData, gid: int, u: np.ndarray) -> float:
+def geom_reach_m(model: mujoco.MjModel, data: mujoco.MjData, gid: int, u: np.ndarray) -> float:
     """How far geom gid's surface reaches along the world unit vector u
     (max of x . u over the geom, x from the world origin)."""
     c, R, size = data.geom_xpos[gid], data.geom_xmat[gid].reshape(3, 3), model.geom_size[gid]
@@ -165,14 +165,14 @@ def _nearest_facing(spec, body, label, colliding, facing) -> mujoco.MjsGeom:
         f = np.asarray((0, 0, -1) if facing is None else facing, dtype=float)
         if f.shape != (3,) or not np.isfinite(f).all() or not np.linalg.norm(f) > 0:
             raise ValueError(f"facing = {facing!r} must be a 3-vector, not all zero, or a site")
-        dirs = [_written_xmat(model, data, i) @ (f / np.linalg.norm(f)) for i in ids]
+        dirs = [geom_written_xmat(model, data, i) @ (f / np.linalg.norm(f)) for i in ids]
     if max(np.abs(d - dirs[0]).max() for d in dirs) > 1e-9:
         raise ValueError(
             f"body {label} has {len(colliding)} colliding geoms ({listed}) turned differently: "
             f"facing = {facing!r} (in the geom's frame) names a different side of each; "
             "valid: facing as a site's name, or geom="
         )
-    reach = [_support_m(model, data, i, d) for i, d in zip(ids, dirs)]
+    reach = [geom_reach_m(model, data, i, d) for i, d in zip(ids, dirs)]
     order = np.argsort(reach)[::-1]
     best, second = order[0], order[1]
     if reach[best] - reach[second] < TIE_M:
@@ -213,7 +213,7 @@ def _facing_from_site(spec: mujoco.MjSpec, g: mujoco.MjsGeom, site: str) -> list
     model = spec.compile()
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
-    gmat = _written_xmat(model, data, model.geom(g.name).id)
+    gmat = geom_written_xmat(model, data, model.geom(g.name).id)
     smat = data.site(site).xmat.reshape(3, 3)
     f = gmat.T @ (-smat[:, 2])
     return [0.0 if abs(x) < 1e-12 else float(x) for x in f]
@@ -283,6 +283,44 @@ def attach(
     # the sensor keeps a copy of the reference: assign after naming the plugin
     sensor.plugin = plugin
     return plugin
+
+
+def distal_joint(model: mujoco.MjModel, body: int | str) -> int:
+    """The hinge nearest `body` on its chain to the world (its own first):
+    a fingertip's distal joint."""
+    b = model.body(body).id
+    while b > 0:
+        for j in range(model.body_jntadr[b], model.body_jntadr[b] + model.body_jntnum[b]):
+            if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE:
+                return j
+        b = model.body_parentid[b]
+    raise ValueError(f"body {model.body(body).name!r} has no hinge joint on its chain to the world")
+
+
+def flexion_facing(
+    model: mujoco.MjModel, geom: int | str, joint: int | str | None = None, angle_rad: float = 1e-3
+) -> np.ndarray:
+    """The pad side of a fingertip geom, as ``facing`` (a unit vector in the
+    geom's frame as written): the direction the geom's centre moves when the
+    hinge `joint` (default the geom body's distal_joint) turns from the
+    model's qpos0 by angle_rad towards the larger side of its range (robot
+    hands' ranges reach farther into flexion than extension; an unlimited
+    joint turns positive)."""
+    g = model.geom(geom).id
+    j = distal_joint(model, model.geom_bodyid[g]) if joint is None else model.joint(joint).id
+    lo, hi = model.jnt_range[j]
+    sign = -1.0 if model.jnt_limited[j] and hi + lo < 0 else 1.0
+    rest, flexed = mujoco.MjData(model), mujoco.MjData(model)
+    flexed.qpos[model.jnt_qposadr[j]] += sign * angle_rad
+    mujoco.mj_kinematics(model, rest)
+    mujoco.mj_kinematics(model, flexed)
+    move = geom_written_xmat(model, rest, g).T @ (flexed.geom_xpos[g] - rest.geom_xpos[g])
+    if not np.linalg.norm(move) > 0:
+        raise ValueError(
+            f"geom {model.geom(g).name!r} does not move when joint "
+            f"{model.joint(j).name!r} turns (on its axis?); pass facing yourself"
+        )
+    return move / np.linalg.norm(move)
 
 
 def layouts(model: mujoco.MjModel) -> dict[str, SkinLayout]:
