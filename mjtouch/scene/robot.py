@@ -297,25 +297,24 @@ def distal_joint(model: mujoco.MjModel, body: int | str) -> int:
     raise ValueError(f"body {model.body(body).name!r} has no hinge joint on its chain to the world")
 
 
-def flexion_facing(
-    model: mujoco.MjModel, geom: int | str, joint: int | str | None = None, angle_rad: float = 1e-3
-) -> np.ndarray:
+def flexion_facing(model: mujoco.MjModel, geom: int | str, joint: int | str | None = None):
     """The pad side of a fingertip geom, as ``facing`` (a unit vector in the
-    geom's frame as written): the direction the geom's centre moves when the
-    hinge `joint` (default the geom body's distal_joint) turns from the
-    model's qpos0 by angle_rad towards the larger side of its range (robot
-    hands' ranges reach farther into flexion than extension; an unlimited
-    joint turns positive)."""
+    geom's frame as written): the direction the geom's centre moves at the
+    model's qpos0 when the hinge `joint` (default the geom body's
+    distal_joint) turns towards the larger side of its range (robot hands'
+    ranges reach farther into flexion than extension; an unlimited joint
+    turns positive)."""
     g = model.geom(geom).id
     j = distal_joint(model, model.geom_bodyid[g]) if joint is None else model.joint(joint).id
     lo, hi = model.jnt_range[j]
     sign = -1.0 if model.jnt_limited[j] and hi + lo < 0 else 1.0
-    rest, flexed = mujoco.MjData(model), mujoco.MjData(model)
-    flexed.qpos[model.jnt_qposadr[j]] += sign * angle_rad
-    mujoco.mj_kinematics(model, rest)
-    mujoco.mj_kinematics(model, flexed)
-    move = geom_written_xmat(model, rest, g).T @ (flexed.geom_xpos[g] - rest.geom_xpos[g])
-    if not np.linalg.norm(move) > 0:
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_comPos(model, data)
+    jacp = np.zeros((3, model.nv))
+    mujoco.mj_jacGeom(model, data, jacp, None, g)
+    move = sign * geom_written_xmat(model, data, g).T @ jacp[:, model.jnt_dofadr[j]]
+    if not np.linalg.norm(move) > 1e-12:
         raise ValueError(
             f"geom {model.geom(g).name!r} does not move when joint "
             f"{model.joint(j).name!r} turns (on its axis?); pass facing yourself"

@@ -107,3 +107,17 @@ def test_main_reads_a_menagerie_folder(tmp_path, capsys):
     np.testing.assert_array_equal(cov, 1.0)
     with pytest.raises(SystemExit, match="is not a file: give the mujoco_menagerie folder"):
         mh.main([str(tmp_path), "--hands", "leap_hand"])
+
+
+def test_flexion_facing_is_the_side_flexion_moves(tmp_path):
+    from mjtouch.scene.robot import flexion_facing
+
+    spec = synthetic_hand(tmp_path, ["tip"], mesh_tips=True)
+    model = spec.compile()
+    g = model.body("tip").geomadr[0]  # the fingertip mesh
+    assert model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH
+    # hinge about +x at the tip's base: the centre 13 mm up moves to -y
+    np.testing.assert_allclose(flexion_facing(model, g), [0, -1, 0], atol=1e-9)
+    # a joint whose range reaches farther negative flexes negative
+    spec.joint("j0_2").range = [-1.6, 0.2]
+    np.testing.assert_allclose(flexion_facing(spec.compile(), g), [0, 1, 0], atol=1e-9)

@@ -10,6 +10,7 @@ total force, the two pressure fields then differ by at most k times twice
 that depth (once in the local gap, once in the solved approach)."""
 
 import mujoco
+import mujoco.rollout
 import numpy as np
 import pytest
 import trimesh
@@ -25,6 +26,14 @@ SIDEWAYS = [0, 90, 0]  # euler, degrees: geom z along world x; world down = geom
 def pressed(tip, rest_z, mesh_file=None, site_euler=None, **skin):
     """A finger on a slide joint resting on a plate under gravity (settled);
     `tip`: the pad geom's attributes; `mesh_file` is loaded as mesh "tip"."""
+    model = build(tip, rest_z, mesh_file, site_euler, **skin)
+    data = mujoco.MjData(model)
+    for _ in range(400):
+        mujoco.mj_step(model, data)
+    return model, data
+
+
+def build(tip, rest_z, mesh_file=None, site_euler=None, **skin) -> mujoco.MjModel:
     spec = mujoco.MjSpec()
     spec.option.timestep = 1e-3
     if mesh_file is not None:
@@ -47,11 +56,7 @@ def pressed(tip, rest_z, mesh_file=None, site_euler=None, **skin):
     )
     attrs.update(skin)
     mjtouch.attach(spec, "tip", **attrs)
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    for _ in range(400):
-        mujoco.mj_step(model, data)
-    return model, data
+    return spec.compile()
 
 
 def readout(model, data):
@@ -206,3 +211,44 @@ def test_a_patch_wider_than_the_mesh_is_refused_naming_the_geom(tmp_path):
     # the inscribed radius of its coarsest face ring
     footprint = float(msg.split("radius ")[-1].split(" m)")[0])
     assert 0.95 * R < footprint <= R
+
+
+def test_mesh_pads_are_deterministic_in_threaded_rollouts(tmp_path):
+    ico = trimesh.creation.icosphere(subdivisions=3, radius=R)
+    model = build(mesh_tip(ico, tmp_path / "ico.stl"), R, mesh_file=tmp_path / "ico.stl")
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    s0 = np.empty(mujoco.mj_stateSize(model, spec))
+    mujoco.mj_getState(model, mujoco.MjData(model), s0, spec)
+    s0 = np.repeat(s0[None], 3, axis=0)
+    s0[:, 1] += [0.0, 2e-4, 5e-4]  # qpos of the slide: dropped from three heights
+    _, one = mujoco.rollout.rollout(model, mujoco.MjData(model), s0, nstep=150)
+    threads = [mujoco.MjData(model), mujoco.MjData(model)]
+    _, two = mujoco.rollout.rollout(model, threads, s0, nstep=150)
+    assert np.array_equal(one, two) and one[:, -1].any()
+    # a serial run from the same start, copied half way, ends the same
+    d = mujoco.MjData(model)
+    mujoco.mj_setState(model, d, s0[2], spec)
+    for _ in range(75):
+        mujoco.mj_step(model, d)
+    copy = mujoco.MjData(model)
+    mujoco.mj_copyData(copy, model, d)
+    d = copy
+    for _ in range(75):
+        mujoco.mj_step(model, d)
+    assert np.array_equal(d.sensordata, one[2, -1])
+
+
+def test_meshes_with_equal_extents_are_different_pads(tmp_path):
+    # a sphere and a cube mesh with the same bounding box: the model cache
+    # must key on the mesh, not its extents (a cube's flat face presses
+    # evenly: Winkler pressure constant where it touches)
+    ico = trimesh.creation.icosphere(subdivisions=3, radius=R)
+    cube = trimesh.creation.box(extents=[2 * R, 2 * R, 2 * R])
+    sphere_run = pressed(mesh_tip(ico, tmp_path / "ico.stl"), R, mesh_file=tmp_path / "ico.stl")
+    cube_run = pressed(mesh_tip(cube, tmp_path / "cube.stl"), R, mesh_file=tmp_path / "cube.stl")
+    p_sphere = readout(*sphere_run)[2]
+    p_cube = readout(*cube_run)[2]
+    pressed_cells = p_cube[p_cube > 0]
+    assert pressed_cells.size > 100
+    assert pressed_cells.std() < 1e-6 * pressed_cells.mean()
+    assert p_sphere[p_sphere > 0].std() > 0.1 * p_sphere.max()

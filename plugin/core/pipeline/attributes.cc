@@ -311,9 +311,10 @@ const std::vector<AttributeRow>& Rows() {
        [](const std::string&, SkinConfig*, AttributeParser*) { return true; }, nullptr,
        S::kAdapter},
       {"facing", K::kCustom, 0, 0, false, false, "(direction)", "0 0 -1",
-       "the skin's outward direction in the pad geom's frame: the skin's frame is the geom's "
-       "turned by the smallest rotation taking -z to it (+z: a half turn about x); the pad's "
-       "surface is the geom's exact near side seen along it",
+       "the skin's outward direction in the pad geom's frame as written (a mesh: its file's "
+       "axes, not MuJoCo's principal axes): the skin's frame is the geom's turned by the "
+       "smallest rotation taking -z to it (+z: a half turn about x); the pad's surface is the "
+       "geom's exact near side seen along it (a mesh: its convex hull's, which MuJoCo collides)",
        "3 finite numbers, not all zero (normalised)", NO_FIELD, ParseFacingAttribute,
        WriteFacingKey, S::kModel},
   };
