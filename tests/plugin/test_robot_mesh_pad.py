@@ -128,6 +128,25 @@ def test_sideways_mesh_capsule_is_the_capsule(tmp_path):
         assert lay.block(data.sensordata, "coverage")[0] == 1.0
 
 
+def test_elastic_contact_mesh_and_capsule_report_mujocos_force(tmp_path):
+    # elastic contact (the default): a faceted surface's kinks spike the
+    # pressure locally, so the fields are compared through their integrals:
+    # the force, and the pressure centroid across the capsule (skin y)
+    capsule = trimesh.creation.capsule(height=2 * HALF, radius=R, count=[48, 48])
+    tip = mesh_tip(capsule, tmp_path / "capsule.stl", euler=SIDEWAYS)
+    skin = dict(facing=(1, 0, 0), pressure="elastic")
+    runs = [
+        pressed(tip, R, mesh_file=tmp_path / "capsule.stl", **skin),
+        pressed(dict(type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[R, HALF, 0], euler=SIDEWAYS), R, **skin),
+    ]  # fmt: skip
+    y = (np.arange(N) - (N - 1) / 2) * PITCH
+    for model, data in runs:
+        _, force, p = readout(model, data)
+        assert force[0] == pytest.approx(mujoco_normal_n(model, data), rel=0.05)
+        assert p.sum() * PITCH**2 == pytest.approx(force[0], rel=0.05)
+        assert abs((p.sum(axis=1) * y).sum() / p.sum()) < PITCH  # centred on the cylinder
+
+
 def test_mesh_contact_off_the_patch_is_reported(tmp_path, capfd):
     # the skin on the mesh capsule's -z end cap, the capsule lying on its
     # side: MuJoCo's contact is on the cylinder, off the patch
