@@ -3,12 +3,12 @@ fingertip geom of a user's ``mujoco.MjSpec`` (several fingertips, each its
 own plugin instance and sensor), and :func:`layouts` reads every skin's
 :class:`~mjtouch.scene.sensor.SkinLayout` by sensor name.
 
-The skin touches the side of its geom (sphere, ellipsoid, capsule or box)
-that ``facing`` names, in the geom's frame; default its -z side. The pad's
-surface is the geom's exact near side seen along ``facing`` (a sideways
-capsule's cylinder), its curvature entering through the gap to what it
-touches; the elastic skin under it is a flat layered half-space
-(plugin/README.md). A texture the skin feels but MuJoCo does not collide is a
+The skin touches the side of its geom (sphere, ellipsoid, capsule, box or
+mesh) that ``facing`` names, in the geom's frame; default its -z side. The
+pad's surface is the geom's exact near side seen along ``facing`` (a
+sideways capsule's cylinder; a mesh's convex hull, which is what MuJoCo
+collides), its curvature entering through the gap to what it touches; the
+elastic skin under it is a flat layered half-space (plugin/README.md). A texture the skin feels but MuJoCo does not collide is a
 non-colliding geom (contype = conaffinity = 0) that the user names in the
 ``texture`` attribute, or any such geom of a group the user opts into with
 ``texture_group``. :func:`attach` sets no group: a robot's own visual
@@ -35,6 +35,7 @@ PAD_TYPES = {
     mujoco.mjtGeom.mjGEOM_ELLIPSOID: "ellipsoid",
     mujoco.mjtGeom.mjGEOM_CAPSULE: "capsule",
     mujoco.mjtGeom.mjGEOM_BOX: "box",
+    mujoco.mjtGeom.mjGEOM_MESH: "mesh",
 }
 
 
@@ -56,9 +57,9 @@ def _geom_label(g: mujoco.MjsGeom, k: int) -> str:
     return repr(g.name) if g.name else f"(unnamed geom {k} of the body, a {g.type.name})"
 
 
-def _pad_geom(spec: mujoco.MjSpec, geom, body) -> mujoco.MjsGeom:
-    """The pad geom: `geom` (a name or an MjsGeom) or `body`'s one colliding
-    geom (a name or an MjsBody)."""
+def _pad_geom(spec: mujoco.MjSpec, geom, body, facing) -> mujoco.MjsGeom:
+    """The pad geom: `geom` (a name or an MjsGeom) or `body`'s colliding geom
+    (a name or an MjsBody) nearest the facing side (_nearest_facing)."""
     if (geom is None) == (body is None):
         raise ValueError(
             f"geom = {geom!r}, body = {body!r}: give exactly one (a geom's name "
@@ -84,18 +85,107 @@ def _pad_geom(spec: mujoco.MjSpec, geom, body) -> mujoco.MjsGeom:
         body = b
     if not isinstance(body, mujoco.MjsBody):
         raise ValueError(f"body = {body!r} must be the name of a body in the spec, or an MjsBody")
-    colliding = [g for g in body.geoms if g.contype or g.conaffinity]
+    colliding = [(k, g) for k, g in enumerate(body.geoms) if g.contype or g.conaffinity]
     label = repr(body.name) if body.name else "(unnamed body)"
-    if len(colliding) != 1:
-        listed = ", ".join(
-            _geom_label(g, k) for k, g in enumerate(body.geoms) if g.contype or g.conaffinity
-        )
+    if not colliding:
         raise ValueError(
-            f"body {label} has {len(colliding)} colliding geoms"
-            f"{': ' + listed if listed else ''}; valid: exactly one, or pass "
+            f"body {label} has no colliding geom; valid: a body with one, or pass "
             "geom= (a name or the MjsGeom)"
         )
-    return colliding[0]
+    if len(colliding) == 1:
+        return colliding[0][1]
+    return _nearest_facing(spec, body, label, colliding, facing)
+
+
+# Two geoms whose surfaces reach within this of each other along `facing`
+# are a tie: the choice is left to the user.
+TIE_M = 1e-4
+
+
+def geom_written_xmat(model: mujoco.MjModel, data: mujoco.MjData, gid: int) -> np.ndarray:
+    """Geom gid's world rotation in its frame as written: a mesh geom's
+    compiled frame is turned to the mesh's principal axes (mesh_quat)."""
+    xmat = data.geom_xmat[gid].reshape(3, 3)
+    if model.geom_type[gid] != mujoco.mjtGeom.mjGEOM_MESH:
+        return xmat
+    turn = np.zeros(9)
+    mujoco.mju_quat2Mat(turn, model.mesh_quat[model.geom_dataid[gid]])
+    return xmat @ turn.reshape(3, 3).T
+
+
+def geom_reach_m(model: mujoco.MjModel, data: mujoco.MjData, gid: int, u: np.ndarray) -> float:
+    """How far geom gid's surface reaches along the world unit vector u
+    (max of x . u over the geom, x from the world origin)."""
+    c, R, size = data.geom_xpos[gid], data.geom_xmat[gid].reshape(3, 3), model.geom_size[gid]
+    w = R.T @ u  # u in the geom's compiled frame
+    t = mujoco.mjtGeom(model.geom_type[gid])
+    if t == mujoco.mjtGeom.mjGEOM_SPHERE:
+        reach = size[0]
+    elif t == mujoco.mjtGeom.mjGEOM_CAPSULE:
+        reach = size[0] + size[1] * abs(w[2])
+    elif t == mujoco.mjtGeom.mjGEOM_CYLINDER:
+        reach = size[1] * abs(w[2]) + size[0] * np.hypot(w[0], w[1])
+    elif t == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
+        reach = float(np.linalg.norm(size * w))
+    elif t == mujoco.mjtGeom.mjGEOM_BOX:
+        reach = float(np.abs(size * w).sum())
+    elif t == mujoco.mjtGeom.mjGEOM_MESH:
+        mid = model.geom_dataid[gid]
+        adr, num = model.mesh_vertadr[mid], model.mesh_vertnum[mid]
+        reach = float((model.mesh_vert[adr : adr + num] @ w).max())
+    else:  # planes, height fields, sdf: not a fingertip
+        return -np.inf
+    return float(c @ u) + reach
+
+
+def _nearest_facing(spec, body, label, colliding, facing) -> mujoco.MjsGeom:
+    """Of several colliding geoms, the one whose surface reaches farthest
+    along the facing direction (at the model's initial pose); an error
+    listing them on a tie (within TIE_M) or when a vector `facing` names no
+    one direction (the geoms' frames are turned differently)."""
+    listed = ", ".join(_geom_label(g, k) for k, g in colliding)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    # compiled geom ids: the body's geoms in order
+    bid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body.name) if body.name else -1
+    if bid < 0:
+        raise ValueError(
+            f"body {label} has {len(colliding)} colliding geoms ({listed}); name the body "
+            "to let attach choose among them, or pass geom="
+        )
+    ids = [model.body_geomadr[bid] + k for k, _ in colliding]
+    if isinstance(facing, str):
+        site = spec.site(facing)
+        if site is None:
+            names = [x.name for x in spec.sites if x.name]
+            raise ValueError(f"facing = {facing!r} is not a site of the spec; named sites: {names}")
+        dirs = [-data.site(facing).xmat.reshape(3, 3)[:, 2]] * len(ids)
+    else:
+        f = np.asarray((0, 0, -1) if facing is None else facing, dtype=float)
+        if f.shape != (3,) or not np.isfinite(f).all() or not np.linalg.norm(f) > 0:
+            raise ValueError(f"facing = {facing!r} must be a 3-vector, not all zero, or a site")
+        dirs = [geom_written_xmat(model, data, i) @ (f / np.linalg.norm(f)) for i in ids]
+    if max(np.abs(d - dirs[0]).max() for d in dirs) > 1e-9:
+        raise ValueError(
+            f"body {label} has {len(colliding)} colliding geoms ({listed}) turned differently: "
+            f"facing = {facing!r} (in the geom's frame) names a different side of each; "
+            "valid: facing as a site's name, or geom="
+        )
+    reach = [geom_reach_m(model, data, i, d) for i, d in zip(ids, dirs)]
+    order = np.argsort(reach)[::-1]
+    best, second = order[0], order[1]
+    if reach[best] - reach[second] < TIE_M:
+        each = ", ".join(
+            f"{_geom_label(g, k)} {reach[n] - reach[best]:+.2e} m"
+            for n, (k, g) in enumerate(colliding)
+        )
+        raise ValueError(
+            f"body {label} has {len(colliding)} colliding geoms and two reach within "
+            f"{TIE_M} m of each other along facing ({each}); valid: pass geom= (a name "
+            "or the MjsGeom)"
+        )
+    return colliding[best][1]
 
 
 def _name_geom(spec: mujoco.MjSpec, g: mujoco.MjsGeom) -> str:
@@ -123,7 +213,7 @@ def _facing_from_site(spec: mujoco.MjSpec, g: mujoco.MjsGeom, site: str) -> list
     model = spec.compile()
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
-    gmat = data.geom(g.name).xmat.reshape(3, 3)
+    gmat = geom_written_xmat(model, data, model.geom(g.name).id)
     smat = data.site(site).xmat.reshape(3, 3)
     f = gmat.T @ (-smat[:, 2])
     return [0.0 if abs(x) < 1e-12 else float(x) for x in f]
@@ -144,12 +234,17 @@ def attach(
     ...; values as Python numbers, bools, strings or lists; None leaves one
     out).
 
-    The pad: ``geom`` (its name or the ``MjsGeom``) or ``body`` (its name or
-    the ``MjsBody``; its one colliding geom, an error listing them if it has
-    several). An unnamed pad geom is named ``<body>_pad`` (a sensor needs the
-    geom's name). ``facing``: the skin's outward direction in the geom's
-    frame (a 3-vector), or a site's name (the site's -z axis, the way MuJoCo
-    marks a frame); default (0, 0, -1), the geom's -z side.
+    The pad: ``geom`` (its name or the ``MjsGeom``; sphere, ellipsoid,
+    capsule, box or mesh) or ``body`` (its name or the ``MjsBody``; its
+    colliding geom, and of several the one whose surface reaches farthest
+    along ``facing`` at the initial pose; a tie within 0.1 mm, or a vector
+    ``facing`` that means a different side of each because their frames are
+    turned differently, is an error listing them). An unnamed pad geom is
+    named ``<body>_pad`` (a sensor needs the geom's name). ``facing``: the
+    skin's outward direction in the geom's frame as written (a 3-vector; a
+    mesh's file axes, not MuJoCo's principal axes), or a site's name (the
+    site's -z axis, the way MuJoCo marks a frame); default (0, 0, -1), the
+    geom's -z side.
 
     The skin feels the geoms MuJoCo reports in contact with the pad plus the
     textures the user asks for: ``texture="geom names"`` and/or
@@ -157,7 +252,7 @@ def attach(
     default. Returns its plugin instance (named like the sensor): edit
     ``.config`` to change attributes later. Attribute values are checked
     when the spec compiles."""
-    g = _pad_geom(spec, geom, body)
+    g = _pad_geom(spec, geom, body, facing)
     if g.type not in PAD_TYPES:
         label = repr(g.name) if g.name else "(unnamed)"
         raise ValueError(
@@ -188,6 +283,43 @@ def attach(
     # the sensor keeps a copy of the reference: assign after naming the plugin
     sensor.plugin = plugin
     return plugin
+
+
+def distal_joint(model: mujoco.MjModel, body: int | str) -> int:
+    """The hinge nearest `body` on its chain to the world (its own first):
+    a fingertip's distal joint."""
+    b = model.body(body).id
+    while b > 0:
+        for j in range(model.body_jntadr[b], model.body_jntadr[b] + model.body_jntnum[b]):
+            if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE:
+                return j
+        b = model.body_parentid[b]
+    raise ValueError(f"body {model.body(body).name!r} has no hinge joint on its chain to the world")
+
+
+def flexion_facing(model: mujoco.MjModel, geom: int | str, joint: int | str | None = None):
+    """The pad side of a fingertip geom, as ``facing`` (a unit vector in the
+    geom's frame as written): the direction the geom's centre moves at the
+    model's qpos0 when the hinge `joint` (default the geom body's
+    distal_joint) turns towards the larger side of its range (robot hands'
+    ranges reach farther into flexion than extension; an unlimited joint
+    turns positive)."""
+    g = model.geom(geom).id
+    j = distal_joint(model, model.geom_bodyid[g]) if joint is None else model.joint(joint).id
+    lo, hi = model.jnt_range[j]
+    sign = -1.0 if model.jnt_limited[j] and hi + lo < 0 else 1.0
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_comPos(model, data)
+    jacp = np.zeros((3, model.nv))
+    mujoco.mj_jacGeom(model, data, jacp, None, g)
+    move = sign * geom_written_xmat(model, data, g).T @ jacp[:, model.jnt_dofadr[j]]
+    if not np.linalg.norm(move) > 1e-12:
+        raise ValueError(
+            f"geom {model.geom(g).name!r} does not move when joint "
+            f"{model.joint(j).name!r} turns (on its axis?); pass facing yourself"
+        )
+    return move / np.linalg.norm(move)
 
 
 def layouts(model: mujoco.MjModel) -> dict[str, SkinLayout]:

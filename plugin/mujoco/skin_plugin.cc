@@ -178,7 +178,76 @@ std::string CheckHeightFieldSamples(const mjModel* m, int geom) {
   return "";
 }
 
+std::string GeomMeshLabel(const mjModel* m, int g) {
+  const char* gname = mj_id2name(m, mjOBJ_GEOM, g);
+  const int id = m->geom_dataid[g];
+  const char* mname = id >= 0 ? mj_id2name(m, mjOBJ_MESH, id) : nullptr;
+  return Fmt("pad geom '%s' (mesh '%s')", gname ? gname : "(unnamed)", mname ? mname : "(unnamed)");
+}
+
 }  // namespace
+
+// A mesh pad's surface: MuJoCo's convex hull of the mesh. MuJoCo collides a
+// mesh geom as its hull, so its contacts lie on the hull: a dent the hull
+// bridges is never touched there, and the skin must not put pressure on the
+// dent's rim instead. Over a convex patch (most fingertips) hull and mesh are
+// one surface. An open or non-manifold mesh is read as its hull too, as
+// MuJoCo reads it.
+bool SkinPlugin::ReadPadMesh(const mjModel* m, int g, PadGeometry* pad, std::string* error) {
+  const int id = m->geom_dataid[g];
+  const int graph = id >= 0 ? m->mesh_graphadr[id] : -1;
+  if (graph < 0) {
+    *error =
+        Fmt("mjtouch.skin: %s has no convex hull: MuJoCo builds one only for a mesh geom "
+            "that can collide (contype or conaffinity nonzero, or in a <pair>), and the skin "
+            "reads the pad's surface from it; valid: a colliding pad geom",
+            GeomMeshLabel(m, g).c_str());
+    return false;
+  }
+  const int nvert = m->mesh_vertnum[id];
+  const float* vert = m->mesh_vert + 3 * m->mesh_vertadr[id];
+  // mesh_graph: numvert, numface, vert_edgeadr, vert_globalid,
+  // edge_localid (numvert + 3 numface), face_globalid (3 numface).
+  const int* gr = m->mesh_graph + graph;
+  const int hull_vert = gr[0], hull_face = gr[1];
+  pad->mesh = MakePadMesh(vert, nvert, gr + 2 + 3 * hull_vert + 3 * hull_face, hull_face);
+  pad->shape = PadShape::kMesh;
+  for (int k = 0; k < 3; ++k) pad->semi_axes_m[k] = 0.0;
+  for (int v = 0; v < nvert; ++v)
+    for (int k = 0; k < 3; ++k)
+      pad->semi_axes_m[k] = std::max<double>(pad->semi_axes_m[k], std::abs(vert[3 * v + k]));
+  return true;
+}
+
+// `facing` of a mesh pad is in the geom's frame as written (the mesh file's
+// axes): MuJoCo moves a mesh's vertices to its centre of mass and principal
+// axes (mesh_pos, mesh_quat) and the compiled geom frame with them. The skin
+// is centred on the line through the centre of mass along `facing`.
+bool SkinPlugin::TurnMeshPad(const mjModel* m, int g, PadGeometry* pad, std::string* error) {
+  const mjtNum* q = m->mesh_quat + 4 * m->geom_dataid[g];
+  if (!(q[0] == 1 && q[1] == 0 && q[2] == 0 && q[3] == 0)) {
+    mjtNum Rq[9], turned[9];
+    mju_quat2Mat(Rq, q);
+    mju_mulMatTMat(turned, Rq, pad->rotation, 3, 3, 3);
+    std::copy(turned, turned + 9, pad->rotation);
+    pad->rotated = true;
+  }
+  // The hull holds the centre of mass, so this line meets it unless the
+  // hull is degenerate.
+  const double* R = pad->rotation;
+  const double d[3] = {R[2], R[5], R[8]};
+  const double far = 2.0 * pad->mesh->bound_radius_m + 1e-3;
+  const double start[3] = {-far * d[0], -far * d[1], -far * d[2]};
+  if (!(pad->mesh->caster->Cast(start, d) >= 0.0)) {
+    *error =
+        Fmt("mjtouch.skin: %s: the line through its centre of mass along `facing` (%g %g %g in "
+            "the compiled geom frame) meets no triangle of its hull; valid: a mesh enclosing a "
+            "volume",
+            GeomMeshLabel(m, g).c_str(), -d[0], -d[1], -d[2]);
+    return false;
+  }
+  return true;
+}
 
 SkinPlugin* SkinPlugin::Owned(const mjData* d, int instance) {
   auto* p = reinterpret_cast<const SkinPlugin*>(d->plugin_data[instance]);
@@ -263,14 +332,28 @@ bool SkinPlugin::ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int
       cfg->pad.shape = PadShape::kBox;
       for (int k = 0; k < 3; ++k) cfg->pad.semi_axes_m[k] = size[k];
       break;
+    case mjGEOM_MESH:
+      if (!ReadPadMesh(m, g, &cfg->pad, error)) return false;
+      break;
     default: {
       const char* name = mj_id2name(m, mjOBJ_GEOM, g);
       *error = std::string("mjtouch.skin: pad geom '") + (name ? name : "?") +
-               "' must be a sphere, ellipsoid, capsule or box";
+               "' must be a sphere, ellipsoid, capsule, box or mesh";
       return false;
     }
   }
-  if (!ParseConfig(m, instance, cfg, error) || !FinalizeSkinConfig(cfg, error)) return false;
+  if (!ParseConfig(m, instance, cfg, error)) return false;
+  if (cfg->pad.shape == PadShape::kMesh && !TurnMeshPad(m, g, &cfg->pad, error)) return false;
+  if (!FinalizeSkinConfig(cfg, error)) {
+    if (cfg->pad.shape == PadShape::kMesh) {
+      const char* name = mj_id2name(m, mjOBJ_GEOM, g);
+      *error +=
+          Fmt(" (pad geom '%s', a mesh: its footprint is the largest disc about the skin's "
+              "centre inside the mesh's outline seen along `facing`, radius %g m)",
+              name ? name : "(unnamed)", PadFootprintSemiAxis(cfg->pad));
+    }
+    return false;
+  }
   ResolveOversample(cfg, m->opt.timestep);
   return true;
 }

@@ -44,6 +44,11 @@ class SkinPlugin {
   static bool ReadConfig(const mjModel* m, int instance, SkinConfig* cfg, int* sensor_id,
                          int* pad_geom, std::string* error);
 
+  // A mesh pad: its surface (ReadPadMesh) and `facing` turned into the
+  // compiled geom frame (TurnMeshPad).
+  static bool ReadPadMesh(const mjModel* m, int g, PadGeometry* pad, std::string* error);
+  static bool TurnMeshPad(const mjModel* m, int g, PadGeometry* pad, std::string* error);
+
   void Reset(const mjModel* m, mjtNum* plugin_state, int instance);
   void Compute(const mjModel* m, mjData* d, int instance);
   // Draws the last pressure field as a heatmap (on the pad's skin and/or a

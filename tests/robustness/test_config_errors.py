@@ -287,8 +287,8 @@ def test_unknown_attribute_fails_at_compile():
         mujoco.MjModel.from_xml_string(pad_scene({"bogus": "1"}))
 
 
-def test_pad_must_be_sphere_ellipsoid_capsule_or_box():
-    with pytest.raises(ValueError, match="must be a sphere, ellipsoid, capsule or box"):
+def test_pad_must_be_sphere_ellipsoid_capsule_box_or_mesh():
+    with pytest.raises(ValueError, match="must be a sphere, ellipsoid, capsule, box or mesh"):
         pad_spec(pad={"kind": "cylinder", "size": [0.008, 0.007]}).compile()
 
 

@@ -311,9 +311,10 @@ const std::vector<AttributeRow>& Rows() {
        [](const std::string&, SkinConfig*, AttributeParser*) { return true; }, nullptr,
        S::kAdapter},
       {"facing", K::kCustom, 0, 0, false, false, "(direction)", "0 0 -1",
-       "the skin's outward direction in the pad geom's frame: the skin's frame is the geom's "
-       "turned by the smallest rotation taking -z to it (+z: a half turn about x); the pad's "
-       "surface is the geom's exact near side seen along it",
+       "the skin's outward direction in the pad geom's frame as written (a mesh: its file's "
+       "axes, not MuJoCo's principal axes): the skin's frame is the geom's turned by the "
+       "smallest rotation taking -z to it (+z: a half turn about x); the pad's surface is the "
+       "geom's exact near side seen along it (a mesh: its convex hull's, which MuJoCo collides)",
        "3 finite numbers, not all zero (normalised)", NO_FIELD, ParseFacingAttribute,
        WriteFacingKey, S::kModel},
   };
@@ -490,6 +491,7 @@ std::string ConfigCacheKey(const SkinConfig& c) {
   s.precision(17);
   s << "pad " << static_cast<int>(c.pad.shape) << ' ' << c.pad.semi_axes_m[0] << ' '
     << c.pad.semi_axes_m[1] << ' ' << c.pad.semi_axes_m[2];
+  if (c.pad.mesh) s << " mesh " << c.pad.mesh->key;
   for (const auto& row : Rows()) {
     if (row.scope != S::kModel) continue;
     s << " | " << row.key << ' ';

@@ -2,13 +2,45 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <numeric>
 
 namespace mjtouch {
 
 namespace {
 constexpr int kLeafTriangles = 4;
+
+// FNV-1a over raw bytes.
+uint64_t Fnv1a(const void* data, size_t bytes, uint64_t h) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t k = 0; k < bytes; ++k) h = (h ^ p[k]) * 1099511628211ull;
+  return h;
+}
 }  // namespace
+
+std::shared_ptr<const PadMesh> MakePadMesh(const float* vertices, int nvert, const int* faces,
+                                           int nface) {
+  auto mesh = std::make_shared<PadMesh>();
+  mesh->vertices_m.assign(vertices, vertices + 3 * static_cast<size_t>(nvert));
+  mesh->faces.assign(faces, faces + 3 * static_cast<size_t>(nface));
+  for (int v = 0; v < nvert; ++v) {
+    const float* p = vertices + 3 * v;
+    mesh->bound_radius_m =
+        std::max(mesh->bound_radius_m,
+                 std::sqrt(double(p[0]) * p[0] + double(p[1]) * p[1] + double(p[2]) * p[2]));
+  }
+  uint64_t h = 14695981039346656037ull;
+  h = Fnv1a(mesh->vertices_m.data(), mesh->vertices_m.size() * sizeof(float), h);
+  h = Fnv1a(mesh->faces.data(), mesh->faces.size() * sizeof(int), h);
+  char key[64];
+  std::snprintf(key, sizeof(key), "%d/%d/%016llx", nvert, nface,
+                static_cast<unsigned long long>(h));
+  mesh->key = key;
+  mesh->caster = std::make_shared<MeshRayCaster>(vertices, nvert, faces, nface);
+  return mesh;
+}
 
 MeshRayCaster::MeshRayCaster(const float* v, int nvert, const int* f, int nface) {
   tri_.reserve(static_cast<size_t>(nface) * 9);

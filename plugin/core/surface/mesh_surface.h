@@ -4,6 +4,7 @@
 #ifndef MJTOUCH_SURFACE_MESH_SURFACE_H_
 #define MJTOUCH_SURFACE_MESH_SURFACE_H_
 
+#include <memory>
 #include <vector>
 
 #include "surface/surface.h"
@@ -33,6 +34,11 @@ class MeshRayCaster {
   std::vector<double> tri_;  // 9 per triangle, in BVH order
   std::vector<Node> nodes_;
 };
+
+// A pad mesh from vertices (3 * nvert, geom frame) and triangles (3 * nface
+// indices, each in [0, nvert)), with its ray caster and cache key.
+std::shared_ptr<const PadMesh> MakePadMesh(const float* vertices, int nvert, const int* faces,
+                                           int nface);
 
 // Rays per cell side: 4 x 4 sub-cell midpoints. The midpoint rule's error on
 // a smooth top is h^2 / (24 * 16) |curvature| (16x smaller than one ray's

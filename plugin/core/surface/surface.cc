@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "surface/mesh_surface.h"
 #include "surface/primitives.h"
 
 namespace mjtouch {
@@ -109,6 +110,25 @@ void SetPadFacing(const double facing[3], PadGeometry* pad) {
 
 double PadFootprintSemiAxis(const PadGeometry& pad) {
   const double* ax = pad.semi_axes_m;
+  if (pad.shape == PadShape::kMesh) {
+    if (!pad.mesh) return 0.0;
+    // The outline of a convex mesh about the centre: its inradius is the
+    // smallest support value over directions in the skin's plane (sampled
+    // every 0.5 degrees: at most R (1 - cos 0.25 deg) ~ 1e-5 R too large).
+    const double* R = pad.rotation;
+    const std::vector<float>& v = pad.mesh->vertices_m;
+    double inradius = kInf;
+    constexpr int kDirections = 720;
+    for (int k = 0; k < kDirections; ++k) {
+      const double t = 2.0 * kPi * k / kDirections, c = std::cos(t), s = std::sin(t);
+      const double u[3] = {c * R[0] + s * R[1], c * R[3] + s * R[4], c * R[6] + s * R[7]};
+      double support = -kInf;
+      for (size_t i = 0; i + 2 < v.size(); i += 3)
+        support = std::max(support, u[0] * v[i] + u[1] * v[i + 1] + u[2] * v[i + 2]);
+      inradius = std::min(inradius, support);
+    }
+    return std::max(inradius, 0.0);
+  }
   if (!pad.rotated) return std::min(ax[0], ax[1]);
   // The shape's half extent along the skin's x and y axes (geom frame u).
   auto extent = [&](int column) {
@@ -149,6 +169,16 @@ bool PadNearSide(const PadGeometry& pad, const double o[3], const double d[3], d
       if (!(lo <= hi)) return false;
       break;
     }
+    case PadShape::kMesh: {
+      // The first hit of the line coming from beyond the mesh along +d.
+      if (!pad.mesh || !pad.mesh->caster) return false;
+      const double far = 2.0 * pad.mesh->bound_radius_m + 1e-3;
+      const double start[3] = {o[0] - far * d[0], o[1] - far * d[1], o[2] - far * d[2]};
+      const double t = pad.mesh->caster->Cast(start, d);
+      if (!(t >= 0.0)) return false;
+      *s_near = t - far;
+      return true;
+    }
     case PadShape::kCapsule: {
       CounterSurface c;
       c.type = CounterSurface::Type::kCapsule;
@@ -180,7 +210,8 @@ std::vector<double> SkinSurface(const TaxelGrid& grid, const PadGeometry& pad,
   // Shape of the touching side as a height field z(x, y) <= 0 in the pad
   // frame; false outside its footprint.
   auto shape = [&](double x, double y, double* zz) {
-    if (pad.rotated) {  // the line (x, y, s) of the skin's frame, in the geom's
+    if (pad.rotated ||
+        pad.shape == PadShape::kMesh) {  // the line (x, y, s) of the skin's frame, in the geom's
       const double o[3] = {R[0] * x + R[1] * y, R[3] * x + R[4] * y, R[6] * x + R[7] * y};
       const double d[3] = {R[2], R[5], R[8]};
       return PadNearSide(pad, o, d, zz);

@@ -8,6 +8,7 @@
 
 #include <functional>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,14 +18,29 @@ namespace mjtouch {
 
 // Pad shape in its own frame (the fingertip geom's); the skin that touches
 // is the -z side: the pole of a sphere or ellipsoid, the -z end cap of a
-// capsule (a hemisphere), the -z face of a box.
-enum class PadShape { kSphere, kEllipsoid, kCapsule, kBox };
+// capsule (a hemisphere), the -z face of a box, the near side of a mesh.
+enum class PadShape { kSphere, kEllipsoid, kCapsule, kBox, kMesh };
+
+class MeshRayCaster;
+
+// A kMesh pad's surface: a closed convex triangle mesh in the geom frame
+// (MuJoCo collides a mesh geom as its convex hull, so the adapter gives the
+// hull: the surface MuJoCo's contacts lie on). MakePadMesh (mesh_surface.h).
+struct PadMesh {
+  std::vector<float> vertices_m;  // 3 per vertex
+  std::vector<int> faces;         // 3 vertex indices per triangle
+  std::string key;                // the data's hash: equal meshes, equal keys
+  double bound_radius_m = 0;      // largest vertex distance from the origin
+  std::shared_ptr<const MeshRayCaster> caster;
+};
 
 struct PadGeometry {
   PadShape shape = PadShape::kEllipsoid;
   // Half extents along x, y, z: sphere (r, r, r), ellipsoid (a, b, c),
-  // capsule (r, r, r + half length), box (MuJoCo's size).
+  // capsule (r, r, r + half length), box (MuJoCo's size), mesh (the largest
+  // |vertex coordinate| per axis).
   double semi_axes_m[3] = {0, 0, 0};
+  std::shared_ptr<const PadMesh> mesh;  // kMesh only
   // The skin's frame in the geom's (`facing`): row-major, columns the skin's
   // x, y, z axes in the geom frame; the skin faces its -z. Identity unless
   // `rotated`: the shape above stays in the geom frame, and the skin's
@@ -37,7 +53,9 @@ struct PadGeometry {
 // unit vector `facing` (geom frame); facing = +z: a half turn about x.
 // `rotated` is false exactly for facing = (0, 0, -1).
 void SetPadFacing(const double facing[3], PadGeometry* pad);
-// The smaller half extent of the pad's shape along the skin's x and y.
+// The smaller half extent of the pad's shape along the skin's x and y; a
+// mesh: the radius of the largest disc about the skin's centre inside its
+// outline seen along the skin's z (the minimum of its support function).
 double PadFootprintSemiAxis(const PadGeometry& pad);
 
 // Ridge relief across the ridge direction s (period pitch, crest at s = 0,
