@@ -64,8 +64,17 @@ StressPlan PlanStresses(const SkinModel& model, const KernelTables& kt, const Tr
 // evaluation. Leaves the quantities in ws->quantity and each receptor's
 // spike count and voltage in `state`; returns whether the skin touches and
 // adds the spikes fired to *fired.
+// substep="receptors" (ramp set): stages 1-3 at time_s only; the receptors
+// then advance over `substeps` equal parts of the elapsed time on the
+// quantity interpolated linearly from ramp_from's (the last step's), their
+// spike counts summed.
+struct QuantityRamp {
+  const double* from;  // per receptor, the last step's quantity
+  int substeps;
+};
+
 bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double nominal_s,
-              double* state, Workspace* ws, int* fired) {
+              double* state, Workspace* ws, int* fired, const QuantityRamp* ramp = nullptr) {
   const SkinConfig& cfg = model.config();
   const auto& sites = model.receptors();
   const int nrec = static_cast<int>(sites.size());
@@ -140,17 +149,33 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
       }
       state[kStReceptorsIdle] = 0.0;
     }
+    const int parts = ramp ? ramp->substeps : 1;
+    const double part_s = elapsed / parts;
     // one step of the timestep (or substep) up to rounding: exactly it
     const double step_s =
-        nominal_s > 0.0 && std::abs(elapsed - nominal_s) <= 1e-9 * nominal_s ? nominal_s : elapsed;
+        nominal_s > 0.0 && std::abs(part_s - nominal_s) <= 1e-9 * nominal_s ? nominal_s : part_s;
     const ReceptorStepper& stepper = StepperFor(cfg.receptor, step_s, ws);
-    // each run of one class's receptors at once (their states are consecutive)
-    for (int r = 0; r < nrec;) {
-      const int end = ClassRunEnd(sites, r, nrec);
-      *fired += stepper.AdvanceBatch(sites[r].cls, end - r, ws->quantity.data() + r, r,
-                                     layout.receptor(state, r), last_spikes + r, last_voltage + r);
-      r = end;
+    if (ramp) ws->spike_sum.assign(nrec, 0.0);
+    for (int k = 1; k <= parts; ++k) {
+      const double* q = ws->quantity.data();
+      if (ramp) {
+        const double s = static_cast<double>(k) / parts;
+        ws->ramp_quantity.resize(nrec);
+        for (int r = 0; r < nrec; ++r)
+          ws->ramp_quantity[r] = ramp->from[r] + s * (ws->quantity[r] - ramp->from[r]);
+        q = ws->ramp_quantity.data();
+      }
+      // each run of one class's receptors at once (their states are consecutive)
+      for (int r = 0; r < nrec;) {
+        const int end = ClassRunEnd(sites, r, nrec);
+        *fired += stepper.AdvanceBatch(sites[r].cls, end - r, q + r, r, layout.receptor(state, r),
+                                       last_spikes + r, last_voltage + r);
+        r = end;
+      }
+      if (ramp)
+        for (int r = 0; r < nrec; ++r) ws->spike_sum[r] += last_spikes[r];
     }
+    if (ramp) std::copy(ws->spike_sum.begin(), ws->spike_sum.end(), last_spikes);
     bool quiescent = !touching && !cfg.outputs[kOutVoltage] && !cfg.outputs[kOutRate];
     for (int r = 0; r < nrec && quiescent; ++r)
       quiescent =
@@ -245,22 +270,31 @@ Pose InterpolatePose(const Pose& a, const Pose& b, double s) {
 // with `elastic` and oversample > 1 the first evaluation's substeps also
 // overwrite the older blocks the warm start reads, so there the repeat
 // agrees with the step alone to the solver's `tolerance`, not bit for bit.
-void SaveOrRestoreEvaluationStart(const StateLayout& lay, double time_s, double* state) {
+// An idle skin out of contact (ComputeTraction returns before touching
+// anything but the header, Evaluate before stage 4) leaves the receptor
+// blocks as they are: they are not saved, and a repeat finds them unchanged.
+void SaveOrRestoreEvaluationStart(const StateLayout& lay, double time_s, bool receptors_unchanged,
+                                  double* state) {
   double* saved = state + lay.eval_start;
   struct Span {
     int first, count;
+    bool receptors;
   };
-  const Span spans[] = {{0, kStateHeader},
-                        {lay.receptors, lay.history - lay.receptors},
-                        {lay.history_head, lay.eval_start - lay.history_head}};
+  const Span spans[] = {{0, kStateHeader, false},
+                        {lay.receptors, lay.history - lay.receptors, true},
+                        {lay.history_head, lay.eval_start - lay.history_head, false}};
   const bool repeat = state[kStTimeValid] > 0.0 && state[kStLastTime] == time_s &&
                       saved[kEsValid] > 0.0 && saved[kEsTime] == time_s;
+  if (!repeat) saved[kEsReceptors] = receptors_unchanged ? 0.0 : 1.0;
+  const bool with_receptors = saved[kEsReceptors] > 0.0;
   double* at = saved + kEvalStartSlots;
   for (const Span& sp : spans) {
-    if (repeat)
-      std::copy(at, at + sp.count, state + sp.first);
-    else
-      std::copy(state + sp.first, state + sp.first + sp.count, at);
+    if (!sp.receptors || with_receptors) {
+      if (repeat)
+        std::copy(at, at + sp.count, state + sp.first);
+      else
+        std::copy(state + sp.first, state + sp.first + sp.count, at);
+    }
     at += sp.count;
   }
   saved[kEsValid] = 1.0;
@@ -275,13 +309,25 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   const int K = cfg.oversample;
   int fired = 0;
   const StateLayout& lay = model.state_layout();
-  SaveOrRestoreEvaluationStart(lay, time_s, state);
+  SaveOrRestoreEvaluationStart(lay, time_s, state[kStReceptorsIdle] > 0.0 && !in.in_contact, state);
   if (lay.tangential_block > 0)  // this step writes the buffer it did not start from
     state[lay.tangential_write] = 1.0 - state[lay.tangential_head];
   bool touching;
   double* last = K > 1 ? state + model.state_layout().last_pose : nullptr;
   const double elapsed = state[kStTimeValid] > 0.0 ? time_s - state[kStLastTime] : 0.0;
-  if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0) {
+  // Idle receptors and no contact: each substep only moves the header on
+  // (no pose is read, no spike fired), so none is interpolated or summed.
+  const bool quiet = state[kStReceptorsIdle] > 0.0 && !in.in_contact;
+  if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0 && quiet) {
+    const double t0 = time_s - elapsed;
+    for (int k = 1; k <= K; ++k)
+      touching = Evaluate(model, in, k < K ? t0 + static_cast<double>(k) / K * elapsed : time_s,
+                          in.timestep_s / K, state, ws, &fired);
+  } else if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0 &&
+             cfg.substep == SkinConfig::Substep::kReceptors) {
+    const QuantityRamp ramp{state + lay.last_quantity, K};
+    touching = Evaluate(model, in, time_s, in.timestep_s / K, state, ws, &fired, &ramp);
+  } else if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0) {
     // Tactile substeps: the pad's pose and MuJoCo's force interpolated from
     // the last step's (counter-surfaces at this step's pose); spikes summed.
     const int nrec = static_cast<int>(model.receptors().size());
@@ -322,6 +368,14 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
     last[kLpShearX] = in.in_contact ? in.shear_x_n : 0.0;
     last[kLpShearY] = in.in_contact ? in.shear_y_n : 0.0;
     last[kLpValid] = 1.0;
+    if (cfg.substep == SkinConfig::Substep::kReceptors) {
+      double* q = state + lay.last_quantity;
+      const int nrec = static_cast<int>(model.receptors().size());
+      if (touching && static_cast<int>(ws->quantity.size()) == nrec)
+        std::copy(ws->quantity.begin(), ws->quantity.end(), q);
+      else
+        std::fill(q, q + nrec, 0.0);
+    }
   }
   WriteOutputs(model, in, touching, state, *ws, out);
   return fired;
