@@ -65,13 +65,19 @@ def env_fingertip(
 ) -> scenes.Fingertip:
     """The environments' skin: 48 x 48 taxels at 0.2 mm (9.6 mm, the whole
     contact up to ~0.8 N), receptors within 4 mm of the pole; exact stress
-    and Winkler contact, as the RL preset (README "What accuracy costs":
+    and Winkler contact, stages 1-3 once per physics step (the receptors'
+    substeps interpolate their input), as the RL preset (README "What accuracy costs":
     the elastic contact costs ~10x in stages 1-2; pass a tip with
     skin={"pressure": "elastic"} where fingerprint filtering matters)."""
     return scenes.Fingertip(
         nx=nx,
         pitch_m=pitch_m,
-        skin={"radius": f"{radius_m:.9g}", "outputs": outputs, "pressure": "winkler"},
+        skin={
+            "radius": f"{radius_m:.9g}",
+            "outputs": outputs,
+            "pressure": "winkler",
+            "substep": "receptors",
+        },
     )
 
 
