@@ -60,20 +60,27 @@ FINGER_X_FULL_SCALE_M = TRAVEL_M + 5e-3
 FINGER_SPEED_MARGIN_M_S = 0.01
 
 
+# The RL preset's receptor density: half the human fingertip's
+# (mjtouch.bench.configs.DEFAULT_DENSITY), SA1 RA PC per cm^2.
+ENV_DENSITY_PER_CM2 = (35.0, 70.0, 10.5)
+
+
 def env_fingertip(
-    nx: int = 48, pitch_m: float = 2e-4, radius_m: float = 4e-3, outputs: str = "spikes force"
+    nx: int = 48, pitch_m: float = 2e-4, radius_m: float = 3e-3, outputs: str = "spikes force"
 ) -> scenes.Fingertip:
     """The environments' skin: 48 x 48 taxels at 0.2 mm (9.6 mm, the whole
-    contact up to ~0.8 N), receptors within 4 mm of the pole; exact stress
-    and Winkler contact, stages 1-3 once per physics step (the receptors'
-    substeps interpolate their input), as the RL preset (README "What accuracy costs":
-    the elastic contact costs ~10x in stages 1-2; pass a tip with
-    skin={"pressure": "elastic"} where fingerprint filtering matters)."""
+    contact up to ~0.8 N), receptors within 3 mm of the pole at half the
+    default density (the RL preset's; ~35 receptors); exact stress and
+    Winkler contact, stages 1-3 once per physics step (the receptors'
+    substeps interpolate their input), as the RL preset (README "What
+    accuracy costs": the elastic contact costs ~10x in stages 1-2; pass a tip
+    with skin={"pressure": "elastic"} where fingerprint filtering matters)."""
     return scenes.Fingertip(
         nx=nx,
         pitch_m=pitch_m,
         skin={
             "radius": f"{radius_m:.9g}",
+            "density": " ".join(f"{d:.9g}" for d in ENV_DENSITY_PER_CM2),
             "outputs": outputs,
             "pressure": "winkler",
             "substep": "receptors",
