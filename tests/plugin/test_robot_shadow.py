@@ -4,6 +4,7 @@ by fixed plates report MuJoCo's normal force on their geom and spike; the
 untouched one stays silent."""
 
 import importlib.util
+import io
 import pathlib
 
 import mujoco
@@ -102,3 +103,44 @@ def test_five_shadow_fingertips_report_mujocos_normal_force():
             assert spikes[f] > 0, f
         else:
             assert mj == 0.0 and force[0] == 0.0 and spikes[f] == 0, (f, mj, spikes[f])
+
+
+def test_hand_bench_runs_every_row():
+    # examples/bench_hand.py (the cost table's source): its smoke run prints
+    # every row with finite positive times, and its skins are the bench's rl
+    # preset (half the default densities, the preset's grid and substeps)
+    import math
+    import re
+    import runpy
+    import sys
+
+    from mjtouch.bench.configs import DEFAULT_DENSITY, PRESETS
+
+    path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "bench_hand.py"
+    ns = runpy.run_path(str(path), run_name="bench_hand")
+    rl = ns["rl_attributes"]()
+    p = PRESETS["rl"]
+    assert rl["nx"] == p["nx"] and rl["pitch"] == p["pitch_m"]
+    np.testing.assert_allclose(rl["density"], np.array(DEFAULT_DENSITY) * p["density_scale"])
+    assert rl["substep"] == p["skin.substep"] == "receptors"
+    out = io.StringIO()
+    old, sys.stdout = sys.stdout, out
+    try:
+        assert ns["main"](["--quick", "--threads", "1"]) == 0
+    finally:
+        sys.stdout = old
+    text = out.getvalue()
+    rows = [
+        "bare, free",
+        "5 skins rl, idle",
+        "bare, 4 tips pressed",
+        "5 skins rl, 4 pressed",
+        "5 skins rl substep=full, 4 pressed",
+        "5 default skins, 4 pressed",
+    ]
+    number = r"([0-9]+(?:\.[0-9]*)?)"
+    for row in rows:
+        found = re.findall(re.escape(row) + r"\s+" + r"\s+".join([number] * 3), text)
+        assert len(found) == (2 if row in rows[:4] else 1), (row, text)  # + rollout rows
+        for values in found:
+            assert all(math.isfinite(float(v)) and float(v) > 0 for v in values), (row, text)
