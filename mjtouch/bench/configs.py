@@ -135,7 +135,7 @@ def default_knobs(cfg: BenchConfig) -> list[Knob]:
             PRESETS["science"],
             labels=(
                 "rl (fast)",
-                "rl on 65 x 0.2 mm, ridges, all receptors, every stage per substep",
+                "former rl: 65 x 0.2 mm, ridged, full",
                 "interactive",
                 "science (accurate)",
             ),

@@ -234,34 +234,45 @@ void QuatToMat(const double* q, double* m) {
   m[8] = 1 - 2 * (x * x + y * y);
 }
 
-// Pose at fraction s of the way from a to b: position linear, rotation
-// by spherical linear interpolation.
-Pose InterpolatePose(const Pose& a, const Pose& b, double s) {
-  Pose out;
-  for (int k = 0; k < 3; ++k) out.pos[k] = a.pos[k] + s * (b.pos[k] - a.pos[k]);
-  double qa[4], qb[4], q[4];
-  MatToQuat(a.mat, qa);
-  MatToQuat(b.mat, qb);
-  double dot = qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3];
-  if (dot < 0.0) {  // the shorter arc
-    for (double& v : qb) v = -v;
-    dot = -dot;
+// Poses a fraction s of the way from a to b: position linear, rotation by
+// spherical linear interpolation (the end rotations converted once).
+class PoseInterpolator {
+ public:
+  PoseInterpolator(const Pose& a, const Pose& b) : a_(a), b_(b) {
+    MatToQuat(a.mat, qa_);
+    MatToQuat(b.mat, qb_);
+    dot_ = qa_[0] * qb_[0] + qa_[1] * qb_[1] + qa_[2] * qb_[2] + qa_[3] * qb_[3];
+    if (dot_ < 0.0) {  // the shorter arc
+      for (double& v : qb_) v = -v;
+      dot_ = -dot_;
+    }
+    if (dot_ < 1.0 - 1e-12) theta_ = std::acos(std::min(1.0, dot_));
   }
-  double wa = 1.0 - s, wb = s;
-  if (dot < 1.0 - 1e-12) {
-    const double theta = std::acos(std::min(1.0, dot));
-    wa = std::sin((1.0 - s) * theta) / std::sin(theta);
-    wb = std::sin(s * theta) / std::sin(theta);
+
+  Pose At(double s) const {
+    Pose out;
+    for (int k = 0; k < 3; ++k) out.pos[k] = a_.pos[k] + s * (b_.pos[k] - a_.pos[k]);
+    double wa = 1.0 - s, wb = s;
+    if (dot_ < 1.0 - 1e-12) {
+      wa = std::sin((1.0 - s) * theta_) / std::sin(theta_);
+      wb = std::sin(s * theta_) / std::sin(theta_);
+    }
+    double q[4], norm = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      q[k] = wa * qa_[k] + wb * qb_[k];
+      norm += q[k] * q[k];
+    }
+    for (double& v : q) v /= std::sqrt(norm);
+    QuatToMat(q, out.mat);
+    return out;
   }
-  double norm = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    q[k] = wa * qa[k] + wb * qb[k];
-    norm += q[k] * q[k];
-  }
-  for (double& v : q) v /= std::sqrt(norm);
-  QuatToMat(q, out.mat);
-  return out;
-}
+
+ private:
+  const Pose& a_;
+  const Pose& b_;
+  double qa_[4], qb_[4], dot_ = 1.0, theta_ = 0.0;
+};
+
 // The receptors' inputs at a time are that evaluation's own: the first
 // evaluation at a new time saves the state it starts from; a repeated one at
 // the same time (mj_forward, then mj_step with other ctrl) restores it and
@@ -342,11 +353,12 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
     sub.in_contact = in.in_contact;
     sub.friction_mu = in.friction_mu;
     const double t0 = time_s - elapsed;
+    const PoseInterpolator pose(from, in.pad_pose);
     for (int k = 1; k <= K; ++k) {
       const double s = static_cast<double>(k) / K;
       const StepInput* use = &in;
       if (k < K) {
-        sub.pad_pose = InterpolatePose(from, in.pad_pose, s);
+        sub.pad_pose = pose.At(s);
         sub.normal_force_n = last[kLpNormalForce] + s * (in.normal_force_n - last[kLpNormalForce]);
         sub.shear_x_n = last[kLpShearX] + s * (in.shear_x_n - last[kLpShearX]);
         sub.shear_y_n = last[kLpShearY] + s * (in.shear_y_n - last[kLpShearY]);
