@@ -6,12 +6,16 @@ its own 2 ms step, five fingertip skins (one ``mjtouch.attach`` each).
 Rows, timed interleaved in one process (thread CPU time per ``mj_step``,
 min and median over repeats x steps):
 
-- bare hand, fingertips free; + five skins idle (no contact): the idle cost;
+- bare hand, fingertips free; + one acceleration-stage sensor (MuJoCo's own
+  cost of any sensor that reads contact forces); + five skins idle (no
+  contact): the idle cost;
 - bare hand, four fingertips pressed on fixed plates; + five skins with the
   RL preset; + five skins with the RL preset but every substep evaluating
   all stages (``substep="full"``); + five default skins (elastic contact);
-- the free and pressed rows again through ``mujoco.rollout`` (T threads,
-  2T MjData; wall time per step per MjData x threads).
+- the free and pressed rows again through ``mujoco.rollout``, which records
+  the full state (plugin_state included) and sensordata every step: in the
+  calling thread (thread CPU time), and on T threads over 2T MjData (wall
+  time per step per MjData x T: noisy on a shared machine).
 
 The RL preset is the bench's ``rl`` preset (``mjtouch.bench.configs.PRESETS``);
 its accuracy against the science preset is the bench's ``presets`` knob
@@ -74,11 +78,20 @@ def pad_facing(model, data, finger: str) -> np.ndarray:
     return f
 
 
-def hand(skin: dict | None, pressed: bool, settle_steps: int = 100):
+def hand(skin: dict | None, pressed: bool, settle_steps: int = 100, acc_sensor: bool = False):
     """(model, data) of the hand, gravity off, settled; skin: attach()
-    attributes for five fingertip skins, or None (bare)."""
+    attributes for five fingertip skins, or None (bare). acc_sensor: add one
+    acceleration-stage sensor (MuJoCo then runs mj_rnePostConstraint every
+    step, as it does for the skins, which need the contact forces)."""
     spec = mujoco.MjSpec.from_file(str(hand_xml()))
     spec.option.gravity = [0, 0, 0]
+    if acc_sensor:
+        spec.add_sensor(
+            name="ff_linacc",
+            type=mujoco.mjtSensor.mjSENS_FRAMELINACC,
+            objtype=mujoco.mjtObj.mjOBJ_BODY,
+            objname="robot0:ffdistal",
+        )
     model = spec.compile()
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
@@ -122,32 +135,40 @@ def step_cpu_us(model, data, steps: int) -> np.ndarray:
 
 
 def rollout_us(model, data, steps: int, threads: int, runner) -> float:
-    """Wall time per step per MjData x threads (CPU per step if the threads
-    each had a core), from the settled state."""
-    n = 2 * threads
+    """Per step of one MjData, from the settled state (rollout records the
+    full state and sensordata every step): threads = 0, thread CPU time of
+    the calling thread (the rollout runs in it); else wall time x threads
+    (the CPU per step if each thread had a core)."""
+    n = max(2 * threads, 1)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state, spec)
     states = np.repeat(state[None], n, axis=0)
     ctrl = np.zeros((n, steps, model.nu))
-    datas = [mujoco.MjData(model) for _ in range(threads)]
-    t0 = time.perf_counter()
-    runner.rollout(model, datas, states, ctrl)
-    return (time.perf_counter() - t0) / (n * steps) * threads * 1e6
+    datas = [mujoco.MjData(model) for _ in range(max(threads, 1))]
+    out_state = np.zeros((n, steps, state.size))
+    out_sensor = np.zeros((n, steps, model.nsensordata))
+    clock = time.perf_counter if threads else time.thread_time
+    t0 = clock()
+    runner.rollout(model, datas, states, ctrl, state=out_state, sensordata=out_sensor)
+    return (clock() - t0) / (n * steps) * max(threads, 1) * 1e6
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--steps", type=int, default=300, help="steps per timed repeat")
     p.add_argument("--repeats", type=int, default=5)
-    p.add_argument("--threads", type=int, default=2, help="mujoco.rollout threads")
+    p.add_argument("--threads", type=int, default=2, help="mujoco.rollout threads (>= 1)")
     p.add_argument("--quick", action="store_true", help="smoke run: 20 steps, 1 repeat")
     args = p.parse_args(argv)
     if args.quick:
         args.steps, args.repeats = 20, 1
+    if args.steps < 1 or args.repeats < 1 or args.threads < 1:
+        p.error(f"--steps {args.steps}, --repeats {args.repeats}, --threads {args.threads}: >= 1")
     rl = rl_attributes()
     rows = {
         "bare, free": hand(None, False),
+        "bare + 1 acc-stage sensor, free": hand(None, False, acc_sensor=True),
         "5 skins rl, idle": hand(rl, False),
         "bare, 4 tips pressed": hand(None, True),
         "5 skins rl, 4 pressed": hand(rl, True),
@@ -161,25 +182,31 @@ def main(argv=None) -> int:
             cpu[k].append(step_cpu_us(m, d, steps))
     m0 = rows["bare, free"][0]
     print(f"Shadow hand (Gymnasium-Robotics), timestep {m0.opt.timestep * 1e3:g} ms; rl = {rl}")
-    print("thread CPU per mj_step, us        min    median   median / bare")
-    bare = {}
-    for k, v in cpu.items():
-        v = np.concatenate(v)
-        ref = "bare, free" if ("free" in k or "idle" in k) else "bare, 4 tips pressed"
-        bare.setdefault(k, np.median(v))
-        ratio = np.median(v) / bare[ref]
-        print(f"  {k:36s} {v.min():8.1f} {np.median(v):8.1f}   {ratio:8.2f}")
-    with mujoco.rollout.Rollout(nthread=args.threads) as runner:
-        print(f"mujoco.rollout, {args.threads} threads: wall per step per MjData x threads, us")
-        res = {k: [] for k in list(rows)[:4]}
-        for _ in range(args.repeats):
-            for k in res:
-                m, d = rows[k]
-                res[k].append(rollout_us(m, d, args.steps, args.threads, runner))
-        for k, v in res.items():
-            ref = "bare, free" if ("free" in k or "idle" in k) else "bare, 4 tips pressed"
-            ratio = np.median(v) / np.median(res[ref])
-            print(f"  {k:36s} {min(v):8.1f} {np.median(v):8.1f}   {ratio:8.2f}")
+
+    def table(times: dict) -> None:
+        lo = {k: float(np.min(v)) for k, v in times.items()}
+        mid = {k: float(np.median(v)) for k, v in times.items()}
+        for k in times:
+            ref = "bare, 4 tips pressed" if "pressed" in k else "bare, free"
+            print(
+                f"  {k:36s} {lo[k]:8.1f} {mid[k]:8.1f}   "
+                f"{lo[k] / lo[ref]:7.2f} {mid[k] / mid[ref]:7.2f}"
+            )
+
+    print("thread CPU per mj_step, us             min   median   x bare: min  median")
+    table({k: np.concatenate(v) for k, v in cpu.items()})
+    for threads in (0, args.threads):
+        with mujoco.rollout.Rollout(nthread=threads) as runner:
+            res = {k: [] for k in rows if "substep" not in k and "default" not in k}
+            for _ in range(args.repeats):
+                for k in res:
+                    m, d = rows[k]
+                    res[k].append(rollout_us(m, d, args.steps, threads, runner))
+        if threads == 0:
+            print("mujoco.rollout in this thread: thread CPU per step, us")
+        else:
+            print(f"mujoco.rollout, {threads} threads: wall per step per MjData x threads, us")
+        table(res)
     return 0
 
 

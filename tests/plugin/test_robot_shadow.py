@@ -132,6 +132,7 @@ def test_hand_bench_runs_every_row():
     text = out.getvalue()
     rows = [
         "bare, free",
+        "bare + 1 acc-stage sensor, free",
         "5 skins rl, idle",
         "bare, 4 tips pressed",
         "5 skins rl, 4 pressed",
@@ -141,6 +142,6 @@ def test_hand_bench_runs_every_row():
     number = r"([0-9]+(?:\.[0-9]*)?)"
     for row in rows:
         found = re.findall(re.escape(row) + r"\s+" + r"\s+".join([number] * 3), text)
-        assert len(found) == (2 if row in rows[:4] else 1), (row, text)  # + rollout rows
+        assert len(found) == (3 if row in rows[:5] else 1), (row, text)  # + 2 rollout tables
         for values in found:
             assert all(math.isfinite(float(v)) and float(v) > 0 for v in values), (row, text)

@@ -283,7 +283,8 @@ class PoseInterpolator {
 // agrees with the step alone to the solver's `tolerance`, not bit for bit.
 // An idle skin out of contact (ComputeTraction returns before touching
 // anything but the header, Evaluate before stage 4) leaves the receptor
-// blocks as they are: they are not saved, and a repeat finds them unchanged.
+// blocks and the last quantities (zero while idle) as they are: they are not
+// saved, and a repeat finds them unchanged.
 void SaveOrRestoreEvaluationStart(const StateLayout& lay, double time_s, bool receptors_unchanged,
                                   double* state) {
   double* saved = state + lay.eval_start;
@@ -293,7 +294,8 @@ void SaveOrRestoreEvaluationStart(const StateLayout& lay, double time_s, bool re
   };
   const Span spans[] = {{0, kStateHeader, false},
                         {lay.receptors, lay.history - lay.receptors, true},
-                        {lay.history_head, lay.eval_start - lay.history_head, false}};
+                        {lay.history_head, lay.last_quantity - lay.history_head, false},
+                        {lay.last_quantity, lay.eval_start - lay.last_quantity, true}};
   const bool repeat = state[kStTimeValid] > 0.0 && state[kStLastTime] == time_s &&
                       saved[kEsValid] > 0.0 && saved[kEsTime] == time_s;
   if (!repeat) saved[kEsReceptors] = receptors_unchanged ? 0.0 : 1.0;
@@ -326,10 +328,17 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   bool touching;
   double* last = K > 1 ? state + model.state_layout().last_pose : nullptr;
   const double elapsed = state[kStTimeValid] > 0.0 ? time_s - state[kStLastTime] : 0.0;
-  // Idle receptors and no contact: each substep only moves the header on
-  // (no pose is read, no spike fired), so none is interpolated or summed.
+  // Idle receptors and no contact: each evaluation only moves the header on
+  // (no pose is read, no spike fired), so none is interpolated or summed;
+  // without a pressure history or tangential buffers to advance, the
+  // header is all there is: set it as the evaluations would.
   const bool quiet = state[kStReceptorsIdle] > 0.0 && !in.in_contact;
-  if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0 && quiet) {
+  if (quiet && elapsed > 0.0 && lay.history_block == 0 && lay.tangential_block == 0) {
+    state[kStLastTime] = time_s;
+    state[kStTimeValid] = 1.0;
+    state[kStContactValid] = 0.0;
+    touching = false;
+  } else if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0 && quiet) {
     const double t0 = time_s - elapsed;
     for (int k = 1; k <= K; ++k)
       touching = Evaluate(model, in, k < K ? t0 + static_cast<double>(k) / K * elapsed : time_s,
@@ -380,7 +389,7 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
     last[kLpShearX] = in.in_contact ? in.shear_x_n : 0.0;
     last[kLpShearY] = in.in_contact ? in.shear_y_n : 0.0;
     last[kLpValid] = 1.0;
-    if (cfg.substep == SkinConfig::Substep::kReceptors) {
+    if (cfg.substep == SkinConfig::Substep::kReceptors && !quiet) {  // (quiet: zero already)
       double* q = state + lay.last_quantity;
       const int nrec = static_cast<int>(model.receptors().size());
       if (touching && static_cast<int>(ws->quantity.size()) == nrec)
