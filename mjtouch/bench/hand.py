@@ -1,6 +1,7 @@
 """What skins cost on a whole robot hand: Gymnasium-Robotics' Shadow hand at
 its own 2 ms step, five fingertip skins (one ``mjtouch.attach`` each).
 
+    python -m mjtouch bench --hand [--time-steps N] [--repeats R] [--quick]
     python examples/bench_hand.py [--steps N] [--repeats R] [--threads T] [--quick]
 
 Rows, timed interleaved in one process (thread CPU time per ``mj_step``,
@@ -45,7 +46,7 @@ DEPTH_M = 1.5e-3  # each plate starts this far into its fingertip
 def hand_xml() -> pathlib.Path:
     spec = importlib.util.find_spec("gymnasium_robotics")
     if spec is None:
-        raise SystemExit("Gymnasium-Robotics is missing: pip install -e '.[robots]'")
+        raise RuntimeError("the hand bench needs Gymnasium-Robotics: pip install -e '.[robots]'")
     root = pathlib.Path(spec.submodule_search_locations[0])
     return root / "envs" / "assets" / "hand" / "reach.xml"
 
