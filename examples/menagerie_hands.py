@@ -55,7 +55,7 @@ HANDS = {
         ],
     ),
 }
-RL = dict(nx=65, pitch=2e-4, pressure="winkler")  # the bench's rl preset grid
+RL = robot.RL_SKIN  # the bench's rl preset
 DEPTH_M = 1.5e-3  # each plate starts this far into its fingertip
 PLATE_HALF_M = (5e-3, 5e-3, 2e-3)
 PLATE_MASS_KG = 0.01

@@ -64,6 +64,12 @@ def add_arguments(p) -> None:
         help="comma-separated knobs to sweep (default all: pitch, pressure, skin, "
         "stress_method, receptors, timestep, presets)",
     )
+    p.add_argument(
+        "--hand",
+        action="store_true",
+        help="run only the hand row: five skins on Gymnasium-Robotics' Shadow hand at 2 ms, "
+        "bare / idle / pressed, rl preset and default (mjtouch.bench.hand; --quick: a smoke run)",
+    )
     p.add_argument("--no-effects", action="store_true", help="skip the effects table")
     p.add_argument("--no-threads", action="store_true", help="skip the threads measurement")
     p.add_argument("--no-progress", action="store_true", help="no progress bar (--progress off)")
@@ -101,6 +107,15 @@ def config_from_args(args) -> BenchConfig:
 
 
 def main(args) -> int:
+    if args.hand:
+        from mjtouch.bench import hand
+
+        hand_args = ["--quick"] if args.quick else []
+        if args.time_steps is not None:
+            hand_args += ["--steps", str(args.time_steps)]
+        if args.repeats is not None:
+            hand_args += ["--repeats", str(args.repeats)]
+        return hand.main(hand_args)
     try:
         cfg = config_from_args(args)
     except ValueError as e:

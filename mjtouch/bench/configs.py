@@ -148,9 +148,14 @@ def default_knobs(cfg: BenchConfig) -> list[Knob]:
         ),
         Knob(
             "presets",
-            (PRESETS["rl"], PRESETS["interactive"]),
+            (PRESETS["rl"], RL_FULL_GRID, PRESETS["interactive"]),
             PRESETS["science"],
-            labels=("rl (fast)", "interactive", "science (accurate)"),
+            labels=(
+                "rl (fast)",
+                "former rl: 65 x 0.2 mm, ridged, full",
+                "interactive",
+                "science (accurate)",
+            ),
         ),
     ]
 
@@ -163,13 +168,18 @@ PRESETS = {
     # the tree at these grids (bench: pitch 200 um exact 158 us/step vs the
     # tree at theta 1.0, 151 per substep), at 1/20 of its stress error.
     # rl: Winkler contact (stages 1-2 ~10x cheaper than elastic; ridges pressed
-    # flat, textures still resolved): speed first.
+    # flat, textures still resolved), a 0.3 mm grid without ridges, half the
+    # receptor density and stages 1-3 once per physics step (substep):
+    # speed first (a whole hand at 2 ms within ~10x the bare step).
     "rl": {
-        "nx": 65,
-        "pitch_m": 200e-6,
+        "nx": 43,
+        "pitch_m": 300e-6,
+        "ridges": False,
         "timestep_s": 1e-3,
+        "density_scale": 0.5,
         "skin.stress_method": "auto",
         "skin.pressure": "winkler",
+        "skin.substep": "receptors",
     },
     "interactive": {"nx": 85, "pitch_m": 150e-6, "timestep_s": 1e-3, "skin.stress_method": "auto"},
     # science: grid_shift cancels the elastic contact's V / pitch line (PC
@@ -181,6 +191,16 @@ PRESETS = {
         "skin.stress_method": "auto",
         "skin.grid_shift": "true",
     },
+}
+
+# What the rl preset gives up for its speed (a row of the presets knob): its
+# former grid, ridges, receptor density and substeps.
+RL_FULL_GRID = {
+    "nx": 65,
+    "pitch_m": 200e-6,
+    "timestep_s": 1e-3,
+    "skin.stress_method": "auto",
+    "skin.pressure": "winkler",
 }
 
 
@@ -335,7 +355,8 @@ def scene_parts(
             skin[key[5:]] = value if isinstance(value, str) else f"{value:.9g}"
         else:
             raise ValueError(f"unknown override {key!r}; valid: {', '.join(OVERRIDE_KEYS)}")
-    if sites is not None:
+    if sites is not None:  # explicit sites replace the density population
+        skin.pop("density", None)
         skin["sites"] = sites
     return scenes.Fingertip(skin=skin, **tip_kw), scenes.Protocol(**proto_kw)
 

@@ -6,6 +6,7 @@ Importing this module registers, in Gymnasium's registry:
 |---|---|---|
 | ``mjtouch/TextureExplore-v0`` | press and slide, then name the texture (:mod:`.texture_explore`) | 50 (0.5 s) |
 | ``mjtouch/SlipHold-v0`` | hold a slipping object with the least grip force (:mod:`.slip_hold`) | 100 (1 s) |
+| ``mjtouch/HandManipulateBlockSkin-v0`` | Gymnasium-Robotics' block rotation, five fingertip skins instead of its 92 touch sensors (registered by importing :mod:`.hand_block`; ``mjtouch[robots]``) | 100 |
 
 ```python
 try:

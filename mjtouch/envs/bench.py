@@ -11,6 +11,11 @@ Measures, in this process and on this machine:
   threaded ``mujoco.rollout`` call per control step) and in Gymnasium's
   ``SyncVectorEnv``, with touch.
 
+Each rate is given per wall second and per CPU second of this process (all
+its threads): on a machine shared with other work the wall rate falls, the
+CPU rate does not; the CPU rate times the cores is what the vector env
+reaches on idle cores.
+
 Random actions (TextureExplore never commits, so episodes run to the limit).
 ``--quick`` (20 steps, 2 environments) only shows that it works: its numbers
 are too short to compare.
@@ -38,33 +43,45 @@ def _actions(space: gym.Space, n: int, env_id: str, seed: int) -> np.ndarray:
     return a
 
 
-def single_steps_per_s(env_id: str, steps: int, seed: int = 0, **kwargs) -> float:
+def _timed(fn) -> tuple[float, float]:
+    """(wall s, process CPU s) of fn()."""
+    w0, c0 = time.perf_counter(), time.process_time()
+    fn()
+    return time.perf_counter() - w0, time.process_time() - c0
+
+
+def single_steps_per_s(env_id: str, steps: int, seed: int = 0, **kwargs) -> tuple[float, float]:
+    """Env steps per (wall, CPU) second of one environment."""
     env = gym.make(env_id, **kwargs)
     actions = _actions(env.action_space, steps, env_id, seed)
     env.reset(seed=seed)
-    t0 = time.perf_counter()
-    for a in actions:
-        _, _, term, trunc, _ = env.step(a)
-        if term or trunc:
-            env.reset()
-    wall = time.perf_counter() - t0
+
+    def run():
+        for a in actions:
+            _, _, term, trunc, _ = env.step(a)
+            if term or trunc:
+                env.reset()
+
+    wall, cpu = _timed(run)
     env.close()
-    return steps / wall
+    return steps / wall, steps / cpu
 
 
 def vector_steps_per_s(
     env_id: str, num_envs: int, steps: int, mode: str, seed: int = 0, **kwargs
-) -> float:
-    """Env steps per second (num_envs x vector steps / wall)."""
+) -> tuple[float, float]:
+    """Env steps per (wall, CPU) second (num_envs x vector steps / time)."""
     venv = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode=mode, **kwargs)
     actions = _actions(venv.action_space, steps, env_id, seed)
     venv.reset(seed=seed)
-    t0 = time.perf_counter()
-    for a in actions:
-        venv.step(a)
-    wall = time.perf_counter() - t0
+
+    def run():
+        for a in actions:
+            venv.step(a)
+
+    wall, cpu = _timed(run)
     venv.close()
-    return num_envs * steps / wall
+    return num_envs * steps / wall, num_envs * steps / cpu
 
 
 def benchmark(
@@ -72,11 +89,13 @@ def benchmark(
 ) -> dict:
     if steps < 1 or num_envs < 1:
         raise ValueError(f"steps = {steps} and num_envs = {num_envs} must be >= 1")
-    touch = single_steps_per_s(env_id, steps, seed)
-    none = single_steps_per_s(env_id, steps, seed, touch="none")
+    touch, touch_cpu = single_steps_per_s(env_id, steps, seed)
+    none, none_cpu = single_steps_per_s(env_id, steps, seed, touch="none")
     vec_steps = max(1, steps // num_envs)
-    rollout = vector_steps_per_s(env_id, num_envs, vec_steps, "vector_entry_point", seed)
-    sync = vector_steps_per_s(env_id, num_envs, vec_steps, "sync", seed)
+    rollout, rollout_cpu = vector_steps_per_s(
+        env_id, num_envs, vec_steps, "vector_entry_point", seed
+    )
+    sync, sync_cpu = vector_steps_per_s(env_id, num_envs, vec_steps, "sync", seed)
     return {
         "env": env_id,
         "single_touch_steps_per_s": touch,
@@ -86,6 +105,10 @@ def benchmark(
         "rollout_vector_steps_per_s": rollout,
         "sync_vector_steps_per_s": sync,
         "rollout_over_sync": rollout / sync,
+        "single_touch_steps_per_cpu_s": touch_cpu,
+        "single_no_touch_steps_per_cpu_s": none_cpu,
+        "rollout_vector_steps_per_cpu_s": rollout_cpu,
+        "sync_vector_steps_per_cpu_s": sync_cpu,
     }
 
 
@@ -115,16 +138,28 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         print(json.dumps(r))
         return 0
-    print(f"{r['env']}: env steps per second (control step 10 ms, {args.steps} steps each)")
-    print(f"  single env, touch      {r['single_touch_steps_per_s']:10.1f}")
     print(
-        f"  single env, no touch   {r['single_no_touch_steps_per_s']:10.1f}   "
-        f"(touch / no touch = {r['touch_over_no_touch']:.4f})"
+        f"{r['env']}: env steps per second (control step 10 ms, {args.steps} steps each); "
+        "in brackets per CPU second of this process"
     )
-    print(f"  {r['num_envs']} envs, rollout      {r['rollout_vector_steps_per_s']:10.1f}")
+    c = {k: r[k.replace("_per_s", "_per_cpu_s")] for k in r if k.endswith("_per_s")}
     print(
-        f"  {r['num_envs']} envs, sync         {r['sync_vector_steps_per_s']:10.1f}   "
-        f"(rollout / sync = {r['rollout_over_sync']:.2f})"
+        f"  single env, touch      {r['single_touch_steps_per_s']:10.1f}"
+        f"   [{c['single_touch_steps_per_s']:8.1f}]"
+    )
+    print(
+        f"  single env, no touch   {r['single_no_touch_steps_per_s']:10.1f}"
+        f"   [{c['single_no_touch_steps_per_s']:8.1f}]"
+        f"   (touch / no touch = {r['touch_over_no_touch']:.4f})"
+    )
+    print(
+        f"  {r['num_envs']} envs, rollout      {r['rollout_vector_steps_per_s']:10.1f}"
+        f"   [{c['rollout_vector_steps_per_s']:8.1f}]"
+    )
+    print(
+        f"  {r['num_envs']} envs, sync         {r['sync_vector_steps_per_s']:10.1f}"
+        f"   [{c['sync_vector_steps_per_s']:8.1f}]"
+        f"   (rollout / sync = {r['rollout_over_sync']:.2f})"
     )
     return 0
 

@@ -8,7 +8,7 @@ block task's observation. :class:`HandBlockSkinEnv` is the same task
 unchanged) whose model is rebuilt with an ``mjtouch.skin`` on each distal
 phalanx's capsule, one ``mjtouch.attach(spec, body=...)`` call each, on the
 pad side (the side that flexing the finger moves forward), with the RL
-preset (65 x 0.2 mm taxels, Winkler contact). Gymnasium-Robotics loads its
+preset (`mjtouch.scene.robot.RL_SKIN`). Gymnasium-Robotics loads its
 XML with ``MjModel.from_xml_path``; the env overrides that one step
 (``_initialize_simulation``) to load it as an ``MjSpec``, attach the skins
 and compile.
@@ -36,12 +36,11 @@ import mujoco
 import numpy as np
 
 import mjtouch
-from mjtouch.scene.robot import flexion_facing
+from mjtouch.scene.robot import RL_SKIN, flexion_facing
 
 FINGERS = ("ff", "mf", "rf", "lf", "th")
 FEATURES = ("SA1", "RA", "PC", "force_n", "coverage")
-# The bench's `rl` preset grid and contact model.
-RL_PRESET = dict(nx=65, pitch=2e-4, pressure="winkler")
+RL_PRESET = RL_SKIN
 BASE_OBS = 61  # HandManipulateBlock's observation length
 
 

@@ -60,18 +60,32 @@ FINGER_X_FULL_SCALE_M = TRAVEL_M + 5e-3
 FINGER_SPEED_MARGIN_M_S = 0.01
 
 
+# Receptor densities of the environments' skin, SA1 RA PC per cm^2: a
+# quarter of the human fingertip's SA1 and RA (mjtouch.bench.configs.
+# DEFAULT_DENSITY), all of its PC (the slip and texture vibration channel).
+ENV_DENSITY_PER_CM2 = (17.5, 35.0, 21.0)
+
+
 def env_fingertip(
-    nx: int = 48, pitch_m: float = 2e-4, radius_m: float = 4e-3, outputs: str = "spikes force"
+    nx: int = 48, pitch_m: float = 2e-4, radius_m: float = 3.5e-3, outputs: str = "spikes force"
 ) -> scenes.Fingertip:
     """The environments' skin: 48 x 48 taxels at 0.2 mm (9.6 mm, the whole
-    contact up to ~0.8 N), receptors within 4 mm of the pole; exact stress
-    and Winkler contact, as the RL preset (README "What accuracy costs":
-    the elastic contact costs ~10x in stages 1-2; pass a tip with
-    skin={"pressure": "elastic"} where fingerprint filtering matters)."""
+    contact up to ~0.8 N), receptors within 3.5 mm of the pole at
+    ENV_DENSITY_PER_CM2 (~28: 7 SA1, 13 RA, 8 PC); exact stress and
+    Winkler contact, stages 1-3 once per physics step (the receptors'
+    substeps interpolate their input), as the RL preset (README "What
+    accuracy costs": the elastic contact costs ~10x in stages 1-2; pass a tip
+    with skin={"pressure": "elastic"} where fingerprint filtering matters)."""
     return scenes.Fingertip(
         nx=nx,
         pitch_m=pitch_m,
-        skin={"radius": f"{radius_m:.9g}", "outputs": outputs, "pressure": "winkler"},
+        skin={
+            "radius": f"{radius_m:.9g}",
+            "density": " ".join(f"{d:.9g}" for d in ENV_DENSITY_PER_CM2),
+            "outputs": outputs,
+            "pressure": "winkler",
+            "substep": "receptors",
+        },
     )
 
 

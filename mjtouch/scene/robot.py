@@ -30,6 +30,19 @@ import numpy as np
 from mjtouch.scene import scenes
 from mjtouch.scene.sensor import SkinLayout
 
+# attach()'s attributes for the bench's `rl` preset (mjtouch.bench.configs.PRESETS["rl"],
+# held equal by tests/plugin/test_robot_shadow.py): a 43 x 0.3 mm Winkler grid without
+# ridges, half the default receptor density, the render once per physics step.
+RL_SKIN = {
+    "nx": 43,
+    "pitch": 3e-4,
+    "ridges": False,
+    "density": [35.0, 70.0, 10.5],
+    "pressure": "winkler",
+    "stress_method": "auto",
+    "substep": "receptors",
+}
+
 PAD_TYPES = {
     mujoco.mjtGeom.mjGEOM_SPHERE: "sphere",
     mujoco.mjtGeom.mjGEOM_ELLIPSOID: "ellipsoid",

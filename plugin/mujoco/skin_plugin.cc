@@ -185,6 +185,24 @@ std::string GeomMeshLabel(const mjModel* m, int g) {
   return Fmt("pad geom '%s' (mesh '%s')", gname ? gname : "(unnamed)", mname ? mname : "(unnamed)");
 }
 
+// Whether `samples` differ bitwise from the cache's copy at a spread of
+// kHeightFieldSpread samples or in the block at cache->next_block (which
+// then moves on): O(kHeightFieldSpread + kHeightFieldBlock) per call.
+constexpr size_t kHeightFieldSpread = 256;
+constexpr size_t kHeightFieldBlock = 4096;
+bool HeightFieldChanged(const float* samples, HeightFieldCache* cache) {
+  const float* copy = cache->samples.data();
+  const size_t count = cache->samples.size();
+  if (count == 0) return false;
+  const size_t stride = std::max<size_t>(1, count / kHeightFieldSpread);
+  for (size_t k = 0; k < count; k += stride)
+    if (std::memcmp(samples + k, copy + k, sizeof(float)) != 0) return true;
+  const size_t begin = cache->next_block < count ? cache->next_block : 0;
+  const size_t n = std::min(kHeightFieldBlock, count - begin);
+  cache->next_block = begin + n;
+  return std::memcmp(samples + begin, copy + begin, n * sizeof(float)) != 0;
+}
+
 }  // namespace
 
 // A mesh pad's surface: MuJoCo's convex hull of the mesh. MuJoCo collides a
@@ -568,7 +586,7 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     mjtNum n_into[3] = {c.frame[0] * -sign, c.frame[1] * -sign, c.frame[2] * -sign};
     bool seen = false;
     for (const auto& s : in.surfaces) seen = seen || s.id == other;
-    const HeightFieldCache* field = HeightField(m, other);
+    const HeightFieldCache* field = seen ? nullptr : HeightField(m, other);
     if (!seen && !(field && field->bad)) {
       in.surfaces.push_back(
           SurfaceForGeom(m, d, other, ppos, c.pos, n_into, field, MeshCaster(m, other)));
@@ -648,11 +666,16 @@ const HeightFieldCache* SkinPlugin::HeightField(const mjModel* m, int geom) {
   const size_t count = static_cast<size_t>(nrow) * ncol;
   auto it = hfields_.find(h);
   // mjModel.hfield_data may be edited while the model runs: the cache
-  // follows the samples (compared every use; an edit rebuilds it).
-  if (it != hfields_.end() && std::equal(samples, samples + count, it->second.samples.begin()))
+  // follows the samples. A full comparison each use would cost as much as
+  // the field is large, so each use compares a spread of samples and one
+  // block that moves on every use (every sample is compared within
+  // count / kHeightFieldBlock uses); a difference rebuilds the cache.
+  if (it != hfields_.end() && it->second.samples.size() == count &&
+      !HeightFieldChanged(samples, &it->second))
     return &it->second;
   HeightFieldCache& c = hfields_[h];
   c.samples.assign(samples, samples + count);
+  c.next_block = 0;
   const std::string bad = CheckHeightFieldSamples(m, geom);
   c.bad = !bad.empty();
   if (c.bad) {

@@ -19,6 +19,7 @@ namespace mjtouch {
 // Per-height-field running integrals (see HeightFieldRowPrefix).
 struct HeightFieldCache {
   std::vector<float> samples;  // the samples the rest was built from
+  size_t next_block = 0;       // where the next use's moving comparison starts
   bool bad = false;            // a non-finite sample: left out
   std::vector<double> prefix;
   double max_sample = 0;

@@ -4,6 +4,7 @@ resumes. Skipping must not change what the receptors report."""
 
 import mujoco
 import numpy as np
+import pytest
 
 from mjtouch.scene import scenes
 from mjtouch.scene.sensor import SkinLayout
@@ -73,3 +74,45 @@ def test_idle_with_default_noise_is_taken_and_deterministic():
         for press in (slice(0, 800), slice(2400, None)):
             a, b = skipped[press, m].sum(), stepped[press, m].sum()
             assert b > 0 and abs(a - b) <= 0.15 * b, (c, press, a, b)
+
+
+@pytest.mark.parametrize(
+    "skin",
+    [
+        {"pressure": "winkler"},
+        {"pressure": "winkler", "oversample": "3"},
+        {"pressure": "winkler", "oversample": "3", "substep": "receptors"},
+        {"pressure": "elastic", "nx": "24"},
+    ],
+    ids=["winkler", "oversample3", "substep_receptors", "elastic"],
+)
+def test_idle_steps_repeated_by_forward_equal_steps_alone(skin):
+    # An idle step saves neither the receptor blocks nor the last quantities
+    # (it leaves them as they are): an mj_forward with other ctrl before each
+    # mj_step still leaves no trace, through press, idle lift and press.
+    # (`elastic` at K = 1 only: oversampled, its repeat agrees to the solver's
+    # tolerance, not bit for bit; step.cc SaveOrRestoreEvaluationStart.)
+    nx = int(skin.pop("nx", 48))
+    tip = scenes.Fingertip(nx=nx, pitch_m=1.5e-4, ridges=False, skin={"outputs": "spikes force"})
+    tip.skin.update(skin)
+    m = scenes.build_model(tip, scenes.Texture(kind="flat"), scenes.Protocol(timestep_s=2e-4))
+
+    def run(forward: bool):
+        d = mujoco.MjData(m)
+        out, idle = [], []
+        for k in range(3000):
+            press = [0.0, -0.5 if (k < 800 or k >= 2400) else 0.02]
+            if forward:
+                d.ctrl[:] = [0.0, 0.3]
+                mujoco.mj_forward(m, d)
+            d.ctrl[:] = press
+            mujoco.mj_step(m, d)
+            out.append(d.sensordata.copy())
+            idle.append(d.plugin_state[m.plugin_stateadr[0] + IDLE_SLOT])
+        return np.array(out), np.array(idle)
+
+    alone, idle = run(False)
+    both, _ = run(True)
+    assert idle[1600:2400].all() and idle[2600:].max() == 0
+    assert alone[2400:].any()
+    np.testing.assert_array_equal(both, alone)

@@ -82,3 +82,29 @@ def test_oversampled_coarse_step_approaches_the_fine_step():
     assert ref > 100
     assert abs(counts[10] - ref) < abs(counts[2] - ref)
     assert abs(counts[10] - ref) <= 0.05 * ref, (counts, ref)
+
+
+def test_receptor_substeps_keep_the_step_end_and_follow_the_full_substeps():
+    # substep="receptors" evaluates stages 1-3 once, at the step's end, where
+    # substep="full" evaluates its last substep at the same pose (Winkler,
+    # uniform slip: no memory): the stress output is bit-identical. The
+    # receptors see the quantity interpolated between step ends instead of
+    # re-rendered: on a 1 mm grating at 40 mm/s (40 Hz, far below the 500 Hz
+    # Nyquist frequency of the 1 ms step) their spike counts stay close.
+    def run(substep):
+        tip = scenes.Fingertip(
+            nx=48,
+            pitch_m=2e-4,
+            skin={"pressure": "winkler", "substep": substep, "outputs": "spikes stress"},
+        )
+        proto = scenes.Protocol(force_n=0.5, speed_m_s=0.04, timestep_s=1e-3, press_s=0.1)
+        return rollout.run_slide(tip, scenes.Texture(period_m=1e-3), proto, duration_s=0.3)
+
+    full, ramp = run("full"), run("receptors")
+    assert ramp.layout.oversample == full.layout.oversample == 2
+    np.testing.assert_array_equal(ramp.stress, full.stress)
+    for cls in ("SA1", "RA", "PC"):
+        nf = full.spikes[:, full.layout.mask(cls)].sum()
+        nr = ramp.spikes[:, ramp.layout.mask(cls)].sum()
+        assert nf > 20, (cls, nf)
+        assert abs(nr - nf) <= 0.1 * nf, (cls, nr, nf)

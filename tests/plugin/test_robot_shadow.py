@@ -4,13 +4,18 @@ by fixed plates report MuJoCo's normal force on their geom and spike; the
 untouched one stays silent."""
 
 import importlib.util
+import math
 import pathlib
+import re
 
 import mujoco
 import numpy as np
 import pytest
 
 import mjtouch
+from mjtouch import cli
+from mjtouch.bench import hand
+from mjtouch.bench.configs import DEFAULT_DENSITY, PRESETS
 
 # the assets only (importing gymnasium_robotics registers every env)
 _SPEC = importlib.util.find_spec("gymnasium_robotics")
@@ -20,7 +25,7 @@ HAND_XML = (
 )
 FINGERS = ("ff", "mf", "rf", "lf", "th")
 PRESSED = ("ff", "mf", "rf", "th")  # lf stays free
-RL = dict(nx=65, pitch=2e-4, pressure="winkler")  # the bench's `rl` preset grid
+RL = mjtouch.scene.robot.RL_SKIN  # the bench's `rl` preset
 DEPTH_M = 1.5e-3  # each plate starts this far into its fingertip
 
 
@@ -102,3 +107,34 @@ def test_five_shadow_fingertips_report_mujocos_normal_force():
             assert spikes[f] > 0, f
         else:
             assert mj == 0.0 and force[0] == 0.0 and spikes[f] == 0, (f, mj, spikes[f])
+
+
+def test_hand_bench_runs_every_row(capsys):
+    # `python -m mjtouch bench --hand` (mjtouch.bench.hand, the README cost
+    # table's source): its smoke run prints every row with finite positive
+    # times, and its skins are the bench's rl preset (half the default
+    # densities, the preset's grid and substeps)
+    rl = hand.rl_attributes()
+    p = PRESETS["rl"]
+    assert rl["nx"] == p["nx"] and rl["pitch"] == p["pitch_m"]
+    np.testing.assert_allclose(rl["density"], np.array(DEFAULT_DENSITY) * p["density_scale"])
+    assert rl["substep"] == p["skin.substep"] == "receptors"
+    assert mjtouch.scene.robot.RL_SKIN == rl  # what README's snippet and the envs attach
+    assert cli.main(["bench", "--hand", "--quick"]) == 0
+    text = capsys.readouterr().out
+    rows = [
+        "bare, free",
+        "bare + 1 acc-stage sensor, free",
+        "5 skins rl, idle",
+        "bare, 4 tips pressed",
+        "5 skins rl, 4 pressed",
+        "5 skins rl substep=full, 4 pressed",
+        "5 default skins, 4 pressed",
+    ]
+    number = r"([0-9]+(?:\.[0-9]*)?)"
+    for row in rows:
+        found = re.findall(re.escape(row) + r"\s+" + r"\s+".join([number] * 4), text)
+        # thread CPU, then rollout in-thread and threaded for all but two rows
+        assert len(found) == (3 if row in rows[:5] else 1), (row, text)
+        for values in found:
+            assert all(math.isfinite(float(v)) and float(v) > 0 for v in values), (row, text)

@@ -114,6 +114,7 @@ CASES = [
     ({"oversample": "2.5"}, "`oversample`", "auto or an integer in [1, 64]"),
     ({"oversample": "65"}, "`oversample`", "auto or an integer in [1, 64]"),
     ({"oversample": "2", "pressure": "contacts"}, "`oversample`", "valid with contacts: 1"),
+    ({"substep": "ramp"}, "`substep`", "valid: full receptors"),
     ({"skin": "foam"}, "`skin`", "layered halfspace"),
     ({"layers": "1e-3 5e4 0.45 2"}, "`layers`", "needs 3 numbers"),
     ({"layers": "2 5e4 0.45"}, "`layers`", "[1e-06, 1] m"),

@@ -54,6 +54,7 @@ CHOICES = {
     "contact_solver": ["pcg", "pk"],
     "elastic_precision": ["float", "double"],
     "grid_shift": ["true", "false"],
+    "substep": ["full", "receptors"],
     "visual": ["none", "pad", "above", "both"],
     "skin": ["layered", "halfspace"],
     "interface_side": ["upper", "lower"],

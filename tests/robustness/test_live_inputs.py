@@ -108,3 +108,39 @@ def test_finite_edit_rebuilds_the_height_field_cache():
             mujoco.mj_step(m, x)
         np.testing.assert_array_equal(d.sensordata, fresh.sensordata)
     assert layout.block(d.sensordata, "stress").any()
+
+
+def test_local_edit_is_followed_within_the_checked_blocks():
+    # ~20 samples under the pad changed (in both rows of the 2 x 4001 grating,
+    # none of the evenly spread samples each step compares): the moving block
+    # reaches it within ceil(8002 / 4096) = 2 steps, after which the running
+    # skin renders what a fresh copy (cache built from the edited field)
+    # renders. Winkler: the stress is a function of this step's field alone.
+    m = slide_model(pressure="winkler")
+    layout = SkinLayout.from_model(m)
+    ncol = m.hfield_ncol[0]
+    d = mujoco.MjData(m)
+    press(m, 0.5, 300, d=d)
+    unedited = slide_model(pressure="winkler")
+    untouched = mujoco.MjData(unedited)
+    press(unedited, 0.5, 300, d=untouched)
+    half_x = m.hfield_size[0][0]
+    pole = int(round((d.geom("pad").xpos[0] + half_x) / (2 * half_x) * (ncol - 1)))
+    cols = np.arange(pole - 10, pole + 11)  # 0.4 mm under the pole
+    stride = m.hfield_data.size // 256  # leave out the spread samples
+    rows = np.arange(m.hfield_nrow[0])[:, None]
+    cols = cols[np.all((rows * ncol + cols) % stride != 0, axis=0)]
+    assert cols.size >= 15
+    k = (rows * ncol + cols).ravel()
+    m.hfield_data[k] = 1.0 - m.hfield_data[k]
+    fresh = mujoco.MjData(m)
+    mujoco.mj_copyData(fresh, m, d)
+    stress = lambda x: layout.block(x.sensordata, "stress").copy()  # noqa: E731
+    for step in range(20):
+        for model, x in ((m, d), (m, fresh), (unedited, untouched)):
+            x.ctrl[:] = [0.0, -0.5]
+            mujoco.mj_step(model, x)
+        if step >= 2:
+            np.testing.assert_array_equal(stress(d), stress(fresh), err_msg=f"step {step}")
+    # the edited sample is felt: the unedited field gives another stress
+    assert not np.array_equal(stress(d), stress(untouched))

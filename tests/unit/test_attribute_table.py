@@ -58,6 +58,7 @@ NON_DEFAULT = {
     "ridge_profile": "square",
     "pressure": "winkler",
     "oversample": "3",
+    "substep": "receptors",
     "young": ("5e4", {"skin": "halfspace"}),
     "tolerance": "1e-3",
     "contact_solver": "pk",

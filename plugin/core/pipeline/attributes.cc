@@ -119,6 +119,12 @@ const std::vector<AttributeRow>& Rows() {
        "tactile evaluations per physics step (\"Oversampling\" below)",
        "auto or an integer in [1, 64]", NO_FIELD, ParseOversampleAttribute, WriteOversampleKey,
        S::kModel},
+      {"substep", K::kChoice, 0, 0, false, false, "", "full",
+       "`oversample` > 1: what each substep evaluates: `full` (all stages at the interpolated "
+       "pose) or `receptors` (stages 1-3 once per physics step; the receptors' input "
+       "interpolated linearly from the last step's: K times cheaper stages 1-3, texture "
+       "content above the physics step's Nyquist frequency lost)",
+       "full receptors", FIELD(substep), NO_PARSE, S::kModel},
       {"young", K::kNumber, kMinModulusPa, 1e10, false, false, "Pa", "8e4",
        "`elastic` on skin=\"halfspace\": Young's modulus", nullptr, FIELD(young_pa), NO_PARSE,
        S::kModel},

@@ -85,6 +85,12 @@ struct SkinConfig {
   // MuJoCo's contact force interpolated over the step); 0 (`auto`) until
   // ResolveOversample sets the smallest that resolves the afferents.
   int oversample = 0;
+  // `substep`: what each oversampled substep evaluates: all the stages at
+  // the interpolated pose (kFull), or only the receptors, on the quantity
+  // interpolated between the last step's and this step's (kReceptors:
+  // stages 1-3 once per physics step).
+  enum class Substep { kFull = 0, kReceptors };
+  Substep substep = Substep::kFull;
   bool shear = true;
   // shear="partial": Coulomb partial slip per cell with memory (tangential.h)
   // instead of uniform full slip; needs `shear`.

@@ -57,6 +57,7 @@ enum TangentialSlot {
 enum EvalStartSlot {
   kEsValid = 0,  // 1 once saved
   kEsTime,       // the time of the evaluation it precedes, s
+  kEsReceptors,  // 1 if the receptor blocks were saved (0: that evaluation left them)
   kEvalStartSlots
 };
 
@@ -145,6 +146,8 @@ struct HistoryBlock {
 
 struct StateLayout {
   int receptors = 0, last_spikes = 0, last_voltage = 0, history = 0, last_pose = 0;
+  // substep="receptors": the last step's receptor quantities (nreceptor)
+  int last_quantity = 0;
   int history_block = 0;                       // kHistorySlots + n*n; 0 without `elastic`
   int shifted_history = 0, shifted_block = 0;  // kHistorySlots + (n+1)^2; 0 without `grid_shift`
   int history_head = 0;                        // slot of h
@@ -179,7 +182,9 @@ struct StateLayout {
     tangential_head = history_head + (elastic ? 1 : 0);
     tangential_write = tangential_head + (partial ? 1 : 0);
     last_pose = tangential_write + (partial ? 1 : 0);
-    eval_start = last_pose + kLastPoseSize;
+    last_quantity = last_pose + kLastPoseSize;
+    const bool ramp = cfg.substep == SkinConfig::Substep::kReceptors;
+    eval_start = last_quantity + (ramp ? nreceptor : 0);
     eval_start_size =
         kEvalStartSlots + kStateHeader + (history - receptors) + (eval_start - history_head);
     size = eval_start + eval_start_size;

@@ -65,8 +65,17 @@ StressPlan PlanStresses(const SkinModel& model, const KernelTables& kt, const Tr
 // evaluation. Leaves the quantities in ws->quantity and each receptor's
 // spike count and voltage in `state`; returns whether the skin touches and
 // adds the spikes fired to *fired.
+// substep="receptors" (ramp set): stages 1-3 at time_s only; the receptors
+// then advance over `substeps` equal parts of the elapsed time on the
+// quantity interpolated linearly from ramp_from's (the last step's), their
+// spike counts summed.
+struct QuantityRamp {
+  const double* from;  // per receptor, the last step's quantity
+  int substeps;
+};
+
 bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double nominal_s,
-              double* state, Workspace* ws, int* fired) {
+              double* state, Workspace* ws, int* fired, const QuantityRamp* ramp = nullptr) {
   const SkinConfig& cfg = model.config();
   const auto& sites = model.receptors();
   const int nrec = static_cast<int>(sites.size());
@@ -141,17 +150,33 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
       }
       state[kStReceptorsIdle] = 0.0;
     }
+    const int parts = ramp ? ramp->substeps : 1;
+    const double part_s = elapsed / parts;
     // one step of the timestep (or substep) up to rounding: exactly it
     const double step_s =
-        nominal_s > 0.0 && std::abs(elapsed - nominal_s) <= 1e-9 * nominal_s ? nominal_s : elapsed;
+        nominal_s > 0.0 && std::abs(part_s - nominal_s) <= 1e-9 * nominal_s ? nominal_s : part_s;
     const ReceptorStepper& stepper = StepperFor(cfg.receptor, step_s, ws);
-    // each run of one class's receptors at once (their states are consecutive)
-    for (int r = 0; r < nrec;) {
-      const int end = ClassRunEnd(sites, r, nrec);
-      *fired += stepper.AdvanceBatch(sites[r].cls, end - r, ws->quantity.data() + r, r,
-                                     layout.receptor(state, r), last_spikes + r, last_voltage + r);
-      r = end;
+    if (ramp) ws->spike_sum.assign(nrec, 0.0);
+    for (int k = 1; k <= parts; ++k) {
+      const double* q = ws->quantity.data();
+      if (ramp) {
+        const double s = static_cast<double>(k) / parts;
+        ws->ramp_quantity.resize(nrec);
+        for (int r = 0; r < nrec; ++r)
+          ws->ramp_quantity[r] = ramp->from[r] + s * (ws->quantity[r] - ramp->from[r]);
+        q = ws->ramp_quantity.data();
+      }
+      // each run of one class's receptors at once (their states are consecutive)
+      for (int r = 0; r < nrec;) {
+        const int end = ClassRunEnd(sites, r, nrec);
+        *fired += stepper.AdvanceBatch(sites[r].cls, end - r, q + r, r, layout.receptor(state, r),
+                                       last_spikes + r, last_voltage + r);
+        r = end;
+      }
+      if (ramp)
+        for (int r = 0; r < nrec; ++r) ws->spike_sum[r] += last_spikes[r];
     }
+    if (ramp) std::copy(ws->spike_sum.begin(), ws->spike_sum.end(), last_spikes);
     bool quiescent = !touching && !cfg.outputs[kOutVoltage] && !cfg.outputs[kOutRate];
     for (int r = 0; r < nrec && quiescent; ++r)
       quiescent =
@@ -210,34 +235,45 @@ void QuatToMat(const double* q, double* m) {
   m[8] = 1 - 2 * (x * x + y * y);
 }
 
-// Pose at fraction s of the way from a to b: position linear, rotation
-// by spherical linear interpolation.
-Pose InterpolatePose(const Pose& a, const Pose& b, double s) {
-  Pose out;
-  for (int k = 0; k < 3; ++k) out.pos[k] = a.pos[k] + s * (b.pos[k] - a.pos[k]);
-  double qa[4], qb[4], q[4];
-  MatToQuat(a.mat, qa);
-  MatToQuat(b.mat, qb);
-  double dot = qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3];
-  if (dot < 0.0) {  // the shorter arc
-    for (double& v : qb) v = -v;
-    dot = -dot;
+// Poses a fraction s of the way from a to b: position linear, rotation by
+// spherical linear interpolation (the end rotations converted once).
+class PoseInterpolator {
+ public:
+  PoseInterpolator(const Pose& a, const Pose& b) : a_(a), b_(b) {
+    MatToQuat(a.mat, qa_);
+    MatToQuat(b.mat, qb_);
+    dot_ = qa_[0] * qb_[0] + qa_[1] * qb_[1] + qa_[2] * qb_[2] + qa_[3] * qb_[3];
+    if (dot_ < 0.0) {  // the shorter arc
+      for (double& v : qb_) v = -v;
+      dot_ = -dot_;
+    }
+    if (dot_ < 1.0 - 1e-12) theta_ = std::acos(std::min(1.0, dot_));
   }
-  double wa = 1.0 - s, wb = s;
-  if (dot < 1.0 - 1e-12) {
-    const double theta = std::acos(std::min(1.0, dot));
-    wa = std::sin((1.0 - s) * theta) / std::sin(theta);
-    wb = std::sin(s * theta) / std::sin(theta);
+
+  Pose At(double s) const {
+    Pose out;
+    for (int k = 0; k < 3; ++k) out.pos[k] = a_.pos[k] + s * (b_.pos[k] - a_.pos[k]);
+    double wa = 1.0 - s, wb = s;
+    if (dot_ < 1.0 - 1e-12) {
+      wa = std::sin((1.0 - s) * theta_) / std::sin(theta_);
+      wb = std::sin(s * theta_) / std::sin(theta_);
+    }
+    double q[4], norm = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      q[k] = wa * qa_[k] + wb * qb_[k];
+      norm += q[k] * q[k];
+    }
+    for (double& v : q) v /= std::sqrt(norm);
+    QuatToMat(q, out.mat);
+    return out;
   }
-  double norm = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    q[k] = wa * qa[k] + wb * qb[k];
-    norm += q[k] * q[k];
-  }
-  for (double& v : q) v /= std::sqrt(norm);
-  QuatToMat(q, out.mat);
-  return out;
-}
+
+ private:
+  const Pose& a_;
+  const Pose& b_;
+  double qa_[4], qb_[4], dot_ = 1.0, theta_ = 0.0;
+};
+
 // The receptors' inputs at a time are that evaluation's own: the first
 // evaluation at a new time saves the state it starts from; a repeated one at
 // the same time (mj_forward, then mj_step with other ctrl) restores it and
@@ -246,22 +282,33 @@ Pose InterpolatePose(const Pose& a, const Pose& b, double s) {
 // with `elastic` and oversample > 1 the first evaluation's substeps also
 // overwrite the older blocks the warm start reads, so there the repeat
 // agrees with the step alone to the solver's `tolerance`, not bit for bit.
-void SaveOrRestoreEvaluationStart(const StateLayout& lay, double time_s, double* state) {
+// An idle skin out of contact (ComputeTraction returns before touching
+// anything but the header, Evaluate before stage 4) leaves the receptor
+// blocks and the last quantities (zero while idle) as they are: they are not
+// saved, and a repeat finds them unchanged.
+void SaveOrRestoreEvaluationStart(const StateLayout& lay, double time_s, bool receptors_unchanged,
+                                  double* state) {
   double* saved = state + lay.eval_start;
   struct Span {
     int first, count;
+    bool receptors;
   };
-  const Span spans[] = {{0, kStateHeader},
-                        {lay.receptors, lay.history - lay.receptors},
-                        {lay.history_head, lay.eval_start - lay.history_head}};
+  const Span spans[] = {{0, kStateHeader, false},
+                        {lay.receptors, lay.history - lay.receptors, true},
+                        {lay.history_head, lay.last_quantity - lay.history_head, false},
+                        {lay.last_quantity, lay.eval_start - lay.last_quantity, true}};
   const bool repeat = state[kStTimeValid] > 0.0 && state[kStLastTime] == time_s &&
                       saved[kEsValid] > 0.0 && saved[kEsTime] == time_s;
+  if (!repeat) saved[kEsReceptors] = receptors_unchanged ? 0.0 : 1.0;
+  const bool with_receptors = saved[kEsReceptors] > 0.0;
   double* at = saved + kEvalStartSlots;
   for (const Span& sp : spans) {
-    if (repeat)
-      std::copy(at, at + sp.count, state + sp.first);
-    else
-      std::copy(state + sp.first, state + sp.first + sp.count, at);
+    if (!sp.receptors || with_receptors) {
+      if (repeat)
+        std::copy(at, at + sp.count, state + sp.first);
+      else
+        std::copy(state + sp.first, state + sp.first + sp.count, at);
+    }
     at += sp.count;
   }
   saved[kEsValid] = 1.0;
@@ -276,13 +323,32 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   const int K = cfg.oversample;
   int fired = 0;
   const StateLayout& lay = model.state_layout();
-  SaveOrRestoreEvaluationStart(lay, time_s, state);
+  SaveOrRestoreEvaluationStart(lay, time_s, state[kStReceptorsIdle] > 0.0 && !in.in_contact, state);
   if (lay.tangential_block > 0)  // this step writes the buffer it did not start from
     state[lay.tangential_write] = 1.0 - state[lay.tangential_head];
   bool touching;
   double* last = K > 1 ? state + model.state_layout().last_pose : nullptr;
   const double elapsed = state[kStTimeValid] > 0.0 ? time_s - state[kStLastTime] : 0.0;
-  if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0) {
+  // Idle receptors and no contact: each evaluation only moves the header on
+  // (no pose is read, no spike fired), so none is interpolated or summed;
+  // without a pressure history or tangential buffers to advance, the
+  // header is all there is: set it as the evaluations would.
+  const bool quiet = state[kStReceptorsIdle] > 0.0 && !in.in_contact;
+  if (quiet && elapsed > 0.0 && lay.history_block == 0 && lay.tangential_block == 0) {
+    state[kStLastTime] = time_s;
+    state[kStTimeValid] = 1.0;
+    state[kStContactValid] = 0.0;
+    touching = false;
+  } else if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0 && quiet) {
+    const double t0 = time_s - elapsed;
+    for (int k = 1; k <= K; ++k)
+      touching = Evaluate(model, in, k < K ? t0 + static_cast<double>(k) / K * elapsed : time_s,
+                          in.timestep_s / K, state, ws, &fired);
+  } else if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0 &&
+             cfg.substep == SkinConfig::Substep::kReceptors) {
+    const QuantityRamp ramp{state + lay.last_quantity, K};
+    touching = Evaluate(model, in, time_s, in.timestep_s / K, state, ws, &fired, &ramp);
+  } else if (K > 1 && last[kLpValid] > 0.0 && elapsed > 0.0) {
     // Tactile substeps: the pad's pose and MuJoCo's force interpolated from
     // the last step's (counter-surfaces at this step's pose); spikes summed.
     const int nrec = static_cast<int>(model.receptors().size());
@@ -297,11 +363,12 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
     sub.in_contact = in.in_contact;
     sub.friction_mu = in.friction_mu;
     const double t0 = time_s - elapsed;
+    const PoseInterpolator pose(from, in.pad_pose);
     for (int k = 1; k <= K; ++k) {
       const double s = static_cast<double>(k) / K;
       const StepInput* use = &in;
       if (k < K) {
-        sub.pad_pose = InterpolatePose(from, in.pad_pose, s);
+        sub.pad_pose = pose.At(s);
         sub.normal_force_n = last[kLpNormalForce] + s * (in.normal_force_n - last[kLpNormalForce]);
         sub.shear_x_n = last[kLpShearX] + s * (in.shear_x_n - last[kLpShearX]);
         sub.shear_y_n = last[kLpShearY] + s * (in.shear_y_n - last[kLpShearY]);
@@ -323,6 +390,14 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
     last[kLpShearX] = in.in_contact ? in.shear_x_n : 0.0;
     last[kLpShearY] = in.in_contact ? in.shear_y_n : 0.0;
     last[kLpValid] = 1.0;
+    if (cfg.substep == SkinConfig::Substep::kReceptors && !quiet) {  // (quiet: zero already)
+      double* q = state + lay.last_quantity;
+      const int nrec = static_cast<int>(model.receptors().size());
+      if (touching && static_cast<int>(ws->quantity.size()) == nrec)
+        std::copy(ws->quantity.begin(), ws->quantity.end(), q);
+      else
+        std::fill(q, q + nrec, 0.0);
+    }
   }
   WriteOutputs(model, in, touching, state, *ws, out);
   return fired;

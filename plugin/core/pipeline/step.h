@@ -53,8 +53,9 @@ struct Workspace {
   TangentialState tangential;
   TangentialResult tangential_result;
   std::shared_ptr<const TangentialCompliance> tangential_compliance;
-  StepInput substep;              // `oversample`: the interpolated input
-  std::vector<double> spike_sum;  // `oversample`: spikes over the substeps
+  StepInput substep;                  // `oversample`: the interpolated input
+  std::vector<double> spike_sum;      // `oversample`: spikes over the substeps
+  std::vector<double> ramp_quantity;  // substep="receptors": this substep's quantities
 };
 
 // What the later stages read of stage 2's field beyond the float pressure
