@@ -1,0 +1,113 @@
+#include "pipeline/elastic/grid_cycle.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "pipeline/elastic/warm_start.h"
+
+namespace mjtouch {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Cloud-in-cell weights of an offset grid's cells on the taxel grid, per
+// axis: cell i (centre at taxel corner i plus `frac` - 1/2 cells) goes to
+// taxel cells i - 1 + shift (weight 1 - w) and i + shift (weight w).
+struct Deposit {
+  int shift;
+  double w;
+};
+
+Deposit DepositOf(const TaxelGrid& offset_grid, const TaxelGrid& grid) {
+  // centre of offset cell i = taxel centre (i - 1) + a cells
+  const double a = (offset_grid.Centre(0) - grid.Centre(0)) / grid.pitch_m + 1.0;
+  const int shift = static_cast<int>(std::floor(a));
+  return Deposit{shift, a - shift};
+}
+
+// Adds scale * (a grid's pressure on box, p(k) for grid cell index k) onto
+// the taxel field, cloud-in-cell; extends *cells.
+template <typename P>
+void AddDeposit(const TaxelGrid& g, const CellBox& box, const Deposit& d, double scale, P p,
+                const TaxelGrid& grid, std::vector<double>* out, CellBounds* cells) {
+  const int n = grid.n;
+  const double w1 = d.w, w0 = 1.0 - d.w;
+  const double wy[2] = {w0, w1}, wx[2] = {w0, w1};
+  for (int j = box.j0; j < box.j0 + box.ny; ++j)
+    for (int i = box.i0; i < box.i0 + box.nx; ++i) {
+      const double v = p(static_cast<size_t>(j) * g.n + i);
+      if (!(v > 0.0)) continue;
+      for (int b = 0; b < 2; ++b) {
+        const int tj = j - 1 + d.shift + b;
+        if (tj < 0 || tj >= n || wy[b] == 0.0) continue;
+        for (int a = 0; a < 2; ++a) {
+          const int ti = i - 1 + d.shift + a;
+          if (ti < 0 || ti >= n || wx[a] == 0.0) continue;
+          (*out)[static_cast<size_t>(tj) * n + ti] += scale * wy[b] * wx[a] * v;
+          cells->Add(ti, tj);
+        }
+      }
+    }
+}
+
+}  // namespace
+
+bool CycleTraction(const CycleGrids& cg, int k, const TaxelGrid& grid, const Pose& pad_pose,
+                   const std::vector<CounterSurface>& surfaces, double force_n, bool warm,
+                   double depth_prev_m, const ElasticSolveOptions& options, bool fast_paths,
+                   HistoryBlock* ring, GridShiftWork* w, TractionField* field, double* depth_m) {
+  const int N = static_cast<int>(cg.grids.size());
+  const ShiftedGrid& sg = cg.grids[k];
+  const TaxelGrid& g = sg.grid;
+  HistoryBlock history[3] = {ring[0], ring[N], ring[2 * N]};
+  const double cull = warm ? CullLevel(depth_prev_m) : kInf;
+  bool touching = false;
+  CellBox sbox, u_region;
+  double gmin = 0.0;
+  for (int pass = 0; pass < 2 && !touching; ++pass) {
+    if (pass == 1 && !std::isfinite(cull)) break;
+    CellBox rbox;
+    RenderRequest request{g, sg.skin_z, pad_pose, surfaces, pass == 0 ? cull : kInf, &sg.blocks};
+    request.fast_paths = fast_paths;
+    RenderOutput out{&w->gap, &w->coverage, &rbox};
+    out.scratch = &w->render_scratch;
+    const double level = RenderGap(request, out);
+    gmin = rbox.empty() ? kInf : MinGap(g, rbox, w->gap, w->coverage);
+    if (!std::isfinite(gmin)) return false;
+    sbox = rbox;  // cold: uniform from the whole rendered box
+    if (!HasWarmStart(history)) w->pressure.assign(g.Size(), 0.0);
+    touching = SolveElasticWarm(g, *sg.elastic, rbox, w->coverage, history, force_n, options,
+                                &w->gap, &w->pressure, &w->elastic, &w->stats, &sbox, &u_region);
+    if (!touching) return false;
+    if (pass == 0 && w->stats.approach_m >= level) touching = false;  // render all, solve again
+  }
+  if (!touching) return false;
+  *depth_m = w->stats.approach_m - gmin;
+  StoreElasticHistory(g, w->pressure, sbox, u_region, w->elastic.check_u, *depth_m, &ring[0]);
+  // The average of every grid's latest solution (this one in double).
+  int count = 0;
+  for (int b = 0; b < N; ++b) count += ring[b].slots[kHsValid] > 0.0;
+  const double scale = 1.0 / count;
+  CellBounds cells;
+  for (int b = 0; b < N; ++b) {
+    const HistoryBlock& h = ring[b];
+    if (!(h.slots[kHsValid] > 0.0)) continue;
+    const ShiftedGrid& gb = cg.grids[(k - b + N) % N];
+    const Deposit d = DepositOf(gb.grid, grid);
+    if (b == 0) {
+      const double* p = w->pressure.data();
+      AddDeposit(
+          gb.grid, sbox, d, scale, [p](size_t c) { return p[c]; }, grid, &field->pressure_pa,
+          &cells);
+    } else {
+      AddDeposit(
+          gb.grid, h.p_box(), d, scale, [&h](size_t c) { return double(h.p(c)); }, grid,
+          &field->pressure_pa, &cells);
+    }
+  }
+  field->box = cells.Box();
+  return NormalizeLoad(grid, force_n, field);
+}
+
+}  // namespace mjtouch

@@ -1,0 +1,47 @@
+// `grid_cycle` N: the `elastic` contact solved each step on one of N grids
+// of n + 1 cells whose centres sit k / N of a cell (k = 0 .. N - 1) off the
+// taxel grid's corners in x and y, in turn; the traction is the average of
+// the N latest solutions, each deposited cloud-in-cell onto the taxels
+// (which keeps its total and first moment).
+//
+// Why: texture edges sharper than a cell lose their sub-cell position in a
+// discrete contact, so its error is periodic in the texture's offset
+// against the grid: a line at V / pitch and its harmonics in the receptor
+// stress (250 Hz at 0.1 mm and 25 mm/s, PC's best frequency). Offsets k / N
+// cancel the error's first N - 1 harmonics in the average, as `grid_shift`
+// cancels the first with two solves per step; here each step solves one
+// grid, warm-started from that grid's own solutions N and 2 N steps back.
+// The average spans N steps (0.4 ms at N = 4 and dt = 0.1 ms: 6% of the
+// amplitude at 500 Hz).
+#ifndef MJTOUCH_PIPELINE_ELASTIC_GRID_CYCLE_H_
+#define MJTOUCH_PIPELINE_ELASTIC_GRID_CYCLE_H_
+
+#include <memory>
+#include <vector>
+
+#include "pipeline/elastic/grid_shift.h"
+
+namespace mjtouch {
+
+// The offset grids (SkinModel, `grid_cycle` > 1): grids[k] has n + 1 cells,
+// offset_m = k pitch / N from the taxel grid's corners.
+struct CycleGrids {
+  std::vector<ShiftedGrid> grids;
+};
+
+// One step: solves grid k (rendered with the cull level of depth_prev_m if
+// warm, else everything; again without culling if the solved approach
+// reaches it), warm-started from ring[N] and ring[2 N] (ring[b]: the
+// history block b steps back, b = 0 .. 2 N; ring[0] is written), then
+// writes to field (cleared by the caller) the average of the latest
+// solution of every grid that has one (ring[0 .. N - 1]; grid (k - b) mod N
+// solved b steps back), load normalised to force_n. *depth_m: this step's
+// indentation depth. Returns whether the contact carries the load.
+bool CycleTraction(const CycleGrids& cg, int k, const TaxelGrid& grid, const Pose& pad_pose,
+                   const std::vector<CounterSurface>& surfaces, double force_n, bool warm,
+                   double depth_prev_m, const ElasticSolveOptions& options, bool fast_paths,
+                   HistoryBlock* ring, GridShiftWork* w, TractionField* field, double* depth_m);
+
+}  // namespace mjtouch
+
+#endif  // MJTOUCH_PIPELINE_ELASTIC_GRID_CYCLE_H_
