@@ -307,8 +307,10 @@ bool ElasticTraction(const TractionStep& s) {
   if (s.model.cycle()) {  // `grid_cycle`: one offset grid per step (grid_cycle.h)
     const StateLayout& lay = s.model.state_layout();
     double depth = 0.0;
+    const int length =
+        CycleLength(lay.cycle, in.timestep_s / std::max(1, cfg.oversample));  // per evaluation
     const bool touching =
-        CycleTraction(*s.model.cycle(), static_cast<int>(s.state[lay.cycle_slot]), grid,
+        CycleTraction(*s.model.cycle(), static_cast<int>(s.state[lay.cycle_slot]), length, grid,
                       in.pad_pose, in.surfaces, in.normal_force_n, s.warm, s.depth_prev_m, options,
                       s.fast, s.shifted, &ws->grid_shift, &tf, &depth);
     ws->elastic_stats = ws->grid_shift.stats;

@@ -37,7 +37,7 @@ void AddDeposit(const TaxelGrid& g, const CellBox& box, const Deposit& d, double
   for (int j = box.j0; j < box.j0 + box.ny; ++j)
     for (int i = box.i0; i < box.i0 + box.nx; ++i) {
       const double v = p(static_cast<size_t>(j) * g.n + i);
-      if (!(v > 0.0)) continue;
+      if (v == 0.0) continue;
       for (int b = 0; b < 2; ++b) {
         const int tj = j - 1 + d.shift + b;
         if (tj < 0 || tj >= n || wy[b] == 0.0) continue;
@@ -51,14 +51,36 @@ void AddDeposit(const TaxelGrid& g, const CellBox& box, const Deposit& d, double
     }
 }
 
+CellBox Union(const CellBox& a, const CellBox& b) {
+  if (a.empty()) return b;
+  if (b.empty()) return a;
+  const int i0 = std::min(a.i0, b.i0), j0 = std::min(a.j0, b.j0);
+  const int i1 = std::max(a.i0 + a.nx, b.i0 + b.nx), j1 = std::max(a.j0 + a.ny, b.j0 + b.ny);
+  return CellBox{i0, j0, i1 - i0, j1 - j0};
+}
+
 }  // namespace
 
-bool CycleTraction(const CycleGrids& cg, int k, const TaxelGrid& grid, const Pose& pad_pose,
-                   const std::vector<CounterSurface>& surfaces, double force_n, bool warm,
-                   double depth_prev_m, const ElasticSolveOptions& options, bool fast_paths,
-                   HistoryBlock* ring, GridShiftWork* w, TractionField* field, double* depth_m) {
+int CycleLength(int n_grids, double dt_s) {
+  int length = n_grids;
+  if (dt_s > 0.0)
+    while (length > 1 && (n_grids % length != 0 || length * dt_s > kMaxCyclePeriodS * (1 + 1e-9)))
+      --length;
+  return length;
+}
+
+bool CycleTraction(const CycleGrids& cg, int slot, int length, const TaxelGrid& grid,
+                   const Pose& pad_pose, const std::vector<CounterSurface>& surfaces,
+                   double force_n, bool warm, double depth_prev_m,
+                   const ElasticSolveOptions& options, bool fast_paths, HistoryBlock* ring,
+                   GridShiftWork* w, TractionField* field, double* depth_m) {
   const int N = static_cast<int>(cg.grids.size());
-  const ShiftedGrid& sg = cg.grids[k];
+  // the grid solved b steps back
+  auto grid_at = [&](int b) {
+    const int phase = ((slot - b) % length + length) % length;
+    return (phase * (N / length) + N / 2) % N;
+  };
+  const ShiftedGrid& sg = cg.grids[grid_at(0)];
   const TaxelGrid& g = sg.grid;
   // The warm start: this grid's last two solutions (N and 2 N steps back)
   // extrapolated, with their stored K p (warm_start.h); before it has them,
@@ -68,12 +90,13 @@ bool CycleTraction(const CycleGrids& cg, int k, const TaxelGrid& grid, const Pos
   auto valid = [&](int b) { return ring[b].slots[kHsValid] > 0.0; };
   WarmTerm terms[2];
   int nterms = 0;
-  if (options.method == ElasticMethod::kPreconditioned && valid(N) && valid(2 * N)) {
-    terms[nterms++] = WarmTerm{&ring[N], 2.0};
-    terms[nterms++] = WarmTerm{&ring[2 * N], -1.0};
-  } else if (valid(N)) {
-    terms[nterms++] = WarmTerm{&ring[N], 1.0};
-  } else if (valid(1)) {
+  const int L = length;
+  if (options.method == ElasticMethod::kPreconditioned && valid(L) && valid(2 * L)) {
+    terms[nterms++] = WarmTerm{&ring[L], 2.0};
+    terms[nterms++] = WarmTerm{&ring[2 * L], -1.0};
+  } else if (valid(L)) {
+    terms[nterms++] = WarmTerm{&ring[L], 1.0};
+  } else if (L > 1 && valid(1)) {
     terms[nterms++] = WarmTerm{&ring[1], 1.0};
   }
   const double cull = warm ? CullLevel(depth_prev_m) : kInf;
@@ -101,27 +124,58 @@ bool CycleTraction(const CycleGrids& cg, int k, const TaxelGrid& grid, const Pos
   if (!touching) return false;
   *depth_m = w->stats.approach_m - gmin;
   StoreElasticHistory(g, w->pressure, sbox, u_region, w->elastic.check_u, *depth_m, &ring[0]);
-  // The average of every grid's latest solution (this one in double).
+  // The average of every cycling grid's latest solution, each carried to
+  // this time by linear extrapolation from its last two (the grid solved a
+  // steps back: (1 + a / L) p(a) - (a / L) p(a + L)); held values would
+  // leave what the grids' errors cancel only at equal times to be modulated
+  // at the cycle's frequency.
   int count = 0;
-  for (int b = 0; b < N; ++b) count += ring[b].slots[kHsValid] > 0.0;
+  for (int b = 0; b < L; ++b) count += valid(b);
   const double scale = 1.0 / count;
   CellBounds cells;
-  for (int b = 0; b < N; ++b) {
-    const HistoryBlock& h = ring[b];
-    if (!(h.slots[kHsValid] > 0.0)) continue;
-    const ShiftedGrid& gb = cg.grids[(k - b + N) % N];
+  for (int b = 0; b < L; ++b) {
+    if (!valid(b)) continue;
+    const ShiftedGrid& gb = cg.grids[grid_at(b)];
     const Deposit d = DepositOf(gb.grid, grid);
     if (b == 0) {
       const double* p = w->pressure.data();
       AddDeposit(
           gb.grid, sbox, d, scale, [p](size_t c) { return p[c]; }, grid, &field->pressure_pa,
           &cells);
-    } else {
-      AddDeposit(
-          gb.grid, h.p_box(), d, scale, [&h](size_t c) { return double(h.p(c)); }, grid,
-          &field->pressure_pa, &cells);
+      continue;
     }
+    const HistoryBlock& h = ring[b];
+    const CellBox hb = h.p_box();
+    if (!valid(b + L)) {
+      AddDeposit(
+          gb.grid, hb, d, scale, [&h](size_t c) { return double(h.p(c)); }, grid,
+          &field->pressure_pa, &cells);
+      continue;
+    }
+    const HistoryBlock& o = ring[b + L];
+    const CellBox ob = o.p_box();
+    const double f = static_cast<double>(b) / L;
+    const int n1 = gb.grid.n;
+    auto inside = [n1](const CellBox& x, size_t c) {
+      const int i = static_cast<int>(c % n1), j = static_cast<int>(c / n1);
+      return i >= x.i0 && i < x.i0 + x.nx && j >= x.j0 && j < x.j0 + x.ny;
+    };
+    AddDeposit(
+        gb.grid, Union(hb, ob), d, scale,
+        [&](size_t c) {
+          const double a = inside(hb, c) ? double(h.p(c)) : 0.0;
+          const double z = inside(ob, c) ? double(o.p(c)) : 0.0;
+          return (1.0 + f) * a - f * z;
+        },
+        grid, &field->pressure_pa, &cells);
   }
+  // extrapolation may leave cells leaving the contact below zero
+  const CellBox fb = cells.Box();
+  for (int j = fb.j0; j < fb.j0 + fb.ny; ++j)
+    for (int i = fb.i0; i < fb.i0 + fb.nx; ++i) {
+      double& v = field->pressure_pa[static_cast<size_t>(j) * grid.n + i];
+      v = std::max(v, 0.0);
+    }
   field->box = cells.Box();
   return NormalizeLoad(grid, force_n, field);
 }

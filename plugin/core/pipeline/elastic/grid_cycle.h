@@ -29,18 +29,31 @@ struct CycleGrids {
   std::vector<ShiftedGrid> grids;
 };
 
-// One step: solves grid k (rendered with the cull level of depth_prev_m if
-// warm, else everything; again without culling if the solved approach
-// reaches it), warm-started from ring[N] and ring[2 N] (ring[b]: the
-// history block b steps back, b = 0 .. 2 N; ring[0] is written), then
-// writes to field (cleared by the caller) the average of the latest
-// solution of every grid that has one (ring[0 .. N - 1]; grid (k - b) mod N
-// solved b steps back), load normalised to force_n. *depth_m: this step's
-// indentation depth. Returns whether the contact carries the load.
-bool CycleTraction(const CycleGrids& cg, int k, const TaxelGrid& grid, const Pose& pad_pose,
-                   const std::vector<CounterSurface>& surfaces, double force_n, bool warm,
-                   double depth_prev_m, const ElasticSolveOptions& options, bool fast_paths,
-                   HistoryBlock* ring, GridShiftWork* w, TractionField* field, double* depth_m);
+// The longest cycle (s): with a longer timestep fewer grids cycle (a
+// divisor of N), so that the cycle's own frequency 1 / (N dt), where what
+// is left of the grid's error is modulated, stays above PC's band.
+constexpr double kMaxCyclePeriodS = 0.5e-3;
+
+// How many of the N grids cycle at evaluation interval dt_s (0: unknown,
+// all of them).
+int CycleLength(int n_grids, double dt_s);
+
+// One step: `slot` counts steps modulo N; `length` grids cycle (a divisor
+// of N: every N / length-th grid, the taxel-centred one k = N / 2 among
+// them). Solves this step's grid (rendered with the cull level of
+// depth_prev_m if warm, else everything; again without culling if the
+// solved approach reaches it), warm-started from its own solutions length
+// and 2 length steps back (ring[b]: the history block b steps back,
+// b = 0 .. 2 N; ring[0] is written), then writes to field (cleared by the
+// caller) the average of the latest solution of every cycling grid that
+// has one (ring[0 .. length - 1]), load normalised to force_n. *depth_m:
+// this step's indentation depth. Returns whether the contact carries the
+// load.
+bool CycleTraction(const CycleGrids& cg, int slot, int length, const TaxelGrid& grid,
+                   const Pose& pad_pose, const std::vector<CounterSurface>& surfaces,
+                   double force_n, bool warm, double depth_prev_m,
+                   const ElasticSolveOptions& options, bool fast_paths, HistoryBlock* ring,
+                   GridShiftWork* w, TractionField* field, double* depth_m);
 
 }  // namespace mjtouch
 
