@@ -10,6 +10,9 @@ namespace mjtouch {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Relative change of the indentation depth beyond which an older grid's
+// solution is not averaged (steady sliding changes it by far less per cycle).
+constexpr double kCycleDepthChange = 0.05;
 
 // Cloud-in-cell weights of an offset grid's cells on the taxel grid, per
 // axis: cell i (centre at taxel corner i plus `frac` - 1/2 cells) goes to
@@ -129,12 +132,19 @@ bool CycleTraction(const CycleGrids& cg, int slot, int length, const TaxelGrid& 
   // steps back: (1 + a / L) p(a) - (a / L) p(a + L)); held values would
   // leave what the grids' errors cancel only at equal times to be modulated
   // at the cycle's frequency.
+  // Solutions of another contact (the indentation depth changed by more
+  // than kCycleDepthChange since, e.g. a jump) are left out until their
+  // grids' turns come: the average then holds fewer grids for a cycle.
+  auto current = [&](int b) {
+    return valid(b) &&
+           std::abs(ring[b].slots[kHsDepth] - *depth_m) <= kCycleDepthChange * (*depth_m);
+  };
   int count = 0;
-  for (int b = 0; b < L; ++b) count += valid(b);
+  for (int b = 0; b < L; ++b) count += current(b);
   const double scale = 1.0 / count;
   CellBounds cells;
   for (int b = 0; b < L; ++b) {
-    if (!valid(b)) continue;
+    if (!current(b)) continue;
     const ShiftedGrid& gb = cg.grids[grid_at(b)];
     const Deposit d = DepositOf(gb.grid, grid);
     if (b == 0) {
@@ -146,7 +156,7 @@ bool CycleTraction(const CycleGrids& cg, int slot, int length, const TaxelGrid& 
     }
     const HistoryBlock& h = ring[b];
     const CellBox hb = h.p_box();
-    if (!valid(b + L)) {
+    if (!current(b + L)) {
       AddDeposit(
           gb.grid, hb, d, scale, [&h](size_t c) { return double(h.p(c)); }, grid,
           &field->pressure_pa, &cells);
