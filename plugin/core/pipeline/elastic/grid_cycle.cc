@@ -40,7 +40,7 @@ void AddDeposit(const TaxelGrid& g, const CellBox& box, const Deposit& d, double
   for (int j = box.j0; j < box.j0 + box.ny; ++j)
     for (int i = box.i0; i < box.i0 + box.nx; ++i) {
       const double v = p(static_cast<size_t>(j) * g.n + i);
-      if (v == 0.0) continue;
+      if (!(v > 0.0)) continue;
       for (int b = 0; b < 2; ++b) {
         const int tj = j - 1 + d.shift + b;
         if (tj < 0 || tj >= n || wy[b] == 0.0) continue;
@@ -52,14 +52,6 @@ void AddDeposit(const TaxelGrid& g, const CellBox& box, const Deposit& d, double
         }
       }
     }
-}
-
-CellBox Union(const CellBox& a, const CellBox& b) {
-  if (a.empty()) return b;
-  if (b.empty()) return a;
-  const int i0 = std::min(a.i0, b.i0), j0 = std::min(a.j0, b.j0);
-  const int i1 = std::max(a.i0 + a.nx, b.i0 + b.nx), j1 = std::max(a.j0 + a.ny, b.j0 + b.ny);
-  return CellBox{i0, j0, i1 - i0, j1 - j0};
 }
 
 }  // namespace
@@ -127,11 +119,13 @@ bool CycleTraction(const CycleGrids& cg, int slot, int length, const TaxelGrid& 
   if (!touching) return false;
   *depth_m = w->stats.approach_m - gmin;
   StoreElasticHistory(g, w->pressure, sbox, u_region, w->elastic.check_u, *depth_m, &ring[0]);
-  // The average of every cycling grid's latest solution, each carried to
-  // this time by linear extrapolation from its last two (the grid solved a
-  // steps back: (1 + a / L) p(a) - (a / L) p(a + L)); held values would
-  // leave what the grids' errors cancel only at equal times to be modulated
-  // at the cycle's frequency.
+  // The average of every cycling grid's solution at one common time,
+  // L - 1 steps back: the grid solved a steps back interpolated linearly
+  // between its last two solutions (a and a + L steps back; weights
+  // (L - 1 - a) / L on the older). Equal times let the grids' errors cancel;
+  // each grid's latest solution held instead (ages 0 .. L - 1) leaves them
+  // modulated at the cycle's frequency 1 / (L dt), and extrapolating to
+  // the present amplifies the solutions' jumps as the contact set changes.
   // Solutions of another contact (the indentation depth changed by more
   // than kCycleDepthChange since, e.g. a jump) are left out until their
   // grids' turns come: the average then holds fewer grids for a cycle.
@@ -147,45 +141,29 @@ bool CycleTraction(const CycleGrids& cg, int slot, int length, const TaxelGrid& 
     if (!current(b)) continue;
     const ShiftedGrid& gb = cg.grids[grid_at(b)];
     const Deposit d = DepositOf(gb.grid, grid);
-    if (b == 0) {
-      const double* p = w->pressure.data();
-      AddDeposit(
-          gb.grid, sbox, d, scale, [p](size_t c) { return p[c]; }, grid, &field->pressure_pa,
-          &cells);
-      continue;
+    // weight of the older solution (b + L steps back), of the newer
+    const double f = current(b + L) ? static_cast<double>(L - 1 - b) / L : 0.0;
+    if (f < 1.0) {
+      const double sc = scale * (1.0 - f);
+      if (b == 0) {
+        const double* p = w->pressure.data();
+        AddDeposit(
+            gb.grid, sbox, d, sc, [p](size_t c) { return p[c]; }, grid, &field->pressure_pa,
+            &cells);
+      } else {
+        const HistoryBlock& h = ring[b];
+        AddDeposit(
+            gb.grid, h.p_box(), d, sc, [&h](size_t c) { return double(h.p(c)); }, grid,
+            &field->pressure_pa, &cells);
+      }
     }
-    const HistoryBlock& h = ring[b];
-    const CellBox hb = h.p_box();
-    if (!current(b + L)) {
+    if (f > 0.0) {
+      const HistoryBlock& o = ring[b + L];
       AddDeposit(
-          gb.grid, hb, d, scale, [&h](size_t c) { return double(h.p(c)); }, grid,
+          gb.grid, o.p_box(), d, scale * f, [&o](size_t c) { return double(o.p(c)); }, grid,
           &field->pressure_pa, &cells);
-      continue;
     }
-    const HistoryBlock& o = ring[b + L];
-    const CellBox ob = o.p_box();
-    const double f = static_cast<double>(b) / L;
-    const int n1 = gb.grid.n;
-    auto inside = [n1](const CellBox& x, size_t c) {
-      const int i = static_cast<int>(c % n1), j = static_cast<int>(c / n1);
-      return i >= x.i0 && i < x.i0 + x.nx && j >= x.j0 && j < x.j0 + x.ny;
-    };
-    AddDeposit(
-        gb.grid, Union(hb, ob), d, scale,
-        [&](size_t c) {
-          const double a = inside(hb, c) ? double(h.p(c)) : 0.0;
-          const double z = inside(ob, c) ? double(o.p(c)) : 0.0;
-          return (1.0 + f) * a - f * z;
-        },
-        grid, &field->pressure_pa, &cells);
   }
-  // extrapolation may leave cells leaving the contact below zero
-  const CellBox fb = cells.Box();
-  for (int j = fb.j0; j < fb.j0 + fb.ny; ++j)
-    for (int i = fb.i0; i < fb.i0 + fb.nx; ++i) {
-      double& v = field->pressure_pa[static_cast<size_t>(j) * grid.n + i];
-      v = std::max(v, 0.0);
-    }
   field->box = cells.Box();
   return NormalizeLoad(grid, force_n, field);
 }
