@@ -7,7 +7,10 @@ grows continuously with the overlap and has no such line.
     python examples/pc_grid_line.py [--duration 0.4] [--json]
 
 Prints, per (pressure, pitch), the PC receptors' stress power at V / pitch and
-at the grating harmonics around 250 Hz, and the PC rate (noise off)."""
+at the grating harmonics around 250 Hz, and the PC rate (noise off). The
+elastic rows solve on the taxel grid alone (grid_cycle=1); the last row is
+the default skin, whose grid_cycle=4 averages four sub-cell offset grids
+solved in turn, which cancels the line."""
 
 import argparse
 import json
@@ -20,7 +23,12 @@ from mjtouch.experiments import rollout
 from mjtouch.scene import scenes
 
 SPEED_M_S = 0.025
-CASES = (("elastic", 1e-4, 128), ("elastic", 5e-5, 256), ("winkler", 1e-4, 128))
+CASES = (
+    ("elastic", 1e-4, 128, "1"),
+    ("elastic", 5e-5, 256, "1"),
+    ("winkler", 1e-4, 128, "1"),
+    ("elastic", 1e-4, 128, "4"),
+)
 
 
 def band_max(f, p, fc, half_width_hz):
@@ -28,8 +36,9 @@ def band_max(f, p, fc, half_width_hz):
     return float(p[k].max()) if k.any() else float("nan")
 
 
-def run(pressure: str, pitch_m: float, nx: int, duration_s: float) -> dict:
-    tip = scenes.Fingertip(nx=nx, pitch_m=pitch_m, skin={"pressure": pressure, "noise": "0 0 0"})
+def run(pressure: str, pitch_m: float, nx: int, cycle: str, duration_s: float) -> dict:
+    skin = {"pressure": pressure, "noise": "0 0 0", "grid_cycle": cycle}
+    tip = scenes.Fingertip(nx=nx, pitch_m=pitch_m, skin=skin)
     r = rollout.run_slide(
         tip,
         scenes.Texture(),
@@ -41,6 +50,7 @@ def run(pressure: str, pitch_m: float, nx: int, duration_s: float) -> dict:
     hw = max(3.0, 1.5 * (f[1] - f[0]))
     return {
         "pressure": pressure,
+        "grid_cycle": int(cycle),
         "pitch_m": pitch_m,
         "v_over_pitch_hz": SPEED_M_S / pitch_m,
         "power_at_v_over_pitch_pa2": band_max(f, p, SPEED_M_S / pitch_m, hw),
@@ -55,15 +65,16 @@ def main(argv=None) -> int:
     ap.add_argument("--small", action="store_true", help="coarse grids (a smoke run)")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
-    cases = ((p, 2 * h, n // 2) for p, h, n in CASES) if a.small else CASES
-    rows = [run(p, h, n, a.duration) for p, h, n in cases]
+    cases = ((p, 2 * h, n // 2, c) for p, h, n, c in CASES) if a.small else CASES
+    rows = [run(p, h, n, c, a.duration) for p, h, n, c in cases]
     if a.json:
         print(json.dumps(rows))
         return 0
     for r in rows:
         hm = r["power_at_harmonics_pa2"]
         print(
-            f"{r['pressure']:8s} pitch {r['pitch_m'] * 1e6:5.1f} um: power at V/pitch "
+            f"{r['pressure']:8s} grid_cycle {r['grid_cycle']} pitch {r['pitch_m'] * 1e6:5.1f} um: "
+            "power at V/pitch "
             f"({r['v_over_pitch_hz']:.0f} Hz) {r['power_at_v_over_pitch_pa2']:.3g} Pa^2; "
             f"at 225/250/275 Hz {hm['225']:.3g} / {hm['250']:.3g} / {hm['275']:.3g}; "
             f"PC {r['pc_rate_hz']:.0f} Hz"

@@ -5,7 +5,8 @@ sliding scene (issue 13; the quasi-static analysis: pc_grid_line_static.py).
     python examples/pc_grid_shift.py --reference 257    # and a 50 um run (~3 min more)
     python examples/pc_grid_shift.py --small --json     # 65 / 64 x 0.2 mm, ~15 s
 
-The default slide (0.5 N, 25 mm/s over the 1 mm grating, noise off) runs on
+The default slide (0.5 N, 25 mm/s over the 1 mm grating, noise off, each grid
+alone: `grid_cycle=1`) runs on
 an odd grid (nx, a taxel centred on the pole) and on the even grid nx - 1 of
 the same pitch, whose cell centres sit half a cell away in x and y. Both carry
 the same PC receptors: a 0.6 mm lattice (the bench's `sites`) on the odd
@@ -44,7 +45,9 @@ def shifted_sites(sites: str, dx_m: float) -> str:
 
 
 def pc_trace(nx: int, pitch_m: float, sites: str, duration_s: float):
-    tip = scenes.Fingertip(nx=nx, pitch_m=pitch_m, skin={"noise": "0 0 0", "sites": sites})
+    tip = scenes.Fingertip(
+        nx=nx, pitch_m=pitch_m, skin={"noise": "0 0 0", "sites": sites, "grid_cycle": "1"}
+    )
     r = rollout.run_slide(
         tip,
         scenes.Texture(),

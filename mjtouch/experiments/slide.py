@@ -130,6 +130,14 @@ class SlideParams:
         "attribute grid_shift; cancels the V/pitch grid line that PC rates pick up, ~1.8x the "
         "step)",
     )
+    grid_cycle: int = _field(
+        4,
+        "int",
+        "elastic: solve each step on one of this many sub-cell offset grids in turn and "
+        "average the last ones (skin attribute grid_cycle; keeps the texture's sub-cell "
+        "position from locking to the grid; 1: the taxel grid alone)",
+        bounds=(1, 4),
+    )
     texture_mesh: str | None = _field(
         None,
         "str",
@@ -175,6 +183,8 @@ class SlideParams:
         skin = {"pressure": self.pressure}
         if self.grid_shift:
             skin["grid_shift"] = "true"
+        if self.grid_cycle != 4:
+            skin["grid_cycle"] = str(self.grid_cycle)
         return scenes.Fingertip(
             ridges=self.ridges,
             ridge_pitch_m=self.ridge_pitch_m,

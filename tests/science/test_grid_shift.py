@@ -45,7 +45,12 @@ def _slide(grid_shift: str, nx: int = 65, pitch: float = 2e-4):
     tip = scenes.Fingertip(
         nx=nx,
         pitch_m=pitch,
-        skin={"noise": "0 0 0", "sites": lattice_sites([(nx, pitch)]), "grid_shift": grid_shift},
+        skin={
+            "noise": "0 0 0",
+            "sites": lattice_sites([(nx, pitch)]),
+            "grid_shift": grid_shift,
+            "grid_cycle": "1",  # against the taxel grid alone (grid_shift turns the cycle off)
+        },
     )
     r = rollout.run_slide(
         tip, scenes.Texture(), scenes.Protocol(speed_m_s=SPEED, force_n=0.5), duration_s=0.25

@@ -64,6 +64,7 @@ NON_DEFAULT = {
     "contact_solver": "pk",
     "elastic_precision": "double",
     "grid_shift": "true",
+    "grid_cycle": "2",
     "stiffness": "3e7",
     "poisson": ("0.4", {"skin": "halfspace"}),
     "shear": "false",

@@ -11,17 +11,18 @@
 namespace mjtouch {
 
 struct TaxelGrid {
-  int n = 0;           // cells per side
-  double pitch_m = 0;  // cell side
+  int n = 0;            // cells per side
+  double pitch_m = 0;   // cell side
+  double offset_m = 0;  // every cell centre moved by this in x and in y (sub-cell offset grids)
 
   size_t Size() const { return static_cast<size_t>(n) * n; }
   // Centre of cell index i along one axis (pad frame, m).
-  double Centre(int i) const { return (i - 0.5 * (n - 1)) * pitch_m; }
+  double Centre(int i) const { return (i - 0.5 * (n - 1)) * pitch_m + offset_m; }
   double Area() const { return pitch_m * pitch_m; }
   double HalfExtent() const { return 0.5 * n * pitch_m; }
   // Nearest cell index to coordinate x_m (clamped).
   int Nearest(double x_m) const {
-    int i = static_cast<int>(x_m / pitch_m + 0.5 * (n - 1) + 0.5 + 1e6) - 1000000;
+    int i = static_cast<int>((x_m - offset_m) / pitch_m + 0.5 * (n - 1) + 0.5 + 1e6) - 1000000;
     return i < 0 ? 0 : (i >= n ? n - 1 : i);
   }
 };

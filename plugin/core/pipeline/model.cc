@@ -186,6 +186,23 @@ std::shared_ptr<const SkinModel> SkinModel::Build(const SkinConfig& cfg_in, std:
               ? LayeredCompliance(*model->layered_, cfg.grid.pitch_m, sg->grid.n)
               : HalfSpaceCompliance(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m, sg->grid.n));
       model->shifted_ = std::move(sg);
+    } else if (cfg.grid_cycle > 1) {
+      // n + 1 cells k / N of a cell off the taxel grid's corners; one
+      // compliance for all (same size and pitch)
+      auto cg = std::make_shared<CycleGrids>();
+      const int n1 = cfg.grid.n + 1;
+      std::shared_ptr<const ElasticContact> ec = std::make_shared<ElasticContact>(
+          model->layered_ ? LayeredCompliance(*model->layered_, cfg.grid.pitch_m, n1)
+                          : HalfSpaceCompliance(cfg.young_pa, cfg.poisson, cfg.grid.pitch_m, n1));
+      cg->grids.resize(cfg.grid_cycle);
+      for (int k = 0; k < cfg.grid_cycle; ++k) {
+        ShiftedGrid& g = cg->grids[k];
+        g.grid = TaxelGrid{n1, cfg.grid.pitch_m, k * cfg.grid.pitch_m / cfg.grid_cycle};
+        g.skin_z = SkinSurface(g.grid, cfg.pad, cfg.ridges);
+        g.blocks = MakeSkinBlocks(g.grid, g.skin_z);
+        g.elastic = ec;
+      }
+      model->cycle_ = std::move(cg);
     }
   }
   cache[key] = model;

@@ -11,6 +11,7 @@
 
 #include "contact/contact_solver.h"
 #include "pipeline/config.h"
+#include "pipeline/elastic/grid_cycle.h"
 #include "pipeline/elastic/grid_shift.h"
 #include "pipeline/state_layout.h"
 #include "stress/kernel_tables.h"
@@ -49,6 +50,9 @@ class SkinModel {
   const ElasticContact* elastic() const { return elastic_.get(); }
   // `grid_shift` (with `elastic`): the half-cell shifted grid, else null.
   const ShiftedGrid* shifted() const { return shifted_.get(); }
+  // `grid_cycle` > 1 (with `elastic`, without `grid_shift`): the offset
+  // grids, else null.
+  const CycleGrids* cycle() const { return cycle_.get(); }
   // The elastic skin (HalfSpace or LayeredSubstrate), its FFT spectra (null
   // unless the FFT path can pay off), the receptor sites as the stress stage
   // sees them, and the material at each class's depth (for `sed`, `strain`;
@@ -78,6 +82,7 @@ class SkinModel {
   std::shared_ptr<const KernelTables> kernel_;
   std::shared_ptr<const ElasticContact> elastic_;  // `elastic` model only
   std::shared_ptr<const ShiftedGrid> shifted_;     // `grid_shift` with `elastic`
+  std::shared_ptr<const CycleGrids> cycle_;        // `grid_cycle` > 1 with `elastic`
   std::shared_ptr<const Substrate> substrate_;
   const LayeredSubstrate* layered_ = nullptr;  // substrate_ if layered
   std::shared_ptr<const KernelSpectra> spectra_;

@@ -421,6 +421,24 @@ bool ElasticTraction(const TractionStep& s) {
   TractionField& tf = ws->traction;
   const ElasticSolveOptions options = ElasticOptions(cfg);
   ClearTraction(grid, &tf);
+  if (s.model.cycle()) {  // `grid_cycle`: one offset grid per step (grid_cycle.h)
+    const StateLayout& lay = s.model.state_layout();
+    double depth = 0.0;
+    const int length =
+        CycleLength(lay.cycle, in.timestep_s / std::max(1, cfg.oversample));  // per evaluation
+    const bool touching =
+        CycleTraction(*s.model.cycle(), static_cast<int>(s.state[lay.cycle_slot]), length, grid,
+                      in.pad_pose, in.surfaces, in.normal_force_n, s.warm, s.depth_prev_m, options,
+                      s.fast, s.shifted, &ws->grid_shift, &tf, &depth);
+    ws->elastic_stats = ws->grid_shift.stats;
+    if (!touching) {
+      ClearTraction(grid, &tf);
+      return false;
+    }
+    s.state[kStContactDepth] = depth;
+    FinishSolvedTraction(s);
+    return true;
+  }
   const double cull_rel = s.warm ? CullLevel(s.depth_prev_m) : kInf;
   CellBox box;
   CellBox u_region;  // the region of the check's K p (ws->elastic.check_u)
@@ -471,19 +489,30 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, const Traction
   // repeated evaluation at the same time starts where the first one did.
   const StateLayout& lay = model.state_layout();
   const bool history = lay.history_block > 0;
-  HistoryBlock taxel[3]{}, shifted[3]{};
-  if (history) {
-    if (new_time)
-      state[lay.history_head] = (static_cast<int>(state[lay.history_head]) + 1) % kHistoryBlocks;
-    for (int back = 0; back < 3; ++back) taxel[back] = lay.history_at(state, back);
-    taxel[0].slots[kHsValid] = 0.0;
+  HistoryBlock taxel[3]{}, shifted[2 * kMaxGridCycle + 1]{};
+  const bool cycle = lay.cycle > 1;
+  if (history || cycle) {
+    if (new_time) {
+      state[lay.history_head] = (static_cast<int>(state[lay.history_head]) + 1) % lay.ring;
+      if (cycle) state[lay.cycle_slot] = (static_cast<int>(state[lay.cycle_slot]) + 1) % lay.cycle;
+    }
+    if (history) {
+      for (int back = 0; back < 3; ++back) taxel[back] = lay.history_at(state, back);
+      taxel[0].slots[kHsValid] = 0.0;
+    }
     if (lay.shifted_block > 0) {
-      for (int back = 0; back < 3; ++back) shifted[back] = lay.shifted_history_at(state, back);
+      for (int back = 0; back < lay.ring; ++back)
+        shifted[back] = lay.shifted_history_at(state, back);
       shifted[0].slots[kHsValid] = 0.0;
     }
   }
-  const bool warm = history ? HasWarmStart(taxel) : state[kStContactValid] > 0.0;
-  const double depth_prev = history ? taxel[1].slots[kHsDepth] : state[kStContactDepth];
+  // `grid_cycle`: the last step's depth, whichever grid it solved
+  const bool warm = history ? HasWarmStart(taxel)
+                    : cycle ? shifted[1].slots[kHsValid] > 0.0
+                            : state[kStContactValid] > 0.0;
+  const double depth_prev = history ? taxel[1].slots[kHsDepth]
+                            : cycle ? shifted[1].slots[kHsDepth]
+                                    : state[kStContactDepth];
   state[kStContactValid] = 0.0;
   // shear="partial": the buffer written becomes the head; without contact
   // it holds no memory.
@@ -511,7 +540,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, const Traction
                           warm,
                           depth_prev,
                           history ? taxel : nullptr,
-                          history && lay.shifted_block > 0 ? shifted : nullptr};
+                          lay.shifted_block > 0 ? shifted : nullptr};
   bool touching;
   switch (cfg.pressure_model) {
     case PressureModel::kContacts: touching = ContactsTraction(step); break;

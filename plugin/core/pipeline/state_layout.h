@@ -86,7 +86,12 @@ enum EvalStartSlot {
 // same bits.
 // `grid_shift`: the same three blocks for the shifted grid's solve ((n+1)^2
 // cells, rotating with the same head), after the taxel grid's; absent
-// without it (the shipped scenes' state is unchanged).
+// without it.
+// `grid_cycle` N > 1 (without `grid_shift`): no taxel grid blocks; a ring of
+// 2 N + 1 blocks of (n+1)^2 cells, one per step whichever offset grid it
+// solved: the grid solved now finds its last two solutions N and 2 N steps
+// back, and every grid's latest is within N - 1 steps. A slot after the
+// head holds which grid this time solves.
 enum HistorySlot {
   kHsValid = 0,  // touched
   kHsDepth,      // indentation, m
@@ -101,6 +106,7 @@ enum HistorySlot {
   kHistorySlots
 };
 constexpr int kHistoryBlocks = 3;
+constexpr int kMaxGridCycle = 4;  // `grid_cycle`'s largest N
 
 // A history block's packed floats: pressure at [0, ncell), displacement at
 // [ncell, 2 ncell) (memcpy: no aliasing of the doubles).
@@ -151,6 +157,8 @@ struct StateLayout {
   int history_block = 0;                       // kHistorySlots + n*n; 0 without `elastic`
   int shifted_history = 0, shifted_block = 0;  // kHistorySlots + (n+1)^2; 0 without `grid_shift`
   int history_head = 0;                        // slot of h
+  int ring = kHistoryBlocks;                   // blocks in each history ring
+  int cycle = 1, cycle_slot = 0;               // `grid_cycle` N; slot of this time's grid (N > 1)
   // shear="partial": the two tangential buffers (0 without), their head slot
   // (saved in eval_start) and the buffer this step writes (set by Step).
   int tangential = 0, tangential_block = 0, tangential_head = 0, tangential_write = 0;
@@ -169,17 +177,20 @@ struct StateLayout {
     history = last_voltage + nreceptor;
     const bool elastic = cfg.pressure_model == PressureModel::kElastic;
     ncell = cfg.grid.Size();
-    history_block = elastic ? kHistorySlots + static_cast<int>(ncell) : 0;
+    cycle = elastic && !cfg.grid_shift ? cfg.grid_cycle : 1;
+    history_block = elastic && cycle == 1 ? kHistorySlots + static_cast<int>(ncell) : 0;
     shifted_history = history + kHistoryBlocks * history_block;
-    if (elastic && cfg.grid_shift) {
+    if (elastic && (cfg.grid_shift || cycle > 1)) {
       shifted_ncell = static_cast<size_t>(cfg.grid.n + 1) * (cfg.grid.n + 1);
       shifted_block = kHistorySlots + static_cast<int>(shifted_ncell);
     }
-    tangential = shifted_history + kHistoryBlocks * shifted_block;
+    if (cycle > 1) ring = 2 * cycle + 1;
+    tangential = shifted_history + ring * shifted_block;
     const bool partial = cfg.shear && cfg.shear_partial;
     tangential_block = partial ? kTangentialSlots + 2 * static_cast<int>(ncell) : 0;
     history_head = tangential + 2 * tangential_block;
-    tangential_head = history_head + (elastic ? 1 : 0);
+    cycle_slot = history_head + (elastic ? 1 : 0);
+    tangential_head = cycle_slot + (cycle > 1 ? 1 : 0);
     tangential_write = tangential_head + (partial ? 1 : 0);
     last_pose = tangential_write + (partial ? 1 : 0);
     last_quantity = last_pose + kLastPoseSize;
@@ -194,7 +205,8 @@ struct StateLayout {
   HistoryBlock history_at(double* state, int back) const {
     return Block(state, history, history_block, ncell, back);
   }
-  // The same for the shifted grid (`grid_shift` only).
+  // The same for the shifted grid (`grid_shift`), or the ring's block k
+  // steps back (`grid_cycle`).
   HistoryBlock shifted_history_at(double* state, int back) const {
     return Block(state, shifted_history, shifted_block, shifted_ncell, back);
   }
@@ -213,8 +225,7 @@ struct StateLayout {
  private:
   HistoryBlock Block(double* state, int first, int block, size_t cells, int back) const {
     const int h = static_cast<int>(state[history_head]);
-    double* b =
-        state + first + static_cast<size_t>((h + kHistoryBlocks - back) % kHistoryBlocks) * block;
+    double* b = state + first + static_cast<size_t>((h + ring - back) % ring) * block;
     return HistoryBlock{b, reinterpret_cast<char*>(b + kHistorySlots), cells};
   }
 };

@@ -362,6 +362,7 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
     sub.contacts = in.contacts;
     sub.in_contact = in.in_contact;
     sub.friction_mu = in.friction_mu;
+    sub.timestep_s = in.timestep_s;
     const double t0 = time_s - elapsed;
     const PoseInterpolator pose(from, in.pad_pose);
     for (int k = 1; k <= K; ++k) {

@@ -166,37 +166,37 @@ void AppendHits(const double* x, int i0, int i1, int base, Hit hit, std::vector<
     if (hit(x[i])) out->push_back(base + i);
 }
 
-// The warm start (`last` null: cold): *guess = the last step's pressure, or
-// with `prev` max(0, 2 p(n-1) - p(n-2)); *solve_box = the last contact
-// kBoxMarginCells wider (within box); with `prev`, the cells where the guess
-// on *solve_box differs from 2 p(n-1) - p(n-2) (clipped, or outside the box)
-// in w->u0_fix (ExtrapolatedDisplacement). The solve reads the guess on
-// *solve_box only (a periodic operator's: everywhere), so only that part is
-// cleared. One pass over the history rows: the guess, the last contact's
-// extent and 2 p(n-1) - p(n-2) (kept in w->warm_lin), which is classified
-// once the solve box is known.
-void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* last,
-               const HistoryBlock* prev, bool periodic, std::vector<double>* guess,
-               ElasticStepWork* w, CellBox* solve_box) {
+// The warm start (no terms: cold): *guess = the first term's pressure, or
+// with two or more terms max(0, sum of weight x pressure); *solve_box = the
+// first term's contact kBoxMarginCells wider (within box); with two or more
+// terms, the cells where the guess on *solve_box differs from the weighted
+// sum (clipped, or outside the box) in w->u0_fix (ExtrapolatedDisplacement).
+// The solve reads the guess on *solve_box only (a periodic operator's:
+// everywhere), so only that part is cleared. One pass over the history
+// rows: the guess, the contact's extent and the weighted sum (kept in
+// w->warm_lin), which is classified once the solve box is known.
+void WarmStart(const TaxelGrid& grid, const CellBox& box, const WarmTerm* terms, int nterms,
+               bool periodic, std::vector<double>* guess, ElasticStepWork* w, CellBox* solve_box) {
   const int n = grid.n;
   w->u0_fix.clear();
-  if (!last || periodic || guess->size() != grid.Size()) guess->assign(grid.Size(), 0.0);
-  if (!last) return;
-  const CellBox lb = last->p_box(), pb = prev ? prev->p_box() : CellBox{};
-  const CellBox both = Union(lb, pb);
+  if (nterms == 0 || periodic || guess->size() != grid.Size()) guess->assign(grid.Size(), 0.0);
+  if (nterms == 0) return;
+  const bool lin_sum = nterms > 1;
+  const CellBox lb = terms[0].block->p_box();
+  CellBox both = lb;
+  for (int t = 1; t < nterms; ++t) both = Union(both, terms[t].block->p_box());
   const int i0 = both.i0, i1 = both.i0 + both.nx;
   // the rows as stored (float): widened exactly where they are used
-  w->row_f.resize(2 * static_cast<size_t>(std::max(n, 1)));
+  w->row_f.resize(static_cast<size_t>(nterms) * std::max(n, 1));
   float* lrow = w->row_f.data();
-  float* prow = lrow + n;
-  if (prev) w->warm_lin.resize(static_cast<size_t>(std::max(both.nx, 0)) * std::max(both.ny, 0));
-  // the last contact within box: its cells in box's columns of lb
+  if (lin_sum) w->warm_lin.resize(static_cast<size_t>(std::max(both.nx, 0)) * std::max(both.ny, 0));
+  // the first term's contact within box: its cells in box's columns of lb
   const int ia = std::max(box.i0, lb.i0), ib = std::min(box.i0 + box.nx, lb.i0 + lb.nx);
   const int ja = std::max(box.j0, lb.j0), jb = std::min(box.j0 + box.ny, lb.j0 + lb.ny);
   CellBounds support;
   for (int j = both.j0; j < both.j0 + both.ny; ++j) {
     double* g = guess->data() + static_cast<size_t>(j) * n;
-    HistoryRow(*last, lb, j, n, i0, i1, lrow);
+    HistoryRow(*terms[0].block, lb, j, n, i0, i1, lrow);
     if (j >= ja && j < jb && ia < ib) {
       int lo = ia, hi = ib - 1;
       while (lo < ib && !(lrow[lo] > 0.0f)) ++lo;
@@ -205,14 +205,19 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
         support.AddRow(lo, hi, j);
       }
     }
-    if (!prev) {
+    if (!lin_sum) {
       for (int i = i0; i < i1; ++i) g[i] = static_cast<double>(lrow[i]);
       continue;
     }
-    HistoryRow(*prev, pb, j, n, i0, i1, prow);
+    for (int t = 1; t < nterms; ++t)
+      HistoryRow(*terms[t].block, terms[t].block->p_box(), j, n, i0, i1,
+                 lrow + static_cast<size_t>(t) * n);
     double* lin = w->warm_lin.data() + static_cast<size_t>(j - both.j0) * both.nx - i0;
+    const double w0 = terms[0].weight;
     for (int i = i0; i < i1; ++i) {
-      const double v = 2.0 * static_cast<double>(lrow[i]) - static_cast<double>(prow[i]);
+      double v = w0 * static_cast<double>(lrow[i]);
+      for (int t = 1; t < nterms; ++t)
+        v += terms[t].weight * static_cast<double>(lrow[static_cast<size_t>(t) * n + i]);
       g[i] = std::max(0.0, v);
       lin[i] = v;
     }
@@ -232,7 +237,7 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
       }
     }
   }
-  if (!prev) return;
+  if (!lin_sum) return;
   for (int j = both.j0; j < both.j0 + both.ny; ++j) {
     const double* lin = w->warm_lin.data() + static_cast<size_t>(j - both.j0) * both.nx - i0;
     // in box order: outside sb, lin != 0; inside, lin < 0
@@ -248,40 +253,44 @@ void WarmStart(const TaxelGrid& grid, const CellBox& box, const HistoryBlock* la
 }
 
 // w->u0 = K times the extrapolated guess on `box` (bx * by): by linearity
-// 2 u(n-1) - u(n-2) from the displacements the last two steps stored (their
-// box checks' K p over kHsURegion*), corrected by direct sums for the cells
-// where the guess is not 2 p(n-1) - p(n-2) (clipped at zero, or outside the
-// box). False (apply the operator instead) if a stored box does not cover
-// `box` or the corrections would cost more than an FFT.
+// the weighted sum of the displacements the terms' steps stored (their box
+// checks' K p over kHsURegion*), corrected by direct sums for the cells
+// where the guess is not the weighted sum of pressures (clipped at zero, or
+// outside the box). False (apply the operator instead) if a stored box does
+// not cover `box` or the corrections would cost more than an FFT.
 bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
-                              const HistoryBlock& last, const HistoryBlock& prev,
-                              const std::vector<double>& guess, const CellBox& box, int threads,
-                              ElasticStepWork* w) {
-  const CellBox rl = last.u_box(), rp = prev.u_box();
+                              const WarmTerm* terms, int nterms, const std::vector<double>& guess,
+                              const CellBox& box, int threads, ElasticStepWork* w) {
   auto covers = [&](const CellBox& r) {
     return r.nx > 0 && r.ny > 0 && box.i0 >= r.i0 && box.j0 >= r.j0 &&
            box.i0 + box.nx <= r.i0 + r.nx && box.j0 + box.ny <= r.j0 + r.ny;
   };
-  if (K.periodic() || !covers(rl) || !covers(rp)) return false;
+  if (K.periodic()) return false;
+  for (int t = 0; t < nterms; ++t)
+    if (!covers(terms[t].block->u_box())) return false;
   // The cells to correct (WarmStart), and whether they are few enough.
   const size_t B = static_cast<size_t>(box.nx) * box.ny;
   if (static_cast<double>(w->u0_fix.size()) >
       DirectCellsPerApply(*K.SpectrumFor(box.nx, box.ny), B))
     return false;
-  const CellBox lb = last.p_box(), pb = prev.p_box();
   w->u0.resize(static_cast<size_t>(box.nx) * box.ny);
   double* u = w->u0.data();
   std::vector<float>& ul = w->row_f;
-  ul.resize(2 * static_cast<size_t>(box.nx));
-  float* up = ul.data() + box.nx;
+  ul.resize(static_cast<size_t>(nterms) * box.nx);
   for (int j = 0; j < box.ny; ++j) {
-    const size_t kl = static_cast<size_t>(box.j0 + j - rl.j0) * rl.nx + (box.i0 - rl.i0);
-    const size_t kp = static_cast<size_t>(box.j0 + j - rp.j0) * rp.nx + (box.i0 - rp.i0);
-    last.u_row(kl, box.nx, ul.data());
-    prev.u_row(kp, box.nx, up);
+    for (int t = 0; t < nterms; ++t) {
+      const CellBox r = terms[t].block->u_box();
+      const size_t k = static_cast<size_t>(box.j0 + j - r.j0) * r.nx + (box.i0 - r.i0);
+      terms[t].block->u_row(k, box.nx, ul.data() + static_cast<size_t>(t) * box.nx);
+    }
     double* urow = u + static_cast<size_t>(j) * box.nx;
-    for (int i = 0; i < box.nx; ++i)
-      urow[i] = 2.0 * static_cast<double>(ul[i]) - static_cast<double>(up[i]);
+    const double w0 = terms[0].weight;
+    for (int i = 0; i < box.nx; ++i) {
+      double v = w0 * static_cast<double>(ul[i]);
+      for (int t = 1; t < nterms; ++t)
+        v += terms[t].weight * static_cast<double>(ul[static_cast<size_t>(t) * box.nx + i]);
+      urow[i] = v;
+    }
   }
   // (in u0_fix's order, several cells per pass over u: AddCellsAt)
   const size_t nfix = w->u0_fix.size();
@@ -291,8 +300,11 @@ bool ExtrapolatedDisplacement(const TaxelGrid& grid, const SurfaceCompliance& K,
   for (size_t f = 0; f < nfix; ++f) {
     const int k = w->u0_fix[f];
     const int i = k % grid.n, j = k / grid.n;
-    const double lin =
-        2.0 * HistoryPressure(last, lb, i, j, grid.n) - HistoryPressure(prev, pb, i, j, grid.n);
+    double lin =
+        terms[0].weight * HistoryPressure(*terms[0].block, terms[0].block->p_box(), i, j, grid.n);
+    for (int t = 1; t < nterms; ++t)
+      lin +=
+          terms[t].weight * HistoryPressure(*terms[t].block, terms[t].block->p_box(), i, j, grid.n);
     w->fix_i[f] = i - box.i0;
     w->fix_j[f] = j - box.j0;
     w->fix_d[f] = (Inside(box, i, j) ? guess[k] : 0.0) - lin;
@@ -342,6 +354,29 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
                       double force_n, const ElasticSolveOptions& opt, std::vector<double>* gap,
                       std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
                       CellBox* solve_box, CellBox* u_region) {
+  // Warm start: the last step's pressure field (plugin_state), so a sliding
+  // contact needs a few iterations. With contact_solver = pcg, extrapolated
+  // 2 p(n-1) - p(n-2) when both steps touched (prototype on slide_grating,
+  // P&K: 16.6 -> 9.7 iterations at the same error), and its K p from the
+  // last two steps' stored K p (linear), which spares the solve an operator
+  // application.
+  WarmTerm terms[2];
+  int nterms = 0;
+  if (HasWarmStart(history)) {
+    const bool extrapolate =
+        opt.method == ElasticMethod::kPreconditioned && history[2].slots[kHsValid] > 0.0;
+    terms[nterms++] = WarmTerm{&history[1], extrapolate ? 2.0 : 1.0};
+    if (extrapolate) terms[nterms++] = WarmTerm{&history[2], -1.0};
+  }
+  return SolveElasticWarmFrom(grid, ec, box, coverage, terms, nterms, force_n, opt, gap, pressure,
+                              w, st, solve_box, u_region);
+}
+
+bool SolveElasticWarmFrom(const TaxelGrid& grid, const ElasticContact& ec, const CellBox& box,
+                          const std::vector<double>& coverage, const WarmTerm* terms, int nterms,
+                          double force_n, const ElasticSolveOptions& opt, std::vector<double>* gap,
+                          std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
+                          CellBox* solve_box, CellBox* u_region) {
   // Cells without coverage never touch (every cell stored, the select
   // vectorises).
   for (int j = box.j0; j < box.j0 + box.ny; ++j) {
@@ -349,15 +384,6 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
     const double* c = coverage.data() + static_cast<size_t>(j) * grid.n;
     for (int i = box.i0; i < box.i0 + box.nx; ++i) g[i] = c[i] > 0.0 ? g[i] : kInf;
   }
-  // Warm start: the last step's pressure field (plugin_state), so a sliding
-  // contact needs a few iterations. With contact_solver = pcg, extrapolated
-  // 2 p(n-1) - p(n-2) when both steps touched (prototype on slide_grating,
-  // P&K: 16.6 -> 9.7 iterations at the same error), and its K p from the
-  // last two steps' stored K p (linear), which spares the solve an operator
-  // application.
-  const HistoryBlock* last = HasWarmStart(history) ? &history[1] : nullptr;
-  const bool extrapolate =
-      last && opt.method == ElasticMethod::kPreconditioned && history[2].slots[kHsValid] > 0.0;
   // The solve box: the last step's contact, kBoxMarginCells wider. The gap
   // alone bounds it poorly: an elastic contact is ~1/sqrt(2) as wide as the
   // region where the surfaces interpenetrate, and a layered skin bulges
@@ -365,12 +391,11 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
   // no rendered cell outside it may touch) and grown around the cells that
   // would; after kBoxAttempts, every rendered cell. The result solves the
   // contact problem on the rendered cells either way.
-  if (last)
-    WarmStart(grid, box, last, extrapolate ? &history[2] : nullptr, ec.compliance().periodic(),
-              pressure, w, solve_box);
+  if (nterms > 0)
+    WarmStart(grid, box, terms, nterms, ec.compliance().periodic(), pressure, w, solve_box);
   const bool have_u0 =
-      extrapolate && ExtrapolatedDisplacement(grid, ec.compliance(), *last, history[2], *pressure,
-                                              *solve_box, opt.threads, w);
+      nterms > 1 && ExtrapolatedDisplacement(grid, ec.compliance(), terms, nterms, *pressure,
+                                             *solve_box, opt.threads, w);
   // Upward bulge bound: max_lift times the whole load on one cell.
   const double lift = ec.max_lift_m_per_pa() * force_n / grid.Area();
   return SolveOnGrowingBox(grid, ec, *gap, box, force_n, lift, opt,

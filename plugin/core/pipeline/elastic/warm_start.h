@@ -45,6 +45,23 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
                       std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
                       CellBox* solve_box, CellBox* u_region);
 
+// A history block's solution and its weight in a warm start.
+struct WarmTerm {
+  const HistoryBlock* block;
+  double weight;
+};
+
+// SolveElasticWarm from any weighted sum of stored solutions of this grid
+// (terms[0]'s contact sets the first solve box; one term: that solution;
+// none: from *pressure and *solve_box as the caller set them), the guess
+// clipped at zero and its K p from the stored ones.
+bool SolveElasticWarmFrom(const TaxelGrid& grid, const ElasticContact& ec, const CellBox& box,
+                          const std::vector<double>& coverage, const WarmTerm* terms, int nterms,
+                          double force_n, const ElasticSolveOptions& options,
+                          std::vector<double>* gap, std::vector<double>* pressure,
+                          ElasticStepWork* w, ElasticSolveStats* st, CellBox* solve_box,
+                          CellBox* u_region);
+
 // Writes a solution to a history block: the pressure on p_box (zero
 // outside it), its K p u over u_region (row-major), the depth; marks it valid.
 void StoreElasticHistory(const TaxelGrid& grid, const std::vector<double>& pressure,
