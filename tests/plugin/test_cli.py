@@ -60,8 +60,23 @@ def test_slide_json_keys_and_peak():
     assert abs(line["peak_hz"] - 30.0) <= o["fft_bin_hz"]
     assert line["contrast"] > 10 and 0 < line["share"] <= 1
     assert o["lines"]["ridges"]["expected_hz"] == pytest.approx(0.03 / 0.45e-3)
-    # the default elastic contact's grid line at V / pitch is reported
-    assert o["pressure"] == "elastic" and o["grid_line_hz"] == pytest.approx(0.03 / 1.5e-4)
+    # the default elastic contact cycles offset grids (two at this timestep),
+    # which cancel the grid line at V / pitch: none is reported
+    assert o["pressure"] == "elastic" and o["grid_line_hz"] is None
+
+
+def test_grid_line_is_reported_where_one_grid_is_solved():
+    # the slide's rule follows the plugin's CycleLength: a divisor of
+    # grid_cycle whose cycle lasts at most 0.5 ms
+    from mjtouch.experiments.slide import SlideParams, cycling_grids
+
+    assert [cycling_grids(SlideParams(dt_s=dt)) for dt in (1e-4, 1.25e-4, 2e-4, 5e-4)] == [
+        4,
+        4,
+        2,
+        1,
+    ]
+    assert cycling_grids(SlideParams(grid_cycle=3, dt_s=2e-4)) == 1  # 2 does not divide 3
 
 
 def test_slide_json_reports_ridge_line_power_for_smooth_skin():

@@ -46,6 +46,8 @@ CASES = [
     ({"ridge_angle": "181"}, "`ridge_angle`", "[-180, 180] deg"),
     ({"shear": "yes"}, "`shear`", "valid: true (full slip) false partial"),
     ({"grid_shift": "half"}, "`grid_shift`", "true or false"),
+    ({"grid_cycle": "5"}, "`grid_cycle`", "[1, 4]"),
+    ({"grid_cycle": "2.5"}, "`grid_cycle`", "not an integer"),
     ({"texture_group": "2.5"}, "`texture_group`", "not an integer; valid range [0, 5]"),
     ({"stiffness": "stiff"}, "`stiffness`", "[100000, 1e+12] Pa/m"),
     ({"sa1_k0": "-1e-16"}, "`sa1_k0`", "[0, 1e-06]"),

@@ -331,10 +331,12 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   const double elapsed = state[kStTimeValid] > 0.0 ? time_s - state[kStLastTime] : 0.0;
   // Idle receptors and no contact: each evaluation only moves the header on
   // (no pose is read, no spike fired), so none is interpolated or summed;
-  // without a pressure history or tangential buffers to advance, the
-  // header is all there is: set it as the evaluations would.
+  // without a pressure history (taxel, shifted or cycled grids) or
+  // tangential buffers to advance, the header is all there is: set it as
+  // the evaluations would.
   const bool quiet = state[kStReceptorsIdle] > 0.0 && !in.in_contact;
-  if (quiet && elapsed > 0.0 && lay.history_block == 0 && lay.tangential_block == 0) {
+  if (quiet && elapsed > 0.0 && lay.history_block == 0 && lay.shifted_block == 0 &&
+      lay.tangential_block == 0) {
     state[kStLastTime] = time_s;
     state[kStTimeValid] = 1.0;
     state[kStContactValid] = 0.0;

@@ -24,7 +24,12 @@ struct Deposit {
 
 Deposit DepositOf(const TaxelGrid& offset_grid, const TaxelGrid& grid) {
   // centre of offset cell i = taxel centre (i - 1) + a cells
-  const double a = (offset_grid.Centre(0) - grid.Centre(0)) / grid.pitch_m + 1.0;
+  double a = (offset_grid.Centre(0) - grid.Centre(0)) / grid.pitch_m + 1.0;
+  // A whole-cell offset (k / N = 1/2 gives a = 1 - 2e-16 in floating point)
+  // deposits on one cell, not on two with a round-off weight on the second:
+  // that weight would give cells pressures of 1e-16 of the peak, which count
+  // as loaded (and, under shear="partial", as slipping).
+  if (std::abs(a - std::round(a)) < 1e-9) a = std::round(a);
   const int shift = static_cast<int>(std::floor(a));
   return Deposit{shift, a - shift};
 }
