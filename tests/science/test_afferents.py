@@ -63,12 +63,14 @@ DT_STIMULI = {
     # SA1: >= 100 spikes in 2 s (noise-free, median set)
     ("SA1", "ramp"): lambda t: ramp_and_hold(t, 300e3, 0.1, 0.7, 1.0),
     ("SA1", "sine"): lambda t: onset_sine(t, 200e3, 80e3, 5.0),
-    ("RA", "ramp"): lambda t: ramp_and_hold(t, 60e3, 0.1, 0.05, 0.3),
+    # RA, PC ramps: >= 100 spikes in 2 s (a few per ramp: the RA's gain control
+    # by its sustained drive, the PC's 2.5 ms refractory period)
+    ("RA", "ramp"): lambda t: ramp_and_hold(t, 60e3, 0.03, 0.02, 0.1),
     ("RA", "sine"): lambda t: onset_sine(t, 0.0, 3100.0, 40.0),
     # 7.6x RA's noise-free absolute threshold at 150 Hz (522 Pa; 1:1 is never
     # reached there), the skipping regime
     ("RA", "sine-skipping"): lambda t: onset_sine(t, 0.0, 4000.0, 150.0),
-    ("PC", "ramp"): lambda t: ramp_and_hold(t, 5e3, 0.02, 0.05, 0.2),
+    ("PC", "ramp"): lambda t: ramp_and_hold(t, 5e3, 0.02, 0.03, 0.1),
     ("PC", "sine"): lambda t: onset_sine(t, 0.0, 10.0, 100.0),
     ("PC", "sine-skipping"): lambda t: onset_sine(t, 0.0, 1.5, 400.0),
 }
