@@ -14,9 +14,10 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 import pytest
+from conftest import fast_tip
 
 from mjtouch import _core, analysis, core
-from mjtouch.experiments import stimuli
+from mjtouch.experiments import rollout, stimuli
 from mjtouch.scene import scenes
 from mjtouch.scene.sensor import SkinLayout
 
@@ -627,3 +628,31 @@ def test_rate_output_is_the_smoothed_spike_count():
     np.testing.assert_allclose(
         rate.sum(axis=0) * dt + tail, spikes.sum(axis=0), rtol=0.01, atol=0.5
     )
+
+
+# --- RA on scanned gratings (full plugin) -----------------------------------------------
+
+
+def test_ra_follows_a_scanned_mm_grating_and_not_a_flat_plate():
+    # RA (FA I) afferents respond to gratings of mm period scanned across the
+    # fingerpad at tens of mm/s with tens of impulses per second, locked to
+    # the passage of the grooves (Darian-Smith & Oke 1980, J Physiol 309:117;
+    # Phillips & Johnson 1981, J Neurophysiol 46:1192). The RA's gain control
+    # acts on the sustained stress rate only, so a grating (zero-mean rate at
+    # V/D) keeps its drive. 1 mm at 40 mm/s (V/D = 40 Hz), 0.5 N: the most
+    # driven tenth of the RA units at >= V/D / 2 and at most 2 V/D; on a flat
+    # plate, steady sliding leaves them silent (< 5 Hz).
+    speed, period = 0.04, 1e-3
+    proto = scenes.Protocol(speed_m_s=speed, timestep_s=2e-4, press_s=0.1)
+    top = {}
+    for kind in ("grating", "flat"):
+        res = rollout.run_slide(
+            fast_tip(), scenes.Texture(kind=kind, period_m=period), proto, duration_s=0.5
+        )
+        w = res.window(settle_s=0.05)
+        ra = np.asarray(res.layout.classes) == "RA"
+        rates = res.spikes[w][:, ra].sum(axis=0) / (res.spikes[w].shape[0] * res.dt)
+        top[kind] = np.percentile(rates, 90)
+    print("RA 90th-percentile rate (Hz)", top, "V/D", speed / period)
+    assert speed / period / 2 <= top["grating"] <= 2 * speed / period, top
+    assert top["flat"] < 5.0, top

@@ -176,7 +176,7 @@ struct ReceptorParams {
   PCParams pc;
   NoiseParams noise;
   // Spike-triggered adaptation per class (membrane.h; README, "Dynamic range").
-  Adaptation adapt[kNumClasses] = {{4.5, 0.05}, {1.3, 0.03}, {1.0, 0.02}};
+  Adaptation adapt[kNumClasses] = {{4.5, 0.05}, {1.3, 0.03}, {0.7, 0.02}};
   bool varied = true;        // `population`: variants (true) or the median set only
   double rate_tau_s = 0.05;  // smoothed rate: exponential kernel, s
 };

@@ -251,7 +251,7 @@ const std::vector<AttributeRow>& Rows() {
       {"pc_refractory", K::kNumber, 0, 1, true, false, "s", "2.5e-3",
        "PC absolute refractory period: one spike per lobe of a ramp corner's drive", nullptr,
        FIELD(receptor.pc.refractory_s), NO_PARSE, S::kModel},
-      {"adapt", K::kPerClass, 0, 100, false, false, "(threshold units)", "4.5 1.3 1",
+      {"adapt", K::kPerClass, 0, 100, false, false, "(threshold units)", "4.5 1.3 0.7",
        "SA1 RA PC spike-triggered adaptation: the jump of an inhibitory current at each spike",
        nullptr, CLASS_FIELD(receptor.adapt[k].jump), NO_PARSE, S::kModel},
       {"adapt_tau", K::kPerClass, 0, 10, true, false, "s", "0.05 0.03 0.02",
