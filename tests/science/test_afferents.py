@@ -73,7 +73,10 @@ DT_STIMULI = {
     ("RA", "sine-skipping"): lambda t: onset_sine(t, 0.0, 4000.0, 150.0),
     ("PC", "ramp"): lambda t: ramp_and_hold(t, 5e3, 0.02, 0.03, 0.1),
     ("PC", "sine"): lambda t: onset_sine(t, 0.0, 10.0, 100.0),
-    ("PC", "sine-skipping"): lambda t: onset_sine(t, 0.0, 1.5, 400.0),
+    # PC skipping at 300 Hz (a spike every ~3 cycles): at 400 Hz the cycle
+    # equals the PC's 2.5 ms refractory period, a tie the two samplings of
+    # the stimulus break differently
+    ("PC", "sine-skipping"): lambda t: onset_sine(t, 0.0, 1.5, 300.0),
 }
 
 
