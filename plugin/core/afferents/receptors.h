@@ -136,8 +136,9 @@ struct PCParams {
   // recorded (Johansson et al. 1982).
   double refractory_s = 2.5e-3;
   // Drive saturation s (threshold units; 0: none), d s / (s + |d|) as the
-  // RA's: a ramp corner gives a spike or two (TouchSim saturates its PC
-  // input current, Saal et al. 2017).
+  // RA's (TouchSim's form, Saal et al. 2017). Off: low enough to cap a ramp
+  // corner (~300x threshold) it also ends 1:1 at 250 Hz (~5x;
+  // docs/science/afferents.md, PC).
   double saturation = 0.0;
 };
 
