@@ -475,13 +475,16 @@ bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
   // Filters of chained real poles: no state entry ever exceeds the sum of
   // the current ones (each propagator entry is (w t)^k / k! exp(-w t) <= 1),
   // so |y| <= sum |c| * n * max |x|.
+  // The RA's third state (its sustained drive) only divides the drive
+  // (|drive| <= |gain y|) and does not feed y: its bound takes x1, x2.
   auto filter_bound = [&](const Filter& f) {
+    const int n = &f == &ra_ ? 2 : f.n;
     double csum = 0.0, xmax = 0.0;
-    for (int i = 0; i < f.n; ++i) {
+    for (int i = 0; i < n; ++i) {
       csum += std::abs(f.c[i]);
       xmax = std::max(xmax, std::abs(st[kF0 + i]));
     }
-    return csum * f.n * xmax;
+    return csum * n * xmax;
   };
   const double gain_scale = var.gain;
   if (cls == ReceptorClass::kSA1) {
