@@ -627,5 +627,7 @@ def pin_reference_table(
                     mid = math.sqrt(lo * hi)
                     lo, hi = (lo, mid) if count(q0 + mid * dq) >= need else (mid, hi)
                 thr[key].append(hi * stress["ref_m"] * 1e6)
-        out[c] = dict(rates_hz=rates, stress_kpa=kpa, offaxis_m=stress["offaxis_m"][r], **thr)
+        out[c] = dict(
+            rates_hz=rates, stress_kpa=kpa, offaxis_m=stress["offaxis_m"][r], dt_s=dt, **thr
+        )
     return out

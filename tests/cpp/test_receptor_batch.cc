@@ -36,6 +36,8 @@ int main() {
     DefaultSA1Gains(quantities[sc % 3], &p.sa1);
     if (sc % 7 == 3) p.sa1.merkel_cells = {6, 2};
     if (sc % 4 == 1) p.ra.saturation = 0.0;
+    if (sc % 6 == 5) p.ra.sustained = 0.0;
+    if (sc % 4 == 3) p.pc.saturation = 1.0 + 8.0 * U(rng);  // PC sub-steps
     if (sc % 4 == 2) p.noise.sd[0] = p.noise.sd[1] = p.noise.sd[2] = 0.0;
     if (sc % 3 == 0) p.noise.sd[1] = p.noise.sd[2] = 1.5 * U(rng);
     p.noise.seed = rng();

@@ -88,9 +88,9 @@ def test_spike_bound_matches_a_saturated_receptor():
     dt = 0.01
     bound = max_spikes_per_receptor(dt, REFRACTORY_DEFAULT_S)
     assert bound == math.ceil(dt / REFRACTORY_DEFAULT_S) + 1
-    # Without adaptation and the RA and SA1 saturations (issue 14's defaults
+    # Without adaptation, the RA and SA1 saturations and the RA's gain control (the defaults
     # keep them well below the bound), the bound is reached.
-    unlimited = {"adapt": "0 0 0", "ra_saturation": "0", "sa1_saturation": "0"}
+    unlimited = {"adapt": "0 0 0", "ra_saturation": "0", "ra_sustained": "0", "sa1_saturation": "0"}
     for cls in ("SA1", "RA"):  # PC is band-pass: a ramp is not its drive
         spikes, _ = core.receptor_run(cls, 1e12 * np.arange(51) * dt, dt, unlimited)
         # saturated: one spike per refractory period, 10 in 10 ms

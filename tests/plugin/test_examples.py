@@ -252,10 +252,11 @@ def test_pc_grid_shift_average_cancels_the_line(capsys):
     # cell apart), the same PC receptors: the PC stress line at V / pitch
     # (125 Hz) is the same on both grids and cancels in their average
     # (measured 38 / 35 -> 0.35 Pa^2), and the PC rate, which the line drove,
-    # drops (186 -> 102 Hz)
+    # drops (146 / 153 -> 112 Hz; 186 -> 102 before the PC's 2.5 ms
+    # refractory period capped its bursts at 400 Hz)
     rows = run_json("pc_grid_shift.py", ["--small"], capsys)
     odd, even, avg = rows
     assert odd["v_over_pitch_hz"] == pytest.approx(125.0)
     for r in (odd, even):
         assert r["power_at_v_over_pitch_pa2"] > 30 * avg["power_at_v_over_pitch_pa2"] > 0
-    assert avg["pc_rate_hz"] < 0.7 * min(odd["pc_rate_hz"], even["pc_rate_hz"])
+    assert avg["pc_rate_hz"] < 0.9 * min(odd["pc_rate_hz"], even["pc_rate_hz"])

@@ -65,6 +65,10 @@ CASES = [
     ({"adapt": "1 -1 0"}, "`adapt` entry 2", "[0, 100]"),
     ({"adapt_tau": "0.05 0 0.02"}, "`adapt_tau` entry 2", "(0, 10]"),
     ({"ra_saturation": "-1"}, "`ra_saturation`", "[0, 1e+06]"),
+    ({"ra_sustained": "-1"}, "`ra_sustained`", "[0, 1e+06]"),
+    ({"ra_sustained_tau": "0"}, "`ra_sustained_tau`", "(0, 10]"),
+    ({"pc_saturation": "-1"}, "`pc_saturation`", "[0, 1e+06]"),
+    ({"pc_refractory": "0"}, "`pc_refractory`", "(0, 1]"),
     ({"sa1_saturation": "-1"}, "`sa1_saturation`", "[0, 1e+12] units of q"),
     ({"population": "random"}, "`population`", "valid: uniform varied"),
     # explicit receptor sites

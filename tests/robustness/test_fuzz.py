@@ -42,6 +42,10 @@ LOG_RANGES = {
     "stress_theta": (0.05, 2),
     "sa1_lowpass": (1, 1e4),
     "ra_saturation": (1e-3, 1e6),
+    "ra_sustained": (1e-3, 1e6),
+    "ra_sustained_tau": (1e-4, 10),
+    "pc_saturation": (1e-3, 1e6),
+    "pc_refractory": (1e-5, 1),
     "sa1_saturation": (1e-3, 1e12),
 }
 LINEAR_RANGES = {"ridge_angle": (-180, 180), "poisson": (-0.99, 0.5), "sa1_i0": (-1e-6, 1e-6)}

@@ -14,9 +14,10 @@ import mujoco
 import mujoco.rollout
 import numpy as np
 import pytest
+from conftest import fast_tip
 
 from mjtouch import _core, analysis, core
-from mjtouch.experiments import stimuli
+from mjtouch.experiments import rollout, stimuli
 from mjtouch.scene import scenes
 from mjtouch.scene.sensor import SkinLayout
 
@@ -63,14 +64,19 @@ DT_STIMULI = {
     # SA1: >= 100 spikes in 2 s (noise-free, median set)
     ("SA1", "ramp"): lambda t: ramp_and_hold(t, 300e3, 0.1, 0.7, 1.0),
     ("SA1", "sine"): lambda t: onset_sine(t, 200e3, 80e3, 5.0),
-    ("RA", "ramp"): lambda t: ramp_and_hold(t, 60e3, 0.1, 0.05, 0.3),
+    # RA, PC ramps: >= 100 spikes in 2 s (a few per ramp: the RA's gain control
+    # by its sustained drive, the PC's 2.5 ms refractory period)
+    ("RA", "ramp"): lambda t: ramp_and_hold(t, 60e3, 0.03, 0.02, 0.1),
     ("RA", "sine"): lambda t: onset_sine(t, 0.0, 3100.0, 40.0),
     # 7.6x RA's noise-free absolute threshold at 150 Hz (522 Pa; 1:1 is never
     # reached there), the skipping regime
     ("RA", "sine-skipping"): lambda t: onset_sine(t, 0.0, 4000.0, 150.0),
-    ("PC", "ramp"): lambda t: ramp_and_hold(t, 5e3, 0.02, 0.05, 0.2),
+    ("PC", "ramp"): lambda t: ramp_and_hold(t, 5e3, 0.02, 0.03, 0.1),
     ("PC", "sine"): lambda t: onset_sine(t, 0.0, 10.0, 100.0),
-    ("PC", "sine-skipping"): lambda t: onset_sine(t, 0.0, 1.5, 400.0),
+    # PC skipping at 300 Hz (a spike every ~3 cycles): at 400 Hz the cycle
+    # equals the PC's 2.5 ms refractory period, a tie the two samplings of
+    # the stimulus break differently
+    ("PC", "sine-skipping"): lambda t: onset_sine(t, 0.0, 1.5, 300.0),
 }
 
 
@@ -625,3 +631,31 @@ def test_rate_output_is_the_smoothed_spike_count():
     np.testing.assert_allclose(
         rate.sum(axis=0) * dt + tail, spikes.sum(axis=0), rtol=0.01, atol=0.5
     )
+
+
+# --- RA on scanned gratings (full plugin) -----------------------------------------------
+
+
+def test_ra_follows_a_scanned_mm_grating_and_not_a_flat_plate():
+    # RA (FA I) afferents respond to gratings of mm period scanned across the
+    # fingerpad at tens of mm/s with tens of impulses per second, locked to
+    # the passage of the grooves (Darian-Smith & Oke 1980, J Physiol 309:117;
+    # Phillips & Johnson 1981, J Neurophysiol 46:1192). The RA's gain control
+    # acts on the sustained stress rate only, so a grating (zero-mean rate at
+    # V/D) keeps its drive. 1 mm at 40 mm/s (V/D = 40 Hz), 0.5 N: the most
+    # driven tenth of the RA units at >= V/D / 2 and at most 2 V/D; on a flat
+    # plate, steady sliding leaves them silent (< 5 Hz).
+    speed, period = 0.04, 1e-3
+    proto = scenes.Protocol(speed_m_s=speed, timestep_s=2e-4, press_s=0.1)
+    top = {}
+    for kind in ("grating", "flat"):
+        res = rollout.run_slide(
+            fast_tip(), scenes.Texture(kind=kind, period_m=period), proto, duration_s=0.5
+        )
+        w = res.window(settle_s=0.05)
+        ra = np.asarray(res.layout.classes) == "RA"
+        rates = res.spikes[w][:, ra].sum(axis=0) / (res.spikes[w].shape[0] * res.dt)
+        top[kind] = np.percentile(rates, 90)
+    print("RA 90th-percentile rate (Hz)", top, "V/D", speed / period)
+    assert speed / period / 2 <= top["grating"] <= 2 * speed / period, top
+    assert top["flat"] < 5.0, top

@@ -72,12 +72,13 @@ def test_grid_shift_cancels_the_v_over_pitch_line():
     # = 125 Hz (measured 38 Pa^2 without the shift, 0.30 with it); the
     # grating's own line at V/D = 25 Hz stays (measured 93 -> 81 Pa^2: the
     # two grids sample the ridges differently); the PC rate the grid line
-    # drove falls (184 -> 101 Hz)
+    # drove falls (143 -> 116 Hz; 184 -> 101 before the PC's 2.5 ms
+    # refractory period capped its bursts at 400 Hz)
     r0, line0, vd0, pc0 = _slide("false")
     r1, line1, vd1, pc1 = _slide("true")
     assert line1 * 30 < line0
     assert vd1 == pytest.approx(vd0, rel=0.25)
-    assert pc1 < 0.7 * pc0
+    assert pc1 < 0.9 * pc0
     # the sliding itself is MuJoCo's and the same; the shift is deterministic
     assert np.array_equal(r0.finger_x_m, r1.finger_x_m)
     r2, *_ = _slide("true")

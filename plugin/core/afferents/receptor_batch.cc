@@ -83,7 +83,7 @@ MJTOUCH_TARGET_CLONES int ReceptorStepper::Group(const double* q1_in, const doub
   };
 
   // Drive before rectification at the step ends (AdvanceAs).
-  constexpr int nf = C == ReceptorClass::kPC ? 4 : 2;
+  constexpr int nf = C == ReceptorClass::kPC ? 4 : C == ReceptorClass::kRA ? 3 : 2;
   const Filter& f = C == ReceptorClass::kSA1 ? sa1_ : C == ReceptorClass::kRA ? ra_ : pc_;
   V x[nf], nx[nf];
   for (int i = 0; i < nf; ++i) x[i] = Load(st, kF0 + i);
@@ -121,20 +121,28 @@ MJTOUCH_TARGET_CLONES int ReceptorStepper::Group(const double* q1_in, const doub
     }
   } else {
     V y0, y1;
+    const V m0 = x[nf - 1];  // RA: the sustained part at the step start
     filter(v, &y0, &y1);
     const V gain = per_variant(gain_[ci]);
     l0[0] = gain * y0;
     l1[0] = gain * y1;
+    if constexpr (C == ReceptorClass::kRA) {
+      if (sustained_ > 0.0) {  // SustainedNorm
+        l0[0] = l0[0] / (1.0 + Abs(gain * m0) / sustained_);
+        l1[0] = l1[0] / (1.0 + Abs(gain * nx[nf - 1]) / sustained_);
+      }
+    }
   }
 
   // The common step (FromDrive): `uncommon` marks the lanes that are not.
   M uncommon = reinterpret_cast<M>(Splat(0.0));
   V la[kMaxNodes], lb[kMaxNodes];
-  if constexpr (C == ReceptorClass::kRA) {
-    const double sat = p_.ra.saturation;
+  if constexpr (C != ReceptorClass::kSA1) {
+    constexpr int k = ci - 1;
+    const double sat = saturation_[ci];
     if (sat > 0.0) {
       const V dd = l1[0] - l0[0];
-      uncommon |= ~(dd * dd <= sub_error_skip_[0]) & (dd * dd / sub_error_den_[0] > 1e-4);
+      uncommon |= ~(dd * dd <= sub_error_skip_[k][0]) & (dd * dd / sub_error_den_[k][0] > 1e-4);
       la[0] = l0[0] * sat / (sat + Abs(l0[0]));
       lb[0] = l1[0] * sat / (sat + Abs(l1[0]));
     } else {

@@ -77,12 +77,12 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
     const double A[4] = {-w, 0, w, -w}, B[2] = {w, 0}, c[2] = {0, 1};
     build(2, A, B, c, &sa1_);
   }
-  {  // RA: y = w^2 / (s + w)^2 v
-    const double w = kTwoPi * p.ra.lowpass_hz;
-    const double A[4] = {-w, 0, w, -w}, B[2] = {w, 0}, c[2] = {0, 1};
-    build(2, A, B, c, &ra_);
+  {  // RA: y = x2 = w^2 / (s + w)^2 v; x3 = y / (1 + tau_m s), its sustained part
+    const double w = kTwoPi * p.ra.lowpass_hz, wm = 1.0 / p.ra.sustained_tau_s;
+    const double A[9] = {-w, 0, 0, w, -w, 0, 0, wm, -wm}, B[3] = {w, 0, 0}, c[3] = {0, 1, 0};
+    build(3, A, B, c, &ra_);
     for (int level = 1; level <= kMaxSubLevels; ++level)
-      build_h(std::ldexp(dt_s, -level), 2, A, B, c, &ra_sub_[level - 1]);
+      build_h(std::ldexp(dt_s, -level), 3, A, B, c, &sub_[0][level - 1]);
   }
   {  // PC: a = v / (s + wh); b_k = wl b_{k-1} / (s + wl); y = s^2 b3
     const double wh = kTwoPi * p.pc.highpass_hz, wl = kTwoPi * p.pc.lowpass_hz;
@@ -90,6 +90,8 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
     const double B[4] = {1, 0, 0, 0};
     const double c[4] = {0, wl * wl, -2 * wl * wl, wl * wl};
     build(4, A, B, c, &pc_);
+    for (int level = 1; level <= kMaxSubLevels; ++level)
+      build_h(std::ldexp(dt_s, -level), 4, A, B, c, &sub_[1][level - 1]);
   }
   noise_rho_ = std::exp(-dt_s / p.noise.tau_s);
   rate_decay_ = std::exp(-dt_s / p.rate_tau_s);
@@ -98,9 +100,15 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
   for (int c = 0; c < kNumClasses; ++c)
     noise_gain_[c] =
         NoiseSd(p, static_cast<ReceptorClass>(c)) * std::sqrt(1.0 - noise_rho_ * noise_rho_);
-  for (int level = 0; level < kMaxSubLevels; ++level) {
-    sub_error_den_[level] = 4.0 * p.ra.saturation * std::ldexp(1.0, 2 * level);
-    sub_error_skip_[level] = 0.99e-4 * sub_error_den_[level];
+  sustained_ = p.ra.sustained;
+  saturation_[0] = 0.0;
+  saturation_[1] = p.ra.saturation;
+  saturation_[2] = p.pc.saturation;
+  for (int k = 0; k < 2; ++k) {
+    for (int level = 0; level < kMaxSubLevels; ++level) {
+      sub_error_den_[k][level] = 4.0 * saturation_[k + 1] * std::ldexp(1.0, 2 * level);
+      sub_error_skip_[k][level] = 0.99e-4 * sub_error_den_[k][level];
+    }
   }
   static_assert(kMaxNodes == 4, "sa1_m_ holds kMaxNodes heminodes");
   sa1_nodes_ = static_cast<int>(std::min<size_t>(p.sa1.merkel_cells.size(), kMaxNodes));
@@ -245,11 +253,17 @@ int ReceptorStepper::AdvanceAs(double q1, unsigned long long stream, double* st,
     }
   } else {
     const Filter& f = C == ReceptorClass::kRA ? ra_ : pc_;
-    constexpr int n = C == ReceptorClass::kRA ? 2 : 4;
+    constexpr int n = C == ReceptorClass::kRA ? 3 : 4;
     FilterStep<n>(f.phi, f.gamma, f.c, d.v, st + kF0, d.x_start, &y0, &y1);
     d.nodes = 1;
-    d.l0[0] = gain_[ci][variant] * y0;
-    d.l1[0] = gain_[ci][variant] * y1;
+    const double g = gain_[ci][variant];
+    if constexpr (C == ReceptorClass::kRA) {
+      d.l0[0] = SustainedNorm(g * y0, g * d.x_start[2]);
+      d.l1[0] = SustainedNorm(g * y1, g * st[kF0 + 2]);
+    } else {
+      d.l0[0] = g * y0;
+      d.l1[0] = g * y1;
+    }
   }
 
   return FromDrive<C>(d, st, voltage);
@@ -273,11 +287,12 @@ int ReceptorStepper::FromDrive(const Drive& d, double* st, double* voltage) cons
   // rectification kink), as Finish takes it.
   double la[kMaxNodes], lb[kMaxNodes];
   const int nodes = C == ReceptorClass::kSA1 ? d.nodes : 1;
-  if constexpr (C == ReceptorClass::kRA) {
-    const double sat = p_.ra.saturation;
+  if constexpr (C != ReceptorClass::kSA1) {
+    constexpr int k = ci - 1;
+    const double sat = saturation_[ci];
     if (sat > 0.0) {
       const double dd = d.l1[0] - d.l0[0];
-      if (!(dd * dd <= sub_error_skip_[0]) && dd * dd / sub_error_den_[0] > 1e-4)
+      if (!(dd * dd <= sub_error_skip_[k][0]) && dd * dd / sub_error_den_[k][0] > 1e-4)
         return Finish(C, d, st, voltage);  // sub-steps
       la[0] = d.l0[0] * sat / (sat + std::abs(d.l0[0]));
       lb[0] = d.l1[0] * sat / (sat + std::abs(d.l1[0]));
@@ -344,14 +359,15 @@ int ReceptorStepper::Finish(ReceptorClass cls, const Drive& d, double* st, doubl
   Adaptation adapt = p_.adapt[ci];
   adapt.jump = jump_[ci][variant];
 
-  // Saturation of the RA drive, d s / (s + |d|) (TouchSim's input
+  // Saturation of the RA and PC drives, d s / (s + |d|) (TouchSim's input
   // saturation, Saal et al. 2017; an odd monotone map keeps the zero
   // crossings). The saturated drive is not linear within a step: it is
   // evaluated at 2^k sub-step ends (the filter propagated exactly to each)
   // and taken linear between, k the smallest (at most kMaxSubLevels) that
   // bounds the interpolation error |l1 - l0|^2 / (4 s 4^k) (the map's
   // curvature is at most 2 / s) by 1e-4 threshold units.
-  const double sat = cls == ReceptorClass::kRA ? p_.ra.saturation : 0.0;
+  const double sat = saturation_[ci];
+  const int sk = cls == ReceptorClass::kPC ? 1 : 0;  // sub-step tables
   auto saturate = [sat](double x) { return x * sat / (sat + std::abs(x)); };
   int nsub = 1;
   double knots[(1 << kMaxSubLevels) + 1];  // node 0's drive at the sub-step ends
@@ -359,14 +375,14 @@ int ReceptorStepper::Finish(ReceptorClass cls, const Drive& d, double* st, doubl
     const double dl = l1[0] - l0[0];
     int level = 0;
     // d^2 at most 0.99e-4 den fails the test without the division
-    while (level < kMaxSubLevels && !(dl * dl <= sub_error_skip_[level]) &&
-           dl * dl / sub_error_den_[level] > 1e-4)
+    while (level < kMaxSubLevels && !(dl * dl <= sub_error_skip_[sk][level]) &&
+           dl * dl / sub_error_den_[sk][level] > 1e-4)
       ++level;
     nsub = 1 << level;
     knots[0] = saturate(l0[0]);
     knots[nsub] = saturate(l1[0]);
     if (nsub > 1) {
-      const Filter& f = ra_sub_[level - 1];
+      const Filter& f = sub_[sk][level - 1];
       const double gain = gain_[ci][variant];
       double x[4], nx[4];
       std::copy(d.x_start, d.x_start + 4, x);
@@ -381,7 +397,8 @@ int ReceptorStepper::Finish(ReceptorClass cls, const Drive& d, double* st, doubl
           x[i] = nx[i];
           y += f.c[i] * x[i];
         }
-        knots[j] = saturate(gain * y);
+        knots[j] =
+            saturate(cls == ReceptorClass::kRA ? SustainedNorm(gain * y, gain * x[2]) : gain * y);
       }
     }
   }
@@ -458,13 +475,16 @@ bool ReceptorStepper::Quiescent(ReceptorClass cls, const double* st) const {
   // Filters of chained real poles: no state entry ever exceeds the sum of
   // the current ones (each propagator entry is (w t)^k / k! exp(-w t) <= 1),
   // so |y| <= sum |c| * n * max |x|.
+  // The RA's third state (its sustained drive) only divides the drive
+  // (|drive| <= |gain y|) and does not feed y: its bound takes x1, x2.
   auto filter_bound = [&](const Filter& f) {
+    const int n = &f == &ra_ ? 2 : f.n;
     double csum = 0.0, xmax = 0.0;
-    for (int i = 0; i < f.n; ++i) {
+    for (int i = 0; i < n; ++i) {
       csum += std::abs(f.c[i]);
       xmax = std::max(xmax, std::abs(st[kF0 + i]));
     }
-    return csum * f.n * xmax;
+    return csum * n * xmax;
   };
   const double gain_scale = var.gain;
   if (cls == ReceptorClass::kSA1) {

@@ -6,6 +6,7 @@
 #ifndef MJTOUCH_AFFERENTS_RECEPTORS_H_
 #define MJTOUCH_AFFERENTS_RECEPTORS_H_
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -91,7 +92,8 @@ constexpr double kSA1SaturationOverRheobase = 4.5;
 // RA (Meissner, FA1): the rate of change of q, low-passed by two equal real
 // poles at `lowpass_hz`, y = w^2 / (s + w)^2 dq/dt (Pa/s), full-wave
 // rectified (fires on loading and unloading, silent in a steady hold):
-// tau dU/dt = -U + |sat(gain y)| - w_adapt, threshold 1, sat(d) = d s / (s + |d|). The low-pass
+// tau dU/dt = -U + |sat(norm(gain y))| - w_adapt, threshold 1, sat(d) = d s / (s + |d|),
+// norm(d) = d / (1 + |m| / sustained), m the drive low-passed (sustained_tau_s). The low-pass
 // sets the best frequency (tens of Hz; Johansson et al. 1982), the membrane time constant is in
 // TouchSim's 3-9 ms range (Saal et al. 2017).
 struct RAParams {
@@ -104,7 +106,15 @@ struct RAParams {
   // Drive saturation s (threshold units; 0: none): TouchSim saturates its
   // input current (Saal et al. 2017); ramp rates stay physiological, and
   // 1:1 entrainment at 80 Hz stays reachable (plugin/README.md).
-  double saturation = 8.0;
+  double saturation = 12.0;
+  // Gain control by the sustained rate: the drive d = gain y is divided by
+  // 1 + |m| / sustained, m = d low-passed with sustained_tau_s (one pole;
+  // threshold units; 0: none). A ramp's steady stress rate (same sign for
+  // tens of ms) is compressed, as the RA's discharge grows only
+  // logarithmically with indentation velocity (Knibestol 1973), while a
+  // vibration or a scanned texture (zero-mean rate) keeps its full drive.
+  double sustained = 1.0;
+  double sustained_tau_s = 0.05;
 };
 
 // PC (Pacinian, FA2): stress acceleration through a band-pass,
@@ -120,7 +130,16 @@ struct PCParams {
   double highpass_hz = 150.0;
   double lowpass_hz = 250.0;
   double tau_s = 1.5e-3;
-  double refractory_s = 1e-3;
+  // 2.5 ms: one spike per lobe of a ramp corner's band-passed acceleration
+  // (~2 ms wide), as TouchSim's PC fits give one or two per corner (Saal et
+  // al. 2017); the PC still follows 1:1 to 400 Hz, the top of the range
+  // recorded (Johansson et al. 1982).
+  double refractory_s = 2.5e-3;
+  // Drive saturation s (threshold units; 0: none), d s / (s + |d|) as the
+  // RA's (TouchSim's form, Saal et al. 2017). Off: low enough to cap a ramp
+  // corner (~300x threshold) it also ends 1:1 at 250 Hz (~5x;
+  // docs/science/afferents.md, PC).
+  double saturation = 0.0;
 };
 
 // Optional membrane noise: an Ornstein-Uhlenbeck process of standard
@@ -158,7 +177,7 @@ struct ReceptorParams {
   PCParams pc;
   NoiseParams noise;
   // Spike-triggered adaptation per class (membrane.h; README, "Dynamic range").
-  Adaptation adapt[kNumClasses] = {{4.5, 0.05}, {1.3, 0.03}, {1.0, 0.02}};
+  Adaptation adapt[kNumClasses] = {{4.5, 0.05}, {1.3, 0.03}, {0.7, 0.02}};
   bool varied = true;        // `population`: variants (true) or the median set only
   double rate_tau_s = 0.05;  // smoothed rate: exponential kernel, s
 };
@@ -210,15 +229,16 @@ class ReceptorStepper {
   };
   const ReceptorParams& p_;
   double dt_;
-  static constexpr int kMaxSubLevels = 3;  // RA saturation: up to 8 sub-steps
+  static constexpr int kMaxSubLevels = 3;  // RA / PC saturation: up to 8 sub-steps
   Filter sa1_, ra_, pc_;
-  Filter ra_sub_[kMaxSubLevels];  // RA filter over dt / 2^k, k = 1..
+  Filter sub_[2][kMaxSubLevels];  // RA (0) and PC (1) filters over dt / 2^k, k = 1..
   double noise_rho_, rate_decay_;
-  unsigned long long seed_hash_;          // SplitMix64 of the noise seed
-  double sa1_scale_;                      // SA1: R / U_th, A -> threshold units
-  double noise_gain_[kNumClasses];        // sd sqrt(1 - rho^2): the OU innovation
-  double sub_error_den_[kMaxSubLevels];   // RA sub-steps: 4 s 4^k
-  double sub_error_skip_[kMaxSubLevels];  // 0.99e-4 of it
+  unsigned long long seed_hash_;             // SplitMix64 of the noise seed
+  double sa1_scale_;                         // SA1: R / U_th, A -> threshold units
+  double noise_gain_[kNumClasses];           // sd sqrt(1 - rho^2): the OU innovation
+  double saturation_[kNumClasses];           // drive saturation (SA1: 0, none)
+  double sub_error_den_[2][kMaxSubLevels];   // RA, PC sub-steps: 4 s 4^k
+  double sub_error_skip_[2][kMaxSubLevels];  // 0.99e-4 of it
   // Membrane exponentials over a whole step, per class and variant.
   MembraneSpan step_span_[kNumClasses][kNumVariants];
   // Per class and variant, as Advance evaluated them per receptor: the
@@ -231,6 +251,11 @@ class ReceptorStepper {
   int sa1_nodes_;
   bool noise_on_[kNumClasses];
   double zero_rate_;  // 0 / rate_tau_s: the rate's increment in a step without spikes
+  double sustained_;  // RAParams::sustained
+  // The RA drive d under the gain control of its sustained part m (RAParams::sustained).
+  double SustainedNorm(double d, double m) const {
+    return sustained_ > 0.0 ? d / (1.0 + std::abs(m) / sustained_) : d;
+  }
   // Advance per class (the class's constants and loop lengths fixed); the
   // uncommon steps (rectification kinks, RA sub-steps) go through Finish.
   // AdvanceBatch: groups of 4 receptors of one class in 4-lane vectors, the
