@@ -54,6 +54,7 @@ BLOCK_MASS_KG = 0.02
 GRATING_PERIOD_M = 1e-3  # ridges across the block's face, perpendicular to slip
 PAD_FRICTION = 0.1  # below every block friction, so the block's sets the contact's
 GRIP_DAMPING_N_S_M = 2.0  # the grip joint's damping
+EPISODE_STEPS = 100  # the registered time limit (1 s at the default control step)
 # Full scales of the grip block: the block (2 x 10 mm deep) stops the finger
 # towards the wall and nothing pulls it back; its speed is at most the
 # terminal speed F / damping under the largest grip force, doubled for
@@ -379,3 +380,46 @@ class SlipHoldEnv(TouchEnv):
         # from behind the finger: the skin's drawing above the pad faces -x
         cam.distance, cam.elevation, cam.azimuth = 0.07, -15.0, 20.0
         return cam
+
+
+# The fixed test episodes (reset seeds) that examples/slip_reflex.py and
+# examples/slip_learn.py score on; training draws from other seeds.
+TEST_SEEDS = tuple(range(1000, 1030))
+
+
+def evaluate(policy, seeds=TEST_SEEDS, env: SlipHoldEnv | None = None, **env_kwargs) -> dict:
+    """Run policy on the episodes reset with seeds (one each, to the time
+    limit of 100 steps or the drop). policy: ``policy(obs, env) -> action``,
+    with an optional ``reset()`` called before each episode. Returns per
+    episode: ``returns``, ``dropped`` (bool), ``mean_grip_n`` (over the steps
+    held), and their means ``mean_return``, ``drops``, ``mean_grip_n_all``."""
+    env = env or SlipHoldEnv(**env_kwargs)
+    returns, dropped, grips = [], [], []
+    for seed in seeds:
+        if hasattr(policy, "reset"):
+            policy.reset()
+        obs, _ = env.reset(seed=int(seed))
+        total, forces, term = 0.0, [], False
+        for _ in range(EPISODE_STEPS):
+            obs, r, term, _, info = env.step(policy(obs, env))
+            total += r
+            forces.append(info["grip_force_n"])
+            if term:
+                break
+        returns.append(total)
+        dropped.append(bool(term))
+        grips.append(float(np.mean(forces)))
+    return {
+        "returns": returns,
+        "dropped": dropped,
+        "mean_grip_n": grips,
+        "mean_return": float(np.mean(returns)),
+        "drops": int(np.sum(dropped)),
+        "mean_grip_n_all": float(np.mean(grips)),
+    }
+
+
+def grip_action(env: SlipHoldEnv, force_n: float) -> np.ndarray:
+    """The action that commands force_n (clipped to force_range_n)."""
+    lo, hi = env.force_range_n
+    return np.array([np.clip(2 * (force_n - lo) / (hi - lo) - 1, -1, 1)], np.float32)
