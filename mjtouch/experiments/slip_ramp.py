@@ -7,10 +7,11 @@ centre sticks (partial slip), then slides (gross slip: Q reaches mu P and the
 finger accelerates away). The skin runs ``shear="partial"``: its stick / slip
 map follows Cattaneo-Mindlin (stuck share of the contact area
 (1 - Q / mu P)^(2k), k = 1/4 on a Winkler skin, 1/3 on a half-space), and its
-receptors see the partial-slip tractions. Humans feel this coming: RA (FA I)
-and SA1 fire as the slip ring grows, before the object moves (Johansson &
-Westling 1987; Barrea et al. 2018: felt when about half the area slips;
-Delhaye et al. 2021), and PC answers the slip's onset.
+receptors see the partial-slip tractions. Humans feel this coming: the
+afferents fire before the object moves (Johansson & Westling 1987; Barrea et
+al. 2018: felt when about half the area slips; Delhaye et al. 2021). Here RA
+(FA I) rises as the slip ring grows (with uniform full-slip shear it does
+not), SA1 rises with the load, and PC answers the slip's onset.
 
 :func:`run` returns, per physics step, Q / mu P (MuJoCo's contact force as the
 skin reports it), the stuck share, the spike count of each class, and the
