@@ -93,9 +93,9 @@ def cem(
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
-    ap.add_argument("--iterations", type=int, default=8)
-    ap.add_argument("--population", type=int, default=8)
-    ap.add_argument("--episodes", type=int, default=2, help="training episodes per candidate")
+    ap.add_argument("--iterations", type=int, default=9)
+    ap.add_argument("--population", type=int, default=9)
+    ap.add_argument("--episodes", type=int, default=3, help="training episodes per candidate")
     ap.add_argument("--test", type=int, default=len(slip_hold.TEST_SEEDS), help="test episodes")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
