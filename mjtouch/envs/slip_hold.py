@@ -21,8 +21,14 @@ n_c = receptors of the class; *: full scale, saturates):
 | ``touch`` | 3 | spikes or Hz | SA1, RA, PC spike counts over the control step (or rates) | 0 to n_c (ceil(T / 1 ms) + 1) |
 | ``contact`` | 3 | N | skin force (normal; tangential along pad x = up, along pad y), mean over the step | 0 to 5 F*, +-5 mu F* |
 | ``pressure`` | p*p | kPa | optional, ``pressure_image=p``: end-of-step pressure, p x p | 0 to 5 F / block area* |
+| ``slip`` | 4 | 1 | stuck share of the contact (cells that did not slip in the last physics step; least over the step), slip zone share (traction within 1% of mu p), the slip zone's mean radius / the contact's equivalent radius | 0 to 1; ring 0 to 2 |
 
-``touch="none"``: only ``grip`` (the skin is not in the scene).
+``touch="none"``: only ``grip`` (the skin is not in the scene). With touch the skin
+solves its own tangential contact (``shear="partial"``): under the load the contact's
+rim slips while its centre sticks, and the slip zone grows as the load nears mu x grip
+(Cattaneo-Mindlin), before the block moves. The stuck share reads 1 in a step where
+the load eases off (no cell slips on unloading, Mindlin-Deresiewicz); the slip zone
+keeps its size then.
 
 Reward per control step: ``-force_cost * grip force (N) - slip_cost * slip (mm)``
 (slip: how far the block moved down in the step). The episode terminates
@@ -48,11 +54,42 @@ BLOCK_MASS_KG = 0.02
 GRATING_PERIOD_M = 1e-3  # ridges across the block's face, perpendicular to slip
 PAD_FRICTION = 0.1  # below every block friction, so the block's sets the contact's
 GRIP_DAMPING_N_S_M = 2.0  # the grip joint's damping
+EPISODE_STEPS = 100  # the registered time limit (1 s at the default control step)
 # Full scales of the grip block: the block (2 x 10 mm deep) stops the finger
 # towards the wall and nothing pulls it back; its speed is at most the
 # terminal speed F / damping under the largest grip force, doubled for
 # contact rebounds.
 GRIP_X_FULL_SCALE_M = 2 * BLOCK_HALF_M[0]
+SLIP_FEATURES = 4
+SLIP_ZONE_TOLERANCE = 0.01
+# The slip zone's mean radius over the contact's equivalent radius is at
+# most the farthest loaded cell's: for the pad's near-elliptic contact
+# (semi-axes ratio <= 8/7), under 1.2; a pressure split by the block's
+# grating rims it at most one cell (0.2 mm of ~2 mm) further.
+RING_RADIUS_MAX = 2.0
+
+
+def slip_zone(pressure_pa: np.ndarray, shear_pa: np.ndarray, mu: float) -> tuple[float, float]:
+    """The slip zone of a contact: the loaded cells whose traction is within
+    SLIP_ZONE_TOLERANCE of the Coulomb limit mu p (unlike the stick map's
+    "did not slip in this step", it outlasts the slight unloadings of a
+    steady hold, which take every cell just off the limit). Returns its share
+    of the loaded cells and its cells' mean distance from the loaded cells'
+    centroid over the contact's equivalent radius sqrt(area / pi) (0, 0
+    without contact or slip). Cattaneo's annulus between c and a:
+    share 1 - (c/a)^2, radius 2 (1 - (c/a)^3) / (3 (1 - (c/a)^2)), 2/3 to 1.
+    pressure_pa (nx, nx); shear_pa (2, nx, nx)."""
+    loaded = pressure_pa > 0
+    if not loaded.any():
+        return 0.0, 0.0
+    limit = (1 - SLIP_ZONE_TOLERANCE) * mu * pressure_pa
+    at_limit = loaded & (np.hypot(shear_pa[0], shear_pa[1]) >= limit)
+    if not at_limit.any():
+        return 0.0, 0.0
+    j, i = np.nonzero(loaded)
+    sj, si = np.nonzero(at_limit)
+    radius = np.hypot(sj - j.mean(), si - i.mean()).mean()
+    return float(at_limit.sum() / loaded.sum()), float(radius / math.sqrt(loaded.sum() / math.pi))
 
 
 def _euler_deg(element, *angles_deg: float) -> None:
@@ -187,10 +224,10 @@ class SlipHoldEnv(TouchEnv):
             raise ValueError(
                 f"control_dt_s = {control_dt_s} must be a multiple of timestep_s = {timestep_s}"
             )
-        outputs = "spikes force pressure" if pressure_image else "spikes force"
-        model_spec = slip_hold_spec(
-            env_fingertip(outputs=outputs), timestep_s, skin=touch != "none"
-        )
+        outputs = "spikes force pressure stick slip shear"
+        tip = env_fingertip(outputs=outputs)
+        tip.skin["shear"] = "partial"  # Coulomb stick and slip per taxel
+        model_spec = slip_hold_spec(tip, timestep_s, skin=touch != "none")
         spec = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_XFRC_APPLIED
         super().__init__(
             model_spec,
@@ -225,6 +262,7 @@ class SlipHoldEnv(TouchEnv):
                 )
             ]
             + self._touch_blocks()
+            + self._slip_blocks()
         )
         self._settled = self._settle()
         self._z0 = self._qpos(np.concatenate([[0.0], self._settled]), "object_z")
@@ -232,6 +270,37 @@ class SlipHoldEnv(TouchEnv):
         self.friction = self.friction_range[1]
         self._load = (0.0, 0.0, 0.0, 1.0)  # N, N, s, s: base, rise, rise start, rise time
         self._grip = self.settle_force_n
+
+    def _slip_blocks(self) -> list[ObsBlock]:
+        if self.touch == "none":
+            return []
+        return [
+            ObsBlock(
+                "slip",
+                SLIP_FEATURES,
+                "1",
+                "stuck share of the contact area (cells that did not slip in the step's "
+                "last physics step, and the least over the step; 1 without contact), "
+                "slip zone share (cells whose traction is within 1% of the Coulomb limit mu p, "
+                "end of step), the slip zone's mean distance from the contact's centre over the "
+                "contact's equivalent radius (0: no slip zone)",
+                low=0.0,
+                high=(1.0, 1.0, 1.0, RING_RADIUS_MAX),
+            )
+        ]
+
+    def _slip_features(self, sensordata: np.ndarray | None) -> list[np.ndarray]:
+        if self.touch == "none":
+            return []
+        if sensordata is None:  # before the first step: nothing loaded, nothing slips
+            return [np.array([1.0, 1.0, 0.0, 0.0])]
+        lay = self.layout
+        loaded_steps = lay.block(sensordata, "force")[:, 0] > 0
+        share = np.where(loaded_steps, lay.block(sensordata, "slip")[:, 0], 1.0)
+        last = sensordata[-1]
+        mu = lay.block(last, "slip")[1]
+        zone = slip_zone(lay.image(last, "pressure"), lay.image(last, "shear"), mu)
+        return [np.array([share[-1], share.min(), *zone])]
 
     def _settle(self, duration_s: float = 0.2) -> np.ndarray:
         """Physics state with the block gripped at settle_force_n, at rest."""
@@ -291,7 +360,8 @@ class SlipHoldEnv(TouchEnv):
     def _observe(self, states, sensordata) -> np.ndarray:
         s = self._state
         grip = [self._qpos(s, "grip") - self._x0, self._qvel(s, "grip"), self._grip]
-        return self._bounded(np.concatenate([grip, *self._touch_features(sensordata)]))
+        features = [grip, *self._touch_features(sensordata), *self._slip_features(sensordata)]
+        return self._bounded(np.concatenate(features))
 
     def _outcome(self, states, sensordata, a):
         z_end = self._qpos(self._state, "object_z")
@@ -310,3 +380,46 @@ class SlipHoldEnv(TouchEnv):
         # from behind the finger: the skin's drawing above the pad faces -x
         cam.distance, cam.elevation, cam.azimuth = 0.07, -15.0, 20.0
         return cam
+
+
+# The fixed test episodes (reset seeds) that examples/slip_reflex.py and
+# examples/slip_learn.py score on; training draws from other seeds.
+TEST_SEEDS = tuple(range(1000, 1030))
+
+
+def evaluate(policy, seeds=TEST_SEEDS, env: SlipHoldEnv | None = None, **env_kwargs) -> dict:
+    """Run policy on the episodes reset with seeds (one each, to the time
+    limit of 100 steps or the drop). policy: ``policy(obs, env) -> action``,
+    with an optional ``reset()`` called before each episode. Returns per
+    episode: ``returns``, ``dropped`` (bool), ``mean_grip_n`` (over the steps
+    held), and their means ``mean_return``, ``drops``, ``mean_grip_n_all``."""
+    env = env or SlipHoldEnv(**env_kwargs)
+    returns, dropped, grips = [], [], []
+    for seed in seeds:
+        if hasattr(policy, "reset"):
+            policy.reset()
+        obs, _ = env.reset(seed=int(seed))
+        total, forces, term = 0.0, [], False
+        for _ in range(EPISODE_STEPS):
+            obs, r, term, _, info = env.step(policy(obs, env))
+            total += r
+            forces.append(info["grip_force_n"])
+            if term:
+                break
+        returns.append(total)
+        dropped.append(bool(term))
+        grips.append(float(np.mean(forces)))
+    return {
+        "returns": returns,
+        "dropped": dropped,
+        "mean_grip_n": grips,
+        "mean_return": float(np.mean(returns)),
+        "drops": int(np.sum(dropped)),
+        "mean_grip_n_all": float(np.mean(grips)),
+    }
+
+
+def grip_action(env: SlipHoldEnv, force_n: float) -> np.ndarray:
+    """The action that commands force_n (clipped to force_range_n)."""
+    lo, hi = env.force_range_n
+    return np.array([np.clip(2 * (force_n - lo) / (hi - lo) - 1, -1, 1)], np.float32)

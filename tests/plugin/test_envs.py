@@ -404,6 +404,39 @@ def test_slip_hold_touch_signals_slip():
     assert pc["slip"] >= 10 * max(pc["hold"], 1.0), pc
 
 
+def test_slip_hold_slip_zone_grows_towards_the_friction_limit():
+    """The slip block: in steady holds the slip zone (traction at mu p) grows
+    as the load nears mu x grip (Cattaneo-Mindlin: its share is
+    1 - (1 - Q / mu P)^(1/2) on a smooth Winkler skin; the ridged pad's
+    pressure shifts it) while the block stays put; sliding, the whole
+    contact is at the limit and nothing sticks."""
+    mu, load = 0.7, 0.1
+    weight = BLOCK_MASS_KG * 9.81
+    zone, stuck_min = {}, {}
+    for margin in (2.0, 1.5, 1.2, 0.8):
+        env = make(
+            SLIP,
+            friction_range=(mu, mu),
+            base_load_range_n=(load, load),
+            rise_load_range_n=(0.0, 0.0),
+        )
+        u = env.unwrapped
+        a = np.array([force_action(env, margin * (load + weight) / mu)], np.float32)
+        run = rollout(env, 0, [a] * 30)
+        slip = run["obs"][1:, u.observation_blocks["slip"]]
+        assert np.all((slip[:, :3] >= 0) & (slip[:, :3] <= 1))
+        assert np.all(slip[:, 3] < u.observation_space.high[u.observation_blocks["slip"]][3])
+        zone[margin] = slip[-10:, 2].mean()  # after the grip change settles
+        stuck_min[margin] = slip[-10:, 1].min()
+        sliding = max(i["slip_m"] for i in run["info"][-10:]) > 1e-4  # > 10 mm/s
+        assert sliding == (margin < 1), (margin, sliding)
+        if margin > 1:
+            cattaneo = 1 - np.sqrt(1 - 1 / margin)
+            assert abs(zone[margin] - cattaneo) < 0.15, (margin, zone[margin], cattaneo)
+    assert 0 < zone[2.0] < zone[1.5] < zone[1.2] < zone[0.8] == 1.0, zone
+    assert stuck_min[0.8] == 0.0 < stuck_min[1.5]
+
+
 # ----- benchmark ---------------------------------------------------------
 
 
