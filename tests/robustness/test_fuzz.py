@@ -49,7 +49,7 @@ LOG_RANGES = {
     "sa1_saturation": (1e-3, 1e12),
 }
 LINEAR_RANGES = {"ridge_angle": (-180, 180), "poisson": (-0.99, 0.5), "sa1_i0": (-1e-6, 1e-6)}
-INTEGER_RANGES = {"nx": (4, 40), "texture_group": (0, 5), "threads": (1, 3)}
+INTEGER_RANGES = {"nx": (4, 40), "texture_group": (0, 5), "threads": (1, 3), "grid_cycle": (1, 4)}
 CHOICES = {
     "ridges": ["true", "false", "1", "0"],
     "shear": ["true", "false"],
