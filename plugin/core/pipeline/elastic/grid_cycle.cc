@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/simd.h"
 #include "pipeline/elastic/warm_start.h"
 
 namespace mjtouch {
@@ -42,9 +43,10 @@ struct DepositTerm {
 // Adds the weighted sum of terms[0 .. nterms) (a grid's cells) onto the taxel
 // field, cloud-in-cell: separably, row by row over each row's positive
 // cells; extends *cells by the taxels they reach. row, row_f: scratch.
-void AddDeposit(const TaxelGrid& g, const DepositTerm* terms, int nterms, const Deposit& d,
-                const TaxelGrid& grid, std::vector<double>* row, std::vector<float>* row_f,
-                std::vector<double>* out, CellBounds* cells) {
+MJTOUCH_TARGET_CLONES void AddDeposit(const TaxelGrid& g, const DepositTerm* terms, int nterms,
+                                      const Deposit& d, const TaxelGrid& grid,
+                                      std::vector<double>* row, std::vector<float>* row_f,
+                                      std::vector<double>* out, CellBounds* cells) {
   const int n = grid.n;
   CellBounds all;
   for (int t = 0; t < nterms; ++t) {
