@@ -493,7 +493,7 @@ bool ComputeTraction(const SkinModel& model, const StepInput& in, const Traction
   // repeated evaluation at the same time starts where the first one did.
   const StateLayout& lay = model.state_layout();
   const bool history = lay.history_block > 0;
-  HistoryBlock taxel[3]{}, shifted[2 * kMaxGridCycle + 1]{};
+  HistoryBlock taxel[3]{}, shifted[2 * kMaxGridCycle]{};
   const bool cycle = lay.cycle > 1;
   if (history || cycle) {
     if (new_time) {

@@ -88,10 +88,10 @@ enum EvalStartSlot {
 // cells, rotating with the same head), after the taxel grid's; absent
 // without it.
 // `grid_cycle` N > 1 (without `grid_shift`): no taxel grid blocks; a ring of
-// 2 N + 1 blocks of (n+1)^2 cells, one per step whichever offset grid it
-// solved: the grid solved now finds its last two solutions N and 2 N steps
-// back, and every grid's latest is within N - 1 steps. A slot after the
-// head holds which grid this time solves.
+// 2 N blocks of (n+1)^2 cells, one per step whichever offset grid it
+// solved: the grid solved now finds its last solution N steps back, and
+// every grid's last two within 2 N - 1 steps. A slot after the head holds
+// which grid this time solves.
 enum HistorySlot {
   kHsValid = 0,  // touched
   kHsDepth,      // indentation, m
@@ -184,7 +184,7 @@ struct StateLayout {
       shifted_ncell = static_cast<size_t>(cfg.grid.n + 1) * (cfg.grid.n + 1);
       shifted_block = kHistorySlots + static_cast<int>(shifted_ncell);
     }
-    if (cycle > 1) ring = 2 * cycle + 1;
+    if (cycle > 1) ring = 2 * cycle;
     tangential = shifted_history + ring * shifted_block;
     const bool partial = cfg.shear && cfg.shear_partial;
     tangential_block = partial ? kTangentialSlots + 2 * static_cast<int>(ncell) : 0;

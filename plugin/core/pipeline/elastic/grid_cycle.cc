@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/simd.h"
 #include "pipeline/elastic/warm_start.h"
 
 namespace mjtouch {
@@ -34,29 +35,74 @@ Deposit DepositOf(const TaxelGrid& offset_grid, const TaxelGrid& grid) {
   return Deposit{shift, a - shift};
 }
 
-// Adds scale * (a grid's pressure on box, p(k) for grid cell index k) onto
-// the taxel field, cloud-in-cell; extends *cells.
-template <typename P>
-void AddDeposit(const TaxelGrid& g, const CellBox& box, const Deposit& d, double scale, P p,
-                const TaxelGrid& grid, std::vector<double>* out, CellBounds* cells) {
+// One grid's share of the average: a weighted sum of up to two of its
+// solutions (a pressure field on a box: a double field, or a history block's
+// floats).
+struct DepositTerm {
+  const double* field = nullptr;  // the grid's full field, or
+  const HistoryBlock* block = nullptr;
+  CellBox box;
+  double scale = 0.0;
+};
+
+// Adds the weighted sum of terms[0 .. nterms) (a grid's cells) onto the taxel
+// field, cloud-in-cell: separably, row by row over each row's positive
+// cells; extends *cells by the taxels they reach. row, row_f: scratch.
+MJTOUCH_TARGET_CLONES void AddDeposit(const TaxelGrid& g, const DepositTerm* terms, int nterms,
+                                      const Deposit& d, const TaxelGrid& grid,
+                                      std::vector<double>* row, std::vector<float>* row_f,
+                                      std::vector<double>* out, CellBounds* cells) {
   const int n = grid.n;
-  const double w1 = d.w, w0 = 1.0 - d.w;
-  const double wy[2] = {w0, w1}, wx[2] = {w0, w1};
-  for (int j = box.j0; j < box.j0 + box.ny; ++j)
-    for (int i = box.i0; i < box.i0 + box.nx; ++i) {
-      const double v = p(static_cast<size_t>(j) * g.n + i);
-      if (!(v > 0.0)) continue;
-      for (int b = 0; b < 2; ++b) {
-        const int tj = j - 1 + d.shift + b;
-        if (tj < 0 || tj >= n || wy[b] == 0.0) continue;
-        for (int a = 0; a < 2; ++a) {
-          const int ti = i - 1 + d.shift + a;
-          if (ti < 0 || ti >= n || wx[a] == 0.0) continue;
-          (*out)[static_cast<size_t>(tj) * n + ti] += scale * wy[b] * wx[a] * v;
-          cells->Add(ti, tj);
-        }
+  CellBounds all;
+  for (int t = 0; t < nterms; ++t) {
+    const CellBox& bx = terms[t].box;
+    if (bx.empty()) continue;
+    all.AddRow(bx.i0, bx.i0 + bx.nx - 1, bx.j0);
+    all.AddRow(bx.i0, bx.i0 + bx.nx - 1, bx.j0 + bx.ny - 1);
+  }
+  if (all.empty()) return;
+  const int i0 = all.i0, i1 = all.i1 + 1;
+  row->resize(static_cast<size_t>(g.n));
+  row_f->resize(static_cast<size_t>(g.n));
+  double* v = row->data();
+  const double wt[2] = {1.0 - d.w, d.w};
+  for (int j = all.j0; j <= all.j1; ++j) {
+    std::fill(v + i0, v + i1, 0.0);
+    for (int t = 0; t < nterms; ++t) {
+      const CellBox& bx = terms[t].box;
+      if (bx.empty() || j < bx.j0 || j >= bx.j0 + bx.ny) continue;
+      const size_t k = static_cast<size_t>(j) * g.n + bx.i0;
+      const double sc = terms[t].scale;
+      if (terms[t].field) {
+        const double* p = terms[t].field + k;
+        for (int i = 0; i < bx.nx; ++i) v[bx.i0 + i] += sc * p[i];
+      } else {
+        float* f = row_f->data();
+        terms[t].block->p_row(k, bx.nx, f);
+        for (int i = 0; i < bx.nx; ++i) v[bx.i0 + i] += sc * static_cast<double>(f[i]);
       }
     }
+    int lo = i0, hi = i1 - 1;
+    while (lo <= hi && !(v[lo] > 0.0)) ++lo;
+    if (lo > hi) continue;
+    while (!(v[hi] > 0.0)) --hi;
+    for (int b = 0; b < 2; ++b) {
+      const int tj = j - 1 + d.shift + b;
+      if (tj < 0 || tj >= n || wt[b] == 0.0) continue;
+      double* o = out->data() + static_cast<size_t>(tj) * n;
+      for (int a = 0; a < 2; ++a) {
+        if (wt[a] == 0.0) continue;
+        const double wa = wt[b] * wt[a];
+        // taxel ti = i - 1 + shift + a
+        const int off = d.shift - 1 + a;
+        const int ia = std::max(lo, -off), ib = std::min(hi, n - 1 - off);
+        if (ia > ib) continue;
+        double* oo = o + off;
+        for (int i = ia; i <= ib; ++i) oo[i] += wa * v[i];
+        cells->AddRow(ia + off, ib + off, tj);
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -82,19 +128,19 @@ bool CycleTraction(const CycleGrids& cg, int slot, int length, const TaxelGrid& 
   };
   const ShiftedGrid& sg = cg.grids[grid_at(0)];
   const TaxelGrid& g = sg.grid;
-  // The warm start: this grid's last two solutions (N and 2 N steps back)
-  // extrapolated, with their stored K p (warm_start.h); before it has them,
-  // its last, or the last step's grid's (a sub-cell offset away).
-  // (Adding the change the last step's grid saw over N steps to this grid's
-  // last solution took more iterations on the sliding scene: 10.8 vs 8.7.)
+  // The warm start: this grid's last solution (N steps back), with its
+  // stored K p (warm_start.h); before it has one, the last step's grid's (a
+  // sub-cell offset away). The contact set changes between a grid's turns
+  // are what its solve pays for, and no other grid's solution predicts them:
+  // on the sliding scene, extrapolating from its solutions N and 2 N steps
+  // back took 8.8 CG iterations (8.9 without), the last step's grid's
+  // solution resampled to this grid 13.2, and this grid's last plus the
+  // change the last step's grid saw over N steps 10.8.
   auto valid = [&](int b) { return ring[b].slots[kHsValid] > 0.0; };
-  WarmTerm terms[2];
+  WarmTerm terms[1];
   int nterms = 0;
   const int L = length;
-  if (options.method == ElasticMethod::kPreconditioned && valid(L) && valid(2 * L)) {
-    terms[nterms++] = WarmTerm{&ring[L], 2.0};
-    terms[nterms++] = WarmTerm{&ring[2 * L], -1.0};
-  } else if (valid(L)) {
+  if (valid(L)) {
     terms[nterms++] = WarmTerm{&ring[L], 1.0};
   } else if (L > 1 && valid(1)) {
     terms[nterms++] = WarmTerm{&ring[1], 1.0};
@@ -109,15 +155,17 @@ bool CycleTraction(const CycleGrids& cg, int slot, int length, const TaxelGrid& 
     RenderRequest request{g, sg.skin_z, pad_pose, surfaces, pass == 0 ? cull : kInf, &sg.blocks};
     request.fast_paths = fast_paths;
     RenderOutput out{&w->gap, &w->coverage, &rbox};
+    // (the grids share the buffers: all have n + 1 cells)
+    out.written = fast_paths ? &w->gap_written : nullptr;
     out.scratch = &w->render_scratch;
     const double level = RenderGap(request, out);
     gmin = rbox.empty() ? kInf : MinGap(g, rbox, w->gap, w->coverage);
     if (!std::isfinite(gmin)) return false;
     sbox = rbox;  // cold: uniform from the whole rendered box
     if (nterms == 0) w->pressure.assign(g.Size(), 0.0);
-    touching =
-        SolveElasticWarmFrom(g, *sg.elastic, rbox, w->coverage, terms, nterms, force_n, options,
-                             &w->gap, &w->pressure, &w->elastic, &w->stats, &sbox, &u_region);
+    touching = SolveElasticWarmFrom(g, *sg.elastic, rbox, w->coverage, terms, nterms, true, force_n,
+                                    options, &w->gap, &w->pressure, &w->elastic, &w->stats, &sbox,
+                                    &u_region);
     if (!touching) return false;
     if (pass == 0 && w->stats.approach_m >= level) touching = false;  // render all, solve again
   }
@@ -148,26 +196,27 @@ bool CycleTraction(const CycleGrids& cg, int slot, int length, const TaxelGrid& 
     const Deposit d = DepositOf(gb.grid, grid);
     // weight of the older solution (b + L steps back), of the newer
     const double f = current(b + L) ? static_cast<double>(L - 1 - b) / L : 0.0;
+    DepositTerm dt[2];
+    int nd = 0;
     if (f < 1.0) {
-      const double sc = scale * (1.0 - f);
+      dt[nd].scale = scale * (1.0 - f);
       if (b == 0) {
-        const double* p = w->pressure.data();
-        AddDeposit(
-            gb.grid, sbox, d, sc, [p](size_t c) { return p[c]; }, grid, &field->pressure_pa,
-            &cells);
+        dt[nd].field = w->pressure.data();
+        dt[nd].box = sbox;
       } else {
-        const HistoryBlock& h = ring[b];
-        AddDeposit(
-            gb.grid, h.p_box(), d, sc, [&h](size_t c) { return double(h.p(c)); }, grid,
-            &field->pressure_pa, &cells);
+        dt[nd].block = &ring[b];
+        dt[nd].box = ring[b].p_box();
       }
+      ++nd;
     }
     if (f > 0.0) {
-      const HistoryBlock& o = ring[b + L];
-      AddDeposit(
-          gb.grid, o.p_box(), d, scale * f, [&o](size_t c) { return double(o.p(c)); }, grid,
-          &field->pressure_pa, &cells);
+      dt[nd].block = &ring[b + L];
+      dt[nd].box = ring[b + L].p_box();
+      dt[nd].scale = scale * f;
+      ++nd;
     }
+    AddDeposit(gb.grid, dt, nd, d, grid, &w->deposit_row, &w->deposit_row_f, &field->pressure_pa,
+               &cells);
   }
   field->box = cells.Box();
   return NormalizeLoad(grid, force_n, field);

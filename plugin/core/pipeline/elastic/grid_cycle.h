@@ -10,7 +10,7 @@
 // stress (250 Hz at 0.1 mm and 25 mm/s, PC's best frequency). Offsets k / N
 // cancel the error's first N - 1 harmonics in the average, as `grid_shift`
 // cancels the first with two solves per step; here each step solves one
-// grid, warm-started from that grid's own solutions N and 2 N steps back.
+// grid, warm-started from that grid's own solution N steps back.
 // The average is of the grids' solutions at one time, N - 1 steps back
 // (each interpolated between its last two): the traction lags the pad by
 // 0.3 ms at N = 4 and dt = 0.1 ms.
@@ -43,9 +43,9 @@ int CycleLength(int n_grids, double dt_s);
 // of N: every N / length-th grid, the taxel-centred one k = N / 2 among
 // them). Solves this step's grid (rendered with the cull level of
 // depth_prev_m if warm, else everything; again without culling if the
-// solved approach reaches it), warm-started from its own solutions length
-// and 2 length steps back (ring[b]: the history block b steps back,
-// b = 0 .. 2 N; ring[0] is written), then writes to field (cleared by the
+// solved approach reaches it), warm-started from its own solution length
+// steps back (ring[b]: the history block b steps back, b = 0 .. 2 N - 1;
+// ring[0] is written), then writes to field (cleared by the
 // caller) the average over the cycling grids of each one's solution at
 // length - 1 steps back, interpolated between its last two (ring[0 ..
 // 2 length - 1]; solutions of another indentation depth left out), load

@@ -42,9 +42,12 @@ struct ShiftedGrid {
 // Per-simulation scratch (Workspace).
 struct GridShiftWork {
   std::vector<double> gap, coverage, pressure;
+  CellBox gap_written;  // the cells of gap / coverage not +inf / 0 (grid_cycle)
   RenderScratch render_scratch;
   ElasticStepWork elastic;
   ElasticSolveStats stats;
+  std::vector<double> deposit_row;  // grid_cycle's deposit, one row
+  std::vector<float> deposit_row_f;
 };
 
 // field: the taxel grid's solution (pressure_pa on field->box, its total

@@ -368,15 +368,16 @@ bool SolveElasticWarm(const TaxelGrid& grid, const ElasticContact& ec, const Cel
     terms[nterms++] = WarmTerm{&history[1], extrapolate ? 2.0 : 1.0};
     if (extrapolate) terms[nterms++] = WarmTerm{&history[2], -1.0};
   }
-  return SolveElasticWarmFrom(grid, ec, box, coverage, terms, nterms, force_n, opt, gap, pressure,
-                              w, st, solve_box, u_region);
+  return SolveElasticWarmFrom(grid, ec, box, coverage, terms, nterms, false, force_n, opt, gap,
+                              pressure, w, st, solve_box, u_region);
 }
 
 bool SolveElasticWarmFrom(const TaxelGrid& grid, const ElasticContact& ec, const CellBox& box,
                           const std::vector<double>& coverage, const WarmTerm* terms, int nterms,
-                          double force_n, const ElasticSolveOptions& opt, std::vector<double>* gap,
-                          std::vector<double>* pressure, ElasticStepWork* w, ElasticSolveStats* st,
-                          CellBox* solve_box, CellBox* u_region) {
+                          bool single_term_u, double force_n, const ElasticSolveOptions& opt,
+                          std::vector<double>* gap, std::vector<double>* pressure,
+                          ElasticStepWork* w, ElasticSolveStats* st, CellBox* solve_box,
+                          CellBox* u_region) {
   // Cells without coverage never touch (every cell stored, the select
   // vectorises).
   for (int j = box.j0; j < box.j0 + box.ny; ++j) {
@@ -393,9 +394,9 @@ bool SolveElasticWarmFrom(const TaxelGrid& grid, const ElasticContact& ec, const
   // contact problem on the rendered cells either way.
   if (nterms > 0)
     WarmStart(grid, box, terms, nterms, ec.compliance().periodic(), pressure, w, solve_box);
-  const bool have_u0 =
-      nterms > 1 && ExtrapolatedDisplacement(grid, ec.compliance(), terms, nterms, *pressure,
-                                             *solve_box, opt.threads, w);
+  const bool have_u0 = (nterms > 1 || (single_term_u && nterms == 1)) &&
+                       ExtrapolatedDisplacement(grid, ec.compliance(), terms, nterms, *pressure,
+                                                *solve_box, opt.threads, w);
   // Upward bulge bound: max_lift times the whole load on one cell.
   const double lift = ec.max_lift_m_per_pa() * force_n / grid.Area();
   return SolveOnGrowingBox(grid, ec, *gap, box, force_n, lift, opt,

@@ -54,10 +54,11 @@ struct WarmTerm {
 // SolveElasticWarm from any weighted sum of stored solutions of this grid
 // (terms[0]'s contact sets the first solve box; one term: that solution;
 // none: from *pressure and *solve_box as the caller set them), the guess
-// clipped at zero and its K p from the stored ones.
+// clipped at zero and its K p from the stored ones (one term: only with
+// single_term_u, else the solve applies the operator).
 bool SolveElasticWarmFrom(const TaxelGrid& grid, const ElasticContact& ec, const CellBox& box,
                           const std::vector<double>& coverage, const WarmTerm* terms, int nterms,
-                          double force_n, const ElasticSolveOptions& options,
+                          bool single_term_u, double force_n, const ElasticSolveOptions& options,
                           std::vector<double>* gap, std::vector<double>* pressure,
                           ElasticStepWork* w, ElasticSolveStats* st, CellBox* solve_box,
                           CellBox* u_region);
