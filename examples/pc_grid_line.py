@@ -9,7 +9,7 @@ grows continuously with the overlap and has no such line.
 Prints, per (pressure, pitch), the PC receptors' stress power at V / pitch and
 at the grating harmonics around 250 Hz, and the PC rate (noise off). The
 elastic rows solve on the taxel grid alone (grid_cycle=1); the last row is
-the default skin, whose grid_cycle=4 averages four sub-cell offset grids
+the elastic skin with grid_cycle=4, which averages four sub-cell offset grids
 solved in turn, which cancels the line."""
 
 import argparse

@@ -138,6 +138,7 @@ def print_human(o: dict) -> None:
     if o.get("grid_line_hz"):
         print(
             f"note: the elastic contact adds a grid line at V/pitch = {o['grid_line_hz']:.0f} Hz "
-            "to the stress; PC rates include it (--grid-shift cancels it; docs: Performance, "
+            "to the stress; PC rates include it (--grid-cycle 4 or --grid-shift cancel it; docs: "
+            "Performance, "
             '"What accuracy costs")'
         )

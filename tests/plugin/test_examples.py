@@ -221,7 +221,7 @@ def test_pc_grid_line_elastic_not_winkler(capsys):
     assert el["pitch_m"] == wk["pitch_m"] == 2e-4
     assert el["power_at_v_over_pitch_pa2"] > 100 * wk["power_at_v_over_pitch_pa2"] > 0
     assert el["pc_rate_hz"] > 5 * wk["pc_rate_hz"]
-    # the default grid_cycle=4 (four sub-cell offset grids in turn) cancels
+    # grid_cycle=4 (four sub-cell offset grids in turn) cancels
     # most of the line and of the PC rate it drove
     cyc = rows[3]
     assert (cyc["pressure"], cyc["grid_cycle"], el["grid_cycle"]) == ("elastic", 4, 1)

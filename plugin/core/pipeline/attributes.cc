@@ -145,11 +145,12 @@ const std::vector<AttributeRow>& Rows() {
        "(cancels the V / pitch line that texture edges sharper than a cell put in the stress; "
        "a step ~1.8x as long at 128 x 0.1 mm)",
        nullptr, FIELD(grid_shift), NO_PARSE, S::kModel},
-      {"grid_cycle", K::kInteger, 1, 4, false, false, "grids", "4",
+      {"grid_cycle", K::kInteger, 1, 4, false, false, "grids", "1",
        "`elastic`: each step solves the contact on one of this many grids offset by k / N of a "
        "cell in x and y, in turn, and the stress sees the average of the last N solutions "
        "deposited cloud-in-cell on the taxels (the texture's sub-cell position no longer locks "
-       "to the grid; about the cost of one solve). 1: the taxel grid alone. Off with `grid_shift`",
+       "to the grid; ~1.5x the step, docs: Performance). 1: the taxel grid alone. Off with "
+       "`grid_shift`",
        nullptr, FIELD(grid_cycle), NO_PARSE, S::kModel},
       {"stiffness", K::kNumber, kMinStiffnessPaPerM, 1e12, false, false, "Pa/m", "2e7",
        "Winkler foundation stiffness (sets the contact size, not the force)", nullptr,
