@@ -70,7 +70,9 @@ def test_grid_line_is_reported_where_one_grid_is_solved():
     # grid_cycle whose cycle lasts at most 0.5 ms
     from mjtouch.experiments.slide import SlideParams, cycling_grids
 
-    assert [cycling_grids(SlideParams(dt_s=dt)) for dt in (1e-4, 1.25e-4, 2e-4, 5e-4)] == [
+    assert [
+        cycling_grids(SlideParams(grid_cycle=4, dt_s=dt)) for dt in (1e-4, 1.25e-4, 2e-4, 5e-4)
+    ] == [
         4,
         4,
         2,
