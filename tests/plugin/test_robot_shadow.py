@@ -29,22 +29,7 @@ RL = mjtouch.scene.robot.RL_SKIN  # the bench's `rl` preset
 DEPTH_M = 1.5e-3  # each plate starts this far into its fingertip
 
 
-def pad_facing(model, data, finger: str) -> np.ndarray:
-    """The side of the distal capsule that flexing the finger moves forward
-    (the pad), in the geom frame, rounded to the nearest geom axis."""
-    g = model.geom(f"robot0:C_{finger}distal").id
-    x0, R0 = data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()
-    flexed = mujoco.MjData(model)
-    joints = ["THJ0"] if finger == "th" else [f"{finger.upper()}J{k}" for k in (0, 1, 2)]
-    for j in joints:
-        flexed.qpos[model.joint(f"robot0:{j}").qposadr[0]] = 0.3
-    mujoco.mj_forward(model, flexed)
-    move = R0.T @ (flexed.geom_xpos[g] - x0)
-    move[2] = 0.0  # across the capsule's axis: its cylinder
-    axis = np.argmax(np.abs(move))
-    f = np.zeros(3)
-    f[axis] = np.sign(move[axis])
-    return f
+pad_facing = hand.pad_facing  # the hand bench's rule: one copy
 
 
 def test_five_shadow_fingertips_report_mujocos_normal_force():
