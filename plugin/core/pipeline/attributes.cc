@@ -148,7 +148,7 @@ const std::vector<AttributeRow>& Rows() {
       {"grid_cycle", K::kInteger, 1, 4, false, false, "grids", "1",
        "`elastic`: each step solves the contact on one of this many grids offset by k / N of a "
        "cell in x and y, in turn, and the stress sees the average of the last N solutions "
-       "deposited cloud-in-cell on the taxels (the texture's sub-cell position no longer locks "
+       "deposited on the nearest taxels (the texture's sub-cell position no longer locks "
        "to the grid; ~1.5x the step, docs: Performance). 1: the taxel grid alone. Off with "
        "`grid_shift`",
        nullptr, FIELD(grid_cycle), NO_PARSE, S::kModel},

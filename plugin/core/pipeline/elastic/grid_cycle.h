@@ -1,8 +1,8 @@
 // `grid_cycle` N: the `elastic` contact solved each step on one of N grids
 // of n + 1 cells whose centres sit k / N of a cell (k = 0 .. N - 1) off the
 // taxel grid's corners in x and y, in turn; the traction is the average of
-// the N latest solutions, each deposited cloud-in-cell onto the taxels
-// (which keeps its total and first moment).
+// the N latest solutions, each deposited on the nearest taxel cells (the
+// average keeps the total and first moment: grid_cycle.cc, DepositOf).
 //
 // Why: texture edges sharper than a cell lose their sub-cell position in a
 // discrete contact, so its error is periodic in the texture's offset
