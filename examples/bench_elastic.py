@@ -29,7 +29,6 @@ and a lead-in simulated without the plugin). Prints per configuration:
 from __future__ import annotations
 
 import argparse
-import pathlib
 import threading
 import time
 
@@ -41,7 +40,6 @@ from mjtouch.bench.configs import LEAD_IN_S
 from mjtouch.scene import scenes
 from mjtouch.scene.sensor import SkinLayout
 
-MODELS = pathlib.Path(__file__).resolve().parents[1] / "models"
 SCENES = ("slide_grating", "slide_flat")
 # label: skin attributes
 SOLVERS = {
@@ -53,22 +51,9 @@ _PHYSICS = int(mujoco.mjtState.mjSTATE_FULLPHYSICS) & ~int(mujoco.mjtState.mjSTA
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 
 
-def scene_spec(name: str, **skin) -> mujoco.MjSpec:
-    """The scene with skin attributes set on its sensor's plugin config (the
-    shipped models embed the config in the <sensor><plugin>, which
-    scenes.set_skin, editing <plugin> instances, does not see)."""
-    spec = mujoco.MjSpec.from_file(str(MODELS / f"{name}.xml"))
-    for s in spec.sensors:
-        if s.type == mujoco.mjtSensor.mjSENS_PLUGIN:
-            cfg = dict(s.plugin.config)
-            cfg.update({k: str(v) for k, v in skin.items()})
-            s.plugin.config = cfg
-    return spec
-
-
 def settled(name: str):
     """(physics state, qacc warm start) after the press and LEAD_IN_S of sliding."""
-    m = scenes.remove_skin(scene_spec(name)).compile()
+    m = scenes.remove_skin(scenes.shipped_scene_spec(name)).compile()
     d = mujoco.MjData(m)
     for row in scenes.controls(scenes.Protocol(), LEAD_IN_S):
         d.ctrl[:] = row
@@ -79,7 +64,7 @@ def settled(name: str):
 
 
 def make_run(name: str, start, nstep: int, **skin) -> bench.Run:
-    m = scene_spec(name, **{"pressure": "elastic", **skin}).compile()
+    m = scenes.shipped_scene_spec(name, **{"pressure": "elastic", **skin}).compile()
     d = mujoco.MjData(m)
     mujoco.mj_setState(m, d, start[0], _PHYSICS)
     full = np.empty(mujoco.mj_stateSize(m, _FULL))

@@ -46,7 +46,6 @@ from mjtouch.bench.configs import LEAD_IN_S
 from mjtouch.scene import scenes
 from mjtouch.scene.sensor import SkinLayout
 
-MODELS = pathlib.Path(__file__).resolve().parents[1] / "models"
 SCENES = ("slide_flat", "slide_grating")
 CASES = ("slide", "ramp")
 RAMP_SPEED_M_S = 13e-3
@@ -61,21 +60,10 @@ _PHYSICS = int(mujoco.mjtState.mjSTATE_FULLPHYSICS) & ~int(mujoco.mjtState.mjSTA
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 
 
-def scene_spec(name: str, **skin) -> mujoco.MjSpec:
-    """The scene with skin attributes set on its sensor's plugin config."""
-    spec = mujoco.MjSpec.from_file(str(MODELS / f"{name}.xml"))
-    for s in spec.sensors:
-        if s.type == mujoco.mjtSensor.mjSENS_PLUGIN:
-            cfg = dict(s.plugin.config)
-            cfg.update({k: str(v) for k, v in skin.items()})
-            s.plugin.config = cfg
-    return spec
-
-
 def settled(name: str, case: str):
     """(physics state, qacc warm start): after the press and LEAD_IN_S of
     sliding (slide), after the press alone (ramp)."""
-    m = scenes.remove_skin(scene_spec(name)).compile()
+    m = scenes.remove_skin(scenes.shipped_scene_spec(name)).compile()
     d = mujoco.MjData(m)
     for row in scenes.controls(scenes.Protocol(), LEAD_IN_S if case == "slide" else 0.0):
         d.ctrl[:] = row
@@ -96,7 +84,7 @@ class Run:
     """A configuration stepped from its start state under the case's ctrl."""
 
     def __init__(self, name: str, case: str, start, nstep: int, **skin):
-        self.model = scene_spec(name, **skin).compile()
+        self.model = scenes.shipped_scene_spec(name, **skin).compile()
         self.data = mujoco.MjData(self.model)
         mujoco.mj_setState(self.model, self.data, start[0], _PHYSICS)
         self.state0 = np.empty(mujoco.mj_stateSize(self.model, _FULL))

@@ -216,6 +216,21 @@ def set_skin(spec: mujoco.MjSpec, **attributes: str) -> mujoco.MjSpec:
     return spec
 
 
+SHIPPED_SCENES = ("slide_grating", "slide_grating_smooth", "slide_flat")
+
+
+def shipped_scene_spec(name: str, **skin: object) -> mujoco.MjSpec:
+    """A shipped scene (``models/<name>.xml``) as an MjSpec, with the skin
+    attributes ``skin`` (values as strings, None removes one) set on its
+    sensor's plugin config (:func:`set_skin`)."""
+    if name not in SHIPPED_SCENES:
+        raise ValueError(f"shipped_scene_spec: name {name!r} must be one of {SHIPPED_SCENES}")
+    spec = mujoco.MjSpec.from_file(str(models_dir() / f"{name}.xml"))
+    if skin:
+        set_skin(spec, **{k: None if v is None else str(v) for k, v in skin.items()})
+    return spec
+
+
 def remove_skin(spec: mujoco.MjSpec) -> mujoco.MjSpec:
     """Delete every mjtouch.skin sensor and instance: the bare MuJoCo scene
     (a sensor plugin does not change the physics)."""
@@ -533,7 +548,8 @@ def write_models(directory: str | pathlib.Path) -> list[pathlib.Path]:
 def models_dir() -> pathlib.Path:
     """The models/ folder: installed with the package, or the source tree's."""
     here = pathlib.Path(__file__).resolve().parent
-    for cand in (here / "models", here.parent / "models"):
+    # installed: mjtouch/models; source tree (editable): models/ beside mjtouch/
+    for cand in (here.parent / "models", here.parents[1] / "models"):
         if cand.is_dir():
             return cand
     raise FileNotFoundError("mjtouch models/ folder not found")

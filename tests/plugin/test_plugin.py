@@ -158,6 +158,32 @@ def test_missing_plugin_library_gives_clear_error(monkeypatch, tmp_path):
         mjtouch._loader.library_path()
 
 
+def test_shipped_scene_spec_sets_the_skin_attributes():
+    # The shipped file with the given attributes on its inline <sensor><plugin>:
+    # the same model as the file edited by set_skin, the rest untouched.
+    spec = scenes.shipped_scene_spec("slide_flat", pressure="elastic", nx=40)
+    layout = SkinLayout.from_model(spec.compile())
+    assert layout.nx == 40
+    cfg = dict(
+        next(s for s in spec.sensors if s.type == mujoco.mjtSensor.mjSENS_PLUGIN).plugin.config
+    )
+    assert cfg["pressure"] == "elastic"
+    ref = mujoco.MjSpec.from_file(str(MODELS / "slide_flat.xml"))
+    ref_cfg = dict(
+        next(s for s in ref.sensors if s.type == mujoco.mjtSensor.mjSENS_PLUGIN).plugin.config
+    )
+    assert {k: v for k, v in cfg.items() if k not in ("pressure", "nx")} == {
+        k: v for k, v in ref_cfg.items() if k not in ("pressure", "nx")
+    }
+    plain = scenes.shipped_scene_spec("slide_grating").compile()
+    assert (
+        SkinLayout.from_model(plain).nx
+        == SkinLayout.from_model(mujoco.MjModel.from_xml_path(str(MODELS / "slide_grating.xml"))).nx
+    )
+    with pytest.raises(ValueError, match="slide_cork.*must be one of"):
+        scenes.shipped_scene_spec("slide_cork")
+
+
 def test_set_skin_edits_the_shipped_scenes_inline_instance():
     # models/*.xml define the instance inline in <sensor><plugin>; set_skin
     # must reach it (it once did nothing there) and reject a spec without skin.
