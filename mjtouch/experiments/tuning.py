@@ -631,3 +631,46 @@ def pin_reference_table(
             rates_hz=rates, stress_kpa=kpa, offaxis_m=stress["offaxis_m"][r], dt_s=dt, **thr
         )
     return out
+
+
+def _wave_amplitude(dq: np.ndarray) -> float:
+    """Peak |dq| over the middle 60% of a sine trace (clear of its ramps)."""
+    n = dq.size
+    return float(np.abs(dq[int(0.2 * n) : int(0.8 * n)]).max())
+
+
+def pin_sine_gain(stress: dict) -> dict:
+    """Per class, our receptor's stress amplitude per metre of pin sine about
+    the pre-indentation (Pa/m), one value per frequency of ``stress``."""
+    out = {}
+    for r, c in enumerate(stress["classes"]):
+        out[c] = [
+            _wave_amplitude(q1[:, r] - q0[:, r]) / stress["ref_m"]
+            for q0, q1 in stress["sine"].values()
+        ]
+    return out
+
+
+def pin_reference_rescaled(
+    stress: dict, ramp_pa: dict, preindent_pa: dict, sine_pa_per_m: dict
+) -> dict:
+    """``stress`` (:func:`pin_reference_stress`) with each class's traces
+    scaled to another mechanics' stress at the receptor, keeping our time
+    course: the k-th ramp so that its mid-hold is ``ramp_pa[c][k]``, the
+    sines' pre-indentation so that it is ``preindent_pa[c]`` mid-trace and
+    their wave so that its amplitude is ``sine_pa_per_m[c]`` per metre of
+    the pin's sine. Input of :func:`pin_reference_table`: our afferent
+    model under those mechanics."""
+    out = dict(stress)
+    ramps = [q.copy() for q in stress["ramp"]]
+    sines = {f: (q0.copy(), q1.copy()) for f, (q0, q1) in stress["sine"].items()}
+    for r, c in enumerate(stress["classes"]):
+        for k, q in enumerate(ramps):
+            q[:, r] *= ramp_pa[c][k] / q[q.shape[0] // 2, r]
+        for q0, q1 in sines.values():
+            dq = q1[:, r] - q0[:, r]
+            dq *= sine_pa_per_m[c] * stress["ref_m"] / _wave_amplitude(dq)
+            q0[:, r] *= preindent_pa[c] / q0[q0.shape[0] // 2, r]
+            q1[:, r] = q0[:, r] + dq
+    out["ramp"], out["sine"] = ramps, sines
+    return out

@@ -65,7 +65,7 @@ DT_STIMULI = {
     ("SA1", "ramp"): lambda t: ramp_and_hold(t, 300e3, 0.1, 0.7, 1.0),
     ("SA1", "sine"): lambda t: onset_sine(t, 200e3, 80e3, 5.0),
     # RA, PC ramps: >= 100 spikes in 2 s (a few per ramp: the RA's gain control
-    # by its sustained drive, the PC's 2.5 ms refractory period)
+    # by its sustained drive, the PC's 2.4 ms refractory period)
     ("RA", "ramp"): lambda t: ramp_and_hold(t, 60e3, 0.03, 0.02, 0.1),
     ("RA", "sine"): lambda t: onset_sine(t, 0.0, 3100.0, 40.0),
     # 7.6x RA's noise-free absolute threshold at 150 Hz (522 Pa; 1:1 is never
@@ -73,9 +73,9 @@ DT_STIMULI = {
     ("RA", "sine-skipping"): lambda t: onset_sine(t, 0.0, 4000.0, 150.0),
     ("PC", "ramp"): lambda t: ramp_and_hold(t, 5e3, 0.02, 0.03, 0.1),
     ("PC", "sine"): lambda t: onset_sine(t, 0.0, 10.0, 100.0),
-    # PC skipping at 300 Hz (a spike every ~3 cycles): at 400 Hz the cycle
-    # equals the PC's 2.5 ms refractory period, a tie the two samplings of
-    # the stimulus break differently
+    # PC skipping at 300 Hz (a spike every ~5 cycles): at 400 Hz the cycle
+    # (2.5 ms) is within a step of the PC's 2.4 ms refractory period, a
+    # near-tie the two samplings of the stimulus break differently
     ("PC", "sine-skipping"): lambda t: onset_sine(t, 0.0, 1.5, 300.0),
 }
 

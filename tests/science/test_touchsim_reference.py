@@ -11,20 +11,22 @@ mjtouch's depths, noise off, median parameter set.
 Asserted: the SA1's ramp-and-hold rate within 1.5x of TouchSim's at 0.5,
 1.0 and 1.5 mm and the same slope; below 0.5 mm ours fires where TouchSim's
 fits barely do, as human SA I units do (Johansson & Vallbo 1979, J Physiol
-286:283: median threshold 56 um). The RA's within 2x at 0.5 and 1.0 mm
-(its gain control by the sustained drive). The PC's within 2x at 0.5 mm;
-at 1.0 mm it is 3.3x, 2.3x on TouchSim's stress (held within 2.5x; the
-test says why).
+286:283: median threshold 56 um). The RA's and the PC's within 2x at 0.5
+and 1.0 mm, on our stress and on TouchSim's.
 The stress at the receptor against TouchSim's, a check of the mechanics
-(bound derived below). Thresholds are printed: ours stay 4-14x (RA) and
-4-10x (PC) more sensitive, the gains that keep the RA's response to
-scanned gratings and the PC's to textures and slip
-(docs/science/afferents.md, "Against TouchSim", has the tables and the
-attribution).
+(bounds derived below), for the ramps and for the sines. "On TouchSim's
+stress": our afferent model driven by our stress traces scaled to
+TouchSim's s_z at the receptor (tuning.pin_reference_rescaled), so each
+difference splits into the mechanics (ours / TouchSim's stress) and the
+afferent model (ours on TouchSim's stress / TouchSim). The thresholds are
+split so: the mechanics give 1.65-2.2x, the RA's model 2.2-10x (its gain,
+kept for the RA's response to scanned gratings), the PC's 1-3.2x (its
+gain, kept for the slip burst and the textures; docs/science/afferents.md,
+"Against TouchSim", has the tables and the reasons).
 
-Cost: ~20 s (six 1 s ramps and nine pairs of 1 s sines on a 49 x 49 skin
+Cost: ~25 s (six 1 s ramps and nine pairs of 1 s sines on a 49 x 49 skin
 at dt 1e-4, two threads; the thresholds by bisection through
-core.receptor_run, ~3 s).
+core.receptor_run, twice ~3 s).
 """
 
 import json
@@ -45,7 +47,9 @@ RAMP = REF["ramp_and_hold"]
 SINES = REF["sines"]
 SA1_RATE_BOUND = 1.5
 RA_PC_RATE_BOUND = 2.0  # issue bound for the rapidly adapting classes
-PC_1MM_MODEL_BOUND = 2.5  # the PC at 1.0 mm on TouchSim's stress (below)
+# the PC's absolute thresholds on TouchSim's stress: its gain, kept for the
+# slip burst and the textures, leaves them 1-3.2x TouchSim's
+PC_THRESHOLD_MODEL_BOUND = 3.5
 # TouchSim's mechanics (Saal et al. 2017; the file's stress_note): Sneddon's
 # flat punch on an elastic half-space
 TOUCHSIM_YOUNG_PA, TOUCHSIM_POISSON = 50e3, 0.4
@@ -62,16 +66,47 @@ def _layers():
     raise KeyError("layers")
 
 
+def _touchsim_stress_key(c):
+    # SA1 at TouchSim's own class depth (0.3 mm, its fits' input); RA and PC
+    # at ours (TouchSim drives them by a surface-velocity wave, not s_z)
+    return "stress_kpa" if c == "SA1" else "stress_kpa_mjtouch_depth"
+
+
+def _touchsim_stress(classes):
+    """TouchSim's s_z at the receptor (Pa): per ramp depth, at the sines'
+    pre-indentation, and per metre of sine (Sneddon's punch is linear in
+    depth: the 0.5 mm ramp's value over 0.5 mm)."""
+    i = RAMP["depths_mm"].index(SINES["preindent_mm"])
+    ramp = {c: [x * 1e3 for x in RAMP[c][_touchsim_stress_key(c)]] for c in classes}
+    pre = {c: ramp[c][i] for c in classes}
+    per_m = {c: pre[c] / (SINES["preindent_mm"] * 1e-3) for c in classes}
+    return ramp, pre, per_m
+
+
 @pytest.fixture(scope="module")
-def ours():
-    stress = tuning.pin_reference_stress(
+def stress():
+    return tuning.pin_reference_stress(
         [d * 1e-3 for d in RAMP["depths_mm"]],
         SINES["freqs_hz"],
         duration_s=REF["duration_s"],
         ramp_s=REF["ramp_s"],
         preindent_m=SINES["preindent_mm"] * 1e-3,
     )
+
+
+@pytest.fixture(scope="module")
+def ours(stress):
     return tuning.pin_reference_table(stress)
+
+
+@pytest.fixture(scope="module")
+def on_touchsim(stress):
+    """Our afferent model on TouchSim's stress at the receptor (our traces'
+    time course scaled to its level): what is left against TouchSim is the
+    afferent model; what this removes, the mechanics."""
+    return tuning.pin_reference_table(
+        tuning.pin_reference_rescaled(stress, *_touchsim_stress(stress["classes"]))
+    )
 
 
 def test_reference_file_is_touchsims_and_self_consistent():
@@ -176,47 +211,100 @@ def _trapezoid_counts(cls, level_pa, dt_s):
     return int(core.receptor_run(cls, q, dt_s, tuning.PIN_AFFERENTS)[0].sum())
 
 
-def test_pc_ramp_and_hold_rates_against_touchsim(ours):
+def test_pc_ramp_and_hold_rates_within_2x_of_touchsim(ours, on_touchsim):
     ts, us = RAMP["PC"]["median_hz"], ours["PC"]["rates_hz"]
-    print("PC rates (Hz) at", RAMP["depths_mm"], "ours", us, "touchsim", ts)
-    i = RAMP["depths_mm"].index(0.5)
-    assert _within(us[i], ts[i], RA_PC_RATE_BOUND), (us[i], ts[i])
-    # 1.0 mm is not within 2x (3.3x): each corner of the ramp whose
-    # acceleration is negative gives two spikes through the rebound lobe of
-    # the capsule's high-pass (~3 ms, longer than the 2.5 ms refractory
-    # period) where TouchSim's PC gives about one; on TouchSim's stress (a
-    # trapezoid at its level at our PC depth) ours is 2.3x, and our stress
-    # (1.9x TouchSim's at 2 mm, rising through the ramp as the skin stiffens)
-    # adds the rest. A PC adaptation jump of 1 (not 0.7) brings the former
-    # to 1.7x but lowers the SlipHold environment's slip burst below its
-    # need (tests/plugin/test_envs.py). Held here: the model's part within
-    # 2.5x, the mechanics only adding.
-    j = RAMP["depths_mm"].index(1.0)
-    level = RAMP["PC"]["stress_kpa_mjtouch_depth"][j] * 1e3
-    on_ts = _trapezoid_counts("PC", level, ours["PC"]["dt_s"]) / REF["duration_s"]
-    print("PC at 1.0 mm on TouchSim's stress", on_ts, "on ours", us[j], "touchsim", ts[j])
-    assert _within(on_ts, ts[j], PC_1MM_MODEL_BOUND), (on_ts, ts[j])
-    assert on_ts <= us[j]
+    on_ts = on_touchsim["PC"]["rates_hz"]
+    print("PC rates (Hz) at", RAMP["depths_mm"], "ours", us, "on TouchSim's stress", on_ts)
+    print("  touchsim", ts)
+    for d in (0.5, 1.0):
+        i = RAMP["depths_mm"].index(d)
+        assert _within(us[i], ts[i], RA_PC_RATE_BOUND), (d, us[i], ts[i])
+        assert _within(on_ts[i], ts[i], RA_PC_RATE_BOUND), (d, on_ts[i], ts[i])
+    # The model alone, on an ideal trapezoid at TouchSim's level (no trace of
+    # our skin's stiffening through the ramp): one spike per rising corner
+    # and one or two per falling corner (the high-pass's rebound lobe),
+    # within 2x of TouchSim's at every depth from 0.5 mm.
+    for k, d in enumerate(RAMP["depths_mm"]):
+        level = RAMP["PC"]["stress_kpa_mjtouch_depth"][k] * 1e3
+        n = _trapezoid_counts("PC", level, ours["PC"]["dt_s"]) / REF["duration_s"]
+        print("  trapezoid at TouchSim's stress,", d, "mm:", n)
+        if d >= 0.5:
+            assert _within(n, ts[k], RA_PC_RATE_BOUND), (d, n, ts[k])
+    # 1.5 mm: ours over 2x, on TouchSim's stress less so: the mechanics
+    # (our stress at 2 mm 3x TouchSim's, convex through the ramp)
+    j = RAMP["depths_mm"].index(1.5)
+    assert on_ts[j] < us[j], (on_ts[j], us[j])
+
+
+def _sine_stress_ratio(stress):
+    """Ours over TouchSim's stress amplitude at the receptor per um of pin
+    sine, per class and frequency: the mechanics' part of the thresholds."""
+    _, _, per_m = _touchsim_stress(stress["classes"])
+    gain = tuning.pin_sine_gain(stress)
+    return {c: np.array(gain[c]) / per_m[c] for c in stress["classes"]}
+
+
+def test_sine_stress_at_the_receptor_against_touchsims(stress, ours):
+    # TouchSim's s_z is quasi-static and linear: per um of sine it is its
+    # ramp stress over depth. Ours about the 0.5 mm pre-indentation is the
+    # tangent of our (convex) stress-depth curve, so at frequencies where the
+    # skin is quasi-static it lies between the secants of our ramp-and-hold
+    # stress below (0.25-0.5 mm) and above (0.5-1.0 mm): an independent
+    # check of the sine runs against the ramp runs.
+    freqs = np.array(SINES["freqs_hz"])
+    depths = RAMP["depths_mm"]
+    i0, i1, i2 = (depths.index(d) for d in (0.25, 0.5, 1.0))
+    gain = tuning.pin_sine_gain(stress)
+    ratio = _sine_stress_ratio(stress)
+    for c in ("RA", "PC"):
+        kpa = ours[c]["stress_kpa"]
+        below = (kpa[i1] - kpa[i0]) / (depths[i1] - depths[i0])  # kPa/mm
+        above = (kpa[i2] - kpa[i1]) / (depths[i2] - depths[i1])
+        g = np.array(gain[c]) / 1e6  # Pa/m -> kPa/mm
+        print(c, "sine stress kPa/mm", np.round(g, 2), "secants", round(below, 2), round(above, 2))
+        print(c, "ours / TouchSim's at the receptor", np.round(ratio[c], 2))
+        quasi = freqs <= 80.0
+        assert np.all((below <= g[quasi]) & (g[quasi] <= above)), (c, g, below, above)
 
 
 @pytest.mark.parametrize("cls", ["RA", "PC"])
-def test_ra_and_pc_thresholds_printed_against_touchsim(ours, cls):
-    # not held to TouchSim (module docstring); each threshold is a real
-    # bisection result: finite where ours follows, and ordered absolute <= 1:1
-    print(cls, "rates ours", ours[cls]["rates_hz"], "touchsim", RAMP[cls]["median_hz"])
+def test_thresholds_split_into_mechanics_and_model(stress, ours, on_touchsim, cls):
+    ratio = _sine_stress_ratio(stress)[cls]
     for crit in ("absolute", "entrainment"):
-        print(
-            cls,
-            crit,
-            "um ours",
-            np.round(ours[cls][f"{crit}_um"], 3),
-            "touchsim",
-            np.round(SINES[cls][f"{crit}_median_um"], 3),
-        )
+        us = np.array(ours[cls][f"{crit}_um"])
+        on = np.array(on_touchsim[cls][f"{crit}_um"])
+        ts = np.array(SINES[cls][f"{crit}_median_um"])
+        print(cls, crit, "um ours", np.round(us, 3))
+        print(cls, crit, "um on TouchSim's stress", np.round(on, 3))
+        print(cls, crit, "um touchsim", np.round(ts, 3))
+        # Our RA and PC see the stress through its derivatives only, so on
+        # TouchSim's stress every threshold is ours times the stress ratio:
+        # ours / TouchSim = (on TouchSim's stress / TouchSim) [the model] /
+        # ratio [the mechanics]. To 1e-3: the held pin's own small stress
+        # fluctuations scale with the pre-indentation, not with the wave.
+        f = np.isfinite(us)
+        np.testing.assert_array_equal(np.isfinite(on), f)
+        np.testing.assert_allclose(on[f], us[f] * ratio[f], rtol=1e-3)
+        # each threshold is a real bisection result, absolute <= 1:1
     a = np.array(ours[cls]["absolute_um"])
     e = np.array(ours[cls]["entrainment_um"])
     assert np.all(a[np.isfinite(e)] <= e[np.isfinite(e)]), (a, e)
-    assert np.all(np.diff(ours[cls]["rates_hz"]) >= 0), ours[cls]["rates_hz"]
+    # The model's part of the absolute thresholds, on TouchSim's stress
+    # (docs/science/afferents.md, "Against TouchSim", says why the gains are
+    # kept): the PC within MODEL_BOUND of TouchSim at every frequency, its
+    # best frequency where TouchSim's is (250-400 Hz); the RA more sensitive
+    # at every frequency, its best within one step of TouchSim's (40-80 Hz).
+    on = np.array(on_touchsim[cls]["absolute_um"])
+    ts = np.array(SINES[cls]["absolute_median_um"])
+    freqs = SINES["freqs_hz"]
+    best_on, best_ts = int(np.argmin(on)), int(np.argmin(ts))
+    assert abs(best_on - best_ts) <= 1, (freqs[best_on], freqs[best_ts])
+    if cls == "PC":
+        b = PC_THRESHOLD_MODEL_BOUND
+        assert np.all((ts / b <= on) & (on <= ts * b)), on / ts
+    else:
+        f = np.isfinite(ts)
+        assert np.all(on[f] < ts[f]), on / ts
 
 
 def test_reference_script_guvectorize_shim_loops_like_numba():

@@ -124,17 +124,19 @@ struct RAParams {
 // 1-2 ms) bound the high one. Half-wave rectified (one spike per cycle, phase
 // locked): tau dU/dt = -U + gain max(0, y) - w_adapt, threshold 1.
 struct PCParams {
-  // Calibrated (plugin/README.md, "Dynamic range and thresholds"): absolute threshold 0.5 Pa at 250
-  // Hz.
-  double gain_s2_per_pa = 4.12e-6;
-  double highpass_hz = 150.0;
+  // Calibrated (docs/science/afferents.md, "Dynamic range and thresholds"): absolute threshold
+  // 0.7 Pa at 250 Hz.
+  double gain_s2_per_pa = 3.94e-6;
+  // 300 Hz: the rebound lobe of a ramp corner's band-passed acceleration
+  // decays as exp(-wh t), so a corner fires once or twice, not three times
+  // (150 Hz), where TouchSim's PC fits fire about once (Saal et al. 2017).
+  double highpass_hz = 300.0;
   double lowpass_hz = 250.0;
   double tau_s = 1.5e-3;
-  // 2.5 ms: one spike per lobe of a ramp corner's band-passed acceleration
-  // (~2 ms wide), as TouchSim's PC fits give one or two per corner (Saal et
-  // al. 2017); the PC still follows 1:1 to 400 Hz, the top of the range
+  // 2.4 ms: one spike per lobe of a ramp corner's drive; under the 2.5 ms
+  // cycle of 400 Hz, so the PC follows 1:1 to 400 Hz, the top of the range
   // recorded (Johansson et al. 1982).
-  double refractory_s = 2.5e-3;
+  double refractory_s = 2.4e-3;
   // Drive saturation s (threshold units; 0: none), d s / (s + |d|) as the
   // RA's (TouchSim's form, Saal et al. 2017). Off: low enough to cap a ramp
   // corner (~300x threshold) it also ends 1:1 at 250 Hz (~5x;
