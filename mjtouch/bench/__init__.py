@@ -83,7 +83,7 @@ from mjtouch.bench.configs import (
     scene_parts,
     tree,
 )
-from mjtouch.bench.report import plot, print_report
+from mjtouch.bench.report import plot, print_markdown, print_report
 from mjtouch.bench.runner import Bench, Progress
 from mjtouch.bench.timing import (
     Run,
@@ -133,6 +133,7 @@ __all__ = [
     "pareto_front",
     "pitch_grid",
     "plot",
+    "print_markdown",
     "print_report",
     "scene_parts",
     "slide_ctrl",

@@ -7,7 +7,7 @@ import sys
 
 from mjtouch import progress
 from mjtouch.bench.configs import BenchConfig
-from mjtouch.bench.report import plot, print_report
+from mjtouch.bench.report import plot, print_markdown, print_report
 from mjtouch.bench.runner import Bench, Progress
 
 
@@ -18,6 +18,11 @@ def add_arguments(p) -> None:
         help="a tiny sweep on small grids (well under a minute; for CI)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument(
+        "--markdown",
+        action="store_true",
+        help="print the accuracy table and the baselines as Markdown (docs/performance.md)",
+    )
     p.add_argument("--plot", metavar="FILE", help="write a PNG: error vs cost, baselines, effects")
     p.add_argument("--save-json", metavar="FILE", help="also write the JSON object to FILE")
     p.add_argument(
@@ -159,6 +164,8 @@ def main(args) -> int:
             f.write(text + "\n")
     if args.json:
         print(text)
+    elif args.markdown:
+        print_markdown(out)
     else:
         print_report(out)
     return 0

@@ -116,6 +116,68 @@ def print_report(o: dict, stream=None) -> None:
             )
 
 
+def _num(v: float) -> str:
+    """us and ratios as the docs print them: three significant figures."""
+    if v >= 100:
+        return f"{v:.0f}"
+    return f"{v:.3g}"
+
+
+def _pct_md(v) -> str:
+    if v is None:
+        return "-"
+    pct = 100 * v
+    if pct == 0:
+        return "0"
+    if pct < 0.01:
+        return "<0.01%"
+    if pct >= 10:
+        return f"{pct:.0f}%"
+    text = f"{pct:.2g}"
+    return (text if "." in text else f"{pct:.1f}") + "%"
+
+
+def print_markdown(o: dict, stream=None) -> None:
+    """The accuracy table and the baselines as Markdown (docs/performance.md
+    prints them as this writes them): ``python -m mjtouch bench --from-json
+    bench.json --markdown``."""
+    out = stream or sys.stdout
+
+    def p(s=""):
+        print(s, file=out)
+
+    p("| knob | setting | us/step | s wall / s sim | stress err | peak amp err | rate err |")
+    p("|---|---|---:|---:|---:|---:|---:|")
+    last = None
+    for row in o["rows"]:
+        e = row["errors"]
+        setting = row["setting"] + (", reference" if row["reference"] else "")
+        if row["reference"]:
+            setting = f"**{setting}**"
+        knob = row["knob"] if row["knob"] != last else ""
+        last = row["knob"]
+        p(
+            f"| {knob} | {setting} | {_num(row['us_per_step'])} | "
+            f"{_num(row['wall_s_per_sim_s'])} | {_pct_md(e['stress_rms_rel'])} | "
+            f"{_pct_md(e.get('peak_amp_rel'))} | {_pct_md(e['spike_rate_rel'])} |"
+        )
+    b = o["baselines"]
+    p()
+    p("| baseline | us/step |")
+    p("|---|---:|")
+    for k, label in [
+        ("bare_mujoco", "bare MuJoCo step (plugin removed from the MJCF)"),
+        ("native_tactile", f"MuJoCo native `tactile` sensor, {b['native_tactile_taxels']} taxels"),
+        ("full_pipeline", "full pipeline, default skin (`elastic` contact, exact stress)"),
+        ("homogeneous_kernel", "same with the homogeneous (half-space) kernel"),
+        ("idle_plugin", "idle plugin (finger lifted)"),
+        ("bare_mujoco_idle", "bare MuJoCo, finger lifted"),
+        ("idle_plugin_rollout", "idle plugin, timed through `mujoco.rollout`"),
+        ("bare_mujoco_idle_rollout", "bare MuJoCo, through `mujoco.rollout`"),
+    ]:
+        p(f"| {label} | {_num(b[k + '_us_per_step'])} |")
+
+
 def _error_panel(ax, o: dict, key: str, ylabel: str, front_key: str) -> None:
     rows = o["rows"]
     nonzero = [r["errors"][key] for r in rows if r["errors"][key]]

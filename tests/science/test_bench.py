@@ -129,6 +129,21 @@ def test_quick_pitch_errors_shrink_toward_reference(quick):
     assert len({r["receptors"] for r in o["rows"] if r["knob"] == "pitch"}) == 1
 
 
+def test_markdown_has_a_row_per_setting_and_bold_references(quick):
+    o, _, _ = quick
+    buf = io.StringIO()
+    bench.print_markdown(o, buf)
+    lines = buf.getvalue().splitlines()
+    table = lines[2 : 2 + len(o["rows"])]
+    assert all(line.count("|") == 8 for line in table), table
+    for line, row in zip(table, o["rows"]):
+        assert row["setting"] in line
+        assert ("**" in line) == row["reference"], line
+        us = float(line.split("|")[3])
+        assert us == pytest.approx(row["us_per_step"], rel=5e-3, abs=0.05), (line, row)
+    assert sum("baseline" in line for line in lines) == 1
+
+
 def test_report_lists_every_row_and_marks_the_front(quick):
     o, _, _ = quick
     buf = io.StringIO()
