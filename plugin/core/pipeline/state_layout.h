@@ -200,6 +200,9 @@ struct StateLayout {
         kEvalStartSlots + kStateHeader + (history - receptors) + (eval_start - history_head);
     size = eval_start + eval_start_size;
   }
+  // Whether any pressure history exists (taxel grid, shifted grid or the
+  // `grid_cycle` ring): an idle step must still rotate it.
+  bool has_history() const { return history_block > 0 || shifted_block > 0; }
   // Block k steps back from the head (0: this time, 1: last step, 2: the one
   // before).
   HistoryBlock history_at(double* state, int back) const {

@@ -335,8 +335,7 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   // tangential buffers to advance, the header is all there is: set it as
   // the evaluations would.
   const bool quiet = state[kStReceptorsIdle] > 0.0 && !in.in_contact;
-  if (quiet && elapsed > 0.0 && lay.history_block == 0 && lay.shifted_block == 0 &&
-      lay.tangential_block == 0) {
+  if (quiet && elapsed > 0.0 && !lay.has_history() && lay.tangential_block == 0) {
     state[kStLastTime] = time_s;
     state[kStTimeValid] = 1.0;
     state[kStContactValid] = 0.0;
