@@ -133,6 +133,12 @@ class TouchEnv(gym.Env):
         self._runner = mujoco.rollout.Rollout(nthread=0)
         self._zero_warmstart = np.zeros((1, self.model.nv))
         self._state = np.zeros(mujoco.mj_stateSize(self.model, FULLPHYSICS))
+        # rollout's outputs, reused every control step (the hooks read them
+        # before the next step; _finish copies the last state)
+        self._out_states = np.empty((1, self.frame_skip, self._state.size))
+        self._out_sensordata = np.empty((1, self.frame_skip, self.model.nsensordata))
+        self._qpos_adr: dict[str, int] = {}
+        self._qvel_adr: dict[str, int] = {}
         self._renderer = None
         self._blocks: list[ObsBlock] = []
         # full scales of the touch blocks (see the module docstring)
@@ -260,22 +266,44 @@ class TouchEnv(gym.Env):
         mujoco.mj_getState(self.model, self.data, out, spec)
         return out
 
+    def check_inputs(self, inputs: np.ndarray) -> np.ndarray:
+        """inputs as rollout takes them unchecked: float64, C-contiguous,
+        (frame_skip, user state size)."""
+        inputs = np.ascontiguousarray(inputs, dtype=np.float64)
+        if inputs.shape != (self.frame_skip, self.nuser):
+            raise ValueError(
+                f"inputs have shape {inputs.shape}; expected {(self.frame_skip, self.nuser)}"
+            )
+        return inputs
+
     def _advance(self, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        states, sensordata = self._runner.rollout(
-            self.model,
-            self.data,
-            self._state[None],
-            inputs[None],
+        # shapes and types are fixed here, so rollout's own checks are skipped
+        self._runner.rollout(
+            [self.model],
+            [self.data],
+            np.ascontiguousarray(self._state[None]),
+            self.check_inputs(inputs)[None],
             control_spec=self.user_spec,
+            skip_checks=True,
+            nstep=self.frame_skip,
             initial_warmstart=self._zero_warmstart,
+            state=self._out_states,
+            sensordata=self._out_sensordata,
+            chunk_size=1,
         )
-        return states[0], sensordata[0]
+        return self._out_states[0], self._out_sensordata[0]
 
     def _qpos(self, state: np.ndarray, joint: str) -> float:
-        return float(state[1 + self.model.jnt_qposadr[self.model.joint(joint).id]])
+        adr = self._qpos_adr.get(joint)
+        if adr is None:
+            adr = self._qpos_adr[joint] = 1 + int(self.model.joint(joint).qposadr[0])
+        return float(state[adr])
 
     def _qvel(self, state: np.ndarray, joint: str) -> float:
-        return float(state[1 + self.model.nq + self.model.jnt_dofadr[self.model.joint(joint).id]])
+        adr = self._qvel_adr.get(joint)
+        if adr is None:
+            adr = self._qvel_adr[joint] = 1 + self.model.nq + int(self.model.joint(joint).dofadr[0])
+        return float(state[adr])
 
     # ----- task hooks ------------------------------------------------------
     def _task_reset(self, options: dict | None) -> None:

@@ -315,6 +315,8 @@ class SlipHoldEnv(TouchEnv):
     def load_n(self, time_s: np.ndarray | float) -> np.ndarray:
         """External load on the block (N, downwards) at time_s; gravity comes on top."""
         base, rise, t0, duration = self._load
+        if isinstance(time_s, float):  # the per-step path, without numpy's overhead
+            return base + rise * min(max((time_s - t0) / duration, 0.0), 1.0)
         return base + rise * np.clip((np.asarray(time_s) - t0) / duration, 0.0, 1.0)
 
     def _task_reset(self, options):
@@ -338,10 +340,11 @@ class SlipHoldEnv(TouchEnv):
 
     def _info(self, slip_m: float) -> dict:
         t = float(self._state[0])
+        load = float(self.load_n(t))
         return {
             "friction": self.friction,
-            "load_n": float(self.load_n(t)),
-            "total_load_n": float(self.load_n(t)) + BLOCK_MASS_KG * -self.model.opt.gravity[2],
+            "load_n": load,
+            "total_load_n": load + BLOCK_MASS_KG * -self.model.opt.gravity[2],
             "grip_force_n": self._grip,
             "slip_m": slip_m,
             "object_drop_m": self._z0 - self._qpos(self._state, "object_z"),
