@@ -724,7 +724,7 @@ void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {
   // For drawing only: whether the field is live, and when each receptor last fired.
   touching_ = state[kStContactValid] > 0.0;
   if (fired > 0) {
-    const double* spikes = state + model_->state_layout().last_spikes;
+    const std::vector<double>& spikes = workspace_.spikes;
     for (size_t r = 0; r < last_spike_time_s_.size(); ++r)
       if (spikes[r] > 0) last_spike_time_s_[r] = d->time;
   }

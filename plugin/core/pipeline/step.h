@@ -40,7 +40,11 @@ struct Workspace {
   RenderSummary render_summary;  // the last render's covered cells (winkler)
   RenderScratch render_scratch;
   TractionField traction;
-  std::vector<double> quantity;        // per receptor
+  std::vector<double> quantity;  // per receptor
+  // This step's spike counts (summed over `oversample` substeps) and, without
+  // the `voltage` output, voltages: per receptor, zero unless the step
+  // advanced the receptors (Step sets them before its evaluations).
+  std::vector<double> spikes, voltage;
   ElasticStepWork elastic;             // `elastic`
   ElasticSolveStats elastic_stats;     // the last `elastic` solve (diagnostics)
   GridShiftWork grid_shift;            // `grid_shift`
