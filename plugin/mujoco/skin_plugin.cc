@@ -738,7 +738,10 @@ void SkinPlugin::RegisterPlugin() {
   const auto& keys = SkinAttributeKeys();
   plugin.nattribute = static_cast<int>(keys.size());
   plugin.attributes = keys.data();
-  // Contact forces are known only after the constraint solver.
+  // Contact forces are known only after the constraint solver. MuJoCo then
+  // also runs mj_rnePostConstraint (body accelerations) once per step before
+  // any acceleration-stage plugin sensor, which the skin does not read; no
+  // earlier stage has the forces.
   plugin.needstage = mjSTAGE_ACC;
 
   plugin.nstate = +[](const mjModel* m, int instance) {
