@@ -360,13 +360,13 @@ class SlipHoldEnv(TouchEnv):
         ctrl = np.full((self.frame_skip, m.nu), self._grip)
         return np.concatenate([ctrl, xfrc.reshape(self.frame_skip, -1)], axis=1)
 
-    def _observe(self, states, sensordata) -> np.ndarray:
+    def _observe(self, final_state, sensordata) -> np.ndarray:
         s = self._state
         grip = [self._qpos(s, "grip") - self._x0, self._qvel(s, "grip"), self._grip]
         features = [grip, *self._touch_features(sensordata), *self._slip_features(sensordata)]
         return self._bounded(np.concatenate(features))
 
-    def _outcome(self, states, sensordata, a):
+    def _outcome(self, final_state, sensordata, a):
         z_end = self._qpos(self._state, "object_z")
         slip = max(0.0, self._z_last - z_end)  # how far the block moved down this step
         self._z_last = z_end
@@ -374,7 +374,7 @@ class SlipHoldEnv(TouchEnv):
         terminated = self._z0 - z_end >= self.drop_m
         if terminated:
             reward -= self.drop_penalty
-        return self._observe(states, sensordata), reward, terminated, self._info(slip)
+        return self._observe(final_state, sensordata), reward, terminated, self._info(slip)
 
     def _camera(self) -> mujoco.MjvCamera:
         cam = mujoco.MjvCamera()

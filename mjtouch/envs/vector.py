@@ -136,7 +136,7 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
                 chunk_size=max(1, nb // (max(1, self.nthread) * 10)),
             )
             for k, (i, _, a) in enumerate(batch):
-                results[i] = self.envs[i]._finish(states[k], sensordata[k], a)
+                results[i] = self.envs[i]._finish(states[k, -1], sensordata[k], a)
         for i, (o, r, term, trunc, info) in results.items():
             self._elapsed[i] += 1
             if self.max_episode_steps is not None and self._elapsed[i] >= self.max_episode_steps:
