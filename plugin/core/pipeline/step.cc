@@ -156,6 +156,7 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
     const double step_s =
         nominal_s > 0.0 && std::abs(part_s - nominal_s) <= 1e-9 * nominal_s ? nominal_s : part_s;
     const ReceptorStepper& stepper = StepperFor(cfg.receptor, step_s, ws);
+    ws->receptor_outputs_written = true;
     if (ramp) ws->spike_sum.assign(nrec, 0.0);
     for (int k = 1; k <= parts; ++k) {
       const double* q = ws->quantity.data();
@@ -325,8 +326,11 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   const StateLayout& lay = model.state_layout();
   SaveOrRestoreEvaluationStart(lay, time_s, state[kStReceptorsIdle] > 0.0 && !in.in_contact, state);
   const size_t nreceptor = model.receptors().size();
-  ws->spikes.assign(nreceptor, 0.0);
-  if (!lay.voltage_in_state) ws->voltage.assign(nreceptor, 0.0);
+  if (ws->spikes.size() != nreceptor || ws->receptor_outputs_written) {
+    ws->spikes.assign(nreceptor, 0.0);
+    if (!lay.voltage_in_state) ws->voltage.assign(nreceptor, 0.0);
+    ws->receptor_outputs_written = false;
+  }
   if (lay.tangential_block > 0)  // this step writes the buffer it did not start from
     state[lay.tangential_write] = 1.0 - state[lay.tangential_head];
   bool touching;
@@ -385,6 +389,7 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
       for (int r = 0; r < nrec; ++r) ws->spike_sum[r] += last_spikes[r];
     }
     std::copy(ws->spike_sum.begin(), ws->spike_sum.end(), last_spikes);
+    ws->receptor_outputs_written = true;
   } else {
     touching = Evaluate(model, in, time_s, in.timestep_s / std::max(K, 1), state, ws, &fired);
   }
