@@ -11,7 +11,7 @@ zero, in both paths, which is what makes them identical.
 Task logic lives in three hooks a subclass implements:
 ``_task_reset`` (sample the episode, return the user inputs' template),
 ``_inputs`` (action -> per-step inputs, or None to end without physics) and
-``_outcome`` (sensordata and states of the step -> reward, termination, info).
+``_outcome`` (sensordata of the step and its final state -> reward, termination, info).
 
 Touch observations (documented per environment):
 
@@ -133,6 +133,12 @@ class TouchEnv(gym.Env):
         self._runner = mujoco.rollout.Rollout(nthread=0)
         self._zero_warmstart = np.zeros((1, self.model.nv))
         self._state = np.zeros(mujoco.mj_stateSize(self.model, FULLPHYSICS))
+        # rollout's sensordata, reused every control step (the hooks read it
+        # before the next step), and the state the step ends in
+        self._final_state = np.empty_like(self._state)
+        self._out_sensordata = np.empty((1, self.frame_skip, self.model.nsensordata))
+        self._qpos_adr: dict[str, int] = {}
+        self._qvel_adr: dict[str, int] = {}
         self._renderer = None
         self._blocks: list[ObsBlock] = []
         # full scales of the touch blocks (see the module docstring)
@@ -260,22 +266,48 @@ class TouchEnv(gym.Env):
         mujoco.mj_getState(self.model, self.data, out, spec)
         return out
 
+    def check_inputs(self, inputs: np.ndarray) -> np.ndarray:
+        """inputs as rollout takes them unchecked: float64, C-contiguous,
+        (frame_skip, user state size)."""
+        inputs = np.ascontiguousarray(inputs, dtype=np.float64)
+        if inputs.shape != (self.frame_skip, self.nuser):
+            raise ValueError(
+                f"inputs have shape {inputs.shape}; expected {(self.frame_skip, self.nuser)}"
+            )
+        return inputs
+
     def _advance(self, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        states, sensordata = self._runner.rollout(
-            self.model,
-            self.data,
-            self._state[None],
-            inputs[None],
+        """(final state, sensordata of each physics step) of a control step."""
+        # Shapes and types are fixed here, so rollout's own checks are
+        # skipped; no state is recorded per step: the rollout leaves
+        # self.data in the final one.
+        self._runner.rollout(
+            [self.model],
+            [self.data],
+            np.ascontiguousarray(self._state[None]),
+            self.check_inputs(inputs)[None],
             control_spec=self.user_spec,
+            skip_checks=True,
+            nstep=self.frame_skip,
             initial_warmstart=self._zero_warmstart,
+            state=None,
+            sensordata=self._out_sensordata,
+            chunk_size=1,
         )
-        return states[0], sensordata[0]
+        mujoco.mj_getState(self.model, self.data, self._final_state, FULLPHYSICS)
+        return self._final_state, self._out_sensordata[0]
 
     def _qpos(self, state: np.ndarray, joint: str) -> float:
-        return float(state[1 + self.model.jnt_qposadr[self.model.joint(joint).id]])
+        adr = self._qpos_adr.get(joint)
+        if adr is None:
+            adr = self._qpos_adr[joint] = 1 + int(self.model.joint(joint).qposadr[0])
+        return float(state[adr])
 
     def _qvel(self, state: np.ndarray, joint: str) -> float:
-        return float(state[1 + self.model.nq + self.model.jnt_dofadr[self.model.joint(joint).id]])
+        adr = self._qvel_adr.get(joint)
+        if adr is None:
+            adr = self._qvel_adr[joint] = 1 + self.model.nq + int(self.model.joint(joint).dofadr[0])
+        return float(state[adr])
 
     # ----- task hooks ------------------------------------------------------
     def _task_reset(self, options: dict | None) -> None:
@@ -285,11 +317,11 @@ class TouchEnv(gym.Env):
         raise NotImplementedError
 
     def _outcome(
-        self, states: np.ndarray | None, sensordata: np.ndarray | None, action: np.ndarray
+        self, final_state: np.ndarray | None, sensordata: np.ndarray | None, action: np.ndarray
     ) -> tuple[np.ndarray, float, bool, dict]:
         raise NotImplementedError
 
-    def _observe(self, states: np.ndarray | None, sensordata: np.ndarray | None) -> np.ndarray:
+    def _observe(self, final_state: np.ndarray | None, sensordata: np.ndarray | None) -> np.ndarray:
         raise NotImplementedError
 
     # ----- gymnasium API ---------------------------------------------------
@@ -317,13 +349,15 @@ class TouchEnv(gym.Env):
         inputs = self._inputs(a)
         if inputs is None:
             return self._finish(None, None, a)
-        states, sensordata = self._advance(inputs)
-        return self._finish(states, sensordata, a)
+        final_state, sensordata = self._advance(inputs)
+        return self._finish(final_state, sensordata, a)
 
-    def _finish(self, states, sensordata, action):
-        if states is not None:
-            self._state = states[-1].copy()
-        obs, reward, terminated, info = self._outcome(states, sensordata, action)
+    def _finish(self, final_state, sensordata, action):
+        """final_state: the full-physics state the control step ends in
+        (None: no physics); sensordata: (frame_skip, nsensordata)."""
+        if final_state is not None:
+            self._state = final_state.copy()
+        obs, reward, terminated, info = self._outcome(final_state, sensordata, action)
         return obs, float(reward), bool(terminated), False, info
 
     # ----- rendering -------------------------------------------------------

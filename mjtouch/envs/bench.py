@@ -1,6 +1,6 @@
 """Environment steps per second, with and without touch.
 
-``python -m mjtouch.envs.bench [--env ID] [--num-envs N] [--steps S] [--quick]``
+``python -m mjtouch.envs.bench [--env ID] [--num-envs N] [--steps S] [--timestep-s T] [--quick]``
 
 Measures, in this process and on this machine:
 
@@ -85,19 +85,25 @@ def vector_steps_per_s(
 
 
 def benchmark(
-    env_id: str = "mjtouch/TextureExplore-v0", num_envs: int = 4, steps: int = 200, seed: int = 0
+    env_id: str = "mjtouch/TextureExplore-v0",
+    num_envs: int = 4,
+    steps: int = 200,
+    seed: int = 0,
+    **env_kwargs,
 ) -> dict:
+    """env_kwargs: passed to every environment (e.g. timestep_s)."""
     if steps < 1 or num_envs < 1:
         raise ValueError(f"steps = {steps} and num_envs = {num_envs} must be >= 1")
-    touch, touch_cpu = single_steps_per_s(env_id, steps, seed)
-    none, none_cpu = single_steps_per_s(env_id, steps, seed, touch="none")
+    touch, touch_cpu = single_steps_per_s(env_id, steps, seed, **env_kwargs)
+    none, none_cpu = single_steps_per_s(env_id, steps, seed, touch="none", **env_kwargs)
     vec_steps = max(1, steps // num_envs)
     rollout, rollout_cpu = vector_steps_per_s(
-        env_id, num_envs, vec_steps, "vector_entry_point", seed
+        env_id, num_envs, vec_steps, "vector_entry_point", seed, **env_kwargs
     )
-    sync, sync_cpu = vector_steps_per_s(env_id, num_envs, vec_steps, "sync", seed)
+    sync, sync_cpu = vector_steps_per_s(env_id, num_envs, vec_steps, "sync", seed, **env_kwargs)
     return {
         "env": env_id,
+        **env_kwargs,
         "single_touch_steps_per_s": touch,
         "single_no_touch_steps_per_s": none,
         "touch_over_no_touch": touch / none,
@@ -124,6 +130,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--num-envs", type=int, default=4)
     p.add_argument("--steps", type=int, default=200, help="env steps per measurement")
     p.add_argument(
+        "--timestep-s",
+        type=float,
+        default=None,
+        help="the environments' physics timestep (s; default theirs, 1 ms)",
+    )
+    p.add_argument(
         "--quick",
         action="store_true",
         help="a smoke run: 20 steps, 2 environments (overrides --steps, --num-envs)",
@@ -134,12 +146,15 @@ def main(argv: list[str] | None = None) -> int:
         args.steps, args.num_envs = QUICK_STEPS, QUICK_NUM_ENVS
     if args.steps < 1 or args.num_envs < 1:
         p.error(f"--steps {args.steps} and --num-envs {args.num_envs} must be >= 1")
-    r = benchmark(args.env, args.num_envs, args.steps)
+    env_kwargs = {} if args.timestep_s is None else {"timestep_s": args.timestep_s}
+    r = benchmark(args.env, args.num_envs, args.steps, **env_kwargs)
     if args.json:
         print(json.dumps(r))
         return 0
     print(
-        f"{r['env']}: env steps per second (control step 10 ms, {args.steps} steps each); "
+        f"{r['env']}: env steps per second (control step 10 ms"
+        f"{', timestep %g ms' % (args.timestep_s * 1e3) if args.timestep_s else ''}, "
+        f"{args.steps} steps each); "
         "in brackets per CPU second of this process"
     )
     c = {k: r[k.replace("_per_s", "_per_cpu_s")] for k in r if k.endswith("_per_s")}

@@ -315,6 +315,8 @@ class SlipHoldEnv(TouchEnv):
     def load_n(self, time_s: np.ndarray | float) -> np.ndarray:
         """External load on the block (N, downwards) at time_s; gravity comes on top."""
         base, rise, t0, duration = self._load
+        if isinstance(time_s, float):  # the per-step path, without numpy's overhead
+            return base + rise * min(max((time_s - t0) / duration, 0.0), 1.0)
         return base + rise * np.clip((np.asarray(time_s) - t0) / duration, 0.0, 1.0)
 
     def _task_reset(self, options):
@@ -338,10 +340,11 @@ class SlipHoldEnv(TouchEnv):
 
     def _info(self, slip_m: float) -> dict:
         t = float(self._state[0])
+        load = float(self.load_n(t))
         return {
             "friction": self.friction,
-            "load_n": float(self.load_n(t)),
-            "total_load_n": float(self.load_n(t)) + BLOCK_MASS_KG * -self.model.opt.gravity[2],
+            "load_n": load,
+            "total_load_n": load + BLOCK_MASS_KG * -self.model.opt.gravity[2],
             "grip_force_n": self._grip,
             "slip_m": slip_m,
             "object_drop_m": self._z0 - self._qpos(self._state, "object_z"),
@@ -357,13 +360,13 @@ class SlipHoldEnv(TouchEnv):
         ctrl = np.full((self.frame_skip, m.nu), self._grip)
         return np.concatenate([ctrl, xfrc.reshape(self.frame_skip, -1)], axis=1)
 
-    def _observe(self, states, sensordata) -> np.ndarray:
+    def _observe(self, final_state, sensordata) -> np.ndarray:
         s = self._state
         grip = [self._qpos(s, "grip") - self._x0, self._qvel(s, "grip"), self._grip]
         features = [grip, *self._touch_features(sensordata), *self._slip_features(sensordata)]
         return self._bounded(np.concatenate(features))
 
-    def _outcome(self, states, sensordata, a):
+    def _outcome(self, final_state, sensordata, a):
         z_end = self._qpos(self._state, "object_z")
         slip = max(0.0, self._z_last - z_end)  # how far the block moved down this step
         self._z_last = z_end
@@ -371,7 +374,7 @@ class SlipHoldEnv(TouchEnv):
         terminated = self._z0 - z_end >= self.drop_m
         if terminated:
             reward -= self.drop_penalty
-        return self._observe(states, sensordata), reward, terminated, self._info(slip)
+        return self._observe(final_state, sensordata), reward, terminated, self._info(slip)
 
     def _camera(self) -> mujoco.MjvCamera:
         cam = mujoco.MjvCamera()

@@ -274,22 +274,22 @@ class TextureExploreEnv(TouchEnv):
         row = np.concatenate([[speed, -force], self._mocap_pos.ravel()])
         return np.tile(row, (self.frame_skip, 1))
 
-    def _observe(self, states, sensordata) -> np.ndarray:
+    def _observe(self, final_state, sensordata) -> np.ndarray:
         s = self._state
         finger = [self._qpos(s, "slide_x") - self._x0, self._qvel(s, "slide_x")]
         return self._bounded(
             np.concatenate([finger, self._command, *self._touch_features(sensordata)])
         )
 
-    def _outcome(self, states, sensordata, a):
+    def _outcome(self, final_state, sensordata, a):
         info = {"texture": self.label, "period_m": self.classes[self.label]}
-        if states is None:  # committed
+        if final_state is None:  # committed
             guess = int(np.argmax(a[3:]))
             correct = guess == self.label
             info.update(guess=guess, correct=correct)
             obs = self._last_obs.copy() if self._last_obs is not None else self._observe(None, None)
             return obs, float(correct) - self.step_cost, True, info
-        obs = self._observe(states, sensordata)
+        obs = self._observe(final_state, sensordata)
         self._last_obs = obs
         return obs, -self.step_cost, False, info
 

@@ -62,6 +62,13 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
         self.nthread = nthread
         self._pool = mujoco.rollout.Rollout(nthread=nthread)
         self._datas = [mujoco.MjData(e0.model) for _ in range(max(1, nthread))]
+        # rollout's inputs and outputs, reused every step (rows [0, batch))
+        nstep = e0.frame_skip
+        self._in_states = np.empty((num_envs, e0._state.size))
+        self._in_controls = np.empty((num_envs, nstep, e0.nuser))
+        self._warmstart = np.zeros((num_envs, e0.model.nv))
+        self._out_states = np.empty((num_envs, nstep, e0._state.size))
+        self._out_sensordata = np.empty((num_envs, nstep, e0.model.nsensordata))
         self._elapsed = np.zeros(num_envs, dtype=np.int64)
         self._autoreset = np.zeros(num_envs, dtype=bool)
 
@@ -109,17 +116,27 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
             else:
                 batch.append((i, inputs, a))
         if batch:
-            envs = [self.envs[i] for i, _, _ in batch]
-            states, sensordata = self._pool.rollout(
-                [e.model for e in envs],
+            nb = len(batch)
+            for k, (i, u, _) in enumerate(batch):
+                self._in_states[k] = self.envs[i]._state
+                self._in_controls[k] = self.envs[i].check_inputs(u)
+            states, sensordata = self._out_states[:nb], self._out_sensordata[:nb]
+            # shapes and types are fixed here, so rollout's own checks are skipped
+            self._pool.rollout(
+                [self.envs[i].model for i, _, _ in batch],
                 self._datas,
-                np.stack([e._state for e in envs]),
-                np.stack([u for _, u, _ in batch]),
-                control_spec=envs[0].user_spec,
-                initial_warmstart=np.zeros((len(batch), envs[0].model.nv)),
+                self._in_states[:nb],
+                self._in_controls[:nb],
+                control_spec=self.envs[0].user_spec,
+                skip_checks=True,
+                nstep=self.envs[0].frame_skip,
+                initial_warmstart=self._warmstart[:nb],
+                state=states,
+                sensordata=sensordata,
+                chunk_size=max(1, nb // (max(1, self.nthread) * 10)),
             )
             for k, (i, _, a) in enumerate(batch):
-                results[i] = self.envs[i]._finish(states[k], sensordata[k], a)
+                results[i] = self.envs[i]._finish(states[k, -1], sensordata[k], a)
         for i, (o, r, term, trunc, info) in results.items():
             self._elapsed[i] += 1
             if self.max_episode_steps is not None and self._elapsed[i] >= self.max_episode_steps:

@@ -4,6 +4,7 @@
 #include "pad_frame.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -154,6 +155,20 @@ std::unordered_map<const SkinPlugin*, const mjData*>& Registry() {
   static auto* live = new std::unordered_map<const SkinPlugin*, const mjData*>();
   return *live;
 }
+// Bumped on every removal from the registry: a (plugin, mjData) pair found
+// live stays live until then (a pointer is only re-added after removal).
+std::atomic<unsigned long long>& RegistryGeneration() {
+  static auto* generation = new std::atomic<unsigned long long>(0);
+  return *generation;
+}
+// (plugin, mjData) pairs one thread found in the registry at a generation.
+struct VerifiedPairs {
+  static constexpr int kSize = 16;
+  unsigned long long generation = ~0ull;
+  const SkinPlugin* plugin[kSize];
+  const mjData* data[kSize];
+  int count = 0, next = 0;
+};
 
 // A non-finite sample in a height field the skin renders: a message naming
 // the hfield, the geom and the first bad sample, or empty.
@@ -270,9 +285,28 @@ bool SkinPlugin::TurnMeshPad(const mjModel* m, int g, PadGeometry* pad, std::str
 SkinPlugin* SkinPlugin::Owned(const mjData* d, int instance) {
   auto* p = reinterpret_cast<const SkinPlugin*>(d->plugin_data[instance]);
   if (!p) return nullptr;
-  std::shared_lock<std::shared_mutex> lock(RegistryMutex());
-  auto it = Registry().find(p);
-  return it != Registry().end() && it->second == d ? const_cast<SkinPlugin*>(p) : nullptr;
+  // The pairs this thread found live since the last removal: a step looks
+  // its skins up without taking the registry lock.
+  thread_local VerifiedPairs verified;
+  const unsigned long long generation = RegistryGeneration().load(std::memory_order_acquire);
+  if (verified.generation == generation) {
+    for (int k = 0; k < verified.count; ++k)
+      if (verified.plugin[k] == p && verified.data[k] == d) return const_cast<SkinPlugin*>(p);
+  } else {
+    verified.generation = generation;
+    verified.count = verified.next = 0;
+  }
+  {
+    std::shared_lock<std::shared_mutex> lock(RegistryMutex());
+    auto it = Registry().find(p);
+    if (it == Registry().end() || it->second != d) return nullptr;
+  }
+  verified.plugin[verified.next] = p;
+  verified.data[verified.next] = d;
+  verified.next = (verified.next + 1) % VerifiedPairs::kSize;
+  verified.count =
+      std::max(verified.count, verified.next == 0 ? VerifiedPairs::kSize : verified.next);
+  return const_cast<SkinPlugin*>(p);
 }
 
 SkinPlugin* SkinPlugin::OwnedOrRebuilt(const mjModel* m, mjData* d, int instance) {
@@ -724,7 +758,7 @@ void SkinPlugin::Compute(const mjModel* m, mjData* d, int instance) {
   // For drawing only: whether the field is live, and when each receptor last fired.
   touching_ = state[kStContactValid] > 0.0;
   if (fired > 0) {
-    const double* spikes = state + model_->state_layout().last_spikes;
+    const std::vector<double>& spikes = workspace_.spikes;
     for (size_t r = 0; r < last_spike_time_s_.size(); ++r)
       if (spikes[r] > 0) last_spike_time_s_[r] = d->time;
   }
@@ -738,7 +772,10 @@ void SkinPlugin::RegisterPlugin() {
   const auto& keys = SkinAttributeKeys();
   plugin.nattribute = static_cast<int>(keys.size());
   plugin.attributes = keys.data();
-  // Contact forces are known only after the constraint solver.
+  // Contact forces are known only after the constraint solver. MuJoCo then
+  // also runs mj_rnePostConstraint (body accelerations) once per step before
+  // any acceleration-stage plugin sensor, which the skin does not read; no
+  // earlier stage has the forces.
   plugin.needstage = mjSTAGE_ACC;
 
   plugin.nstate = +[](const mjModel* m, int instance) {
@@ -772,6 +809,7 @@ void SkinPlugin::RegisterPlugin() {
       {
         std::unique_lock<std::shared_mutex> lock(RegistryMutex());
         Registry().erase(p);
+        RegistryGeneration().fetch_add(1, std::memory_order_release);
       }
       delete p;
     }

@@ -23,8 +23,9 @@ void WriteOutputs(const SkinModel& model, const StepInput& in, bool touching, co
   const SkinConfig& cfg = model.config();
   const int nrec = static_cast<int>(model.receptors().size());
   const StateLayout& layout = model.state_layout();
-  const double* last_spikes = state + layout.last_spikes;
-  const double* last_voltage = state + layout.last_voltage;
+  const double* last_spikes = ws.spikes.data();
+  const double* last_voltage =
+      layout.voltage_in_state ? state + layout.last_voltage : ws.voltage.data();
   const TractionField& tf = ws.traction;
   double* cursor = out;
   if (cfg.outputs[kOutSpikes]) {

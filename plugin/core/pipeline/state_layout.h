@@ -63,8 +63,8 @@ enum EvalStartSlot {
 
 // Where each block of plugin_state lives (offsets and sizes in doubles), in
 // this order: the header (StateSlot), per-receptor membranes
-// (kReceptorStateSize each), the last step's spike counts and voltages
-// (re-output on repeated calls), for `elastic` the pressure history (below);
+// (kReceptorStateSize each), with the `voltage` output the last step's
+// voltages, for `elastic` the pressure history (below);
 // then the last pose (LastPoseSlot; always there: `auto` oversampling depends
 // on the timestep, which MuJoCo's state-size callback does not see).
 //
@@ -151,7 +151,12 @@ struct HistoryBlock {
 };
 
 struct StateLayout {
-  int receptors = 0, last_spikes = 0, last_voltage = 0, history = 0, last_pose = 0;
+  int receptors = 0, history = 0, last_pose = 0;
+  // The `voltage` output's last values (nreceptor; 0 without it): re-output
+  // by a step that does not advance the receptors. Spike counts are the
+  // step's own (Workspace::spikes): zero unless it advanced them.
+  int last_voltage = 0;
+  bool voltage_in_state = false;
   // substep="receptors": the last step's receptor quantities (nreceptor)
   int last_quantity = 0;
   int history_block = 0;                       // kHistorySlots + n*n; 0 without `elastic`
@@ -172,9 +177,9 @@ struct StateLayout {
   StateLayout() = default;
   StateLayout(const SkinConfig& cfg, int nreceptor) {
     receptors = kStateHeader;
-    last_spikes = receptors + nreceptor * kReceptorStateSize;
-    last_voltage = last_spikes + nreceptor;
-    history = last_voltage + nreceptor;
+    last_voltage = receptors + nreceptor * kReceptorStateSize;
+    voltage_in_state = cfg.outputs[kOutVoltage];
+    history = last_voltage + (voltage_in_state ? nreceptor : 0);
     const bool elastic = cfg.pressure_model == PressureModel::kElastic;
     ncell = cfg.grid.Size();
     cycle = elastic && !cfg.grid_shift ? cfg.grid_cycle : 1;
@@ -200,6 +205,9 @@ struct StateLayout {
         kEvalStartSlots + kStateHeader + (history - receptors) + (eval_start - history_head);
     size = eval_start + eval_start_size;
   }
+  // Whether any pressure history exists (taxel grid, shifted grid or the
+  // `grid_cycle` ring): an idle step must still rotate it.
+  bool has_history() const { return history_block > 0 || shifted_block > 0; }
   // Block k steps back from the head (0: this time, 1: last step, 2: the one
   // before).
   HistoryBlock history_at(double* state, int back) const {

@@ -80,8 +80,8 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
   const auto& sites = model.receptors();
   const int nrec = static_cast<int>(sites.size());
   const StateLayout& layout = model.state_layout();
-  double* last_spikes = state + layout.last_spikes;
-  double* last_voltage = state + layout.last_voltage;
+  double* last_spikes = ws->spikes.data();
+  double* last_voltage = layout.voltage_in_state ? state + layout.last_voltage : ws->voltage.data();
   // Receptors integrate over the time elapsed since the previous call, so a
   // repeated mj_forward at the same time changes nothing.
   const bool time_valid = state[kStTimeValid] > 0.0;
@@ -105,8 +105,8 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
   // contact resumes. An untouched skin then costs O(1) per step.
   const bool idle = state[kStReceptorsIdle] > 0.0;
   if (!touching && idle && elapsed >= 0.0) {
-    // Nothing to do: the last spike counts are zero (idle is entered only
-    // after a step without spikes).
+    // Nothing to do: no spikes (idle receptors never fire; without the
+    // `voltage` output no voltage is shown).
     return false;
   }
   ws->quantity.assign(nrec, 0.0);
@@ -156,6 +156,7 @@ bool Evaluate(const SkinModel& model, const StepInput& in, double time_s, double
     const double step_s =
         nominal_s > 0.0 && std::abs(part_s - nominal_s) <= 1e-9 * nominal_s ? nominal_s : part_s;
     const ReceptorStepper& stepper = StepperFor(cfg.receptor, step_s, ws);
+    ws->receptor_outputs_written = true;
     if (ramp) ws->spike_sum.assign(nrec, 0.0);
     for (int k = 1; k <= parts; ++k) {
       const double* q = ws->quantity.data();
@@ -324,6 +325,12 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   int fired = 0;
   const StateLayout& lay = model.state_layout();
   SaveOrRestoreEvaluationStart(lay, time_s, state[kStReceptorsIdle] > 0.0 && !in.in_contact, state);
+  const size_t nreceptor = model.receptors().size();
+  if (ws->spikes.size() != nreceptor || ws->receptor_outputs_written) {
+    ws->spikes.assign(nreceptor, 0.0);
+    if (!lay.voltage_in_state) ws->voltage.assign(nreceptor, 0.0);
+    ws->receptor_outputs_written = false;
+  }
   if (lay.tangential_block > 0)  // this step writes the buffer it did not start from
     state[lay.tangential_write] = 1.0 - state[lay.tangential_head];
   bool touching;
@@ -335,8 +342,7 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
   // tangential buffers to advance, the header is all there is: set it as
   // the evaluations would.
   const bool quiet = state[kStReceptorsIdle] > 0.0 && !in.in_contact;
-  if (quiet && elapsed > 0.0 && lay.history_block == 0 && lay.shifted_block == 0 &&
-      lay.tangential_block == 0) {
+  if (quiet && elapsed > 0.0 && !lay.has_history() && lay.tangential_block == 0) {
     state[kStLastTime] = time_s;
     state[kStTimeValid] = 1.0;
     state[kStContactValid] = 0.0;
@@ -354,7 +360,7 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
     // Tactile substeps: the pad's pose and MuJoCo's force interpolated from
     // the last step's (counter-surfaces at this step's pose); spikes summed.
     const int nrec = static_cast<int>(model.receptors().size());
-    double* last_spikes = state + model.state_layout().last_spikes;
+    double* last_spikes = ws->spikes.data();
     ws->spike_sum.assign(nrec, 0.0);
     Pose from;
     std::copy(last + kLpPos, last + kLpPos + 3, from.pos);
@@ -383,6 +389,7 @@ int Step(const SkinModel& model, const StepInput& in, double time_s, double* sta
       for (int r = 0; r < nrec; ++r) ws->spike_sum[r] += last_spikes[r];
     }
     std::copy(ws->spike_sum.begin(), ws->spike_sum.end(), last_spikes);
+    ws->receptor_outputs_written = true;
   } else {
     touching = Evaluate(model, in, time_s, in.timestep_s / std::max(K, 1), state, ws, &fired);
   }

@@ -40,12 +40,17 @@ struct Workspace {
   RenderSummary render_summary;  // the last render's covered cells (winkler)
   RenderScratch render_scratch;
   TractionField traction;
-  std::vector<double> quantity;        // per receptor
-  ElasticStepWork elastic;             // `elastic`
-  ElasticSolveStats elastic_stats;     // the last `elastic` solve (diagnostics)
-  GridShiftWork grid_shift;            // `grid_shift`
-  std::vector<double> pressure_guess;  // `elastic` initial guess, n*n
-  std::vector<Stress6> stress;         // per receptor, Pa
+  std::vector<double> quantity;  // per receptor
+  // This step's spike counts (summed over `oversample` substeps) and, without
+  // the `voltage` output, voltages: per receptor, zero unless the step
+  // advanced the receptors (Step sets them before its evaluations).
+  std::vector<double> spikes, voltage;
+  bool receptor_outputs_written = false;  // since Step last zeroed them
+  ElasticStepWork elastic;                // `elastic`
+  ElasticSolveStats elastic_stats;        // the last `elastic` solve (diagnostics)
+  GridShiftWork grid_shift;               // `grid_shift`
+  std::vector<double> pressure_guess;     // `elastic` initial guess, n*n
+  std::vector<Stress6> stress;            // per receptor, Pa
   StressScratch stress_scratch;
   StressMethod last_stress_method = StressMethod::kDirect;
   // shear="partial": the tractions read from and written to plugin_state,
