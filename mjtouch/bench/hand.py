@@ -79,6 +79,28 @@ def pad_facing(model, data, finger: str) -> np.ndarray:
     return f
 
 
+def add_pad_plates(spec, model, data, facing: dict, fingers, depth_m: float = DEPTH_M) -> None:
+    """A fixed plate against each finger's distal capsule pad (normal along the
+    pad's outward `facing[f]`, in the geom frame), starting depth_m into it;
+    8 mm of the capsule's length lies on it. model, data: the hand before the
+    plates, forward-computed."""
+    for f in fingers:
+        g = model.geom(f"robot0:C_{f}distal")
+        R = data.geom_xmat[g.id].reshape(3, 3)
+        n = R @ facing[f]
+        centre = data.geom_xpos[g.id] + n * (g.size[0] - depth_m + 2e-3)
+        x = R[:, 2]  # along the capsule
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, np.column_stack([x, np.cross(n, x), n]).ravel())
+        spec.worldbody.add_geom(
+            name=f"plate_{f}",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[4e-3, 8e-3, 2e-3],
+            pos=centre,
+            quat=quat,
+        )
+
+
 def hand(skin: dict | None, pressed: bool, settle_steps: int = 100, acc_sensor: bool = False):
     """(model, data) of the hand, gravity off, settled; skin: attach()
     attributes for five fingertip skins, or None (bare). acc_sensor: add one
@@ -98,21 +120,7 @@ def hand(skin: dict | None, pressed: bool, settle_steps: int = 100, acc_sensor: 
     mujoco.mj_forward(model, data)
     facing = {f: pad_facing(model, data, f) for f in FINGERS}
     if pressed:
-        for f in PRESSED:
-            g = model.geom(f"robot0:C_{f}distal")
-            R = data.geom_xmat[g.id].reshape(3, 3)
-            n = R @ facing[f]
-            centre = data.geom_xpos[g.id] + n * (g.size[0] - DEPTH_M + 2e-3)
-            x = R[:, 2]
-            quat = np.zeros(4)
-            mujoco.mju_mat2Quat(quat, np.column_stack([x, np.cross(n, x), n]).ravel())
-            spec.worldbody.add_geom(
-                name=f"plate_{f}",
-                type=mujoco.mjtGeom.mjGEOM_BOX,
-                size=[4e-3, 8e-3, 2e-3],
-                pos=centre,
-                quat=quat,
-            )
+        add_pad_plates(spec, model, data, facing, PRESSED)
     if skin is not None:
         for f in FINGERS:
             mjtouch.attach(

@@ -39,21 +39,8 @@ def test_five_shadow_fingertips_report_mujocos_normal_force():
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     facing = {f: pad_facing(model, data, f) for f in FINGERS}
-    for f in PRESSED:  # a fixed plate against each pad, normal along the pad's outward
-        g = model.geom(f"robot0:C_{f}distal")
-        R = data.geom_xmat[g.id].reshape(3, 3)
-        n = R @ facing[f]
-        centre = data.geom_xpos[g.id] + n * (g.size[0] - DEPTH_M + 2e-3)
-        x = R[:, 2]  # along the capsule: 8 mm of it, inside the 13 mm grid
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, np.column_stack([x, np.cross(n, x), n]).ravel())
-        spec.worldbody.add_geom(
-            name=f"plate_{f}",
-            type=mujoco.mjtGeom.mjGEOM_BOX,
-            size=[4e-3, 8e-3, 2e-3],
-            pos=centre,
-            quat=quat,
-        )
+    # a fixed plate against each pressed pad, normal along the pad's outward
+    hand.add_pad_plates(spec, model, data, facing, PRESSED, depth_m=DEPTH_M)
     for f in FINGERS:  # one call each: the body's one colliding geom, its pad side
         mjtouch.attach(
             spec,
