@@ -187,26 +187,36 @@ void LoadTangentialState(const TaxelGrid& grid, const double* from, TangentialSt
   });
 }
 
-// The workspace's TangentialState into buffer `to`: its old box cleared,
-// the state's support copied, the slots set.
-void StoreTangentialState(const TaxelGrid& grid, const TangentialState& ts, double* to) {
+// Buffer `to`'s tractions zeroed over its box (the rest is zero already).
+void ClearTangentialBuffer(const TaxelGrid& grid, double* to) {
   const CellBox old = TangentialBufferBox(grid, to);
   ForBufferRows(grid, to, old, [&](double* x, double* y, size_t) {
     std::fill_n(x, old.nx, 0.0);
     std::fill_n(y, old.nx, 0.0);
   });
+}
+
+// Buffer `to`'s slots: valid, the shift (m) and the box its tractions fill.
+void WriteTangentialSlots(double shift_x_m, double shift_y_m, const CellBox& b, double* to) {
+  to[kTgValid] = 1.0;
+  to[kTgShiftX] = shift_x_m;
+  to[kTgShiftY] = shift_y_m;
+  to[kTgBoxI0] = b.i0;
+  to[kTgBoxJ0] = b.j0;
+  to[kTgBoxNx] = b.nx;
+  to[kTgBoxNy] = b.ny;
+}
+
+// The workspace's TangentialState into buffer `to`: its old box cleared,
+// the state's support copied, the slots set.
+void StoreTangentialState(const TaxelGrid& grid, const TangentialState& ts, double* to) {
+  ClearTangentialBuffer(grid, to);
   const CellBox& b = ts.support;
   ForBufferRows(grid, to, b, [&](double* x, double* y, size_t k) {
     std::copy_n(ts.shear_x_pa.begin() + k, b.nx, x);
     std::copy_n(ts.shear_y_pa.begin() + k, b.nx, y);
   });
-  to[kTgValid] = 1.0;
-  to[kTgShiftX] = ts.shift_x_m;
-  to[kTgShiftY] = ts.shift_y_m;
-  to[kTgBoxI0] = b.i0;
-  to[kTgBoxJ0] = b.j0;
-  to[kTgBoxNx] = b.nx;
-  to[kTgBoxNy] = b.ny;
+  WriteTangentialSlots(ts.shift_x_m, ts.shift_y_m, b, to);
 }
 
 // shear="partial": whether MuJoCo's force is at the friction limit. Its
@@ -247,11 +257,7 @@ void PartialSlipTraction(const TractionStep& s) {
     const bool valid = from[kTgValid] > 0.0;
     ts.shift_x_m = valid ? from[kTgShiftX] : 0.0;
     ts.shift_y_m = valid ? from[kTgShiftY] : 0.0;
-    const CellBox old = TangentialBufferBox(grid, to);
-    ForBufferRows(grid, to, old, [&](double* x, double* y, size_t) {
-      std::fill_n(x, old.nx, 0.0);
-      std::fill_n(y, old.nx, 0.0);
-    });
+    ClearTangentialBuffer(grid, to);
     const double rx = tf->slip_x, ry = tf->slip_y;
     const size_t N = grid.Size();
     double* qx = to + kTangentialSlots;
@@ -264,14 +270,7 @@ void PartialSlipTraction(const TractionStep& s) {
         qx[N + k] = ry * tf->pressure_pa[k];
       }
     }
-    const CellBox b = bounds.Box();
-    to[kTgValid] = 1.0;
-    to[kTgShiftX] = ts.shift_x_m;
-    to[kTgShiftY] = ts.shift_y_m;
-    to[kTgBoxI0] = b.i0;
-    to[kTgBoxJ0] = b.j0;
-    to[kTgBoxNx] = b.nx;
-    to[kTgBoxNy] = b.ny;
+    WriteTangentialSlots(ts.shift_x_m, ts.shift_y_m, bounds.Box(), to);
     return;
   }
   LoadTangentialState(grid, from, &ts);
