@@ -3,25 +3,29 @@ hands, each fingertip pressed by a plate: per skin, its normal force
 against MuJoCo's normal force on the fingertip geom, and the share of that
 force its patch carries (coverage).
 
-    python examples/menagerie_hands.py PATH/TO/mujoco_menagerie [--hands shadow_hand ...]
+    python examples/menagerie_hands.py PATH/TO/mujoco_menagerie [--hands shadow_hand ...] [--time]
 
 Nothing is downloaded: give a local clone of mujoco_menagerie. Fingertips
 are named per hand in HANDS (a body, whose colliding geom attach picks, or
 a geom by name); their pad side is where flexing the distal joint moves
 them (mjtouch.scene.robot.flexion_facing). A plate on a slide joint is
 pushed into each pad with PUSH_N while the hand holds its pose (gravity
-off, position servos at qpos0).
+off, position servos at qpos0). --time adds each hand's cost at its own
+timestep: thread CPU per mj_step, pressed, bare against an RL skin on
+every fingertip (interleaved repeats, min and median).
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import pathlib
 
 import mujoco
 import numpy as np
 
 import mjtouch
+from mjtouch.bench.hand import step_cpu_us
 from mjtouch.scene import robot
 
 # Fingertips per hand: (label, {"body": name} or {"geom": name}).
@@ -72,26 +76,23 @@ def mujoco_normal_n(model: mujoco.MjModel, data: mujoco.MjData, geom: int) -> fl
     return total
 
 
-def press_fingertips(
+def pressed_hand(
     spec: mujoco.MjSpec,
     tips,
-    steps: int = 300,
     depth_m: float = DEPTH_M,
     push_n: float = PUSH_N,
-    **skin,
-) -> list[dict]:
-    """Attach a skin to each fingertip of `tips` ((label, {"body"|"geom":
-    name}) pairs) on its pad side, start a plate depth_m into each pad,
-    pushed into it by push_n along the pad's normal (a slide joint and a
-    motor), hold the hand at qpos0 (position servos) and step; per skin: MuJoCo's normal force on its
-    geom, the skin's normal force, the coverage share and the spike count
-    over the run (mean forces over the last half of the run)."""
+    skin: dict | None = None,
+):
+    """(model, data, labels): start a plate depth_m into each fingertip pad
+    of `tips` ((label, {"body"|"geom": name}) pairs), pushed into it by push_n
+    along the pad's normal (a slide joint and a motor), the hand held at
+    qpos0 (position servos); skin: attach() attributes for a skin on each
+    pad (merged over the RL preset), or None for the bare hand."""
     spec.option.gravity = [0, 0, 0]
     model = spec.compile()
     data = mujoco.MjData(model)
+    start_pose(model, data)
     mujoco.mj_kinematics(model, data)
-    attrs = dict(RL, outputs="spikes force coverage")
-    attrs.update(skin)
     pads = []
     for label, where in tips:
         if "geom" in where:
@@ -129,15 +130,35 @@ def press_fingertips(
         if "body" in where and len(colliding) > 1:  # the picked geom itself (maybe unnamed)
             where = {"geom": spec.body(where["body"]).geoms[g - model.body_geomadr[b]]}
         pads.append((label, where, facing))
-    for label, where, facing in pads:
-        mjtouch.attach(spec, **where, name=f"skin_{label}", facing=facing, **attrs)
+    if skin is not None:
+        attrs = dict(RL, outputs="spikes force coverage")
+        attrs.update(skin)
+        for label, where, facing in pads:
+            mjtouch.attach(spec, **where, name=f"skin_{label}", facing=facing, **attrs)
     model = spec.compile()
     data = mujoco.MjData(model)
+    start_pose(model, data)
     hold_pose(model, data)
     for label, _, _ in pads:
         data.ctrl[model.actuator(f"push_{label}").id] = push_n
+    return model, data, [label for label, _, _ in pads]
+
+
+def press_fingertips(
+    spec: mujoco.MjSpec,
+    tips,
+    steps: int = 300,
+    depth_m: float = DEPTH_M,
+    push_n: float = PUSH_N,
+    **skin,
+) -> list[dict]:
+    """Press each fingertip of `tips` with a plate (pressed_hand, a skin on
+    each pad) and step; per skin: MuJoCo's normal force on its geom, the
+    skin's normal force, the coverage share and the spike count over the run
+    (mean forces over the last half of the run)."""
+    model, data, labels = pressed_hand(spec, tips, depth_m, push_n, skin)
     layouts = mjtouch.layouts(model)
-    rows = {label: dict(tip=label, mujoco_n=0.0, skin_n=0.0, spikes=0) for label, _, _ in pads}
+    rows = {label: dict(tip=label, mujoco_n=0.0, skin_n=0.0, spikes=0) for label in labels}
     carried = {label: 0.0 for label in rows}
     half = steps // 2
     for k in range(steps):
@@ -159,9 +180,20 @@ def press_fingertips(
     return list(rows.values())
 
 
+def start_pose(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+    """qpos0 clipped into each limited hinge and slide joint's range (the
+    Allegro's thumb base has qpos0 0 outside its range: its servo would
+    swing the thumb away from its plate)."""
+    hinge_slide = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+    for j in range(model.njnt):
+        if model.jnt_limited[j] and int(model.jnt_type[j]) in hinge_slide:
+            a = model.jnt_qposadr[j]
+            data.qpos[a] = np.clip(model.qpos0[a], *model.jnt_range[j])
+
+
 def hold_pose(model: mujoco.MjModel, data: mujoco.MjData) -> None:
-    """Position servos hold qpos0: each joint actuator's control is its
-    joint's initial position (tendon actuators: the tendon's length)."""
+    """Position servos hold the current pose: each joint actuator's control
+    is its joint's position (tendon actuators: the tendon's length)."""
     mujoco.mj_forward(model, data)
     for a in range(model.nu):
         t = model.actuator_trnid[a, 0]
@@ -186,18 +218,65 @@ def print_rows(hand: str, rows: list[dict]) -> None:
         )
 
 
+def time_hand(make_spec, tips, steps: int, repeats: int, settle_steps: int = 100) -> dict:
+    """Thread CPU per mj_step (us) of the pressed hand, bare and with an RL
+    skin on each pad, timed interleaved after settle_steps: per row, every
+    step's time (repeats x steps). make_spec() returns a fresh MjSpec."""
+    rows = {"bare": None, "rl skins": {}}
+    hands = {}
+    for k, skin in rows.items():
+        model, data, _ = pressed_hand(make_spec(), tips, skin=skin)
+        for _ in range(settle_steps):
+            mujoco.mj_step(model, data)
+        hands[k] = (model, data)
+    times = {k: [] for k in rows}
+    for _ in range(repeats):
+        for k, (model, data) in hands.items():
+            times[k].append(step_cpu_us(model, data, steps))
+    out = {k: np.concatenate(v) for k, v in times.items()}
+    out["timestep_s"] = hands["bare"][0].opt.timestep
+    return out
+
+
+def print_times(hand: str, n_tips: int, t: dict) -> None:
+    lo = {k: float(np.min(t[k])) for k in ("bare", "rl skins")}
+    mid = {k: float(np.median(t[k])) for k in ("bare", "rl skins")}
+    print(
+        f"{hand}: {n_tips} tips pressed, timestep {t['timestep_s'] * 1e3:g} ms; "
+        "thread CPU per mj_step, us (min, median)"
+    )
+    for k in lo:
+        print(f"  {k:9s} {lo[k]:8.1f} {mid[k]:8.1f}   x bare {lo[k] / lo['bare']:6.2f} "
+              f"{mid[k] / mid['bare']:6.2f}")  # fmt: skip
+
+
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("menagerie", type=pathlib.Path, help="a local clone of mujoco_menagerie")
     p.add_argument("--hands", nargs="+", default=list(HANDS), choices=list(HANDS))
     p.add_argument("--steps", type=int, default=300)
+    p.add_argument(
+        "--time", action="store_true",
+        help="also time each hand pressed, bare and with RL skins (interleaved)",
+    )  # fmt: skip
+    p.add_argument("--repeats", type=int, default=5, help="timed repeats of --steps (--time)")
     args = p.parse_args(argv)
+    if args.steps < 1 or args.repeats < 1:
+        p.error(f"--steps {args.steps}, --repeats {args.repeats}: each must be >= 1")
     for hand in args.hands:
         xml, tips = HANDS[hand]
         path = args.menagerie / hand / xml
         if not path.is_file():
             raise SystemExit(f"{path} is not a file: give the mujoco_menagerie folder")
         print_rows(hand, press_fingertips(mujoco.MjSpec.from_file(str(path)), tips, args.steps))
+        if args.time:
+            t = time_hand(
+                functools.partial(mujoco.MjSpec.from_file, str(path)),
+                tips,
+                args.steps,
+                args.repeats,
+            )
+            print_times(hand, len(tips), t)
 
 
 if __name__ == "__main__":

@@ -121,3 +121,43 @@ def test_flexion_facing_is_the_side_flexion_moves(tmp_path):
     # a joint whose range reaches farther negative flexes negative
     spec.joint("j0_2").range = [-1.6, 0.2]
     np.testing.assert_allclose(flexion_facing(spec.compile(), g), [0, 1, 0], atol=1e-9)
+
+
+def test_a_start_outside_a_joint_range_is_clipped_into_it(tmp_path):
+    # the Allegro's thumb base starts (qpos0 0) outside its range; its servo
+    # must not swing the tip away from the plate placed on it
+    def hand():
+        spec = synthetic_hand(tmp_path, ["tip"], mesh_tips=False)
+        spec.compiler.degree = False
+        spec.joint("j0_1").range = [0.3, 1.6]
+        return spec
+
+    model, data, labels = mh.pressed_hand(hand(), [("t", {"body": "tip"})], skin=None)
+    assert labels == ["t"]
+    assert model.qpos0[model.joint("j0_1").qposadr[0]] == 0
+    assert data.qpos[model.joint("j0_1").qposadr[0]] == 0.3
+    assert data.ctrl[model.actuator("j0_1").id] == 0.3
+    spec = hand()
+    assert_each_skin_reports_the_push(mh.press_fingertips(spec, [("t", {"body": "tip"})]), 1)
+
+
+def test_time_prints_bare_and_skinned_cost_per_step(tmp_path, capsys):
+    xml_name, tips = mh.HANDS["wonik_allegro"]
+    spec = synthetic_hand(tmp_path, [where["body"] for _, where in tips], mesh_tips=False)
+    folder = tmp_path / "menagerie" / "wonik_allegro"
+    folder.mkdir(parents=True)
+    (folder / xml_name).write_text(spec.to_xml())
+    args = ["--hands", "wonik_allegro", "--steps", "20", "--time", "--repeats", "2"]
+    mh.main([str(tmp_path / "menagerie"), *args])
+    lines = capsys.readouterr().out.splitlines()
+    head = next(k for k, line in enumerate(lines) if "tips pressed, timestep" in line)
+    assert lines[head].startswith(f"wonik_allegro: {len(tips)} tips pressed, timestep 1 ms")
+    rows = {line.split()[0]: line.split() for line in lines[head + 1 :]}
+    assert set(rows) == {"bare", "rl"}
+    bare_min, bare_med = float(rows["bare"][1]), float(rows["bare"][2])
+    rl_min, rl_med = float(rows["rl"][2]), float(rows["rl"][3])
+    assert 0 < bare_min <= bare_med and 0 < rl_min <= rl_med
+    assert rows["bare"][-2:] == ["1.00", "1.00"]
+    assert float(rows["rl"][-2]) == pytest.approx(rl_min / bare_min, abs=0.006)
+    with pytest.raises(SystemExit):
+        mh.main([str(tmp_path / "menagerie"), "--repeats", "0"])
