@@ -38,6 +38,7 @@ started, and is truncated by the time limit (100 control steps = 1 s).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import gymnasium as gym
@@ -79,20 +80,29 @@ def slip_zone(pressure_pa: np.ndarray, shear_pa: np.ndarray, mu: float) -> tuple
     without contact or slip). Cattaneo's annulus between c and a:
     share 1 - (c/a)^2, radius 2 (1 - (c/a)^3) / (3 (1 - (c/a)^2)), 2/3 to 1.
     pressure_pa (nx, nx); shear_pa (2, nx, nx)."""
-    loaded = pressure_pa > 0
-    j, i = np.nonzero(loaded)
-    if j.size == 0:
+    nx = pressure_pa.shape[-1]
+    pressure = pressure_pa.reshape(-1)
+    loaded = np.flatnonzero(pressure > 0)  # row-major, as np.nonzero
+    n = loaded.size
+    if n == 0:
         return 0.0, 0.0
-    # only the loaded cells: the at-limit test is elementwise, and their
-    # row-major order is nonzero's, so the subset keeps its order
-    p = pressure_pa[j, i]
-    limit = (1 - SLIP_ZONE_TOLERANCE) * mu * p
-    at_limit = np.hypot(shear_pa[0, j, i], shear_pa[1, j, i]) >= limit
-    n_slip = np.count_nonzero(at_limit)
-    if n_slip == 0:
+    shear = shear_pa.reshape(2, -1)
+    limit = (1 - SLIP_ZONE_TOLERANCE) * mu * pressure[loaded]
+    at_limit = loaded[np.hypot(shear[0, loaded], shear[1, loaded]) >= limit]
+    if at_limit.size == 0:
         return 0.0, 0.0
-    radius = np.hypot(j[at_limit] - j.mean(), i[at_limit] - i.mean()).mean()
-    return float(n_slip / j.size), float(radius / math.sqrt(j.size / math.pi))
+    rows, cols = _cell_indices(nx)
+    # means of whole numbers: the sums are exact, so these are np.mean's bits
+    j_mean, i_mean = rows[loaded].sum() / n, cols[loaded].sum() / n
+    radius = np.hypot(rows[at_limit] - j_mean, cols[at_limit] - i_mean).mean()
+    return float(at_limit.size / n), float(radius / math.sqrt(n / math.pi))
+
+
+@functools.cache
+def _cell_indices(nx: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column index (as float) of each cell of an nx x nx image, row-major."""
+    index = np.arange(nx, dtype=np.float64)
+    return np.repeat(index, nx), np.tile(index, nx)
 
 
 def _euler_deg(element, *angles_deg: float) -> None:
@@ -282,7 +292,7 @@ class SlipHoldEnv(TouchEnv):
         )
         self._inputs_buffer = np.zeros((frame_skip, self.nuser))
         self._load_column = m.nu + 6 * self._object_body + 2
-        self._step_offsets_s = m.opt.timestep * np.arange(frame_skip)
+        self._step_offsets_s = (m.opt.timestep * np.arange(frame_skip)).tolist()
         if touch != "none":
             lay = self.layout
             adr, b = lay.sensor_adr, lay.blocks
@@ -377,10 +387,11 @@ class SlipHoldEnv(TouchEnv):
         (the grip force), then xfrc_applied (only the load on the block)."""
         lo, hi = self.force_range_n
         self._grip = lo + 0.5 * (float(a[0]) + 1.0) * (hi - lo)
-        t = self._state[0] + self._step_offsets_s
+        t0_s = float(self._state[0])
         inputs = self._inputs_buffer
         inputs[:, : self.model.nu] = self._grip
-        inputs[:, self._load_column] = -self.load_n(t)
+        # load_n's per-step path for each physics step: a few floats, cheaper than numpy
+        inputs[:, self._load_column] = [-self.load_n(t0_s + dt) for dt in self._step_offsets_s]
         return inputs
 
     def _observe(self, final_state, sensordata) -> np.ndarray:
