@@ -29,6 +29,10 @@ from mjtouch.envs.base import TouchEnv
 
 
 class RolloutVectorEnv(gym.vector.VectorEnv):
+    """num_envs environments of env_cls (built with env_kwargs), stepped on
+    nthread worker threads (default: one per core, at most num_envs; 0 or
+    1: in the calling thread, in turn); max_episode_steps truncates."""
+
     def __init__(
         self,
         env_cls: type[TouchEnv],

@@ -227,11 +227,18 @@ def test_rollout_vector_env_equals_single_envs_bit_for_bit(env_id):
         seeds,
         actions,
     )
+    # in the calling thread, and on more worker threads than environments
+    vec_of = {TEX: mjtouch.envs.vector.texture_explore_vec, SLIP: mjtouch.envs.vector.slip_hold_vec}
+    inline, wide = (
+        run_vector(vec_of[env_id](n, nthread=k, max_episode_steps=limit), seeds, actions)
+        for k in (0, n + 1)
+    )
     assert isinstance(gym.make_vec(env_id, num_envs=1), mjtouch.envs.RolloutVectorEnv)
     # the sequence exercises both episode ends and the autoreset after them
     assert ref["truncated"].any()
     assert ref["terminated"].any()
-    for name, got in (("RolloutVectorEnv", fast), ("SyncVectorEnv", sync)):
+    runs = {"RolloutVectorEnv": fast, "nthread=0": inline, f"nthread={n + 1}": wide}
+    for name, got in (*runs.items(), ("SyncVectorEnv", sync)):
         for key in ref:
             assert np.array_equal(got[key], ref[key]), (name, key)
 
