@@ -64,9 +64,12 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
         self.render_mode = None
         self.max_episode_steps = max_episode_steps
         self.nthread = nthread
-        # nthread <= 1: the calling thread steps the environments in turn
+        # The calling thread steps one share of the environments and
+        # nthread - 1 workers the others (nthread <= 1: all in turn).
         self._pool = (
-            ThreadPoolExecutor(nthread, thread_name_prefix="mjtouch-env") if nthread > 1 else None
+            ThreadPoolExecutor(nthread - 1, thread_name_prefix="mjtouch-env")
+            if nthread > 1
+            else None
         )
         self._elapsed = np.zeros(num_envs, dtype=np.int64)
         self._autoreset = np.zeros(num_envs, dtype=bool)
@@ -108,11 +111,19 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
                 infos = self._add_info(infos, info, i)
             else:
                 stepping.append(i)
+
+        def step_share(share):
+            return [(i, self.envs[i].step(actions[i])) for i in share]
+
         if self._pool is None or len(stepping) < 2:
-            results = [self.envs[i].step(actions[i]) for i in stepping]
+            results = step_share(stepping)
         else:
-            results = list(self._pool.map(lambda i: self.envs[i].step(actions[i]), stepping))
-        for i, (o, r, term, trunc, info) in zip(stepping, results):
+            shares = [stepping[k :: self.nthread] for k in range(self.nthread)]
+            futures = [self._pool.submit(step_share, s) for s in shares[1:] if s]
+            results = step_share(shares[0])
+            for f in futures:
+                results += f.result()
+        for i, (o, r, term, trunc, info) in sorted(results, key=lambda x: x[0]):
             self._elapsed[i] += 1
             if self.max_episode_steps is not None and self._elapsed[i] >= self.max_episode_steps:
                 trunc = True
