@@ -18,7 +18,7 @@ observation with reward 0.
 from __future__ import annotations
 
 import os
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 
 import gymnasium as gym
 import numpy as np
@@ -112,6 +112,9 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
             else:
                 stepping.append(i)
 
+        for i in stepping:  # every action valid before any environment steps
+            self.envs[i]._check_action(actions[i])
+
         def step_share(share):
             return [(i, self.envs[i].step(actions[i])) for i in share]
 
@@ -120,7 +123,10 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
         else:
             shares = [stepping[k :: self.nthread] for k in range(self.nthread)]
             futures = [self._pool.submit(step_share, s) for s in shares[1:] if s]
-            results = step_share(shares[0])
+            try:
+                results = step_share(shares[0])
+            finally:  # no worker still stepping when this returns or raises
+                wait(futures)
             for f in futures:
                 results += f.result()
         for i, (o, r, term, trunc, info) in sorted(results, key=lambda x: x[0]):

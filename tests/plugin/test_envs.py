@@ -243,6 +243,25 @@ def test_rollout_vector_env_equals_single_envs_bit_for_bit(env_id):
             assert np.array_equal(got[key], ref[key]), (name, key)
 
 
+def test_rollout_vector_env_rejects_a_bad_action_before_stepping_any_env():
+    def fresh():
+        venv = mjtouch.envs.vector.slip_hold_vec(2, nthread=2)
+        venv.reset(seed=0)
+        return venv
+
+    venv, ref = fresh(), fresh()
+    actions = np.zeros((2, 1), np.float32)
+    for row in (0, 1):  # the calling thread's share, then the worker's
+        bad = actions.copy()
+        bad[row, 0] = np.nan
+        with pytest.raises(ValueError, match="not finite"):
+            venv.step(bad)
+    # nothing stepped: the next step is the first
+    assert np.array_equal(venv.step(actions)[0], ref.step(actions)[0])
+    venv.close()
+    ref.close()
+
+
 # ----- task logic (the docstrings) ---------------------------------------
 
 
