@@ -28,10 +28,18 @@ from gymnasium.vector.utils import batch_space
 from mjtouch.envs.base import TouchEnv
 
 
+def _usable_cores() -> int:
+    """Cores this process may run on (its affinity where the OS tells)."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return os.cpu_count() or 1
+
+
 class RolloutVectorEnv(gym.vector.VectorEnv):
     """num_envs environments of env_cls (built with env_kwargs), stepped on
-    nthread worker threads (default: one per core, at most num_envs; 0 or
-    1: in the calling thread, in turn); max_episode_steps truncates."""
+    nthread threads (default: one per core this process may run on, at most
+    num_envs; 0 or 1: in the calling thread, in turn); max_episode_steps
+    truncates."""
 
     def __init__(
         self,
@@ -50,7 +58,7 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
             raise ValueError("RolloutVectorEnv does not render; render a single environment")
         env_kwargs.pop("render_mode", None)
         if nthread is None:
-            nthread = min(num_envs, os.cpu_count() or 1)
+            nthread = min(num_envs, _usable_cores())
         if not (isinstance(nthread, int) and nthread >= 0):
             raise ValueError(f"nthread = {nthread!r} must be a non-negative integer")
         self.envs = [env_cls(**env_kwargs) for _ in range(num_envs)]
