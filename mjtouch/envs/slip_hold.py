@@ -102,7 +102,9 @@ def slip_zone(pressure_pa: np.ndarray, shear_pa: np.ndarray, mu: float) -> tuple
 def _cell_indices(nx: int) -> tuple[np.ndarray, np.ndarray]:
     """Row and column index (as float) of each cell of an nx x nx image, row-major."""
     index = np.arange(nx, dtype=np.float64)
-    return np.repeat(index, nx), np.tile(index, nx)
+    rows, cols = np.repeat(index, nx), np.tile(index, nx)
+    rows.flags.writeable = cols.flags.writeable = False  # shared by every call
+    return rows, cols
 
 
 def _euler_deg(element, *angles_deg: float) -> None:
