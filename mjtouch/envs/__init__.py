@@ -15,13 +15,13 @@ except ImportError as e:  # an optional dependency
     raise ImportError("mjtouch.envs needs gymnasium >= 1.1: pip install 'mjtouch[envs]'") from e
 import mjtouch.envs  # noqa: F401 (registers the ids)
 env = gym.make("mjtouch/TextureExplore-v0")
-envs = gym.make_vec("mjtouch/SlipHold-v0", num_envs=8)  # mujoco.rollout threads
+envs = gym.make_vec("mjtouch/SlipHold-v0", num_envs=8)  # stepped on threads
 ```
 
 Every environment takes ``touch="counts" | "rates" | "none"`` (``none``: the
 same task without the skin) and ``pressure_image=p`` (add a p x p pressure
-image). ``gym.make_vec`` uses :class:`.vector.RolloutVectorEnv` (one threaded
-``mujoco.rollout`` call per control step); ``vectorization_mode="sync"``
+image). ``gym.make_vec`` uses :class:`.vector.RolloutVectorEnv` (the
+environments stepped on worker threads); ``vectorization_mode="sync"``
 gives Gymnasium's ``SyncVectorEnv``. :func:`.bench.benchmark` reports env
 steps per second, with and without touch.
 """

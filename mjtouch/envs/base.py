@@ -2,11 +2,10 @@
 
 A :class:`TouchEnv` owns one MuJoCo model with an ``mjtouch.skin`` fingertip
 and advances it one control step at a time with :func:`mujoco.rollout`
-(``frame_skip`` physics steps, open-loop inputs held over the control step),
-so that a batch of environments can be advanced the same way in one threaded
-call (:class:`mjtouch.envs.vector.RolloutVectorEnv`) with bit-identical
-results. Every control step starts the constraint solver's warm start from
-zero, in both paths, which is what makes them identical.
+(``frame_skip`` physics steps, open-loop inputs held over the control step,
+without the GIL), so that a batch of environments can step on threads
+(:class:`mjtouch.envs.vector.RolloutVectorEnv`) with bit-identical results.
+Every control step starts the constraint solver's warm start from zero.
 
 Task logic lives in three hooks a subclass implements:
 ``_task_reset`` (sample the episode, return the user inputs' template),
@@ -119,6 +118,20 @@ class TouchEnv(gym.Env):
         if touch != "none":
             self.layout = SkinLayout.from_model(self.model)
             self._class_masks = [self.layout.mask(c) for c in CLASSES]
+            # each receptor's class index (bincount sums per class), the
+            # receptors per class, and the spike and force blocks' columns
+            self._class_index = np.zeros(self.layout.classes.size, dtype=np.intp)
+            for k, m in enumerate(self._class_masks):
+                self._class_index[m] = k
+            n = np.array([max(1, int(m.sum())) for m in self._class_masks])
+            self._rate_divisor = n * self.control_dt_s
+            adr = self.layout.sensor_adr
+            spikes = self.layout.blocks["spikes"]
+            force = self.layout.blocks["force"]
+            self._touch_slices = (
+                slice(adr + spikes.start, adr + spikes.stop),
+                slice(adr + force.start, adr + force.start + 3),
+            )
             if self.pressure_image:
                 nx = self.layout.nx
                 if "pressure" not in self.layout.blocks:
@@ -134,9 +147,9 @@ class TouchEnv(gym.Env):
         self._zero_warmstart = np.zeros((1, self.model.nv))
         self._state = np.zeros(mujoco.mj_stateSize(self.model, FULLPHYSICS))
         # rollout's sensordata, reused every control step (the hooks read it
-        # before the next step), and the state the step ends in
-        self._final_state = np.empty_like(self._state)
+        # before the next step)
         self._out_sensordata = np.empty((1, self.frame_skip, self.model.nsensordata))
+        self._action_bounds: tuple | None = None  # (space, low, high) as float64
         self._qpos_adr: dict[str, int] = {}
         self._qvel_adr: dict[str, int] = {}
         self._renderer = None
@@ -206,8 +219,10 @@ class TouchEnv(gym.Env):
         self.observation_space = gym.spaces.Box(self._obs_low, self._obs_high, (start,), np.float64)
 
     def _bounded(self, obs: np.ndarray) -> np.ndarray:
-        """Saturate at the full-scale range (see the module docstring)."""
-        return np.clip(obs, self._obs_low, self._obs_high)
+        """Saturate obs (a fresh array, clipped in place) at the full-scale
+        range (see the module docstring)."""
+        np.maximum(obs, self._obs_low, out=obs)
+        return np.minimum(obs, self._obs_high, out=obs)
 
     def describe_observation(self) -> str:
         """A table of the observation blocks (name, slice, units, range, meaning)."""
@@ -237,12 +252,14 @@ class TouchEnv(gym.Env):
             if self.pressure_image:
                 out.append(np.zeros(self.pressure_image**2))
             return out
-        per_receptor = lay.block(sensordata, "spikes").sum(axis=0)
-        counts = np.array([per_receptor[m].sum() for m in self._class_masks])
+        spikes, force_cols = self._touch_slices
+        # spike counts are whole numbers, so any summation order is exact
+        per_receptor = np.add.reduce(sensordata[:, spikes], axis=0)
+        counts = np.bincount(self._class_index, per_receptor, len(CLASSES))
         if self.touch == "rates":
-            n = np.array([max(1, int(m.sum())) for m in self._class_masks])
-            counts = counts / (n * self.control_dt_s)
-        force = lay.block(sensordata, "force")[:, :3].mean(axis=0)
+            counts = counts / self._rate_divisor
+        # np.mean's arithmetic (a sum along the steps, then one division)
+        force = np.add.reduce(sensordata[:, force_cols], axis=0) / sensordata.shape[0]
         out = [counts, force]
         if self.pressure_image:
             nx, p = lay.nx, self.pressure_image
@@ -277,14 +294,15 @@ class TouchEnv(gym.Env):
         return inputs
 
     def _advance(self, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(final state, sensordata of each physics step) of a control step."""
+        """(final state, sensordata of each physics step) of a control step.
+        The final state is written into self._state (rollout has read it)."""
         # Shapes and types are fixed here, so rollout's own checks are
         # skipped; no state is recorded per step: the rollout leaves
         # self.data in the final one.
         self._runner.rollout(
             [self.model],
             [self.data],
-            np.ascontiguousarray(self._state[None]),
+            self._state[None],
             self.check_inputs(inputs)[None],
             control_spec=self.user_spec,
             skip_checks=True,
@@ -294,8 +312,8 @@ class TouchEnv(gym.Env):
             sensordata=self._out_sensordata,
             chunk_size=1,
         )
-        mujoco.mj_getState(self.model, self.data, self._final_state, FULLPHYSICS)
-        return self._final_state, self._out_sensordata[0]
+        mujoco.mj_getState(self.model, self.data, self._state, FULLPHYSICS)
+        return self._state, self._out_sensordata[0]
 
     def _qpos(self, state: np.ndarray, joint: str) -> float:
         adr = self._qpos_adr.get(joint)
@@ -338,11 +356,19 @@ class TouchEnv(gym.Env):
 
     def _check_action(self, action) -> np.ndarray:
         a = np.asarray(action, dtype=np.float64)
-        if a.shape != self.action_space.shape:
-            raise ValueError(f"action has shape {a.shape}; expected {self.action_space.shape}")
-        if not np.all(np.isfinite(a)):
+        space = self.action_space
+        if a.shape != space.shape:
+            raise ValueError(f"action has shape {a.shape}; expected {space.shape}")
+        if not np.isfinite(a).all():
             raise ValueError(f"action {a} is not finite")
-        return np.clip(a, self.action_space.low, self.action_space.high)
+        if self._action_bounds is None or self._action_bounds[0] is not space:
+            self._action_bounds = (
+                space,
+                space.low.astype(np.float64),
+                space.high.astype(np.float64),
+            )
+        _, low, high = self._action_bounds
+        return np.minimum(np.maximum(a, low), high)
 
     def step(self, action):
         a = self._check_action(action)
@@ -355,7 +381,7 @@ class TouchEnv(gym.Env):
     def _finish(self, final_state, sensordata, action):
         """final_state: the full-physics state the control step ends in
         (None: no physics); sensordata: (frame_skip, nsensordata)."""
-        if final_state is not None:
+        if final_state is not None and final_state is not self._state:
             self._state = final_state.copy()
         obs, reward, terminated, info = self._outcome(final_state, sensordata, action)
         return obs, float(reward), bool(terminated), False, info

@@ -7,14 +7,15 @@ Measures, in this process and on this machine:
 - one environment stepped alone, with touch (``touch="counts"``) and without
   (``touch="none"``: the same scene without the skin plugin): the ratio is
   what the skin costs;
-- N environments in :class:`~mjtouch.envs.vector.RolloutVectorEnv` (one
-  threaded ``mujoco.rollout`` call per control step) and in Gymnasium's
+- N environments in :class:`~mjtouch.envs.vector.RolloutVectorEnv` (the
+  environments stepped on worker threads, one per core) and in Gymnasium's
   ``SyncVectorEnv``, with touch.
 
 Each rate is given per wall second and per CPU second of this process (all
 its threads): on a machine shared with other work the wall rate falls, the
 CPU rate does not; the CPU rate times the cores is what the vector env
-reaches on idle cores.
+reaches on idle cores. The vector env's line also gives the cores it kept
+busy (CPU seconds per wall second).
 
 Random actions (TextureExplore never commits, so episodes run to the limit).
 ``--quick`` (20 steps, 2 environments) only shows that it works: its numbers
@@ -170,6 +171,7 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"  {r['num_envs']} envs, rollout      {r['rollout_vector_steps_per_s']:10.1f}"
         f"   [{c['rollout_vector_steps_per_s']:8.1f}]"
+        f"   ({r['rollout_vector_steps_per_s'] / c['rollout_vector_steps_per_s']:.2f} cores busy)"
     )
     print(
         f"  {r['num_envs']} envs, sync         {r['sync_vector_steps_per_s']:10.1f}"

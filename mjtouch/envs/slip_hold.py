@@ -38,6 +38,7 @@ started, and is truncated by the time limit (100 control steps = 1 s).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import gymnasium as gym
@@ -79,17 +80,31 @@ def slip_zone(pressure_pa: np.ndarray, shear_pa: np.ndarray, mu: float) -> tuple
     without contact or slip). Cattaneo's annulus between c and a:
     share 1 - (c/a)^2, radius 2 (1 - (c/a)^3) / (3 (1 - (c/a)^2)), 2/3 to 1.
     pressure_pa (nx, nx); shear_pa (2, nx, nx)."""
-    loaded = pressure_pa > 0
-    if not loaded.any():
+    nx = pressure_pa.shape[-1]
+    pressure = pressure_pa.reshape(-1)
+    loaded = np.flatnonzero(pressure > 0)  # row-major, as np.nonzero
+    n = loaded.size
+    if n == 0:
         return 0.0, 0.0
-    limit = (1 - SLIP_ZONE_TOLERANCE) * mu * pressure_pa
-    at_limit = loaded & (np.hypot(shear_pa[0], shear_pa[1]) >= limit)
-    if not at_limit.any():
+    shear = shear_pa.reshape(2, -1)
+    limit = (1 - SLIP_ZONE_TOLERANCE) * mu * pressure[loaded]
+    at_limit = loaded[np.hypot(shear[0, loaded], shear[1, loaded]) >= limit]
+    if at_limit.size == 0:
         return 0.0, 0.0
-    j, i = np.nonzero(loaded)
-    sj, si = np.nonzero(at_limit)
-    radius = np.hypot(sj - j.mean(), si - i.mean()).mean()
-    return float(at_limit.sum() / loaded.sum()), float(radius / math.sqrt(loaded.sum() / math.pi))
+    rows, cols = _cell_indices(nx)
+    # means of whole numbers: the sums are exact, so these are np.mean's bits
+    j_mean, i_mean = rows[loaded].sum() / n, cols[loaded].sum() / n
+    radius = np.hypot(rows[at_limit] - j_mean, cols[at_limit] - i_mean).mean()
+    return float(at_limit.size / n), float(radius / math.sqrt(n / math.pi))
+
+
+@functools.cache
+def _cell_indices(nx: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column index (as float) of each cell of an nx x nx image, row-major."""
+    index = np.arange(nx, dtype=np.float64)
+    rows, cols = np.repeat(index, nx), np.tile(index, nx)
+    rows.flags.writeable = cols.flags.writeable = False  # shared by every call
+    return rows, cols
 
 
 def _euler_deg(element, *angles_deg: float) -> None:
@@ -270,6 +285,26 @@ class SlipHoldEnv(TouchEnv):
         self.friction = self.friction_range[1]
         self._load = (0.0, 0.0, 0.0, 1.0)  # N, N, s, s: base, rise, rise start, rise time
         self._grip = self.settle_force_n
+        # the per-step layout: state entries of the grip joint (qpos, qvel),
+        # the inputs' columns, each physics step's time offset, the
+        # sensordata columns the slip features read
+        self._grip_adr = (
+            1 + int(m.joint("grip").qposadr[0]),
+            1 + m.nq + int(m.joint("grip").dofadr[0]),
+        )
+        self._inputs_buffer = np.zeros((frame_skip, self.nuser))
+        self._load_column = m.nu + 6 * self._object_body + 2
+        self._step_offsets_s = (m.opt.timestep * np.arange(frame_skip)).tolist()
+        if touch != "none":
+            lay = self.layout
+            adr, b = lay.sensor_adr, lay.blocks
+            self._slip_columns = (
+                adr + b["force"].start,
+                adr + b["slip"].start,
+                adr + b["slip"].start + 1,
+                slice(adr + b["pressure"].start, adr + b["pressure"].stop),
+                slice(adr + b["shear"].start, adr + b["shear"].stop),
+            )
 
     def _slip_blocks(self) -> list[ObsBlock]:
         if self.touch == "none":
@@ -289,18 +324,17 @@ class SlipHoldEnv(TouchEnv):
             )
         ]
 
-    def _slip_features(self, sensordata: np.ndarray | None) -> list[np.ndarray]:
-        if self.touch == "none":
-            return []
+    def _slip_features(self, sensordata: np.ndarray | None) -> np.ndarray:
         if sensordata is None:  # before the first step: nothing loaded, nothing slips
-            return [np.array([1.0, 1.0, 0.0, 0.0])]
-        lay = self.layout
-        loaded_steps = lay.block(sensordata, "force")[:, 0] > 0
-        share = np.where(loaded_steps, lay.block(sensordata, "slip")[:, 0], 1.0)
+            return np.array([1.0, 1.0, 0.0, 0.0])
+        normal_col, stuck_col, mu_col, pressure, shear = self._slip_columns
+        share = np.where(sensordata[:, normal_col] > 0, sensordata[:, stuck_col], 1.0)
         last = sensordata[-1]
-        mu = lay.block(last, "slip")[1]
-        zone = slip_zone(lay.image(last, "pressure"), lay.image(last, "shear"), mu)
-        return [np.array([share[-1], share.min(), *zone])]
+        nx = self.layout.nx
+        zone = slip_zone(
+            last[pressure].reshape(nx, nx), last[shear].reshape(2, nx, nx), last[mu_col]
+        )
+        return np.array([share[-1], share.min(), *zone])
 
     def _settle(self, duration_s: float = 0.2) -> np.ndarray:
         """Physics state with the block gripped at settle_force_n, at rest."""
@@ -351,20 +385,30 @@ class SlipHoldEnv(TouchEnv):
         }
 
     def _inputs(self, a: np.ndarray) -> np.ndarray:
+        """The control step's inputs, in a buffer reused every step: ctrl
+        (the grip force), then xfrc_applied (only the load on the block)."""
         lo, hi = self.force_range_n
         self._grip = lo + 0.5 * (float(a[0]) + 1.0) * (hi - lo)
-        m = self.model
-        t = self._state[0] + m.opt.timestep * np.arange(self.frame_skip)
-        xfrc = np.zeros((self.frame_skip, m.nbody, 6))
-        xfrc[:, self._object_body, 2] = -self.load_n(t)
-        ctrl = np.full((self.frame_skip, m.nu), self._grip)
-        return np.concatenate([ctrl, xfrc.reshape(self.frame_skip, -1)], axis=1)
+        t0_s = float(self._state[0])
+        inputs = self._inputs_buffer
+        inputs[:, : self.model.nu] = self._grip
+        # load_n's per-step path for each physics step: a few floats, cheaper than numpy
+        inputs[:, self._load_column] = [-self.load_n(t0_s + dt) for dt in self._step_offsets_s]
+        return inputs
 
     def _observe(self, final_state, sensordata) -> np.ndarray:
         s = self._state
-        grip = [self._qpos(s, "grip") - self._x0, self._qvel(s, "grip"), self._grip]
-        features = [grip, *self._touch_features(sensordata), *self._slip_features(sensordata)]
-        return self._bounded(np.concatenate(features))
+        obs = np.empty(self.observation_space.shape[0])
+        obs[0] = s[self._grip_adr[0]] - self._x0
+        obs[1] = s[self._grip_adr[1]]
+        obs[2] = self._grip
+        if self.touch != "none":
+            k = 3
+            for block in self._touch_features(sensordata):
+                obs[k : k + block.size] = block
+                k += block.size
+            obs[k:] = self._slip_features(sensordata)
+        return self._bounded(obs)
 
     def _outcome(self, final_state, sensordata, a):
         z_end = self._qpos(self._state, "object_z")

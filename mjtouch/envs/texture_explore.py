@@ -228,6 +228,12 @@ class TextureExploreEnv(TouchEnv):
         self._command = np.array([self.settle_force_n, 0.0])
         self._last_obs = None
         self._mocap_pos = np.zeros((m.nmocap, 3))
+        self._inputs_buffer = np.zeros((frame_skip, self.nuser))
+        # the slide joint's entries in the full-physics state (qpos, qvel)
+        self._slide_adr = (
+            1 + int(m.joint("slide_x").qposadr[0]),
+            1 + m.nq + int(m.joint("slide_x").dofadr[0]),
+        )
 
     def _qpos_model(self, joint: str) -> float:
         return float(self.model.qpos0[self.model.jnt_qposadr[self.model.joint(joint).id]])
@@ -258,6 +264,7 @@ class TextureExploreEnv(TouchEnv):
             phase = float(self.np_random.uniform(0.0, self.classes[k]))
             self._mocap_pos[self._mocap[k]] = [phase, 0.0, 0.0]
         self._state = self._initial_state(self._settled)
+        self._inputs_buffer[:, 2:] = self._mocap_pos.ravel()
         self._command = np.array([self.settle_force_n, 0.0])
         self._last_obs = None
 
@@ -271,15 +278,24 @@ class TextureExploreEnv(TouchEnv):
         force = lo + 0.5 * (a[0] + 1.0) * (hi - lo)
         speed = a[1] * self.max_speed_m_s
         self._command = np.array([force, speed])
-        row = np.concatenate([[speed, -force], self._mocap_pos.ravel()])
-        return np.tile(row, (self.frame_skip, 1))
+        # a buffer reused every step: ctrl (speed, -force), then the
+        # episode's mocap positions (written at reset)
+        inputs = self._inputs_buffer
+        inputs[:, 0] = speed
+        inputs[:, 1] = -force
+        return inputs
 
     def _observe(self, final_state, sensordata) -> np.ndarray:
         s = self._state
-        finger = [self._qpos(s, "slide_x") - self._x0, self._qvel(s, "slide_x")]
-        return self._bounded(
-            np.concatenate([finger, self._command, *self._touch_features(sensordata)])
-        )
+        obs = np.empty(self.observation_space.shape[0])
+        obs[0] = s[self._slide_adr[0]] - self._x0
+        obs[1] = s[self._slide_adr[1]]
+        obs[2:4] = self._command
+        k = 4
+        for block in self._touch_features(sensordata):
+            obs[k : k + block.size] = block
+            k += block.size
+        return self._bounded(obs)
 
     def _outcome(self, final_state, sensordata, a):
         info = {"texture": self.label, "period_m": self.classes[self.label]}

@@ -1,12 +1,13 @@
-"""Batched stepping over ``mujoco.rollout`` threads.
+"""Batched stepping over threads.
 
-:class:`RolloutVectorEnv` holds N environments of one class and advances all
-that need physics in a single threaded ``mujoco.rollout`` call per control
-step; task logic (actions to inputs, observations, rewards) runs per
-environment in Python. Each environment's results are bit-identical to
-stepping it alone (both paths start every control step from the same state
-with a zero solver warm start). It is the registered ``vector_entry_point``,
-so ``gymnasium.make_vec("mjtouch/TextureExplore-v0", num_envs=8)`` returns it;
+:class:`RolloutVectorEnv` holds N environments of one class and steps them
+on ``nthread`` worker threads: each environment advances its control step
+with its own ``mujoco.rollout`` call (the physics, which releases the GIL)
+and runs its task logic (actions to inputs, observations, rewards) in
+Python, so one environment's Python overlaps the others' physics. Each
+environment's results are bit-identical to stepping it alone (it is the same
+code on the same data). It is the registered ``vector_entry_point``, so
+``gymnasium.make_vec("mjtouch/TextureExplore-v0", num_envs=8)`` returns it;
 ``vectorization_mode="sync"`` or ``"async"`` give Gymnasium's own.
 
 Autoreset follows Gymnasium's default (``AutoresetMode.NEXT_STEP``): the step
@@ -17,10 +18,9 @@ observation with reward 0.
 from __future__ import annotations
 
 import os
+from concurrent.futures import ThreadPoolExecutor, wait
 
 import gymnasium as gym
-import mujoco
-import mujoco.rollout
 import numpy as np
 from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
@@ -28,7 +28,19 @@ from gymnasium.vector.utils import batch_space
 from mjtouch.envs.base import TouchEnv
 
 
+def _usable_cores() -> int:
+    """Cores this process may run on (its affinity where the OS tells)."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return os.cpu_count() or 1
+
+
 class RolloutVectorEnv(gym.vector.VectorEnv):
+    """num_envs environments of env_cls (built with env_kwargs), stepped on
+    nthread threads (default: one per core this process may run on, at most
+    num_envs; 0 or 1: in the calling thread, in turn); max_episode_steps
+    truncates."""
+
     def __init__(
         self,
         env_cls: type[TouchEnv],
@@ -46,7 +58,7 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
             raise ValueError("RolloutVectorEnv does not render; render a single environment")
         env_kwargs.pop("render_mode", None)
         if nthread is None:
-            nthread = min(num_envs, os.cpu_count() or 1)
+            nthread = min(num_envs, _usable_cores())
         if not (isinstance(nthread, int) and nthread >= 0):
             raise ValueError(f"nthread = {nthread!r} must be a non-negative integer")
         self.envs = [env_cls(**env_kwargs) for _ in range(num_envs)]
@@ -60,15 +72,13 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
         self.render_mode = None
         self.max_episode_steps = max_episode_steps
         self.nthread = nthread
-        self._pool = mujoco.rollout.Rollout(nthread=nthread)
-        self._datas = [mujoco.MjData(e0.model) for _ in range(max(1, nthread))]
-        # rollout's inputs and outputs, reused every step (rows [0, batch))
-        nstep = e0.frame_skip
-        self._in_states = np.empty((num_envs, e0._state.size))
-        self._in_controls = np.empty((num_envs, nstep, e0.nuser))
-        self._warmstart = np.zeros((num_envs, e0.model.nv))
-        self._out_states = np.empty((num_envs, nstep, e0._state.size))
-        self._out_sensordata = np.empty((num_envs, nstep, e0.model.nsensordata))
+        # The calling thread steps one share of the environments and
+        # nthread - 1 workers the others (nthread <= 1: all in turn).
+        self._pool = (
+            ThreadPoolExecutor(nthread - 1, thread_name_prefix="mjtouch-env")
+            if nthread > 1
+            else None
+        )
         self._elapsed = np.zeros(num_envs, dtype=np.int64)
         self._autoreset = np.zeros(num_envs, dtype=bool)
 
@@ -100,44 +110,34 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
         terminated = np.zeros(n, dtype=bool)
         truncated = np.zeros(n, dtype=bool)
         infos: dict = {}
-        batch = []  # (env index, inputs, clipped action)
-        results = {}
+        stepping = []
         for i, env in enumerate(self.envs):
             if self._autoreset[i]:
                 o, info = env.reset()
                 obs[i] = o
                 self._elapsed[i] = 0
                 infos = self._add_info(infos, info, i)
-                continue
-            a = env._check_action(actions[i])
-            inputs = env._inputs(a)
-            if inputs is None:
-                results[i] = env._finish(None, None, a)
             else:
-                batch.append((i, inputs, a))
-        if batch:
-            nb = len(batch)
-            for k, (i, u, _) in enumerate(batch):
-                self._in_states[k] = self.envs[i]._state
-                self._in_controls[k] = self.envs[i].check_inputs(u)
-            states, sensordata = self._out_states[:nb], self._out_sensordata[:nb]
-            # shapes and types are fixed here, so rollout's own checks are skipped
-            self._pool.rollout(
-                [self.envs[i].model for i, _, _ in batch],
-                self._datas,
-                self._in_states[:nb],
-                self._in_controls[:nb],
-                control_spec=self.envs[0].user_spec,
-                skip_checks=True,
-                nstep=self.envs[0].frame_skip,
-                initial_warmstart=self._warmstart[:nb],
-                state=states,
-                sensordata=sensordata,
-                chunk_size=max(1, nb // (max(1, self.nthread) * 10)),
-            )
-            for k, (i, _, a) in enumerate(batch):
-                results[i] = self.envs[i]._finish(states[k, -1], sensordata[k], a)
-        for i, (o, r, term, trunc, info) in results.items():
+                stepping.append(i)
+
+        for i in stepping:  # every action valid before any environment steps
+            self.envs[i]._check_action(actions[i])
+
+        def step_share(share):
+            return [(i, self.envs[i].step(actions[i])) for i in share]
+
+        if self._pool is None or len(stepping) < 2:
+            results = step_share(stepping)
+        else:
+            shares = [stepping[k :: self.nthread] for k in range(self.nthread)]
+            futures = [self._pool.submit(step_share, s) for s in shares[1:] if s]
+            try:
+                results = step_share(shares[0])
+            finally:  # no worker still stepping when this returns or raises
+                wait(futures)
+            for f in futures:
+                results += f.result()
+        for i, (o, r, term, trunc, info) in sorted(results, key=lambda x: x[0]):
             self._elapsed[i] += 1
             if self.max_episode_steps is not None and self._elapsed[i] >= self.max_episode_steps:
                 trunc = True
@@ -150,7 +150,7 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
         for env in self.envs:
             env.close()
         if self._pool is not None:
-            self._pool.close()
+            self._pool.shutdown()
             self._pool = None
 
 

@@ -227,13 +227,39 @@ def test_rollout_vector_env_equals_single_envs_bit_for_bit(env_id):
         seeds,
         actions,
     )
+    # in the calling thread, and on more worker threads than environments
+    vec_of = {TEX: mjtouch.envs.vector.texture_explore_vec, SLIP: mjtouch.envs.vector.slip_hold_vec}
+    inline, wide = (
+        run_vector(vec_of[env_id](n, nthread=k, max_episode_steps=limit), seeds, actions)
+        for k in (0, n + 1)
+    )
     assert isinstance(gym.make_vec(env_id, num_envs=1), mjtouch.envs.RolloutVectorEnv)
     # the sequence exercises both episode ends and the autoreset after them
     assert ref["truncated"].any()
     assert ref["terminated"].any()
-    for name, got in (("RolloutVectorEnv", fast), ("SyncVectorEnv", sync)):
+    runs = {"RolloutVectorEnv": fast, "nthread=0": inline, f"nthread={n + 1}": wide}
+    for name, got in (*runs.items(), ("SyncVectorEnv", sync)):
         for key in ref:
             assert np.array_equal(got[key], ref[key]), (name, key)
+
+
+def test_rollout_vector_env_rejects_a_bad_action_before_stepping_any_env():
+    def fresh():
+        venv = mjtouch.envs.vector.slip_hold_vec(2, nthread=2)
+        venv.reset(seed=0)
+        return venv
+
+    venv, ref = fresh(), fresh()
+    actions = np.zeros((2, 1), np.float32)
+    for row in (0, 1):  # the calling thread's share, then the worker's
+        bad = actions.copy()
+        bad[row, 0] = np.nan
+        with pytest.raises(ValueError, match="not finite"):
+            venv.step(bad)
+    # nothing stepped: the next step is the first
+    assert np.array_equal(venv.step(actions)[0], ref.step(actions)[0])
+    venv.close()
+    ref.close()
 
 
 # ----- task logic (the docstrings) ---------------------------------------
