@@ -595,10 +595,16 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     mj_contactForce(m, d, i, f_local);
     mju_mulMatTVec3(f_world, c.frame, f_local);
     const mjtNum sign = (c.geom[1] == pad) ? 1 : -1;
+    in.contact_normal_n += f_local[0];
+    // One rule for what the skin feels and what `coverage` reports: only a
+    // contact on the patch (OnPatch) loads it, and only its geom is
+    // rendered. A contact off it (the fingertip's side or back, past the
+    // grid) is not felt, so that its force is not forced onto the few
+    // patch cells its geom may graze (a huge indentation at the edge).
+    if (!OnPatch(c, pmat, ppos, -sign)) continue;
+    in.patch_normal_n += f_local[0];
     mju_addToScl3(total, f_world, sign);
     in.in_contact = true;
-    in.contact_normal_n += f_local[0];
-    if (OnPatch(c, pmat, ppos, -sign)) in.patch_normal_n += f_local[0];
     const double normal_n = std::max<double>(f_local[0], 0.0);
     mu_weighted += normal_n * c.friction[0];
     weight += normal_n;
@@ -642,22 +648,39 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
 
 bool SkinPlugin::OnPatch(const mjContact& c, const mjtNum* pmat, const mjtNum* ppos,
                          mjtNum normal_sign) const {
-  // The normal from the pad into the other geom must point out of the skin:
-  // within ~75 degrees of its outward -z (a contact on the pad's rim, seen
-  // edge-on along z, is not one the grid can render), and the point lie
-  // over a taxel the skin covers.
+  // The normal from the pad into the other geom must point out of the skin
+  // within 45 degrees of its outward -z, and the point lie over a taxel the
+  // skin covers. Beyond 45 degrees the contact pushes the fingertip more
+  // sideways than into the skin (a neighbouring finger on its side): the
+  // skin, a half-space pressed along its z, would take it on the few steep
+  // cells at the grid's edge, as an indentation of centimetres. The render
+  // keeps to the same patch: only these contacts' geoms are rendered, and a
+  // body indents a cell only where it crosses the skin's surface along the
+  // cell's column (surface/render.cc).
+  constexpr mjtNum kCos45 = 0.70710678118654752;
   const mjtNum n_z =
       normal_sign * (c.frame[0] * pmat[2] + c.frame[1] * pmat[5] + c.frame[2] * pmat[8]);
-  if (!(n_z < -0.25)) return false;
+  if (!(n_z < -kCos45)) return false;
   mjtNum rel[3], loc[3];
   mju_sub3(rel, c.pos, ppos);
   mju_mulMatTVec3(loc, pmat, rel);
   const TaxelGrid& grid = model_->config().grid;
-  const double half = 0.5 * grid.n * grid.pitch_m;
-  if (!(std::abs(loc[0]) < half && std::abs(loc[1]) < half)) return false;
-  const int i = std::min(grid.n - 1, static_cast<int>((loc[0] + half) / grid.pitch_m));
-  const int j = std::min(grid.n - 1, static_cast<int>((loc[1] + half) / grid.pitch_m));
-  return std::isfinite(model_->skin_z()[static_cast<size_t>(j) * grid.n + i]);
+  // Any covered cell within half a pitch of the point: MuJoCo puts a flat
+  // face's contacts on its corners, on the covered cells' outline.
+  const double h = grid.pitch_m, half = 0.5 * grid.n * h;
+  auto cells = [&](double x, int* c0, int* c1) {
+    if (!(std::abs(x) < half + 0.5 * h)) return false;
+    *c0 = std::max(0, static_cast<int>(std::floor((x + half) / h - 0.5)));
+    *c1 = std::min(grid.n - 1, static_cast<int>(std::floor((x + half) / h + 0.5)));
+    return *c0 <= *c1;
+  };
+  int i0, i1, j0, j1;
+  if (!cells(loc[0], &i0, &i1) || !cells(loc[1], &j0, &j1)) return false;
+  const std::vector<double>& z = model_->skin_z();
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i)
+      if (std::isfinite(z[static_cast<size_t>(j) * grid.n + i])) return true;
+  return false;
 }
 
 void SkinPlugin::WarnOffPatch(const mjModel* m) {

@@ -207,8 +207,13 @@ bool RenderGeneralSurface(const RenderRequest& req, size_t k, const SurfaceFrame
                   const double y = v + (area_average ? (b ? g : -g) : 0.0);
                   const double o[3] = {F.t[0] + R[0] * x + R[1] * y, F.t[1] + R[3] * x + R[4] * y,
                                        F.t[2] + R[6] * x + R[7] * y};
+                  // The body indents the skin here only if it reaches the
+                  // skin's surface along the column (lo <= z): one lying
+                  // wholly above it is inside the pad beside the patch (on
+                  // the fingertip's side or back), where the skin is not,
+                  // and MuJoCo's contact with it is off the patch.
                   double lo, hi;
-                  if (LineInterval(s, o, d_loc, &lo, &hi)) {
+                  if (LineInterval(s, o, d_loc, &lo, &hi) && lo <= z) {
                     top_sum += hi;
                     ++hits;
                   }
