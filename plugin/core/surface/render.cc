@@ -386,4 +386,53 @@ double RenderGap(const RenderRequest& req, const RenderOutput& out) {
   return cull;
 }
 
+PatchFootprint MakePatchFootprint(const TaxelGrid& patch, const std::vector<double>& patch_z,
+                                  const PadGeometry& pad, int cells) {
+  const double* ax = pad.semi_axes_m;
+  double bound;  // a sphere about the geom's centre (the skin's origin) holding the shape
+  switch (pad.shape) {
+    case PadShape::kCapsule: bound = ax[2]; break;
+    case PadShape::kBox: bound = std::sqrt(ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2]); break;
+    case PadShape::kMesh: bound = pad.mesh ? pad.mesh->bound_radius_m : 0.0; break;
+    default: bound = std::max({ax[0], ax[1], ax[2]});
+  }
+  PatchFootprint fp;
+  fp.grid.n = cells;
+  fp.grid.pitch_m = 2.0 * std::max(bound, patch.HalfExtent()) / cells;
+  Ridges smooth;
+  smooth.enabled = false;
+  fp.skin_z = SkinSurface(fp.grid, pad, smooth);
+  fp.on_patch.assign(fp.grid.Size(), 0);
+  const double half = patch.HalfExtent();
+  for (int j = 0; j < cells; ++j)
+    for (int i = 0; i < cells; ++i) {
+      const double u = fp.grid.Centre(i) - patch.offset_m, v = fp.grid.Centre(j) - patch.offset_m;
+      if (!(std::abs(u) < half && std::abs(v) < half)) continue;
+      const int pi = std::min(patch.n - 1, static_cast<int>((u + half) / patch.pitch_m));
+      const int pj = std::min(patch.n - 1, static_cast<int>((v + half) / patch.pitch_m));
+      fp.on_patch[static_cast<size_t>(j) * cells + i] =
+          std::isfinite(patch_z[static_cast<size_t>(pj) * patch.n + pi]);
+    }
+  return fp;
+}
+
+double PatchShare(PatchFootprint* fp, const Pose& pad_pose, const CounterSurface& s) {
+  fp->one.assign(1, s);
+  RenderRequest request{fp->grid, fp->skin_z, pad_pose, fp->one};
+  RenderOutput out{&fp->gap, &fp->coverage};
+  out.scratch = &fp->scratch;
+  RenderGap(request, out);
+  double on = 0.0, off = 0.0;
+  bool seen = false;
+  for (size_t k = 0; k < fp->gap.size(); ++k) {
+    seen = seen || fp->coverage[k] > 0.0;
+    const double w = fp->coverage[k] * std::max(-fp->gap[k], 0.0);
+    if (!(w > 0.0)) continue;
+    (fp->on_patch[k] ? on : off) += w;
+  }
+  if (!seen) return 0.0;  // no column of the pad meets the body
+  if (!(on + off > 0.0)) return -1.0;
+  return off == 0.0 ? 1.0 : on / (on + off);
+}
+
 }  // namespace mjtouch
