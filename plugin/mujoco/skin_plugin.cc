@@ -746,7 +746,7 @@ void SkinPlugin::WarnOffPatch(const mjModel* m) {
   const char* geom = mj_id2name(m, mjOBJ_GEOM, pad_geom_);
   mju_warning(
       "mjtouch.skin '%s': %.3g of MuJoCo's %.3g N normal force on pad geom '%s' lands "
-      "off the skin's patch (outside the nx x pitch grid or on the geom's far side) "
+      "off the skin's patch (past the nx x pitch grid, or on the geom's side or back) "
       "and is not felt; enable the `coverage` output to follow it, widen the grid or "
       "turn the skin with `facing` (warned once)",
       sensor ? sensor : "(unnamed)", in.contact_normal_n - in.patch_normal_n, in.contact_normal_n,

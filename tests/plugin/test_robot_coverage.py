@@ -223,3 +223,92 @@ def test_render_skips_a_body_beside_the_pad_above_its_skin():
             top = np.mean([zc + np.sqrt(v) for v in q])
             assert gap[j, i] < 0.0
             assert gap[j, i] == pytest.approx(z[j, i] - top, rel=1e-12)
+
+
+def test_contact_along_the_capsule_past_the_grid_is_felt_by_its_share():
+    # the sideways capsule (cylinder 10 mm long) lying on the plate: MuJoCo
+    # puts its two contacts at the cylinder's ends, 5 mm off the skin's
+    # centre, outside a 5 x 5 mm grid, but the plate presses the grid's
+    # middle half of the cylinder. The patch carries the share of the
+    # plate's overlap with the pad that lies on it: the 5 mm of the 10 mm
+    # cylinder against the whole, end caps included (each overlaps the
+    # plate by half a spherical cap of height d). The share is rendered on
+    # the pad's footprint grid (32 cells over 20 mm: the grid's edges fall
+    # on its cells' edges); its sampling of the caps' small overlap moves
+    # the share by well under 2%.
+    model, data = pressed(
+        CAPSULE_SIDEWAYS,
+        R,
+        facing=(1, 0, 0),
+        nx=20,
+        pitch=2.5e-4,
+        radius=1e-3,
+        outputs="force coverage",
+    )
+    lay, cov = coverage(model, data)
+    mj = mujoco_normal_n(model, data)
+    assert mj > 0.4 and cov[1] == pytest.approx(mj, rel=1e-12)
+    d = R - data.geom("tip").xpos[2]  # overlap depth with the plate (its top at z = 0)
+    area = R * R * np.arccos((R - d) / R) - (R - d) * np.sqrt(2 * R * d - d * d)  # segment
+    caps = 2 * np.pi * d * d * (3 * R - d) / 6
+    share = 5e-3 * area / (10e-3 * area + caps)
+    assert cov[0] == pytest.approx(share, rel=0.02)
+    force = lay.block(data.sensordata, "force")
+    assert force[0] == pytest.approx(cov[0] * mj, rel=1e-9)  # the plate's normal is the skin's z
+
+
+def test_capsule_on_a_box_edge_renders_the_edge():
+    # the sideways capsule resting along the top edge of a box turned 45
+    # degrees about x: MuJoCo's contact normal is 45 degrees off both faces,
+    # so the skin renders the box as a body (its top along each column),
+    # not one face. Winkler on the exact geometry: the gap along the skin's
+    # z (world up) from the skin, z_c - sqrt(R^2 - y^2) on the cylinder,
+    # down to the edge's ridge, -|y|.
+    spec = mujoco.MjSpec()
+    spec.option.timestep = 1e-3
+    spec.worldbody.add_geom(
+        name="wedge",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[0.03, 0.01, 0.01],
+        euler=[45, 0, 0],
+        pos=[0, 0, -0.01 * np.sqrt(2)],
+    )
+    body = spec.worldbody.add_body(name="finger", pos=[0, 0, R])
+    body.add_joint(name="z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
+    body.add_geom(name="tip", mass=0.05, **CAPSULE_SIDEWAYS)
+    n, h = 64, 2.5e-4
+    mjtouch.attach(
+        spec,
+        "tip",
+        nx=n,
+        pitch=h,
+        pressure="winkler",
+        ridges=False,
+        radius=4e-3,
+        facing=(1, 0, 0),
+        outputs="force pressure coverage",
+    )
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    for _ in range(400):
+        mujoco.mj_step(model, data)
+    lay, cov = coverage(model, data)
+    force = lay.block(data.sensordata, "force")
+    mj = mujoco_normal_n(model, data)
+    assert mj == pytest.approx(0.05 * 9.81, rel=1e-3)
+    assert cov[0] == 1.0 and force[0] == pytest.approx(mj, rel=1e-6)
+    x = (np.arange(n) - (n - 1) / 2) * h
+    X, Y = np.meshgrid(x, x)
+    inside = R * R - Y**2 - np.maximum(np.abs(X) - R, 0) ** 2  # tip HALF = R
+    zc = data.geom("tip").xpos[2]
+    gap = np.where(inside > 0, zc - np.sqrt(np.maximum(inside, 0)) + np.abs(Y), np.inf)
+    lo, hi = gap.min(), gap.min() + 1e-2
+    for _ in range(100):  # bisection on the approach c
+        c = 0.5 * (lo + hi)
+        load = STIFFNESS * np.maximum(c - gap, 0).sum() * h * h
+        lo, hi = (c, hi) if load < force[0] else (lo, c)
+    # cell centres vs the plugin's 2 x 2 cell means: |y| is linear in every
+    # cell (the ridge lies on cell edges), the skin's curvature ~1 um
+    assert force[3] == pytest.approx(c - gap.min(), rel=0.05)
+    p = lay.block(data.sensordata, "pressure").reshape(n, n)
+    np.testing.assert_allclose(p, STIFFNESS * np.maximum(c - gap, 0), atol=0.05 * p.max())
