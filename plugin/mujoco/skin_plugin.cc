@@ -538,8 +538,8 @@ bool SkinPlugin::CheckAtCompile(const mjModel* m, int instance, std::string* err
          ResolveTextures(m, instance, cfg, pad, &textures, error);
 }
 
-// The footprint's cells a side (PatchShare): on a Shadow fingertip (a 7 mm
-// capsule 24 mm long) cells of 1.2 mm.
+// About this many footprint cells a side (PatchShare): on a Shadow
+// fingertip (a 7 mm capsule 24 mm long) under the rl grid, 36 of 1.1 mm.
 constexpr int kFootprintCells = 32;
 
 SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
@@ -601,10 +601,11 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
   double mu_weighted = 0, weight = 0, mu_sum = 0;
   int mu_count = 0;
   // One rule for what the skin feels and what `coverage` reports: a
-  // contact facing the skin (FacesSkin) loads the patch by its share (PatchShare); a share off
-  // it (the fingertip's side or back, past the grid) is not felt, rather
-  // than forced onto the few patch cells its geom reaches at the edge (an
-  // indentation of centimetres). Only geoms with a share are rendered.
+  // contact facing the skin (FacesSkin) loads the patch by its share (1 or
+  // PatchShare, below); the rest (the fingertip's side or back, past the
+  // grid) is not felt, rather than forced onto the few patch cells its geom
+  // reaches at the edge (an indentation of centimetres). Only geoms with a
+  // share are rendered.
   contacts_.clear();
   for (int i = 0; i < d->ncon; ++i) {
     const mjContact& c = d->contact[i];
@@ -629,8 +630,10 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     pc.share = FacesSkin(c, pmat, -pc.sign) ? 1.0 : 0.0;
     contacts_.push_back(pc);
   }
-  // Per geom: the share of its overlap with the pad on the patch, or (no
-  // overlap rendered) each contact's point over a covered taxel.
+  // A contact whose point lies over a covered taxel loads the patch whole
+  // (the patch stands for the fingertip under it); one whose point lies off
+  // it (a block along the fingertip, touching it past the grid) by the share
+  // of its geom's overlap with the pad that lies on the patch.
   for (size_t a = 0; a < contacts_.size(); ++a) {
     const PadContact& first = contacts_[a];
     if (first.share == 0.0) continue;
@@ -648,12 +651,16 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     }
     const CounterSurface surface =
         SurfaceForGeom(m, d, first.other, ppos, c.pos, n_into, field, MeshCaster(m, first.other));
-    const double share = PatchShare(&footprint_, in.pad_pose, surface);
+    double overlap_share = -2.0;  // not rendered yet
     bool any = false;
     for (size_t b = a; b < contacts_.size(); ++b) {
       PadContact& pc = contacts_[b];
       if (pc.other != first.other || pc.share == 0.0) continue;
-      pc.share = share >= 0.0 ? share : PointOnPatch(d->contact[pc.index].pos, pmat, ppos);
+      pc.share = PointOnPatch(d->contact[pc.index].pos, pmat, ppos);
+      if (pc.share == 0.0) {
+        if (overlap_share == -2.0) overlap_share = PatchShare(&footprint_, in.pad_pose, surface);
+        pc.share = std::max(overlap_share, 0.0);
+      }
       any = any || pc.share > 0.0;
     }
     if (any) in.surfaces.push_back(surface);

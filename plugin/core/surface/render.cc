@@ -396,14 +396,20 @@ PatchFootprint MakePatchFootprint(const TaxelGrid& patch, const std::vector<doub
     case PadShape::kMesh: bound = pad.mesh ? pad.mesh->bound_radius_m : 0.0; break;
     default: bound = std::max({ax[0], ax[1], ax[2]});
   }
+  // Cells of about 2 bound / cells whose edges fall on the patch's square
+  // (a footprint cell lies wholly on or off it), and enough of them.
+  const double half = patch.HalfExtent();
+  bound = std::max(bound, half);
+  const int per_half = std::max(1, static_cast<int>(std::ceil(half * cells / (2.0 * bound))));
   PatchFootprint fp;
-  fp.grid.n = cells;
-  fp.grid.pitch_m = 2.0 * std::max(bound, patch.HalfExtent()) / cells;
+  fp.grid.pitch_m = half / per_half;
+  fp.grid.n = 2 * static_cast<int>(std::ceil(bound / fp.grid.pitch_m - 1e-9));
+  fp.grid.offset_m = patch.offset_m;
+  cells = fp.grid.n;
   Ridges smooth;
   smooth.enabled = false;
   fp.skin_z = SkinSurface(fp.grid, pad, smooth);
   fp.on_patch.assign(fp.grid.Size(), 0);
-  const double half = patch.HalfExtent();
   for (int j = 0; j < cells; ++j)
     for (int i = 0; i < cells; ++i) {
       const double u = fp.grid.Centre(i) - patch.offset_m, v = fp.grid.Centre(j) - patch.offset_m;

@@ -241,14 +241,14 @@ struct PatchFootprint {
   RenderScratch scratch;
   std::vector<CounterSurface> one;  // the surface rendered
 };
-// cells: footprint cells a side; patch_z: SkinSurface(patch, pad, ...).
+// cells: about this many footprint cells a side (their edges on the
+// patch's square); patch_z: SkinSurface(patch, pad, ...).
 PatchFootprint MakePatchFootprint(const TaxelGrid& patch, const std::vector<double>& patch_z,
                                   const PadGeometry& pad, int cells);
 // The share in [0, 1] of surface s's overlap with the pad that lies on the
 // patch (exactly 1 when none lies off it); 0 if no column of the footprint
 // meets the body (the render cannot see it); -1 if the body lies under the
-// pad but overlaps no cell (a contact within MuJoCo's margin: the caller
-// falls back on the contact point).
+// pad but overlaps no cell (a contact within MuJoCo's margin).
 double PatchShare(PatchFootprint* fp, const Pose& pad_pose, const CounterSurface& s);
 
 // Radius of a sphere about the surface's origin containing the body
