@@ -90,8 +90,8 @@ class SkinLayout:
         """The share of MuJoCo's normal force on the pad geom that the skin's
         patch carries (the ``coverage`` block's first value; 1 without
         contact), for sensordata of any leading shape; an OffPatchWarning
-        when some of it lands off the patch (outside the grid or on the
-        geom's far side), where the skin feels nothing."""
+        when some of it lands off the patch (past the grid, or on the
+        geom's side or back), where the skin feels nothing."""
         block = self.block(sensordata, "coverage")
         share, normal_n = block[..., 0], block[..., 1]
         off = (share < 1.0 - 1e-6) & (normal_n > 0)

@@ -32,7 +32,8 @@ void CopyPose(const mjtNum* pos, const mjtNum* mat, Pose* p) {
 // boxes, height fields, spheres, capsules, cylinders and ellipsoids are
 // rendered from their exact geometry; meshes through ray queries of their
 // triangles (`caster`, mesh_surface.h); anything else (sdf) by its tangent
-// plane at the contact (pos, normal from the pad into the geom).
+// plane at the contact (pos, normal from the pad into the geom; null for a
+// texture, which has no contact).
 CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mjtNum toward[3],
                               const mjtNum* contact_pos, const mjtNum* normal_into_geom,
                               const HeightFieldCache* cache, const MeshRayCaster* caster) {
@@ -66,8 +67,22 @@ CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mj
       return s;
     }
     case mjGEOM_BOX: {
-      // The face whose outward normal points most towards `toward`.
+      // A contact whose normal is off every face's (on an edge or corner):
+      // the box as a body, whose top each cell's column meets. Else a face
+      // (the aligned-face fast path for plates): the face whose outward
+      // normal points most towards `toward`.
       mjtNum rel[3], loc[3];
+      if (normal_into_geom) {
+        mju_scl3(rel, normal_into_geom, -1);
+        mju_mulMatTVec3(loc, gmat, rel);
+        constexpr mjtNum kCos1Deg = 0.99984769515639124;
+        if (!(std::max({std::abs(loc[0]), std::abs(loc[1]), std::abs(loc[2])}) > kCos1Deg)) {
+          s.type = CounterSurface::Type::kBox;
+          CopyPose(gpos, gmat, &s.pose);
+          for (int k = 0; k < 3; ++k) s.size_m[k] = size[k];
+          return s;
+        }
+      }
       mju_sub3(rel, toward, gpos);
       mju_mulMatTVec3(loc, gmat, rel);
       int axis = 0;
@@ -131,7 +146,8 @@ CounterSurface SurfaceForGeom(const mjModel* m, const mjData* d, int g, const mj
       return s;
     default: {
       // Tangent plane: local z = -normal (outward from the geom, towards pad).
-      mjtNum z[3] = {-normal_into_geom[0], -normal_into_geom[1], -normal_into_geom[2]};
+      mjtNum z[3] = {0, 0, 1};  // a texture has no contact (sdf textures are refused)
+      if (normal_into_geom) mju_scl3(z, normal_into_geom, -1);
       mjtNum quat[4];
       mju_quatZ2Vec(quat, z);
       mjtNum mat[9];
@@ -522,6 +538,10 @@ bool SkinPlugin::CheckAtCompile(const mjModel* m, int instance, std::string* err
          ResolveTextures(m, instance, cfg, pad, &textures, error);
 }
 
+// About this many footprint cells a side (PatchShare): on a Shadow
+// fingertip (a 7 mm capsule 24 mm long) under the rl grid, 36 of 1.1 mm.
+constexpr int kFootprintCells = 32;
+
 SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
   SkinConfig cfg;
   int sensor_id, pad;
@@ -552,6 +572,8 @@ SkinPlugin* SkinPlugin::Create(const mjModel* m, mjData* d, int instance) {
   p->pad_body_ = m->body_weldid[m->geom_bodyid[pad]];
   p->texture_geoms_ = std::move(textures);
   p->visual_ = cfg.visual;
+  p->footprint_ = MakePatchFootprint(p->model_->config().grid, p->model_->skin_z(),
+                                     p->model_->config().pad, kFootprintCells);
   return p;
 }
 
@@ -578,6 +600,13 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
   // their normal forces (the plain mean if none pushes).
   double mu_weighted = 0, weight = 0, mu_sum = 0;
   int mu_count = 0;
+  // One rule for what the skin feels and what `coverage` reports: a
+  // contact facing the skin (FacesSkin) loads the patch by its share (1 or
+  // PatchShare, below); the rest (the fingertip's side or back, past the
+  // grid) is not felt, rather than forced onto the few patch cells its geom
+  // reaches at the edge (an indentation of centimetres). Only geoms with a
+  // share are rendered.
+  contacts_.clear();
   for (int i = 0; i < d->ncon; ++i) {
     const mjContact& c = d->contact[i];
     if (c.exclude || c.efc_address < 0) continue;
@@ -591,15 +620,61 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     if (other < 0) continue;
     // mj_contactForce: contact frame (normal first); the normal points from
     // geom[0] to geom[1], so the force on geom[1] is +frame^T f.
-    mjtNum f_local[6], f_world[3];
-    mj_contactForce(m, d, i, f_local);
-    mju_mulMatTVec3(f_world, c.frame, f_local);
-    const mjtNum sign = (c.geom[1] == pad) ? 1 : -1;
-    mju_addToScl3(total, f_world, sign);
+    PadContact pc;
+    pc.index = i;
+    pc.other = other;
+    mj_contactForce(m, d, i, pc.f_local);
+    mju_mulMatTVec3(pc.f_world, c.frame, pc.f_local);
+    pc.sign = (c.geom[1] == pad) ? 1 : -1;
+    in.contact_normal_n += pc.f_local[0];
+    pc.share = FacesSkin(c, pmat, -pc.sign) ? 1.0 : 0.0;
+    contacts_.push_back(pc);
+  }
+  // A contact whose point lies over a covered taxel loads the patch whole
+  // (the patch stands for the fingertip under it); one whose point lies off
+  // it (a block along the fingertip, touching it past the grid) by the share
+  // of its geom's overlap with the pad that lies on the patch.
+  for (size_t a = 0; a < contacts_.size(); ++a) {
+    const PadContact& first = contacts_[a];
+    if (first.share == 0.0) continue;
+    bool seen = false;
+    for (size_t b = 0; b < a && !seen; ++b) seen = contacts_[b].other == first.other;
+    if (seen) continue;
+    const mjContact& c = d->contact[first.index];
+    const mjtNum n_into[3] = {c.frame[0] * -first.sign, c.frame[1] * -first.sign,
+                              c.frame[2] * -first.sign};  // from the pad into the other geom
+    const HeightFieldCache* field = HeightField(m, first.other);
+    if (field && field->bad) {
+      for (size_t b = a; b < contacts_.size(); ++b)
+        if (contacts_[b].other == first.other) contacts_[b].share = 0.0;
+      continue;
+    }
+    const CounterSurface surface =
+        SurfaceForGeom(m, d, first.other, ppos, c.pos, n_into, field, MeshCaster(m, first.other));
+    double overlap_share = -2.0;  // not rendered yet
+    bool any = false;
+    for (size_t b = a; b < contacts_.size(); ++b) {
+      PadContact& pc = contacts_[b];
+      if (pc.other != first.other || pc.share == 0.0) continue;
+      pc.share = PointOnPatch(d->contact[pc.index].pos, pmat, ppos);
+      if (pc.share == 0.0) {
+        if (overlap_share == -2.0) overlap_share = PatchShare(&footprint_, in.pad_pose, surface);
+        pc.share = std::max(overlap_share, 0.0);
+      }
+      any = any || pc.share > 0.0;
+    }
+    if (any) in.surfaces.push_back(surface);
+  }
+  for (const PadContact& pc : contacts_) {
+    if (!(pc.share > 0.0)) continue;
+    const mjContact& c = d->contact[pc.index];
+    const double share = pc.share;
+    mjtNum f_world[3];
+    mju_scl3(f_world, pc.f_world, share);
+    in.patch_normal_n += share * pc.f_local[0];
+    mju_addToScl3(total, f_world, pc.sign);
     in.in_contact = true;
-    in.contact_normal_n += f_local[0];
-    if (OnPatch(c, pmat, ppos, -sign)) in.patch_normal_n += f_local[0];
-    const double normal_n = std::max<double>(f_local[0], 0.0);
+    const double normal_n = std::max<double>(share * pc.f_local[0], 0.0);
     mu_weighted += normal_n * c.friction[0];
     weight += normal_n;
     mu_sum += c.friction[0];
@@ -608,7 +683,7 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
       mjtNum rel[3], loc[3], f_pad[3];
       mju_sub3(rel, c.pos, ppos);
       mju_mulMatTVec3(loc, pmat, rel);
-      mju_scl3(f_world, f_world, sign);
+      mju_scl3(f_world, f_world, pc.sign);
       mju_mulMatTVec3(f_pad, pmat, f_world);
       ContactPoint cp;
       cp.x_m = loc[0];
@@ -616,21 +691,12 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
       for (int k = 0; k < 3; ++k) cp.force_n[k] = f_pad[k];
       in.contacts.push_back(cp);
     }
-    // Normal from the pad into the other geom.
-    mjtNum n_into[3] = {c.frame[0] * -sign, c.frame[1] * -sign, c.frame[2] * -sign};
-    bool seen = false;
-    for (const auto& s : in.surfaces) seen = seen || s.id == other;
-    const HeightFieldCache* field = seen ? nullptr : HeightField(m, other);
-    if (!seen && !(field && field->bad)) {
-      in.surfaces.push_back(
-          SurfaceForGeom(m, d, other, ppos, c.pos, n_into, field, MeshCaster(m, other)));
-    }
   }
   if (in.in_contact) {
     for (int g : texture_geoms_) {
       const HeightFieldCache* field = HeightField(m, g);
       if (field && field->bad) continue;
-      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, ppos, field, MeshCaster(m, g)));
+      in.surfaces.push_back(SurfaceForGeom(m, d, g, ppos, ppos, nullptr, field, MeshCaster(m, g)));
     }
   }
   in.friction_mu = weight > 0 ? mu_weighted / weight : mu_count > 0 ? mu_sum / mu_count : 0.0;
@@ -640,24 +706,41 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
   in.normal_force_n = total[0] * pmat[2] + total[1] * pmat[5] + total[2] * pmat[8];
 }
 
-bool SkinPlugin::OnPatch(const mjContact& c, const mjtNum* pmat, const mjtNum* ppos,
-                         mjtNum normal_sign) const {
-  // The normal from the pad into the other geom must point out of the skin:
-  // within ~75 degrees of its outward -z (a contact on the pad's rim, seen
-  // edge-on along z, is not one the grid can render), and the point lie
-  // over a taxel the skin covers.
+bool SkinPlugin::FacesSkin(const mjContact& c, const mjtNum* pmat, mjtNum normal_sign) const {
+  // The normal from the pad into the other geom within 45 degrees of the
+  // skin's outward -z. Beyond, the contact pushes the fingertip more
+  // sideways than into the skin (a neighbouring finger on its side): the
+  // skin, pressed along its z, would take it on the few steep cells at the
+  // grid's edge. The render keeps to the same patch: a body indents a cell
+  // only where it crosses the skin's surface along the cell's column
+  // (surface/render.cc).
+  constexpr mjtNum kCos45 = 0.70710678118654752;
   const mjtNum n_z =
       normal_sign * (c.frame[0] * pmat[2] + c.frame[1] * pmat[5] + c.frame[2] * pmat[8]);
-  if (!(n_z < -0.25)) return false;
+  return n_z < -kCos45;
+}
+
+double SkinPlugin::PointOnPatch(const mjtNum* pos, const mjtNum* pmat, const mjtNum* ppos) const {
   mjtNum rel[3], loc[3];
-  mju_sub3(rel, c.pos, ppos);
+  mju_sub3(rel, pos, ppos);
   mju_mulMatTVec3(loc, pmat, rel);
   const TaxelGrid& grid = model_->config().grid;
-  const double half = 0.5 * grid.n * grid.pitch_m;
-  if (!(std::abs(loc[0]) < half && std::abs(loc[1]) < half)) return false;
-  const int i = std::min(grid.n - 1, static_cast<int>((loc[0] + half) / grid.pitch_m));
-  const int j = std::min(grid.n - 1, static_cast<int>((loc[1] + half) / grid.pitch_m));
-  return std::isfinite(model_->skin_z()[static_cast<size_t>(j) * grid.n + i]);
+  // Any covered cell within half a pitch of the point: MuJoCo puts a flat
+  // face's contacts on its corners, on the covered cells' outline.
+  const double h = grid.pitch_m, half = 0.5 * grid.n * h;
+  auto cells = [&](double x, int* c0, int* c1) {
+    if (!(std::abs(x) < half + 0.5 * h)) return false;
+    *c0 = std::max(0, static_cast<int>(std::floor((x + half) / h - 0.5)));
+    *c1 = std::min(grid.n - 1, static_cast<int>(std::floor((x + half) / h + 0.5)));
+    return *c0 <= *c1;
+  };
+  int i0, i1, j0, j1;
+  if (!cells(loc[0], &i0, &i1) || !cells(loc[1], &j0, &j1)) return 0.0;
+  const std::vector<double>& z = model_->skin_z();
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i)
+      if (std::isfinite(z[static_cast<size_t>(j) * grid.n + i])) return 1.0;
+  return 0.0;
 }
 
 void SkinPlugin::WarnOffPatch(const mjModel* m) {
@@ -670,7 +753,7 @@ void SkinPlugin::WarnOffPatch(const mjModel* m) {
   const char* geom = mj_id2name(m, mjOBJ_GEOM, pad_geom_);
   mju_warning(
       "mjtouch.skin '%s': %.3g of MuJoCo's %.3g N normal force on pad geom '%s' lands "
-      "off the skin's patch (outside the nx x pitch grid or on the geom's far side) "
+      "off the skin's patch (past the nx x pitch grid, or on the geom's side or back) "
       "and is not felt; enable the `coverage` output to follow it, widen the grid or "
       "turn the skin with `facing` (warned once)",
       sensor ? sensor : "(unnamed)", in.contact_normal_n - in.patch_normal_n, in.contact_normal_n,

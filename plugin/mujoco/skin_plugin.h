@@ -74,10 +74,11 @@ class SkinPlugin {
  private:
   SkinPlugin() = default;
   void GatherInput(const mjModel* m, const mjData* d);
-  // Whether contact c (normal_sign: +1 if its frame normal points from the
-  // pad into the other geom) lies over the skin's patch on its facing side.
-  bool OnPatch(const mjContact& c, const mjtNum* pmat, const mjtNum* ppos,
-               mjtNum normal_sign) const;
+  // Whether contact c's normal (normal_sign: +1 if its frame normal points
+  // from the pad into the other geom) faces the skin; 1 if point `pos`
+  // (world) lies over a taxel the skin covers, else 0.
+  bool FacesSkin(const mjContact& c, const mjtNum* pmat, mjtNum normal_sign) const;
+  double PointOnPatch(const mjtNum* pos, const mjtNum* pmat, const mjtNum* ppos) const;
   // mju_warning once when MuJoCo's normal force on the pad lands off the patch.
   void WarnOffPatch(const mjModel* m);
   const HeightFieldCache* HeightField(const mjModel* m, int geom);
@@ -90,6 +91,14 @@ class SkinPlugin {
   int pad_body_ = -1;
   std::vector<int> texture_geoms_;
   StepInput input_;
+  // A MuJoCo contact on the pad, and the share of it the patch carries.
+  struct PadContact {
+    int index, other;
+    mjtNum sign, f_local[6], f_world[3];
+    double share;
+  };
+  std::vector<PadContact> contacts_;
+  PatchFootprint footprint_;  // the pad's near side, for PatchShare
   Workspace workspace_;
   bool warned_beyond_skin_ = false, warned_height_field_ = false;
   std::map<int, HeightFieldCache> hfields_;               // by hfield id, built on first use

@@ -91,6 +91,8 @@ def test_touch_block_is_each_skins_step_summary(env):
             np.testing.assert_allclose(touch[f], [*counts, force, share], rtol=1e-12)
             if mj == 0:  # no contact on this fingertip over the step: silent
                 assert touch[f, :4].tolist() == [0, 0, 0, 0]
+            elif share == 0:  # MuJoCo's contacts all off the patch: not felt
+                assert touch[f, 3] == 0.0
             elif force > 0.5:  # pressed: its receptors fire
                 assert touch[f, :3].sum() > 0
                 touched += 1

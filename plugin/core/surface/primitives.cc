@@ -107,6 +107,9 @@ double BoundRadius(const CounterSurface& s) {
     case T::kEllipsoid: return std::max({s.size_m[0], s.size_m[1], s.size_m[2]});
     case T::kCapsule: return s.size_m[0] + s.size_m[1];
     case T::kCylinder: return std::hypot(s.size_m[0], s.size_m[1]);
+    case T::kBox:
+      return std::sqrt(s.size_m[0] * s.size_m[0] + s.size_m[1] * s.size_m[1] +
+                       s.size_m[2] * s.size_m[2]);
     default: return s.bound_radius_m;
   }
 }

@@ -18,7 +18,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 inline bool IsLineType(CounterSurface::Type t) {
   using T = CounterSurface::Type;
   return t == T::kSphere || t == T::kEllipsoid || t == T::kCapsule || t == T::kCylinder ||
-         t == T::kRay;
+         t == T::kRay || t == T::kBox;
 }
 
 // Interval of s where a s^2 + b s + c <= 0 (a > 0).
@@ -77,6 +77,24 @@ inline bool LineInterval(const CounterSurface& s, const double o[3], const doubl
       return SphereInterval(os, ds, 1.0, lo, hi);
     }
     case T::kCylinder: return CylinderInterval(o, d, s.size_m[0], s.size_m[1], lo, hi);
+    case T::kBox: {  // the slabs' intersection
+      double l = -kInf, u = kInf;
+      for (int k = 0; k < 3; ++k) {
+        const double e = s.size_m[k];
+        if (std::abs(d[k]) < 1e-15) {
+          if (std::abs(o[k]) > e) return false;
+          continue;
+        }
+        double t0 = (-e - o[k]) / d[k], t1 = (e - o[k]) / d[k];
+        if (t0 > t1) std::swap(t0, t1);
+        l = std::max(l, t0);
+        u = std::min(u, t1);
+      }
+      if (!(l <= u)) return false;
+      *lo = l;
+      *hi = u;
+      return true;
+    }
     case T::kCapsule: {
       // Convex: the union of the pieces' intervals is one interval.
       double l = kInf, u = -kInf, a, b;

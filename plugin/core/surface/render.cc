@@ -207,8 +207,13 @@ bool RenderGeneralSurface(const RenderRequest& req, size_t k, const SurfaceFrame
                   const double y = v + (area_average ? (b ? g : -g) : 0.0);
                   const double o[3] = {F.t[0] + R[0] * x + R[1] * y, F.t[1] + R[3] * x + R[4] * y,
                                        F.t[2] + R[6] * x + R[7] * y};
+                  // The body indents the skin here only if it reaches the
+                  // skin's surface along the column (lo <= z): one lying
+                  // wholly above it is inside the pad beside the patch (on
+                  // the fingertip's side or back), where the skin is not,
+                  // and MuJoCo's contact with it is off the patch.
                   double lo, hi;
-                  if (LineInterval(s, o, d_loc, &lo, &hi)) {
+                  if (LineInterval(s, o, d_loc, &lo, &hi) && lo <= z) {
                     top_sum += hi;
                     ++hits;
                   }
@@ -379,6 +384,61 @@ double RenderGap(const RenderRequest& req, const RenderOutput& out) {
   if (out.rendered) *out.rendered = box;
   if (out.written) *out.written = box;
   return cull;
+}
+
+PatchFootprint MakePatchFootprint(const TaxelGrid& patch, const std::vector<double>& patch_z,
+                                  const PadGeometry& pad, int cells) {
+  const double* ax = pad.semi_axes_m;
+  double bound;  // a sphere about the geom's centre (the skin's origin) holding the shape
+  switch (pad.shape) {
+    case PadShape::kCapsule: bound = ax[2]; break;
+    case PadShape::kBox: bound = std::sqrt(ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2]); break;
+    case PadShape::kMesh: bound = pad.mesh ? pad.mesh->bound_radius_m : 0.0; break;
+    default: bound = std::max({ax[0], ax[1], ax[2]});
+  }
+  // Cells of about 2 bound / cells whose edges fall on the patch's square
+  // (a footprint cell lies wholly on or off it), and enough of them.
+  const double half = patch.HalfExtent();
+  bound = std::max(bound, half);
+  const int per_half = std::max(1, static_cast<int>(std::ceil(half * cells / (2.0 * bound))));
+  PatchFootprint fp;
+  fp.grid.pitch_m = half / per_half;
+  fp.grid.n = 2 * static_cast<int>(std::ceil(bound / fp.grid.pitch_m - 1e-9));
+  fp.grid.offset_m = patch.offset_m;
+  cells = fp.grid.n;
+  Ridges smooth;
+  smooth.enabled = false;
+  fp.skin_z = SkinSurface(fp.grid, pad, smooth);
+  fp.on_patch.assign(fp.grid.Size(), 0);
+  for (int j = 0; j < cells; ++j)
+    for (int i = 0; i < cells; ++i) {
+      const double u = fp.grid.Centre(i) - patch.offset_m, v = fp.grid.Centre(j) - patch.offset_m;
+      if (!(std::abs(u) < half && std::abs(v) < half)) continue;
+      const int pi = std::min(patch.n - 1, static_cast<int>((u + half) / patch.pitch_m));
+      const int pj = std::min(patch.n - 1, static_cast<int>((v + half) / patch.pitch_m));
+      fp.on_patch[static_cast<size_t>(j) * cells + i] =
+          std::isfinite(patch_z[static_cast<size_t>(pj) * patch.n + pi]);
+    }
+  return fp;
+}
+
+double PatchShare(PatchFootprint* fp, const Pose& pad_pose, const CounterSurface& s) {
+  fp->one.assign(1, s);
+  RenderRequest request{fp->grid, fp->skin_z, pad_pose, fp->one};
+  RenderOutput out{&fp->gap, &fp->coverage};
+  out.scratch = &fp->scratch;
+  RenderGap(request, out);
+  double on = 0.0, off = 0.0;
+  bool seen = false;
+  for (size_t k = 0; k < fp->gap.size(); ++k) {
+    seen = seen || fp->coverage[k] > 0.0;
+    const double w = fp->coverage[k] * std::max(-fp->gap[k], 0.0);
+    if (!(w > 0.0)) continue;
+    (fp->on_patch[k] ? on : off) += w;
+  }
+  if (!seen) return 0.0;  // no column of the pad meets the body
+  if (!(on + off > 0.0)) return -1.0;
+  return off == 0.0 ? 1.0 : on / (on + off);
 }
 
 }  // namespace mjtouch

@@ -99,8 +99,8 @@ struct Pose {
 //  - kPlane, kRectangle, kHeightField: local +z is the outward normal of the
 //    face the skin touches; the gap is measured along it, and a cell's
 //    coverage of a rectangle or height field is its exact overlap fraction.
-//  - kSphere, kEllipsoid, kCapsule, kCylinder (MuJoCo's geom frames and
-//    sizes) and kRay (any geom, through a ray query, e.g. MuJoCo meshes):
+//  - kSphere, kEllipsoid, kCapsule, kCylinder, kBox (MuJoCo's geom frames
+//    and sizes) and kRay (any geom, through a ray query, e.g. MuJoCo meshes):
 //    the gap is measured along the pad's z axis, from the skin down to the
 //    body's top where the cell's line (pad frame x, y fixed) meets it;
 //    analytic bodies are averaged over the cell at 2x2 Gauss points
@@ -114,7 +114,8 @@ struct CounterSurface {
     kEllipsoid,
     kCapsule,
     kCylinder,
-    kRay
+    kRay,
+    kBox  // MuJoCo's box (size_m: half sizes) as a body, for contact on its edges or corners
   };
   Type type = Type::kPlane;
   Pose pose;
@@ -223,6 +224,32 @@ struct SkinBlocks {
   std::vector<double> zmin, zmax;  // nb x nb, row-major
 };
 SkinBlocks MakeSkinBlocks(const TaxelGrid& grid, const std::vector<double>& skin_z);
+
+// Which share of a counter-body's contact the skin's patch carries. MuJoCo
+// gives each contact a point and a force, not its extent: a body pressing
+// across the patch's edge (a block along a fingertip, a neighbour near the
+// grid's rim) would put all its force on the few cells it reaches. The
+// footprint is the pad's whole near side (the shape seen along the skin's
+// z, no ridges) on a coarse grid in the skin's frame; a body's overlap with
+// it (depth x coverage per cell, the render's own rule) is split into the
+// cells over the patch (covered taxels) and the rest.
+struct PatchFootprint {
+  TaxelGrid grid;
+  std::vector<double> skin_z;
+  std::vector<char> on_patch;         // per footprint cell: its centre over a covered taxel
+  std::vector<double> gap, coverage;  // scratch, one render
+  RenderScratch scratch;
+  std::vector<CounterSurface> one;  // the surface rendered
+};
+// cells: about this many footprint cells a side (their edges on the
+// patch's square); patch_z: SkinSurface(patch, pad, ...).
+PatchFootprint MakePatchFootprint(const TaxelGrid& patch, const std::vector<double>& patch_z,
+                                  const PadGeometry& pad, int cells);
+// The share in [0, 1] of surface s's overlap with the pad that lies on the
+// patch (exactly 1 when none lies off it); 0 if no column of the footprint
+// meets the body (the render cannot see it); -1 if the body lies under the
+// pad but overlaps no cell (a contact within MuJoCo's margin).
+double PatchShare(PatchFootprint* fp, const Pose& pad_pose, const CounterSurface& s);
 
 // Radius of a sphere about the surface's origin containing the body
 // (analytic bodies from size_m; kRay: bound_radius_m).
