@@ -158,6 +158,7 @@ def test_time_prints_bare_and_skinned_cost_per_step(tmp_path, capsys):
     rl_min, rl_med = float(rows["rl"][2]), float(rows["rl"][3])
     assert 0 < bare_min <= bare_med and 0 < rl_min <= rl_med
     assert rows["bare"][-2:] == ["1.00", "1.00"]
-    assert float(rows["rl"][-2]) == pytest.approx(rl_min / bare_min, abs=0.006)
+    # the printed times are rounded to 0.1 us: their ratio to ~1% of ~5 us
+    assert float(rows["rl"][-2]) == pytest.approx(rl_min / bare_min, rel=0.02)
     with pytest.raises(SystemExit):
         mh.main([str(tmp_path / "menagerie"), "--repeats", "0"])
