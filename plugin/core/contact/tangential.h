@@ -16,10 +16,11 @@
 //            increment dW (2-D) by a safeguarded Newton solve. O(loaded cells).
 //   elastic  the homogeneous half-space's Cerruti surface compliance
 //            (TangentialCompliance), by FFT on the contact's box (DC-FFT
-//            zero padding); a Polonsky-Keer-like projected conjugate
-//            gradient on the stick cells with the force constraint as a
-//            multiplier (the shift), slip cells stepped along the gradient
-//            and projected onto their disks.
+//            zero padding); active-set semismooth Newton steps, each a
+//            projected conjugate gradient solve (stick cells free, slip
+//            cells free across their slip direction, the force constraint's
+//            multiplier the shift), then a projected step onto the disks
+//            that updates the sets.
 //
 // Deterministic: one thread, fixed cell order.
 #ifndef MJTOUCH_CONTACT_TANGENTIAL_H_
