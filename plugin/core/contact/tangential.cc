@@ -333,6 +333,69 @@ std::shared_ptr<const TangentialCompliance::Spectra> TangentialCompliance::Spect
   return slot;
 }
 
+const TangentialCompliance::LocalInverse& TangentialCompliance::local_inverse() const {
+  std::call_once(local_inverse_once_, [this] {
+    // The inverse operator's symbol (the 2 x 2 inverse of K's at every
+    // frequency) on the torus of the whole grid's reach, back to offsets.
+    const auto s = SpectraFor(n_, n_);
+    const Fft2D& fft = s->fft;
+    const int mx = fft.nx(), my = fft.ny();
+    const size_t S = fft.spectrum_size();
+    std::vector<double> ixx(S), iyy(S), ixy(S), zero(S), scratch;
+    // The kernels cut off at the grid's reach ring at high frequencies,
+    // where the symbol can dip to zero: floored at 1e-3 of its largest.
+    const double floor = 1e-3 * std::max(s->xx[0], s->yy[0]);
+    for (size_t k = 0; k < S; ++k) {
+      const double a = std::max(s->xx[k], floor), b = std::max(s->yy[k], floor);
+      const double c = std::clamp(s->xy[k], -0.9 * std::sqrt(a * b), 0.9 * std::sqrt(a * b));
+      const double det = a * b - c * c;
+      ixx[k] = b / det;
+      iyy[k] = a / det;
+      ixy[k] = -c / det;
+    }
+    // s holds K's symbol / (mx my) and InverseReal has no 1 / (mx my).
+    const double norm = 1.0 / (static_cast<double>(mx) * my * mx * my);
+    std::vector<double> out(static_cast<size_t>(mx) * my);
+    auto centre = [&](std::vector<double>* spec, std::array<double, 9>* st) {
+      std::fill(zero.begin(), zero.end(), 0.0);
+      fft.InverseReal(spec->data(), zero.data(), my, mx, out.data(), mx, &scratch);
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di)
+          (*st)[(dj + 1) * 3 + di + 1] =
+              out[static_cast<size_t>((dj + my) % my) * mx + (di + mx) % mx] * norm;
+    };
+    LocalInverse li;
+    centre(&ixx, &li.xx);
+    centre(&iyy, &li.yy);
+    centre(&ixy, &li.xy);
+    // The truncated stencils' symbols (all even: sum s(d) cos(k . d)) must
+    // stay positive definite.
+    auto definite = [&](bool with_xy) {
+      for (int u = 0; u < 64; ++u)
+        for (int v = 0; v < 64; ++v) {
+          double a = 0, b = 0, c = 0;
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const double w = std::cos(2 * kPi * (u * di + v * dj) / 64.0);
+              const int k = (dj + 1) * 3 + di + 1;
+              a += li.xx[k] * w;
+              b += li.yy[k] * w;
+              c += with_xy ? li.xy[k] * w : 0.0;
+            }
+          if (!(a > 0) || !(b > 0) || !(a * b - c * c > 0)) return false;
+        }
+      return true;
+    };
+    if (!definite(true)) {
+      li.xy.fill(0.0);
+      if (!definite(false)) return;
+    }
+    li.empty = false;
+    local_inverse_ = li;
+  });
+  return local_inverse_;
+}
+
 namespace {
 
 template <typename T>
@@ -605,6 +668,7 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   // slip cells turn with their neighbours in one solve, where projected
   // steps of their own converged linearly.
   std::vector<double> px(m), py(m), dcoef(m), ax(m), ay(m);
+  const TangentialCompliance::LocalInverse& local = K.local_inverse();
   auto NewtonCg = [&](double cg_tolerance) {
     // The shift: least squares over the free components.
     double m11 = 0, m12 = 0, m22 = 0;
@@ -671,7 +735,35 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
           dcoef[c] = std::max(sl, 0.0);
         }
     }
-    std::vector<double> zx(m), zy(m);
+    // The preconditioner: v = P L P z with L the local inverse of K (P the
+    // projection onto the subspace), once the first (steepest-descent)
+    // step has set tau_ref.
+    auto precondition = [&](const std::vector<double>& zx, const std::vector<double>& zy,
+                            std::vector<double>* vx, std::vector<double>* vy) {
+      std::fill(tbx.begin(), tbx.end(), 0.0);
+      std::fill(tby.begin(), tby.end(), 0.0);
+      for (size_t c = 0; c < m; ++c) {
+        tbx[cb[c]] = zx[c];
+        tby[cb[c]] = zy[c];
+      }
+      for (size_t c = 0; c < m; ++c) {
+        const int i = static_cast<int>(cb[c] % bx), j = static_cast<int>(cb[c] / bx);
+        double sx = 0, sy = 0;
+        for (int dj = -1; dj <= 1; ++dj) {
+          if (j + dj < 0 || j + dj >= by) continue;
+          for (int di = -1; di <= 1; ++di) {
+            if (i + di < 0 || i + di >= bx) continue;
+            const size_t b = static_cast<size_t>(j + dj) * bx + (i + di);
+            const int k = (dj + 1) * 3 + di + 1;
+            sx += local.xx[k] * tbx[b] + local.xy[k] * tby[b];
+            sy += local.xy[k] * tbx[b] + local.yy[k] * tby[b];
+          }
+        }
+        free_part(c, sx, sy, &(*vx)[c], &(*vy)[c]);
+      }
+      project(vx, vy);
+    };
+    std::vector<double> zx(m), zy(m), vx(m), vy(m);
     double gg_old = 0;
     bool first = true;
     while (it < max_iterations) {
@@ -681,15 +773,23 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
         zy[c] += dcoef[c] * ay[c];
       }
       project(&zx, &zy);
+      const bool preconditioned = !local.empty && tau_ref > 0.0;
+      if (preconditioned) {
+        precondition(zx, zy, &vx, &vy);
+      } else {
+        vx = zx;
+        vy = zy;
+      }
       double gg = 0;
-      for (size_t c = 0; c < m; ++c) gg += zx[c] * zx[c] + zy[c] * zy[c];
+      for (size_t c = 0; c < m; ++c) gg += zx[c] * vx[c] + zy[c] * vy[c];
       if (!(gg > 0)) break;
       const double beta = first ? 0.0 : gg / gg_old;
-      first = false;
+      // (the steepest-descent step before the preconditioned ones restarts)
+      first = !preconditioned && !local.empty;
       gg_old = gg;
       for (size_t c = 0; c < m; ++c) {
-        tcx[c] = zx[c] + beta * tcx[c];
-        tcy[c] = zy[c] + beta * tcy[c];
+        tcx[c] = vx[c] + beta * tcx[c];
+        tcy[c] = vy[c] + beta * tcy[c];
       }
       std::fill(tbx.begin(), tbx.end(), 0.0);
       std::fill(tby.begin(), tby.end(), 0.0);
