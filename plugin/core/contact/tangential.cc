@@ -669,6 +669,9 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   // steps of their own converged linearly.
   std::vector<double> px(m), py(m), dcoef(m), ax(m), ay(m);
   const TangentialCompliance::LocalInverse& local = K.local_inverse();
+  // (the preconditioner's padded box; zero but for the loaded cells)
+  std::vector<double> pad_x(local.empty ? 0 : static_cast<size_t>(bx + 2) * (by + 2), 0.0),
+      pad_y(pad_x.size(), 0.0);
   auto NewtonCg = [&](double cg_tolerance) {
     // The shift: least squares over the free components.
     double m11 = 0, m12 = 0, m22 = 0;
@@ -740,24 +743,23 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
     // step has set tau_ref.
     auto precondition = [&](const std::vector<double>& zx, const std::vector<double>& zy,
                             std::vector<double>* vx, std::vector<double>* vy) {
-      std::fill(tbx.begin(), tbx.end(), 0.0);
-      std::fill(tby.begin(), tby.end(), 0.0);
+      // z on the box with a ring of zeros, so that every cell's 3 x 3
+      // neighbourhood is in it
+      const int px_stride = bx + 2;
       for (size_t c = 0; c < m; ++c) {
-        tbx[cb[c]] = zx[c];
-        tby[cb[c]] = zy[c];
+        const size_t b = cb[c] + (cb[c] / bx) * 2 + px_stride + 1;
+        pad_x[b] = zx[c];
+        pad_y[b] = zy[c];
       }
+      const long off[9] = {-px_stride - 1, -px_stride, -px_stride + 1, -1, 0, 1,
+                           px_stride - 1,  px_stride,  px_stride + 1};
       for (size_t c = 0; c < m; ++c) {
-        const int i = static_cast<int>(cb[c] % bx), j = static_cast<int>(cb[c] / bx);
+        const size_t b = cb[c] + (cb[c] / bx) * 2 + px_stride + 1;
         double sx = 0, sy = 0;
-        for (int dj = -1; dj <= 1; ++dj) {
-          if (j + dj < 0 || j + dj >= by) continue;
-          for (int di = -1; di <= 1; ++di) {
-            if (i + di < 0 || i + di >= bx) continue;
-            const size_t b = static_cast<size_t>(j + dj) * bx + (i + di);
-            const int k = (dj + 1) * 3 + di + 1;
-            sx += local.xx[k] * tbx[b] + local.xy[k] * tby[b];
-            sy += local.xy[k] * tbx[b] + local.yy[k] * tby[b];
-          }
+        for (int k = 0; k < 9; ++k) {
+          const double ux = pad_x[b + off[k]], uy = pad_y[b + off[k]];
+          sx += local.xx[k] * ux + local.xy[k] * uy;
+          sy += local.xy[k] * ux + local.yy[k] * uy;
         }
         free_part(c, sx, sy, &(*vx)[c], &(*vy)[c]);
       }
@@ -846,11 +848,13 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
     for (size_t c = 0; c < m; ++c) diff += std::fabs(qx[c] - oldx[c]) + std::fabs(qy[c] - oldy[c]);
     const double norm = l1();
     change = norm > 0 ? diff / norm : 0.0;
+    // (cells that change sets without changing q, at the disk's edge with
+    // no slip, do not hold it up; the shift below then reads the
+    // displacement before this last step, which moved q by less than the
+    // tolerance)
+    if (change < tolerance) break;
     residual();
     ++it;
-    // (cells that change sets without changing q, at the disk's edge with
-    // no slip, do not hold it up)
-    if (change < tolerance) break;
   }
   double dwx, dwy;
   shift_increment(&dwx, &dwy);
