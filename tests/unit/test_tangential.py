@@ -168,6 +168,34 @@ def test_mindlin_deresiewicz_unloading():
     assert np.all(fresh["shear_x_pa"][p > 0] >= 0)
 
 
+def test_oblique_ramp_converges_and_the_default_tolerance_tracks_it():
+    """A warm-started oblique ramp (the slip directions turn with nu's x-y
+    coupling): a tight solve reaches its tolerance within the iteration cap at
+    every step, and the default solve (1e-4, float) stays within 1% of it in
+    traction RMS (its stop is a relative change of 1e-4 per step; the
+    remainder of the increment left by the CG scales with it)."""
+    n, per, mu, G, nu = 64, 20, 0.5, 100e6, 0.45
+    h, r, p, p0 = hertz(n, per)
+    P = p.sum() * h * h
+    solver = half_space(n, h, G, nu)
+    tight_state = loose_state = None
+    for k in range(1, 13):
+        F = (0.07 * k * mu * P, 0.03 * k * mu * P)
+        tight, tight_state = solver.solve(
+            p, mu, F, state=tight_state, tolerance=1e-10, max_iterations=500, precision="double"
+        )
+        assert tight["iterations"] < 500 and tight["change"] < 1e-10, (k, tight["iterations"])
+        loose, loose_state = solver.solve(p, mu, F, state=loose_state, tolerance=1e-4)
+        dq2 = (loose["shear_x_pa"] - tight["shear_x_pa"]) ** 2 + (
+            loose["shear_y_pa"] - tight["shear_y_pa"]
+        ) ** 2
+        rms = np.sqrt(dq2.sum() / (tight["shear_x_pa"] ** 2 + tight["shear_y_pa"] ** 2).sum())
+        assert rms < 0.01, (k, rms)
+    q = np.hypot(tight["shear_x_pa"], tight["shear_y_pa"])
+    assert np.all(q <= mu * p * (1 + 1e-12))
+    assert 0 < tight["stuck_share"] < 1
+
+
 @pytest.mark.parametrize("model", ["winkler", "elastic"])
 @pytest.mark.parametrize("ratio", [1.0, 1.3])
 def test_full_slip(model, ratio):

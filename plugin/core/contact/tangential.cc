@@ -12,6 +12,10 @@ constexpr double kPi = 3.14159265358979323846;
 // (c/a = (1 - |F|/(mu P))^(1/3) < 1e-4) is below any grid, and |F| = mu P
 // given by the caller must not miss the branch by round-off.
 constexpr double kFullSlipShare = 1.0 - 1e-12;
+// Inexact Newton (elastic): each step's CG stops at this share of the last
+// step's relative change of q (the sets far from settled need no tight
+// solve), at the tolerance at the latest.
+constexpr double kNewtonForcing = 0.1;
 
 std::string Num(double v) {
   char buf[32];
@@ -329,6 +333,69 @@ std::shared_ptr<const TangentialCompliance::Spectra> TangentialCompliance::Spect
   return slot;
 }
 
+const TangentialCompliance::LocalInverse& TangentialCompliance::local_inverse() const {
+  std::call_once(local_inverse_once_, [this] {
+    // The inverse operator's symbol (the 2 x 2 inverse of K's at every
+    // frequency) on the torus of the whole grid's reach, back to offsets.
+    const auto s = SpectraFor(n_, n_);
+    const Fft2D& fft = s->fft;
+    const int mx = fft.nx(), my = fft.ny();
+    const size_t S = fft.spectrum_size();
+    std::vector<double> ixx(S), iyy(S), ixy(S), zero(S), scratch;
+    // The kernels cut off at the grid's reach ring at high frequencies,
+    // where the symbol can dip to zero: floored at 1e-3 of its largest.
+    const double floor = 1e-3 * std::max(s->xx[0], s->yy[0]);
+    for (size_t k = 0; k < S; ++k) {
+      const double a = std::max(s->xx[k], floor), b = std::max(s->yy[k], floor);
+      const double c = std::clamp(s->xy[k], -0.9 * std::sqrt(a * b), 0.9 * std::sqrt(a * b));
+      const double det = a * b - c * c;
+      ixx[k] = b / det;
+      iyy[k] = a / det;
+      ixy[k] = -c / det;
+    }
+    // s holds K's symbol / (mx my) and InverseReal has no 1 / (mx my).
+    const double norm = 1.0 / (static_cast<double>(mx) * my * mx * my);
+    std::vector<double> out(static_cast<size_t>(mx) * my);
+    auto centre = [&](std::vector<double>* spec, std::array<double, 9>* st) {
+      std::fill(zero.begin(), zero.end(), 0.0);
+      fft.InverseReal(spec->data(), zero.data(), my, mx, out.data(), mx, &scratch);
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di)
+          (*st)[(dj + 1) * 3 + di + 1] =
+              out[static_cast<size_t>((dj + my) % my) * mx + (di + mx) % mx] * norm;
+    };
+    LocalInverse li;
+    centre(&ixx, &li.xx);
+    centre(&iyy, &li.yy);
+    centre(&ixy, &li.xy);
+    // The truncated stencils' symbols (all even: sum s(d) cos(k . d)) must
+    // stay positive definite.
+    auto definite = [&](bool with_xy) {
+      for (int u = 0; u < 64; ++u)
+        for (int v = 0; v < 64; ++v) {
+          double a = 0, b = 0, c = 0;
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const double w = std::cos(2 * kPi * (u * di + v * dj) / 64.0);
+              const int k = (dj + 1) * 3 + di + 1;
+              a += li.xx[k] * w;
+              b += li.yy[k] * w;
+              c += with_xy ? li.xy[k] * w : 0.0;
+            }
+          if (!(a > 0) || !(b > 0) || !(a * b - c * c > 0)) return false;
+        }
+      return true;
+    };
+    if (!definite(true)) {
+      li.xy.fill(0.0);
+      if (!definite(false)) return;
+    }
+    li.empty = false;
+    local_inverse_ = li;
+  });
+  return local_inverse_;
+}
+
 namespace {
 
 template <typename T>
@@ -528,6 +595,17 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
   std::vector<unsigned char> slip;
   double lx = 0, ly = 0;
   int projection_steps = ProjectWithForce(yx, yy, cells.g, 1.0, tx, ty, &lx, &ly, &qx, &qy, &slip);
+  // The relative change of q so far (here the warm start's), which sets the
+  // next Newton step's CG tolerance.
+  double change = 0;
+  {
+    double diff = 0, norm = 0;
+    for (size_t c = 0; c < m; ++c) {
+      diff += std::fabs(qx[c] - yx[c]) + std::fabs(qy[c] - yy[c]);
+      norm += std::fabs(qx[c]) + std::fabs(qy[c]);
+    }
+    change = norm > 0 ? std::min(1.0, diff / norm) : 1.0;
+  }
 
   std::vector<double> dx(B), dy(B), rx(B), ry(B), tbx(B, 0.0), tby(B, 0.0), wx(B), wy(B);
   std::vector<double> tcx(m, 0.0), tcy(m, 0.0), oldx(m), oldy(m);
@@ -566,90 +644,195 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
       *wym = ay / m;
     }
   };
-  // Active-set iterations: conjugate gradients on the stick cells with the
-  // slip cells held (zero-mean steps keep the force; the shift increment is
-  // the stick cells' mean displacement), until q changes by less than the
-  // tolerance; then one projected step of every cell (stick cells whose
-  // traction passes mu p start slipping, slip cells turn toward their slip
-  // or stick where it reverses) with the force restored. Done when that
-  // step keeps the sets and changes q by less than the tolerance. Every CG
-  // iteration and every step costs one compliance application.
+  // Active-set iterations: a semismooth Newton step on the current sets
+  // (NewtonCg), solved by conjugate gradients until q changes by less than
+  // the tolerance; then one projected step of every cell (stick cells whose
+  // traction passes mu p start slipping, slip cells stick where their slip
+  // reverses) with the force restored. Done when that step changes q by
+  // less than the tolerance. Every CG iteration and every step costs one
+  // compliance application.
   residual();
   double tau_ref = 0;
   int it = 0;
-  double change = 0;
   auto l1 = [&]() {
     double norm = 0;
     for (size_t c = 0; c < m; ++c) norm += std::fabs(qx[c]) + std::fabs(qy[c]);
     return norm;
   };
-  while (it < max_iterations) {
-    // CG on the stick cells (slip cells held).
+  // The Newton step: stick cells free (both components, r = w), slip cells
+  // free across their traction's direction e only, q = g e + a e_perp
+  // linearised about the disk's edge: the slip law q || (w - r) gives
+  // (r - w) . e_perp + (s / g) a = 0 with s = (w - r) . e, the slip along e,
+  // which adds s / g to the operator (still symmetric positive). Projected
+  // CG on that subspace with the force kept (the changes sum to zero); the
+  // slip cells turn with their neighbours in one solve, where projected
+  // steps of their own converged linearly.
+  std::vector<double> px(m), py(m), dcoef(m), ax(m), ay(m);
+  const TangentialCompliance::LocalInverse& local = K.local_inverse();
+  // (the preconditioner's padded box; zero but for the loaded cells)
+  std::vector<double> pad_x(local.empty ? 0 : static_cast<size_t>(bx + 2) * (by + 2), 0.0),
+      pad_y(pad_x.size(), 0.0);
+  auto NewtonCg = [&](double cg_tolerance) {
+    // The shift: least squares over the free components.
+    double m11 = 0, m12 = 0, m22 = 0;
+    int stick_count = 0;
+    for (size_t c = 0; c < m; ++c) {
+      if (!slip[c]) {
+        px[c] = py[c] = 0;
+        dcoef[c] = 0;
+        m11 += 1;
+        m22 += 1;
+        ++stick_count;
+      } else {
+        const double qn = std::hypot(qx[c], qy[c]);
+        px[c] = qn > 0 ? -qy[c] / qn : 0.0;  // e_perp
+        py[c] = qn > 0 ? qx[c] / qn : 0.0;
+        dcoef[c] = 0;
+        m11 += px[c] * px[c];
+        m12 += px[c] * py[c];
+        m22 += py[c] * py[c];
+      }
+      ax[c] = ay[c] = 0;  // the slip cells' change across e this step
+    }
+    if (stick_count == 0) return;
+    const double det = m11 * m22 - m12 * m12;
+    // P_c v: the cell's free part of v.
+    auto free_part = [&](size_t c, double vx, double vy, double* ox, double* oy) {
+      if (!slip[c]) {
+        *ox = vx;
+        *oy = vy;
+      } else {
+        const double d = vx * px[c] + vy * py[c];
+        *ox = d * px[c];
+        *oy = d * py[c];
+      }
+    };
+    // Projection onto the subspace: v_c <- v_c - P_c M^-1 sum v (v free already).
+    auto project = [&](std::vector<double>* vx, std::vector<double>* vy) {
+      double sx = 0, sy = 0;
+      for (size_t c = 0; c < m; ++c) {
+        sx += (*vx)[c];
+        sy += (*vy)[c];
+      }
+      const double lx = (m22 * sx - m12 * sy) / det, ly = (m11 * sy - m12 * sx) / det;
+      for (size_t c = 0; c < m; ++c) {
+        double fx, fy;
+        free_part(c, lx, ly, &fx, &fy);
+        (*vx)[c] -= fx;
+        (*vy)[c] -= fy;
+      }
+    };
+    {  // the slip rate along e for the operator's diagonal: s / g (>= 0)
+      double sx = 0, sy = 0;
+      for (size_t c = 0; c < m; ++c) {
+        double fx, fy;
+        free_part(c, rx[cb[c]], ry[cb[c]], &fx, &fy);
+        sx += fx;
+        sy += fy;
+      }
+      const double wxm = (m22 * sx - m12 * sy) / det, wym = (m11 * sy - m12 * sx) / det;
+      for (size_t c = 0; c < m; ++c)
+        if (slip[c] && cells.g[c] > 0) {
+          const double sl =
+              ((wxm - rx[cb[c]]) * qx[c] + (wym - ry[cb[c]]) * qy[c]) / (cells.g[c] * cells.g[c]);
+          dcoef[c] = std::max(sl, 0.0);
+        }
+    }
+    // The preconditioner: v = P L P z with L the local inverse of K (P the
+    // projection onto the subspace), once the first (steepest-descent)
+    // step has set tau_ref.
+    auto precondition = [&](const std::vector<double>& zx, const std::vector<double>& zy,
+                            std::vector<double>* vx, std::vector<double>* vy) {
+      // z on the box with a ring of zeros, so that every cell's 3 x 3
+      // neighbourhood is in it
+      const int px_stride = bx + 2;
+      for (size_t c = 0; c < m; ++c) {
+        const size_t b = cb[c] + (cb[c] / bx) * 2 + px_stride + 1;
+        pad_x[b] = zx[c];
+        pad_y[b] = zy[c];
+      }
+      const long off[9] = {-px_stride - 1, -px_stride, -px_stride + 1, -1, 0, 1,
+                           px_stride - 1,  px_stride,  px_stride + 1};
+      for (size_t c = 0; c < m; ++c) {
+        const size_t b = cb[c] + (cb[c] / bx) * 2 + px_stride + 1;
+        double sx = 0, sy = 0;
+        for (int k = 0; k < 9; ++k) {
+          const double ux = pad_x[b + off[k]], uy = pad_y[b + off[k]];
+          sx += local.xx[k] * ux + local.xy[k] * uy;
+          sy += local.xy[k] * ux + local.yy[k] * uy;
+        }
+        free_part(c, sx, sy, &(*vx)[c], &(*vy)[c]);
+      }
+      project(vx, vy);
+    };
+    std::vector<double> zx(m), zy(m), vx(m), vy(m);
     double gg_old = 0;
     bool first = true;
     while (it < max_iterations) {
-      double dwx, dwy;
-      shift_increment(&dwx, &dwy);
+      for (size_t c = 0; c < m; ++c) {
+        free_part(c, rx[cb[c]], ry[cb[c]], &zx[c], &zy[c]);
+        zx[c] += dcoef[c] * ax[c];
+        zy[c] += dcoef[c] * ay[c];
+      }
+      project(&zx, &zy);
+      const bool preconditioned = !local.empty && tau_ref > 0.0;
+      if (preconditioned) {
+        precondition(zx, zy, &vx, &vy);
+      } else {
+        vx = zx;
+        vy = zy;
+      }
       double gg = 0;
-      int count = 0;
-      for (size_t c = 0; c < m; ++c)
-        if (!slip[c]) {
-          const double gx = rx[cb[c]] - dwx, gy = ry[cb[c]] - dwy;
-          gg += gx * gx + gy * gy;
-          ++count;
-        }
-      if (count == 0 || !(gg > 0)) break;
+      for (size_t c = 0; c < m; ++c) gg += zx[c] * vx[c] + zy[c] * vy[c];
+      if (!(gg > 0)) break;
       const double beta = first ? 0.0 : gg / gg_old;
-      first = false;
+      // (the steepest-descent step before the preconditioned ones restarts)
+      first = !preconditioned && !local.empty;
       gg_old = gg;
-      double mx = 0, my = 0;
-      for (size_t c = 0; c < m; ++c)
-        if (!slip[c]) {
-          tcx[c] = rx[cb[c]] - dwx + beta * tcx[c];
-          tcy[c] = ry[cb[c]] - dwy + beta * tcy[c];
-          mx += tcx[c];
-          my += tcy[c];
-        }
-      mx /= count;
-      my /= count;
+      for (size_t c = 0; c < m; ++c) {
+        tcx[c] = vx[c] + beta * tcx[c];
+        tcy[c] = vy[c] + beta * tcy[c];
+      }
       std::fill(tbx.begin(), tbx.end(), 0.0);
       std::fill(tby.begin(), tby.end(), 0.0);
-      for (size_t c = 0; c < m; ++c)
-        if (!slip[c]) {
-          tcx[c] -= mx;
-          tcy[c] -= my;
-          tbx[cb[c]] = tcx[c];
-          tby[cb[c]] = tcy[c];
-        }
+      for (size_t c = 0; c < m; ++c) {
+        tbx[cb[c]] = tcx[c];
+        tby[cb[c]] = tcy[c];
+      }
       K.Apply(*spectra, tbx.data(), tby.data(), bx, by, wx.data(), wy.data(), &work, precision);
       ++it;
       double tw = 0, tg = 0, step = 0;
-      for (size_t c = 0; c < m; ++c)
-        if (!slip[c]) {
-          tw += tcx[c] * wx[cb[c]] + tcy[c] * wy[cb[c]];
-          tg += tcx[c] * (rx[cb[c]] - dwx) + tcy[c] * (ry[cb[c]] - dwy);
-          step += std::fabs(tcx[c]) + std::fabs(tcy[c]);
-        }
+      for (size_t c = 0; c < m; ++c) {
+        tw += tcx[c] * wx[cb[c]] + tcy[c] * wy[cb[c]] +
+              dcoef[c] * (tcx[c] * tcx[c] + tcy[c] * tcy[c]);
+        tg += tcx[c] * zx[c] + tcy[c] * zy[c];
+        step += std::fabs(tcx[c]) + std::fabs(tcy[c]);
+      }
       if (!(tw > 0) || !(tg > 0)) break;
       const double tau = tg / tw;
       if (tau_ref == 0.0) tau_ref = tau;
-      for (size_t c = 0; c < m; ++c)
-        if (!slip[c]) {
-          qx[c] -= tau * tcx[c];
-          qy[c] -= tau * tcy[c];
+      for (size_t c = 0; c < m; ++c) {
+        qx[c] -= tau * tcx[c];
+        qy[c] -= tau * tcy[c];
+        if (slip[c]) {
+          ax[c] -= tau * tcx[c];
+          ay[c] -= tau * tcy[c];
         }
+      }
       for (size_t b = 0; b < B; ++b) {
         rx[b] -= tau * wx[b];
         ry[b] -= tau * wy[b];
       }
       const double norm = l1();
-      if (!(norm > 0) || tau * step < tolerance * norm) break;
+      if (!(norm > 0) || tau * step < cg_tolerance * norm) break;
     }
+  };
+  while (it < max_iterations) {
+    NewtonCg(std::max(tolerance, kNewtonForcing * change));
     if (it >= max_iterations) break;
-    // The projected step of every cell, slip cells along their slip by half
-    // the first steepest-descent step: a longer one overshoots the slip
-    // cells' directions, which then circle without converging (above ~0.75
-    // mu P on a 0.5 N fingertip).
+    // The projected step of every cell, by half the first steepest-descent
+    // step (the Newton step turned the slip cells already; a longer step
+    // overshoots their directions where the step is inexact).
     double dwx, dwy;
     shift_increment(&dwx, &dwy);
     const double tau_slip = 0.5 * (tau_ref > 0 ? tau_ref : 1.0 / K.Kxx(0, 0));
@@ -665,11 +848,13 @@ bool SolveTangentialElastic(const TaxelGrid& grid, const std::vector<double>& pr
     for (size_t c = 0; c < m; ++c) diff += std::fabs(qx[c] - oldx[c]) + std::fabs(qy[c] - oldy[c]);
     const double norm = l1();
     change = norm > 0 ? diff / norm : 0.0;
+    // (cells that change sets without changing q, at the disk's edge with
+    // no slip, do not hold it up; the shift below then reads the
+    // displacement before this last step, which moved q by less than the
+    // tolerance)
+    if (change < tolerance) break;
     residual();
     ++it;
-    // (cells that change sets without changing q, at the disk's edge with
-    // no slip, do not hold it up)
-    if (change < tolerance) break;
   }
   double dwx, dwy;
   shift_increment(&dwx, &dwy);

@@ -16,15 +16,17 @@
 //            increment dW (2-D) by a safeguarded Newton solve. O(loaded cells).
 //   elastic  the homogeneous half-space's Cerruti surface compliance
 //            (TangentialCompliance), by FFT on the contact's box (DC-FFT
-//            zero padding); a Polonsky-Keer-like projected conjugate
-//            gradient on the stick cells with the force constraint as a
-//            multiplier (the shift), slip cells stepped along the gradient
-//            and projected onto their disks.
+//            zero padding); active-set semismooth Newton steps, each a
+//            projected conjugate gradient solve (stick cells free, slip
+//            cells free across their slip direction, the force constraint's
+//            multiplier the shift), then a projected step onto the disks
+//            that updates the sets.
 //
 // Deterministic: one thread, fixed cell order.
 #ifndef MJTOUCH_CONTACT_TANGENTIAL_H_
 #define MJTOUCH_CONTACT_TANGENTIAL_H_
 
+#include <array>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -100,6 +102,16 @@ class TangentialCompliance {
   void Apply(const Spectra& s, const double* qx, const double* qy, int bx, int by, double* ux,
              double* uy, Work* w, ApplyPrecision precision = ApplyPrecision::kDouble) const;
 
+  // A local approximate inverse of K (Pa/m): the 3 x 3 centre of the
+  // inverse operator's kernels (offset (di, dj) at [(dj + 1) * 3 + di + 1]),
+  // positive definite (else the xy part dropped, else none: `empty`), for
+  // preconditioning. Built on first use (thread-safe).
+  struct LocalInverse {
+    std::array<double, 9> xx{}, yy{}, xy{};
+    bool empty = true;
+  };
+  const LocalInverse& local_inverse() const;
+
  private:
   double At(const std::vector<double>& t, int di, int dj) const {
     return t[static_cast<size_t>(dj + n_ - 1) * (2 * n_ - 1) + (di + n_ - 1)];
@@ -109,6 +121,8 @@ class TangentialCompliance {
   std::vector<double> kxx_, kyy_, kxy_;  // (2n - 1)^2, m/Pa
   mutable std::mutex mu_;
   mutable std::map<std::pair<int, int>, std::shared_ptr<const Spectra>> spectra_;
+  mutable std::once_flag local_inverse_once_;
+  mutable LocalInverse local_inverse_;
 };
 
 // The Winkler skin's tangential spring stiffness per area (Pa/m) matching
