@@ -7,6 +7,9 @@ cancels the grid's line); PC is held to 20% for now (BOUND). The cheapest honest
 0.4 N, noise off, the same receptor sites on both grids; the full check on
 the 12.8 mm skin and more textures is examples/converged_rates.py."""
 
+import pathlib
+import runpy
+
 import numpy as np
 
 from mjtouch import analysis
@@ -87,3 +90,16 @@ def test_grid_cycle_solves_as_accurately_as_one_grid():
 
     one, cycle = err("1"), err("4")
     assert 0.0 < cycle <= one, (cycle, one)
+
+
+def test_cost_mode_times_both_settings():
+    # examples/converged_rates.py --cost, shortened: both settings stepped
+    # from their settled slides, a time and a CG iteration count each
+    ex = runpy.run_path(
+        str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "converged_rates.py")
+    )
+    cost = ex["step_cost"](steps=10, rounds=2)
+    assert set(cost) == {"default", "cycle 4"}
+    for c in cost.values():
+        assert 0 < c["us_min"] <= c["us_median"] < 1e6
+        assert c["iterations"] >= 1
