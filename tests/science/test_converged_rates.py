@@ -7,6 +7,9 @@ cancels the grid's line); PC is held to 20% for now (BOUND). The cheapest honest
 0.4 N, noise off, the same receptor sites on both grids; the full check on
 the 12.8 mm skin and more textures is examples/converged_rates.py."""
 
+import pathlib
+import runpy
+
 import numpy as np
 
 from mjtouch import analysis
@@ -53,3 +56,50 @@ def test_default_rates_match_the_converged_reference():
     bare = _rates(*GRIDS[0], grid_cycle="1")
     assert abs(bare["PC"] - ref["PC"]) / ref["PC"] > BOUND["PC"], (bare, ref)
     assert np.isfinite(list(default.values())).all()
+
+
+def _stress(tol: str, cycle: str) -> np.ndarray:
+    """Receptor stress over the steady window of a short slide on the
+    81-cell skin (the 10 mm grating at 25 mm/s: a texture and speed the
+    rate check above does not use)."""
+    tip = scenes.Fingertip(
+        nx=GRIDS[0][0],
+        pitch_m=GRIDS[0][1],
+        skin={"noise": "0 0 0", "outputs": "stress", "tolerance": tol, "grid_cycle": cycle},
+    )
+    r = rollout.run_slide(
+        tip,
+        scenes.Texture(period_m=1e-3),
+        scenes.Protocol(speed_m_s=0.025, force_n=FORCE_N),
+        duration_s=0.15,
+    )
+    return r.stress[r.window()]
+
+
+def test_grid_cycle_solves_as_accurately_as_one_grid():
+    # grid_cycle's solves stop at N times the tolerance (grid_cycle.cc): the
+    # receptor stress's step-to-step change, what PC and RA follow, must stay
+    # as close to a tight solve (1e-7) as the taxel grid alone's does at the
+    # default tolerance.
+    def err(cycle):
+        fine, coarse = (
+            np.diff(_stress("1e-7", cycle), axis=0),
+            np.diff(_stress("1e-4", cycle), axis=0),
+        )
+        return np.sqrt(((coarse - fine) ** 2).sum() / (fine**2).sum())
+
+    one, cycle = err("1"), err("4")
+    assert 0.0 < cycle <= one, (cycle, one)
+
+
+def test_cost_mode_times_both_settings():
+    # examples/converged_rates.py --cost, shortened: both settings stepped
+    # from their settled slides, a time and a CG iteration count each
+    ex = runpy.run_path(
+        str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "converged_rates.py")
+    )
+    cost = ex["step_cost"](steps=10, rounds=2)
+    assert set(cost) == {"default", "cycle 4"}
+    for c in cost.values():
+        assert 0 < c["us_min"] <= c["us_median"] < 1e6
+        assert c["iterations"] >= 1

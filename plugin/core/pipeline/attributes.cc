@@ -149,8 +149,8 @@ const std::vector<AttributeRow>& Rows() {
        "`elastic`: each step solves the contact on one of this many grids offset by k / N of a "
        "cell in x and y, in turn, and the stress sees the average of the last N solutions "
        "deposited on the nearest taxels (the texture's sub-cell position no longer locks "
-       "to the grid; ~1.5x the step, docs: Performance). 1: the taxel grid alone. Off with "
-       "`grid_shift`",
+       "to the grid; each grid's solve stops at N x `tolerance`; ~1.3x the step, docs: "
+       "Performance). 1: the taxel grid alone. Off with `grid_shift`",
        nullptr, FIELD(grid_cycle), NO_PARSE, S::kModel},
       {"stiffness", K::kNumber, kMinStiffnessPaPerM, 1e12, false, false, "Pa/m", "2e7",
        "Winkler foundation stiffness (sets the contact size, not the force)", nullptr,

@@ -43,12 +43,11 @@ int CycleLength(int n_grids, double dt_s);
 // of N: every N / length-th grid, the taxel-centred one k = N / 2 among
 // them). Solves this step's grid (rendered with the cull level of
 // depth_prev_m if warm, else everything; again without culling if the
-// solved approach reaches it), warm-started from its own solution length
-// steps back (ring[b]: the history block b steps back, b = 0 .. 2 N - 1;
-// ring[0] is written), then writes to field (cleared by the
-// caller) the average over the cycling grids of each one's solution at
-// length - 1 steps back, interpolated between its last two (ring[0 ..
-// 2 length - 1]; solutions of another indentation depth left out), load
+// solved approach reaches it) to length times options' tolerance,
+// warm-started from its own solution length steps back (ring[b]: the history block b steps back, b
+// = 0 .. 2 N - 1; ring[0] is written), then writes to field (cleared by the caller) the average
+// over the cycling grids of each one's solution at length - 1 steps back, interpolated between its
+// last two (ring[0 .. 2 length - 1]; solutions of another indentation depth left out), load
 // normalised to force_n. *depth_m:
 // this step's indentation depth. Returns whether the contact carries the
 // load.
