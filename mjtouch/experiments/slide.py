@@ -131,7 +131,7 @@ class SlideParams:
         "step)",
     )
     grid_cycle: int = _field(
-        1,
+        4,
         "int",
         "elastic: solve each step on one of this many sub-cell offset grids in turn and "
         "average the last ones (skin attribute grid_cycle; keeps the texture's sub-cell "
@@ -183,8 +183,7 @@ class SlideParams:
         skin = {"pressure": self.pressure}
         if self.grid_shift:
             skin["grid_shift"] = "true"
-        if self.grid_cycle != 1:
-            skin["grid_cycle"] = str(self.grid_cycle)
+        skin["grid_cycle"] = str(self.grid_cycle)
         return scenes.Fingertip(
             ridges=self.ridges,
             ridge_pitch_m=self.ridge_pitch_m,

@@ -436,6 +436,10 @@ def _skin(tip: scenes.Fingertip, skin: dict | None) -> scenes.Fingertip:
     cfg.update(skin or {})
     if cfg.get("pressure", "elastic") == "elastic":
         cfg.setdefault("tolerance", STIMULUS_TOLERANCE)
+        # One contact grid: a probe moves along the skin's normal, so no
+        # edge crosses the grid and no grid line forms for the cycle to
+        # cancel; the cycle would also stop each grid at N x the tolerance.
+        cfg.setdefault("grid_cycle", "1")
     have = cfg.get("outputs", "spikes stress").split()
     cfg["outputs"] = " ".join(dict.fromkeys(have + OUTPUTS.split()))
     return dataclasses.replace(tip, skin=cfg)

@@ -249,10 +249,9 @@ SETTLE_STEPS = 6000
 VIB_DRIVES = {"plate": 1e-6, "finger": 2e-3}
 # noise off as ramp_runs; elastic solved to 1e-7 of the load (linearity at
 # 1 um needs it: stimuli.STIMULUS_TOLERANCE)
-# One contact grid: a flat contact has no texture edge for grid_cycle to
-# unlock, and its average of the grids' solutions interpolated over N steps
-# jitters the phase of a 400 Hz sine's spikes (vector strength 0.983 against
-# the 0.992 that exact locking to +-dt/2 gives).
+# One contact grid, as the stimuli's probes: a flat contact driven along
+# its normal moves no edge across the grid, and the cycle would stop each
+# grid's solve at N x the 1e-7 tolerance.
 VIB_SKIN = {
     "outputs": "spikes stress",
     "classes": "RA PC",

@@ -111,6 +111,15 @@ def test_quick_references_are_exact_and_runs_repeat(quick):
     assert all(r["repeats_identical"] for r in o["effects"])
 
 
+def cycle_response(pitch_m: float, period_m: float = 1e-3) -> float:
+    """The default grid_cycle 4's response to a line of period_m across x:
+    its four offset grids' solutions are deposited on the nearest taxel
+    cells, moved by 0, +-1/4 and (in halves) +-1/2 cell, a five-tap filter
+    of weights 1/4, 1/4, 1/4 and 1/8, 1/8."""
+    k = 2 * np.pi / period_m
+    return 0.25 + 0.5 * np.cos(k * pitch_m / 4) + 0.25 * np.cos(k * pitch_m / 2)
+
+
 def test_quick_pitch_errors_shrink_toward_reference(quick):
     o, _, _ = quick
     rows = [r for r in o["rows"] if r["knob"] == "pitch" and not r["reference"]]
@@ -118,12 +127,16 @@ def test_quick_pitch_errors_shrink_toward_reference(quick):
     rows.sort(key=lambda r: -r["pitch_m"])  # coarsest first
     # the stress converges with the pitch; spike rates need not be monotone
     # (a PC's rate depends on which grating harmonics a grid renders: README,
-    # "What accuracy costs"), only finite. The V/D line's amplitude is within
-    # 1% at every pitch under the elastic contact, where how a grid resolves
-    # the 0.45 mm ridges (2.25 vs 3 cells) moves it by a few 1e-3 either way.
+    # "What accuracy costs"), only finite. The V/D line's amplitude loses at
+    # most the default grid cycle's low-pass against the reference's, plus
+    # 1% (how a grid resolves the 0.45 mm ridges, 2.25 vs 3 cells, moves it
+    # by a few 1e-3 either way).
     errs = [r["errors"]["stress_rms_rel"] for r in rows]
     assert all(a > b for a, b in zip(errs, errs[1:])), errs
-    assert all(r["errors"]["peak_amp_rel"] < 0.01 for r in rows), rows
+    ref = next(r for r in o["rows"] if r["knob"] == "pitch" and r["reference"])
+    for r in rows:
+        loss = 1 - cycle_response(r["pitch_m"]) / cycle_response(ref["pitch_m"])
+        assert r["errors"]["peak_amp_rel"] < loss + 0.01, (r["setting"], loss)
     assert all(np.isfinite(r["errors"]["spike_rate_rel"]) for r in rows)
     # every pitch row has the same receptors (explicit sites)
     assert len({r["receptors"] for r in o["rows"] if r["knob"] == "pitch"}) == 1

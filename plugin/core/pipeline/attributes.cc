@@ -145,7 +145,7 @@ const std::vector<AttributeRow>& Rows() {
        "(cancels the V / pitch line that texture edges sharper than a cell put in the stress; "
        "a step ~1.8x as long at 128 x 0.1 mm)",
        nullptr, FIELD(grid_shift), NO_PARSE, S::kModel},
-      {"grid_cycle", K::kInteger, 1, 4, false, false, "grids", "1",
+      {"grid_cycle", K::kInteger, 1, 4, false, false, "grids", "4",
        "`elastic`: each step solves the contact on one of this many grids offset by k / N of a "
        "cell in x and y, in turn, and the stress sees the average of the last N solutions "
        "deposited on the nearest taxels (the texture's sub-cell position no longer locks "

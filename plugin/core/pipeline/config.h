@@ -70,7 +70,7 @@ struct SkinConfig {
   ElasticMethod elastic_method = ElasticMethod::kPreconditioned;  // `contact_solver`
   ApplyPrecision elastic_precision = ApplyPrecision::kFloat;      // `elastic_precision`
   bool grid_shift = false;  // `elastic`: average with the half-cell shifted grid (grid_shift.h)
-  int grid_cycle = 1;       // `elastic`: sub-cell offset grids solved in turn (grid_cycle.h)
+  int grid_cycle = 4;       // `elastic`: sub-cell offset grids solved in turn (grid_cycle.h)
   double poisson = 0.48;    // homogeneous skin (Shao 2010 epidermis)
   // Elastic skin: a layered stack (`skin` = layered: `layers` over `base`,
   // default the Shao et al. 2010 fingertip) or a homogeneous half-space
