@@ -93,6 +93,8 @@ def print_human(o: dict) -> None:
         f"{o['duration_s']:.3g} s sliding (wall {o['wall_s']:.1f} s)"
     )
     shift = ", grid shift average" if o["grid_shift"] else ""
+    if o.get("grids_cycled", 0) > 1:
+        shift = f", {o['grids_cycled']} sub-cell offset grids in turn"
     print(f"pressure model: {o['pressure']} ({PRESSURE_MODELS[o['pressure']]}{shift})")
     print(
         "firing rates (Hz):  "

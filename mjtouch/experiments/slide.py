@@ -432,6 +432,9 @@ def summarize(
             else None
         ),
         "grid_shift": p.grid_shift,
+        # offset grids the elastic contact cycles at this timestep (1: the
+        # taxel grid alone; 0 without the elastic contact or with grid_shift)
+        "grids_cycled": (cycling_grids(p) if p.pressure == "elastic" and not p.grid_shift else 0),
         "power_at_expected": power_expected,
         "speed_m_s": p.speed_m_s,
         "period_m": periodic,

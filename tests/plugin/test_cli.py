@@ -63,6 +63,7 @@ def test_slide_json_keys_and_peak():
     # the default elastic contact cycles offset grids (two at dt 0.2 ms):
     # no grid line to report
     assert o["pressure"] == "elastic" and o["grid_line_hz"] is None
+    assert o["grids_cycled"] == 2  # 4 grids x 0.2 ms exceed the 0.5 ms cycle; 2 do not
 
 
 def test_grid_line_is_reported_where_one_grid_is_solved():
@@ -129,6 +130,8 @@ def test_slide_human_output_and_plot(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "V/D band" in out.stdout and "firing rates" in out.stdout
     assert "pressure model: elastic" in out.stdout
+    assert "2 sub-cell offset grids in turn" in out.stdout  # at dt 0.2 ms
+    assert "grid line" not in out.stdout
     assert png.stat().st_size > 10_000
 
 
@@ -170,7 +173,7 @@ def test_slide_grid_shift_option():
     )
     assert out.returncode == 0, out.stderr
     o = json.loads(out.stdout)
-    assert o["grid_shift"] is True and o["grid_line_hz"] is None
+    assert o["grid_shift"] is True and o["grid_line_hz"] is None and o["grids_cycled"] == 0
     assert abs(o["nearest_peak_hz"]["texture"] - 30.0) <= o["fft_bin_hz"]
     assert all(np.isfinite(v) for v in o["rates_hz"].values())
     # it is an option of the elastic contact only: a clear error otherwise
