@@ -239,7 +239,7 @@ class SlipHoldEnv(TouchEnv):
             raise ValueError(
                 f"control_dt_s = {control_dt_s} must be a multiple of timestep_s = {timestep_s}"
             )
-        outputs = "spikes force pressure stick slip shear"
+        outputs = "spikes force pressure slip shear"  # what the observation reads
         tip = env_fingertip(outputs=outputs)
         tip.skin["shear"] = "partial"  # Coulomb stick and slip per taxel
         model_spec = slip_hold_spec(tip, timestep_s, skin=touch != "none")
