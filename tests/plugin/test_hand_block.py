@@ -188,3 +188,20 @@ def test_grasp_presses_the_patches(env):
     pressed = out["carried"] > 0.2 * total / 5
     assert pressed.sum() >= 2
     assert (out["spikes"][pressed] > 0).all()
+
+
+def test_pad_facing_tilts_toward_the_tip(env):
+    # Each distal capsule runs along its geom z from the distal joint
+    # (at -z) to the tip; the pad side is -y (fingers) or -x (thumb).
+    m = env.model
+    t = np.radians(hand_block.PAD_TILT_DEG)
+    for f in hand_block.FINGERS:
+        g = m.geom(f"robot0:C_{f}distal").id
+        assert m.geom_pos[g][2] > 0  # the capsule lies on the joint's +z side
+        pad = np.array([-1.0, 0, 0]) if f == "th" else np.array([0, -1.0, 0])
+        np.testing.assert_array_equal(hand_block.shadow_pad_facing(m, f, 0.0), pad)
+        want = np.cos(t) * pad + np.sin(t) * np.array([0, 0, 1.0])
+        np.testing.assert_allclose(hand_block.shadow_pad_facing(m, f), want, atol=1e-15)
+    for bad in (-1.0, 91.0, float("nan")):
+        with pytest.raises(ValueError, match="tilt_deg"):
+            hand_block.shadow_pad_facing(m, "ff", bad)
