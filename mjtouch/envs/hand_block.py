@@ -6,9 +6,11 @@ of its 92 MuJoCo touch sensors (``pip install 'mjtouch[robots]'``).
 block task's observation. :class:`HandBlockSkinEnv` is the same task
 (Gymnasium-Robotics' ``MujocoHandBlockEnv``: model, actions, goal, reward
 unchanged) whose model is rebuilt with an ``mjtouch.skin`` on each distal
-phalanx's capsule, one ``mjtouch.attach(spec, body=...)`` call each, on the
-pad side (the side that flexing the finger moves forward), with the RL
-preset (`mjtouch.scene.robot.RL_SKIN`). Gymnasium-Robotics loads its
+phalanx's capsule, one ``mjtouch.attach(spec, body=...)`` call each, facing
+the pad side (the side that flexing the finger moves forward) tilted 40
+degrees toward the tip (PAD_TILT_DEG), where the fingers press the block,
+with the RL preset (`mjtouch.scene.robot.RL_SKIN`) at 0.45 mm pitch: a
+19 mm patch from mid-pad over the tip (SKIN_PRESET). Gymnasium-Robotics loads its
 XML with ``MjModel.from_xml_path``; the env overrides that one step
 (``_initialize_simulation``) to load it as an ``MjSpec``, attach the skins
 and compile.
@@ -36,12 +38,25 @@ import mujoco
 import numpy as np
 
 import mjtouch
-from mjtouch.scene.robot import RL_SKIN, flexion_facing
+from mjtouch.scene.robot import RL_SKIN, distal_joint, flexion_facing
 
 FINGERS = ("ff", "mf", "rf", "lf", "th")
 FEATURES = ("SA1", "RA", "PC", "force_n", "coverage")
-RL_PRESET = RL_SKIN
 BASE_OBS = 61  # HandManipulateBlock's observation length
+
+# Where the skins sit. Grasping the block, the fingers press it with the
+# capsule's end cap (12-17 mm along a 7 mm capsule whose cylinder spans
+# +-12 mm), not mid-pad: a patch facing the palm side straight carries a
+# fifth of MuJoCo's fingertip normal force. Facing 40 degrees from the palm
+# side toward the tip puts the patch's pole on the cap's palm-side shoulder,
+# and a 19 mm patch (the rl preset's 43 x 43 grid, hence its cost, at
+# 0.45 mm pitch: still finer than the receptors' 1.2-1.7 mm spacing) spans
+# the capsule's width and reaches from mid-pad over the tip, so contacts on
+# the cap and on the pad's far half (normals within 45 degrees of the pole)
+# are felt. Less tilt leaves the tip's contacts past 45 degrees; more leaves
+# the pad's.
+PAD_TILT_DEG = 40.0
+SKIN_PRESET = dict(RL_SKIN, pitch=4.5e-4)
 
 
 def _require_gymnasium_robotics():
@@ -88,31 +103,54 @@ def _make_sensor_env_class():
     return HandBlockTouchSensorsEnv
 
 
-def shadow_pad_facing(model: mujoco.MjModel, finger: str) -> np.ndarray:
+def shadow_pad_facing(
+    model: mujoco.MjModel, finger: str, tilt_deg: float = PAD_TILT_DEG
+) -> np.ndarray:
     """The pad side of Shadow fingertip `finger`'s distal capsule
     (``robot0:C_<finger>distal``) in the geom's frame: where flexing its
-    distal joint moves it (mjtouch.scene.robot.flexion_facing), across the capsule's
-    axis (its cylinder) and rounded to the nearest geom axis."""
-    move = flexion_facing(model, f"robot0:C_{finger}distal")
+    distal joint moves it (mjtouch.scene.robot.flexion_facing), across the
+    capsule's axis (its cylinder) and rounded to the nearest geom axis, then
+    turned by `tilt_deg` toward the tip (the capsule's end away from the
+    distal joint) about the axis across both."""
+    if not (np.isfinite(tilt_deg) and 0.0 <= tilt_deg <= 90.0):
+        raise ValueError(f"tilt_deg = {tilt_deg!r}: valid 0 (pad side) to 90 (tip), in degrees")
+    name = f"robot0:C_{finger}distal"
+    move = flexion_facing(model, name)
     move[2] = 0.0
     axis = int(np.argmax(np.abs(move)))
-    f = np.zeros(3)
-    f[axis] = np.sign(move[axis])
-    return f
+    pad = np.zeros(3)
+    pad[axis] = np.sign(move[axis])
+    # the tip: the capsule's +z or -z end, whichever lies away from the joint
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    g = model.geom(name).id
+    j = distal_joint(model, model.geom_bodyid[g])
+    anchor = data.geom_xmat[g].reshape(3, 3).T @ (data.xanchor[j] - data.geom_xpos[g])
+    tip = np.array([0.0, 0.0, -np.sign(anchor[2]) or 1.0])
+    t = np.radians(tilt_deg)
+    f = np.cos(t) * pad + np.sin(t) * tip
+    return np.where(np.abs(f) < 1e-15, 0.0, f)
 
 
-def add_shadow_skins(spec: mujoco.MjSpec, **attributes) -> list[str]:
+def add_shadow_skins(
+    spec: mujoco.MjSpec, tilt_deg: float = PAD_TILT_DEG, **attributes
+) -> list[str]:
     """Attach a skin (named ``skin_<finger>``) to each Shadow fingertip of
-    `spec` (Gymnasium-Robotics' hand), on its pad side, with the RL preset
-    updated by `attributes`. Returns the skin names in FINGERS order."""
+    `spec` (Gymnasium-Robotics' hand), on its pad side tilted `tilt_deg`
+    toward the tip, with SKIN_PRESET updated by `attributes`. Returns the
+    skin names in FINGERS order."""
     model = spec.compile()
-    attrs = dict(RL_PRESET, outputs="spikes force coverage")
+    attrs = dict(SKIN_PRESET, outputs="spikes force coverage")
     attrs.update(attributes)
     names = []
     for f in FINGERS:
         name = f"skin_{f}"
         mjtouch.attach(
-            spec, body=f"robot0:{f}distal", name=name, facing=shadow_pad_facing(model, f), **attrs
+            spec,
+            body=f"robot0:{f}distal",
+            name=name,
+            facing=shadow_pad_facing(model, f, tilt_deg),
+            **attrs,
         )
         names.append(name)
     return names
@@ -125,16 +163,17 @@ def _make_env_class():
     )
 
     class HandBlockSkinEnv(base):
-        def __init__(self, skin: dict | None = None, **kwargs):
-            # skin: attributes replacing the RL preset's (attach's keywords)
+        def __init__(self, skin: dict | None = None, pad_tilt_deg: float = PAD_TILT_DEG, **kwargs):
+            # skin: attributes replacing SKIN_PRESET's (attach's keywords)
             self._skin_attributes = dict(skin or {})
+            self._pad_tilt_deg = pad_tilt_deg
             base.__init__(self, **kwargs)
 
         # Gymnasium-Robotics' MujocoRobotEnv._initialize_simulation, with the
         # model loaded as a spec and the skins attached before compiling.
         def _initialize_simulation(self):
             spec = mujoco.MjSpec.from_file(self.fullpath)
-            self.skins = add_shadow_skins(spec, **self._skin_attributes)
+            self.skins = add_shadow_skins(spec, self._pad_tilt_deg, **self._skin_attributes)
             self.model = spec.compile()
             self.data = mujoco.MjData(self.model)
             self._model_names = self._utils.MujocoModelNames(self.model)
@@ -259,7 +298,7 @@ def main(argv=None) -> None:
     sensors = __getattr__("HandBlockTouchSensorsEnv")
     envs = {
         "92 MuJoCo touch sensors": gym.wrappers.TimeLimit(sensors(), max_episode_steps=100),
-        "5 mjtouch skins (rl preset)": gym.make(ENV_ID),
+        "5 mjtouch skins": gym.make(ENV_ID),
     }
     rates = {k: [] for k in envs}
     for r in range(args.repeats):
