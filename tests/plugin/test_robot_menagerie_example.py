@@ -89,14 +89,20 @@ def test_the_gymnasium_robotics_shadow_hand():
     assert_each_skin_reports_the_push(rows, 5)
 
 
-def test_main_reads_a_menagerie_folder(tmp_path, capsys):
-    # a stand-in for wonik_allegro/right_hand.xml: the table's tip bodies
+def allegro_folder(tmp_path):
+    """A menagerie folder whose wonik_allegro/right_hand.xml is a synthetic
+    hand with the table's tip bodies; returns the folder and the tips."""
     xml_name, tips = mh.HANDS["wonik_allegro"]
     spec = synthetic_hand(tmp_path, [where["body"] for _, where in tips], mesh_tips=False)
     folder = tmp_path / "menagerie" / "wonik_allegro"
     folder.mkdir(parents=True)
     (folder / xml_name).write_text(spec.to_xml())
-    mh.main([str(tmp_path / "menagerie"), "--hands", "wonik_allegro", "--steps", "300"])
+    return tmp_path / "menagerie", tips
+
+
+def test_main_reads_a_menagerie_folder(tmp_path, capsys):
+    menagerie, tips = allegro_folder(tmp_path)
+    mh.main([str(menagerie), "--hands", "wonik_allegro", "--steps", "300"])
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].startswith("wonik_allegro:")
     table = [line.split() for line in lines[2:]]
@@ -142,13 +148,9 @@ def test_a_start_outside_a_joint_range_is_clipped_into_it(tmp_path):
 
 
 def test_time_prints_bare_and_skinned_cost_per_step(tmp_path, capsys):
-    xml_name, tips = mh.HANDS["wonik_allegro"]
-    spec = synthetic_hand(tmp_path, [where["body"] for _, where in tips], mesh_tips=False)
-    folder = tmp_path / "menagerie" / "wonik_allegro"
-    folder.mkdir(parents=True)
-    (folder / xml_name).write_text(spec.to_xml())
+    menagerie, tips = allegro_folder(tmp_path)
     args = ["--hands", "wonik_allegro", "--steps", "20", "--time", "--repeats", "2"]
-    mh.main([str(tmp_path / "menagerie"), *args])
+    mh.main([str(menagerie), *args])
     lines = capsys.readouterr().out.splitlines()
     head = next(k for k, line in enumerate(lines) if "tips pressed, timestep" in line)
     assert lines[head].startswith(f"wonik_allegro: {len(tips)} tips pressed, timestep 1 ms")
@@ -161,4 +163,4 @@ def test_time_prints_bare_and_skinned_cost_per_step(tmp_path, capsys):
     # the printed times are rounded to 0.1 us: their ratio to ~1% of ~5 us
     assert float(rows["rl"][-2]) == pytest.approx(rl_min / bare_min, rel=0.02)
     with pytest.raises(SystemExit):
-        mh.main([str(tmp_path / "menagerie"), "--repeats", "0"])
+        mh.main([str(menagerie), "--repeats", "0"])
