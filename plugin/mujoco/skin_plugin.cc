@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <shared_mutex>
 #include <sstream>
 #include <unordered_map>
@@ -651,15 +652,15 @@ void SkinPlugin::GatherInput(const mjModel* m, const mjData* d) {
     }
     const CounterSurface surface =
         SurfaceForGeom(m, d, first.other, ppos, c.pos, n_into, field, MeshCaster(m, first.other));
-    double overlap_share = -2.0;  // not rendered yet
+    std::optional<double> overlap_share;  // rendered on first need
     bool any = false;
     for (size_t b = a; b < contacts_.size(); ++b) {
       PadContact& pc = contacts_[b];
       if (pc.other != first.other || pc.share == 0.0) continue;
       pc.share = PointOnPatch(d->contact[pc.index].pos, pmat, ppos);
       if (pc.share == 0.0) {
-        if (overlap_share == -2.0) overlap_share = PatchShare(&footprint_, in.pad_pose, surface);
-        pc.share = std::max(overlap_share, 0.0);
+        if (!overlap_share) overlap_share = PatchShare(&footprint_, in.pad_pose, surface);
+        pc.share = std::max(*overlap_share, 0.0);
       }
       any = any || pc.share > 0.0;
     }
