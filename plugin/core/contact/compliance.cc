@@ -132,9 +132,9 @@ void SurfaceCompliance::AddCellRows(int ci, int cj, double d, int bx, int j0, in
   for (int j = j0; j < j1; ++j) {
     double* urow = u + static_cast<size_t>(j) * bx;
     // K(ci - i, cj - j) = table_rev_ at column n - 1 - ci + i
-    const double* krow =
+    const float* krow =
         table_rev_.data() + static_cast<size_t>(cj - j + n_ - 1) * (2 * n_ - 1) + (n_ - 1 - ci);
-    for (int i = 0; i < bx; ++i) urow[i] += d * krow[i];
+    for (int i = 0; i < bx; ++i) urow[i] += d * static_cast<double>(krow[i]);
   }
 }
 
@@ -148,12 +148,14 @@ void SurfaceCompliance::AddCellRows4(const int* ci, const int* cj, const double*
     auto krow = [&](int k) {
       return table_rev_.data() + static_cast<size_t>(cj[k] - j + n_ - 1) * w + (n_ - 1 - ci[k]);
     };
-    const double* __restrict k0 = krow(0);
-    const double* __restrict k1 = krow(1);
-    const double* __restrict k2 = krow(2);
-    const double* __restrict k3 = krow(3);
+    const float* __restrict k0 = krow(0);
+    const float* __restrict k1 = krow(1);
+    const float* __restrict k2 = krow(2);
+    const float* __restrict k3 = krow(3);
     for (int i = 0; i < bx; ++i)
-      urow[i] = (((urow[i] + d0 * k0[i]) + d1 * k1[i]) + d2 * k2[i]) + d3 * k3[i];
+      urow[i] = (((urow[i] + d0 * static_cast<double>(k0[i])) + d1 * static_cast<double>(k1[i])) +
+                 d2 * static_cast<double>(k2[i])) +
+                d3 * static_cast<double>(k3[i]);
   }
 }
 
