@@ -114,9 +114,10 @@ class SurfaceCompliance {
   static void BuildInverse(Spectrum* s);
   // AddCellAt over the box rows [j0, j1) only.
   void AddCellRows(int ci, int cj, double d, int bx, int j0, int j1, double* u) const;
-  // AddCellRows for four cells in one pass over u (each element adds them
-  // in order: four AddCellRows' bits, a quarter of the loads and stores).
-  void AddCellRows4(const int* ci, const int* cj, const double* d, int bx, int j0, int j1,
+  // AddCellRows for kCells cells in one pass over u (each element adds them
+  // in order: kCells AddCellRows' bits, 1 / kCells of the loads and stores).
+  template <int kCells>
+  void AddCellRowsN(const int* ci, const int* cj, const double* d, int bx, int j0, int j1,
                     double* u) const;
   // AddCellsAt over the box rows [j0, j1) in blocks of rows (the block of u
   // stays in L1 while the cells' table rows stream past); cell(k, &ci, &cj,
