@@ -99,7 +99,7 @@ def test_cost_mode_times_both_settings():
         str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "converged_rates.py")
     )
     cost = ex["step_cost"](steps=10, rounds=2)
-    assert set(cost) == {"default", "cycle 4"}
+    assert set(cost) == {"default", "one grid"}
     for c in cost.values():
         assert 0 < c["us_min"] <= c["us_median"] < 1e6
         assert c["iterations"] >= 1

@@ -132,28 +132,30 @@ void SurfaceCompliance::AddCellRows(int ci, int cj, double d, int bx, int j0, in
   for (int j = j0; j < j1; ++j) {
     double* urow = u + static_cast<size_t>(j) * bx;
     // K(ci - i, cj - j) = table_rev_ at column n - 1 - ci + i
-    const double* krow =
+    const float* krow =
         table_rev_.data() + static_cast<size_t>(cj - j + n_ - 1) * (2 * n_ - 1) + (n_ - 1 - ci);
-    for (int i = 0; i < bx; ++i) urow[i] += d * krow[i];
+    for (int i = 0; i < bx; ++i) urow[i] += d * static_cast<double>(krow[i]);
   }
 }
 
-MJTOUCH_TARGET_CLONES
-void SurfaceCompliance::AddCellRows4(const int* ci, const int* cj, const double* d, int bx, int j0,
-                                     int j1, double* u) const {
+template <int kCells>
+MJTOUCH_TARGET_CLONES void SurfaceCompliance::AddCellRowsN(const int* ci, const int* cj,
+                                                           const double* d, int bx, int j0, int j1,
+                                                           double* u) const {
   const size_t w = 2 * static_cast<size_t>(n_) - 1;
-  const double d0 = d[0], d1 = d[1], d2 = d[2], d3 = d[3];
+  double dk[kCells];
+  for (int k = 0; k < kCells; ++k) dk[k] = d[k];
   for (int j = j0; j < j1; ++j) {
     double* __restrict urow = u + static_cast<size_t>(j) * bx;
-    auto krow = [&](int k) {
-      return table_rev_.data() + static_cast<size_t>(cj[k] - j + n_ - 1) * w + (n_ - 1 - ci[k]);
-    };
-    const double* __restrict k0 = krow(0);
-    const double* __restrict k1 = krow(1);
-    const double* __restrict k2 = krow(2);
-    const double* __restrict k3 = krow(3);
-    for (int i = 0; i < bx; ++i)
-      urow[i] = (((urow[i] + d0 * k0[i]) + d1 * k1[i]) + d2 * k2[i]) + d3 * k3[i];
+    const float* __restrict kr[kCells];
+    for (int k = 0; k < kCells; ++k)
+      kr[k] = table_rev_.data() + static_cast<size_t>(cj[k] - j + n_ - 1) * w + (n_ - 1 - ci[k]);
+    for (int i = 0; i < bx; ++i) {
+      double v = urow[i];
+#pragma GCC unroll 8
+      for (int k = 0; k < kCells; ++k) v = v + dk[k] * static_cast<double>(kr[k][i]);
+      urow[i] = v;
+    }
   }
 }
 
@@ -164,11 +166,17 @@ void SurfaceCompliance::AddCellBlocks(size_t count, const Cell& cell, int bx, in
   for (int jb = j0; jb < j1; jb += kRows) {
     const int je = std::min(j1, jb + kRows);
     size_t k = 0;
+    for (; k + 8 <= count; k += 8) {
+      int ci[8], cj[8];
+      double d[8];
+      for (int l = 0; l < 8; ++l) cell(k + l, &ci[l], &cj[l], &d[l]);
+      AddCellRowsN<8>(ci, cj, d, bx, jb, je, u);
+    }
     for (; k + 4 <= count; k += 4) {
       int ci[4], cj[4];
       double d[4];
       for (int l = 0; l < 4; ++l) cell(k + l, &ci[l], &cj[l], &d[l]);
-      AddCellRows4(ci, cj, d, bx, jb, je, u);
+      AddCellRowsN<4>(ci, cj, d, bx, jb, je, u);
     }
     for (; k < count; ++k) {
       int ci, cj;

@@ -114,9 +114,10 @@ class SurfaceCompliance {
   static void BuildInverse(Spectrum* s);
   // AddCellAt over the box rows [j0, j1) only.
   void AddCellRows(int ci, int cj, double d, int bx, int j0, int j1, double* u) const;
-  // AddCellRows for four cells in one pass over u (each element adds them
-  // in order: four AddCellRows' bits, a quarter of the loads and stores).
-  void AddCellRows4(const int* ci, const int* cj, const double* d, int bx, int j0, int j1,
+  // AddCellRows for kCells cells in one pass over u (each element adds them
+  // in order: kCells AddCellRows' bits, 1 / kCells of the loads and stores).
+  template <int kCells>
+  void AddCellRowsN(const int* ci, const int* cj, const double* d, int bx, int j0, int j1,
                     double* u) const;
   // AddCellsAt over the box rows [j0, j1) in blocks of rows (the block of u
   // stays in L1 while the cells' table rows stream past); cell(k, &ci, &cj,
@@ -131,9 +132,10 @@ class SurfaceCompliance {
   int nx_ = 0, ny_ = 0, n_ = 0;
   double pitch_m_ = 0;
   std::vector<float> table_;  // non-periodic, m/Pa, (2n - 1)^2
-  // table_ in double with each row reversed (the direct sums walk it
-  // forward: no conversions or lane reversals in their loops)
-  std::vector<double> table_rev_;
+  // table_ with each row reversed (the direct sums walk it forward: no
+  // lane reversals in their loops; float: half the cache traffic, and each
+  // value widens to double exactly)
+  std::vector<float> table_rev_;
   double max_lift_ = 0;
   std::shared_ptr<const Spectrum> periodic_spectrum_;
   mutable std::mutex mu_;
