@@ -185,6 +185,14 @@ void FoldedSums(const KernelTables& kt, const std::vector<StressSite>& sites,
 // cell index mod s), the table at offsets (s e - px, s f - py), e, f in
 // [-E, E], rows of 2E + 1, zero beyond the table; a site then reads its
 // nodes' entries in contiguous rows.
+// f rounded to bfloat16 (to nearest, ties to even; the tables hold no NaN).
+uint16_t ToBf16(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, sizeof(u));
+  u += 0x7FFFu + ((u >> 16) & 1u);
+  return static_cast<uint16_t>(u >> 16);
+}
+
 int CoarseReach(int n, int s) { return (n - 1 + s) / s + 1; }
 
 void CoarseShearTables(const KernelTables& kt, const std::vector<StressSite>& sites,
@@ -211,7 +219,7 @@ void CoarseShearTables(const KernelTables& kt, const std::vector<StressSite>& si
     for (int l = 0; l < 2; ++l)
       for (int c = 0; c < kNumStress; ++c)
         if (want[d][c]) w->coarse_offset[(d * 2 + l) * kNumStress + c] = count++ * block;
-  w->coarse_tables.assign(count * block + 16, 0.0f);
+  w->coarse_tables.assign(count * block + 16, 0);
   for (int d = 0; d < D; ++d)
     for (int l = 0; l < 2; ++l)
       for (int c = 0; c < kNumStress; ++c) {
@@ -219,17 +227,17 @@ void CoarseShearTables(const KernelTables& kt, const std::vector<StressSite>& si
         if (off < 0) continue;
         const float* K =
             kt.At(d, l == 0 ? kLoadShearX : kLoadShearY, static_cast<StressComponent>(c));
-        float* T = w->coarse_tables.data() + off;
+        uint16_t* T = w->coarse_tables.data() + off;
         for (int py = 0; py < s; ++py)
           for (int px = 0; px < s; ++px)
             for (int f = -E; f <= E; ++f) {
               const int dj = s * f - py;
               if (dj < -(n - 1) || dj > n - 1) continue;
-              float* row = T + (static_cast<size_t>(py * s + px) * W + (f + E)) * W;
+              uint16_t* row = T + (static_cast<size_t>(py * s + px) * W + (f + E)) * W;
               for (int e = -E; e <= E; ++e) {
                 const int di = s * e - px;
                 if (di < -(n - 1) || di > n - 1) continue;
-                row[e + E] = K[static_cast<size_t>(dj + n - 1) * L + (di + n - 1)];
+                row[e + E] = ToBf16(K[static_cast<size_t>(dj + n - 1) * L + (di + n - 1)]);
               }
             }
       }
@@ -320,12 +328,12 @@ void FoldedSplitStresses(const KernelTables& kt, const std::vector<StressSite>& 
       const int phase = (st.j - qj * s) * s + (st.i - qi * s);
       // node (a0 + a, b0 + b) at e = a0 + a - qi, f = b0 + b - qj
       const long first = (static_cast<long>(phase) * W + (b0 - qj + E)) * W + (a0 - qi + E);
-      const float* tx[kNumStress];
-      const float* ty[kNumStress];
+      const uint16_t* tx[kNumStress];
+      const uint16_t* ty[kNumStress];
       int comp[kNumStress], nc = 0;
       for (int c = 0; c < kNumStress; ++c) {
         if (!st.want[c] || !kt.components[c]) continue;
-        const float* base = w->coarse_tables.data() + first;
+        const uint16_t* base = w->coarse_tables.data() + first;
         tx[nc] = base + w->coarse_offset[(st.depth_index * 2 + 0) * kNumStress + c];
         ty[nc] = base + w->coarse_offset[(st.depth_index * 2 + 1) * kNumStress + c];
         comp[nc++] = c;

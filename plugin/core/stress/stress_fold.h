@@ -8,6 +8,7 @@
 #define MJTOUCH_STRESS_STRESS_FOLD_H_
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "stress/kernel_tables.h"
@@ -70,8 +71,8 @@ struct FoldScratch {
   bool fold_legacy = false;
   // FoldedSplitStresses: the shear tables by lattice phase (CoarseShearTables)
   // and the coarse correction's node fields.
-  std::vector<float> coarse_tables;
-  std::vector<long> coarse_offset;  // per (depth, load x / y, component): -1 if not wanted
+  std::vector<uint16_t> coarse_tables;  // bfloat16
+  std::vector<long> coarse_offset;      // per (depth, load x / y, component): -1 if not wanted
   const KernelTables* coarse_key = nullptr;
   std::vector<std::array<bool, kNumStress>> coarse_want;
   std::vector<float> node_x, node_y;  // rows of node_stride, zero padded
