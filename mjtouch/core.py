@@ -461,6 +461,7 @@ class StressEngine:
         fold: bool = True,
         threads: int = 1,
         fold_legacy: bool = False,
+        split: bool = False,
     ):
         """Stress (nrec x 6, Pa). With timing=True also returns (seconds per
         call, method used, active cells). slip = (rx, ry): the shear is
@@ -469,8 +470,12 @@ class StressEngine:
         float32(r x pressure)); fold=False: the reference direct sum.
         threads: the stage's thread count (the same bits for any count).
         fold_legacy: the folded path's memory layout before #13 (unaligned
-        table loads; the same bits), for benchmarks."""
+        table loads; the same bits), for benchmarks. split=True (with slip
+        and any shear fields): partial slip's path, the pressure folded at
+        slip plus the coarse correction of shear - slip x pressure."""
         p = np.ascontiguousarray(pressure_pa, dtype=np.float32)
+        if split and (slip is None or shear_x_pa is None or shear_y_pa is None):
+            raise ValueError("split=True needs slip and both shear fields")
         if p.shape != (self.n, self.n):
             raise ValueError(f"pressure_pa must have shape ({self.n}, {self.n}), got {p.shape}")
         if slip is not None:
@@ -481,7 +486,16 @@ class StressEngine:
                 shear_y_pa = (ry * p.astype(np.float64)).astype(np.float32)
         sx, sy = _shear_pair(p, shear_x_pa, shear_y_pa)
         out, seconds, used, active = self._e.stress(
-            p, sx, sy, method, int(repeats), slip, bool(fold), int(threads), bool(fold_legacy)
+            p,
+            sx,
+            sy,
+            method,
+            int(repeats),
+            slip,
+            bool(fold),
+            int(threads),
+            bool(fold_legacy),
+            bool(split),
         )
         return (out, seconds, used, active) if timing else out
 

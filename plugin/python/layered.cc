@@ -220,7 +220,7 @@ class StressEngine {
   std::tuple<Out<double>, double, std::string, int> Stress(
       const F32_2& pressure_pa, std::optional<F32_2> shear_x_pa, std::optional<F32_2> shear_y_pa,
       const std::string& method, int repeats, std::optional<std::pair<double, double>> slip,
-      bool fold, int threads, bool fold_legacy) {
+      bool fold, int threads, bool fold_legacy, bool split) {
     const StressMethod m = ParseMethod(method);
     if (threads < 1 || threads > ThreadPool::kMaxThreads)
       Fail("threads = " + std::to_string(threads) + " is out of range; valid range [1, " +
@@ -230,7 +230,8 @@ class StressEngine {
     opt.threads = threads;
     opt.fold_legacy = fold_legacy;
     if (slip) {
-      opt.uniform_slip = true;
+      opt.uniform_slip = !split;  // split: any shear, partial slip's path
+      opt.fold_general = split;
       opt.slip_x = slip->first;
       opt.slip_y = slip->second;
     }
@@ -356,12 +357,14 @@ void BindLayered(nb::module_& m) {
            nb::arg("shear_x_pa").noconvert().none() = nb::none(),
            nb::arg("shear_y_pa").noconvert().none() = nb::none(), nb::arg("method") = "auto",
            nb::arg("repeats") = 1, nb::arg("slip").none() = nb::none(), nb::arg("fold") = true,
-           nb::arg("threads") = 1, nb::arg("fold_legacy") = false,
+           nb::arg("threads") = 1, nb::arg("fold_legacy") = false, nb::arg("split") = false,
            "(stress nrec x 6 Pa, seconds per call, path used, active cells) from float32\n"
            "traction fields (n x n, [j, i]); shear both or neither. slip = (rx, ry): the\n"
            "shear is (rx, ry) x pressure, so the direct path folds its tables; fold=False:\n"
            "the reference direct sum. threads in [1, 64]: the same bits for any count.\n"
-           "fold_legacy: the folded path unaligned, without its rx cache (same bits; benchmarks).");
+           "fold_legacy: the folded path unaligned, without its rx cache (same bits; benchmarks).\n"
+           "split: with slip, any shear fields by partial slip's path (the pressure folded\n"
+           "at slip plus the coarse correction of shear - slip x pressure).");
 }
 
 }  // namespace mjtouch::py

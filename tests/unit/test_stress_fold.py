@@ -124,6 +124,45 @@ def test_folded_path_handles_oblique_slip_and_edge_contact(engine):
     assert _rel_rms(got, ref) <= REL_RMS_TOL
 
 
+def test_split_path_matches_reference_for_partial_slip_shear(sliding_contact, engine):
+    # Partial slip's path (stress_fold.h FoldedSplitStresses): the pressure
+    # folded at the full-slip ratio plus a coarse correction of the rest.
+    # Shear of Cattaneo's shape on the real contact: mu p, less mu p scaled
+    # down inside a central stick disk, direction fixed; the ratio r is its
+    # total over the total pressure, so q - r p carries no net force.
+    _, p, _ = sliding_contact
+    n = engine.n
+    yy, xx = np.mgrid[0:n, 0:n]
+    loaded = p > 0
+    cy, cx = (float(np.mean(v[loaded])) for v in (yy, xx))
+    r_cells = np.sqrt(loaded.sum() / np.pi)
+    stick = np.hypot(xx - cx, yy - cy) < 0.6 * r_cells
+    mu = 0.8
+    q = mu * p.astype(np.float64) * np.where(stick, 0.5, 1.0)
+    e = np.array([0.8, -0.6])
+    qx, qy = (q * e[0]).astype(np.float32), (q * e[1]).astype(np.float32)
+    ratio = (float(qx.sum(dtype=np.float64) / p.sum()), float(qy.sum(dtype=np.float64) / p.sum()))
+    ref = engine.stress(p, qx, qy, method="direct", fold=False)
+    got = engine.stress(p, qx, qy, method="direct", slip=ratio, split=True)
+    full = engine.stress(p, slip=ratio, method="direct")
+    effect = _rel_rms(full, ref)  # what the correction carries
+    assert effect > 100 * REL_RMS_TOL
+    # the correction's error: the kernels' interpolation over the node
+    # spacing (0.4 mm here, over sites 0.75 mm deep), a small part of it
+    assert _rel_rms(got, ref) < 0.05 * effect, (_rel_rms(got, ref), effect)
+    # with no correction to make (q = r p) the split path is the folded one
+    fx = (ratio[0] * p.astype(np.float64)).astype(np.float32)
+    fy = (ratio[1] * p.astype(np.float64)).astype(np.float32)
+    uniform = engine.stress(p, fx, fy, method="direct", slip=ratio, split=True)
+    assert _rel_rms(uniform, full) <= REL_RMS_TOL
+
+
+def test_split_needs_slip_and_shear(sliding_contact, engine):
+    _, p, _ = sliding_contact
+    with pytest.raises(ValueError, match="split=True needs slip"):
+        engine.stress(p, split=True)
+
+
 @pytest.mark.parametrize("fold", [True, False])
 def test_stress_bit_identical_for_any_thread_count(sliding_contact, engine, fold):
     _, p, ratio = sliding_contact

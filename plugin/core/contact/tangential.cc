@@ -36,15 +36,6 @@ double CornerSum(F f, double x, double y, double h) {
   return f(x + a, y + a) - f(x - a, y + a) - f(x + a, y - a) + f(x - a, y - a);
 }
 
-// The convex potential of the projection onto the disk |q| <= g:
-// psi(t) = |t|^2 / 2 inside, g |t| - g^2 / 2 outside (its gradient is the
-// projection).
-double Psi(double tx, double ty, double g) {
-  const double t2 = tx * tx + ty * ty;
-  if (t2 <= g * g) return 0.5 * t2;
-  return g * std::sqrt(t2) - 0.5 * g * g;
-}
-
 // The loaded cells (p > 0) of a step, in index order, with their disk radii.
 struct Cells {
   std::vector<int> index;   // grid index
@@ -125,61 +116,79 @@ int ProjectWithForce(const std::vector<double>& yx, const std::vector<double>& y
   double g_sum = 0;
   for (size_t c = 0; c < m; ++c) g_sum += g[c];
   const double scale = g_sum + std::hypot(tx, ty);
-  auto eval = [&](double ax, double ay, double* gx, double* gy, double* hxx, double* hxy,
-                  double* hyy) {
+  // Phi(lam) and, with `grad`, its gradient and Hessian, in one pass; psi,
+  // the potential of the projection onto the disk |q| <= g, is |t|^2 / 2
+  // inside and g |t| - g^2 / 2 outside (its gradient is the projection).
+  struct Eval {
+    double phi = 0, gx = 0, gy = 0, hxx = 0, hxy = 0, hyy = 0;
+  };
+  auto eval = [&](double ax, double ay, bool grad) {
     double phi = 0, sx = 0, sy = 0, h11 = 0, h12 = 0, h22 = 0;
     for (size_t c = 0; c < m; ++c) {
       const double px = yx[c] + k * ax, py = yy[c] + k * ay;
-      phi += Psi(px, py, g[c]);
       const double t2 = px * px + py * py;
-      if (t2 <= g[c] * g[c]) {
+      if (t2 <= g[c] * g[c]) {  // psi = |t|^2 / 2, its gradient t
+        phi += 0.5 * t2;
+        if (!grad) continue;
         sx += px;
         sy += py;
         h11 += 1.0;
         h22 += 1.0;
-      } else {
-        const double t = std::sqrt(t2), f = g[c] / t;
+      } else {  // psi = g |t| - g^2 / 2, its gradient g t / |t|
+        const double t = std::sqrt(t2);
+        phi += g[c] * t - 0.5 * g[c] * g[c];
+        if (!grad) continue;
+        const double inv = 1.0 / t, f = g[c] * inv;
         sx += f * px;
         sy += f * py;
-        const double ux = px / t, uy = py / t;
+        const double ux = px * inv, uy = py * inv;
         h11 += f * (1.0 - ux * ux);
         h12 -= f * ux * uy;
         h22 += f * (1.0 - uy * uy);
       }
     }
-    if (gx) {
-      *gx = sx - tx;
-      *gy = sy - ty;
-      *hxx = k * h11;
-      *hxy = k * h12;
-      *hyy = k * h22;
-    }
-    return phi / k - tx * ax - ty * ay;
+    Eval e;
+    e.phi = phi / k - tx * ax - ty * ay;
+    e.gx = sx - tx;
+    e.gy = sy - ty;
+    e.hxx = k * h11;
+    e.hxy = k * h12;
+    e.hyy = k * h22;
+    return e;
   };
   int steps = 0;
   double last_norm = HUGE_VAL;
+  // Each step's trial point is evaluated with its gradient, which the next
+  // step then starts from (one pass per accepted full step).
+  Eval cur = eval(lx, ly, true);
   for (; steps < 60; ++steps) {
-    double gx, gy, hxx, hxy, hyy;
-    const double phi = eval(lx, ly, &gx, &gy, &hxx, &hxy, &hyy);
+    const double phi = cur.phi, gx = cur.gx, gy = cur.gy;
     // Close enough (the rest goes to the stick cells below), or stalled.
     const double norm = std::hypot(gx, gy);
     if (norm <= 1e-10 * scale || (norm <= 1e-8 * scale && norm > 0.5 * last_norm)) break;
     last_norm = norm;
     // Regularised so that a step exists when every cell slips the same way.
     const double reg = 1e-12 * k * static_cast<double>(m);
-    hxx += reg;
-    hyy += reg;
+    const double hxx = cur.hxx + reg, hyy = cur.hyy + reg, hxy = cur.hxy;
     const double det = hxx * hyy - hxy * hxy;
     const double dx = -(hyy * gx - hxy * gy) / det, dy = -(hxx * gy - hxy * gx) / det;
     const double slope = gx * dx + gy * dy;
-    double s = 1.0;
     // Phi's round-off (~1e-16 of its terms) hides decreases below ~1e-12 of
     // it: near the solution Armijo cannot tell, and Newton is then exact
     // (piecewise quadratic, one piece).
-    bool accepted = -slope <= 1e-12 * (std::fabs(phi) + g_sum * g_sum / k);
-    for (int b = 0; b < 40 && !accepted; ++b, s *= 0.5) {
-      if (eval(lx + s * dx, ly + s * dy, nullptr, nullptr, nullptr, nullptr, nullptr) <=
-          phi + 1e-4 * s * slope) {
+    const bool flat = -slope <= 1e-12 * (std::fabs(phi) + g_sum * g_sum / k);
+    const Eval full = eval(lx + dx, ly + dy, true);
+    if (flat || full.phi <= phi + 1e-4 * slope) {
+      lx += dx;
+      ly += dy;
+      cur = full;
+      continue;
+    }
+    double s = 1.0;
+    bool accepted = false;
+    for (int b = 1; b < 40; ++b) {
+      s *= 0.5;
+      if (eval(lx + s * dx, ly + s * dy, false).phi <= phi + 1e-4 * s * slope) {
         accepted = true;
         break;
       }
@@ -187,13 +196,15 @@ int ProjectWithForce(const std::vector<double>& yx, const std::vector<double>& y
     if (!accepted) {
       // Phi flat to round-off along d: take the Newton step if it shrinks
       // the gradient, else stop.
-      double g2x, g2y, a, b2, c2;
-      eval(lx + dx, ly + dy, &g2x, &g2y, &a, &b2, &c2);
-      if (std::hypot(g2x, g2y) >= std::hypot(gx, gy)) break;
-      s = 1.0;
+      if (std::hypot(full.gx, full.gy) >= norm) break;
+      lx += dx;
+      ly += dy;
+      cur = full;
+      continue;
     }
     lx += s * dx;
     ly += s * dy;
+    cur = eval(lx, ly, true);
   }
   double sx = 0, sy = 0;
   int inside = 0;

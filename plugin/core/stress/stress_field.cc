@@ -112,7 +112,7 @@ StressCost EstimateStressCost(const KernelTables& kt, const std::vector<StressSi
   double macs = 0;
   for (const StressSite& s : sites) macs += CountWanted(s.want);
   c.direct_s = folded    ? EstimateFoldedSeconds(kt, sites, active_cells)
-               : general ? 3.0 * EstimateFoldedSeconds(kt, sites, active_cells)
+               : general ? 1.6 * EstimateFoldedSeconds(kt, sites, active_cells)
                          : kDirectSecondsPerMac * macs * loads * active_cells;
   const double N = NextFftSize(2 * kt.n - 1);
   const double points = N * N;
@@ -316,8 +316,8 @@ StressMethod ComputeStresses(const KernelTables& kt, const KernelSpectra* spectr
     FoldedDirectStresses(kt, sites, runs, pressure, shear, opt.slip_x, opt.slip_y, opt.threads,
                          &scratch->fold, out);
   else if (UsesGeneralFoldedPath(kt, shear, opt))
-    FoldedGeneralStresses(kt, sites, runs, pressure, shear_x, shear_y, opt.threads, &scratch->fold,
-                          out);
+    FoldedSplitStresses(kt, sites, runs, pressure, shear_x, shear_y, opt.slip_x, opt.slip_y,
+                        opt.threads, &scratch->fold, out);
   else
     ReferenceDirectStresses(kt, sites, runs, pressure, shear ? shear_x : nullptr,
                             shear ? shear_y : nullptr, opt.threads, out);

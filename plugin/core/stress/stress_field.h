@@ -58,7 +58,7 @@ std::shared_ptr<const KernelSpectra> BuildKernelSpectra(const KernelTables& kt,
 double KernelSpectraBytes(const KernelTables& kt, const std::vector<StressSite>& sites);
 
 // Estimated seconds per evaluation of each path (one core). folded: the
-// direct path is the folded one (stress_fold.h); general: three of them.
+// direct path is the folded one (stress_fold.h); general: the split one.
 struct StressCost {
   double direct_s = 0, fft_s = 0;
 };
@@ -86,7 +86,8 @@ struct StressOptions {
   bool fold = true;
   int threads = 1;
   bool fold_legacy = false;
-  // Any shear fields folded too (FoldedGeneralStresses) instead of the
+  // Any shear fields folded too (FoldedSplitStresses: the uniform-slip
+  // part at slip_x, slip_y and a coarse correction) instead of the
   // reference sum: the partial-slip skin's.
   bool fold_general = false;
 };
@@ -95,8 +96,8 @@ struct StressOptions {
 inline bool UsesFoldedPath(const KernelTables& kt, bool shear, const StressOptions& opt) {
   return opt.fold && (!shear || opt.uniform_slip) && kt.mirror_symmetric;
 }
-// Whether it is the folded path of any shear fields (FoldedGeneralStresses:
-// three folded sums, which read the shear arrays).
+// Whether it is the folded path of any shear fields (FoldedSplitStresses,
+// which reads the shear arrays).
 inline bool UsesGeneralFoldedPath(const KernelTables& kt, bool shear, const StressOptions& opt) {
   return opt.fold && opt.fold_general && shear && !opt.uniform_slip && kt.mirror_symmetric;
 }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 
 #include "common/thread_pool.h"
@@ -179,30 +180,177 @@ void FoldedSums(const KernelTables& kt, const std::vector<StressSite>& sites,
   w->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// The phase tables of the coarse correction (FoldScratch::coarse_tables):
+// per wanted (depth, load, component) and lattice phase (px, py) (a site's
+// cell index mod s), the table at offsets (s e - px, s f - py), e, f in
+// [-E, E], rows of 2E + 1, zero beyond the table; a site then reads its
+// nodes' entries in contiguous rows.
+// f rounded to bfloat16 (to nearest, ties to even; the tables hold no NaN).
+uint16_t ToBf16(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, sizeof(u));
+  u += 0x7FFFu + ((u >> 16) & 1u);
+  return static_cast<uint16_t>(u >> 16);
+}
+
+int CoarseReach(int n, int s) { return (n - 1 + s) / s + 1; }
+
+void CoarseShearTables(const KernelTables& kt, const std::vector<StressSite>& sites,
+                       FoldScratch* w) {
+  const int D = static_cast<int>(kt.depths_m.size());
+  std::vector<std::array<bool, kNumStress>> want(D);
+  double depth_m = HUGE_VAL;  // the shallowest site's
+  for (const StressSite& st : sites) {
+    bool any = false;
+    for (int c = 0; c < kNumStress; ++c) {
+      want[st.depth_index][c] |= st.want[c] && kt.components[c];
+      any |= st.want[c] && kt.components[c];
+    }
+    if (any) depth_m = std::min(depth_m, kt.depths_m[st.depth_index]);
+  }
+  if (w->coarse_key == &kt && w->coarse_want == want) return;
+  w->coarse_cells = std::clamp(static_cast<int>(kCoarseSpacingPerDepth * depth_m / kt.pitch_m), 1,
+                               kMaxCoarseCells);
+  const int s = w->coarse_cells, n = kt.n, L = 2 * n - 1, E = CoarseReach(n, s), W = 2 * E + 1;
+  const size_t block = static_cast<size_t>(s) * s * W * W;
+  w->coarse_offset.assign(static_cast<size_t>(D) * 2 * kNumStress, -1);
+  size_t count = 0;
+  for (int d = 0; d < D; ++d)
+    for (int l = 0; l < 2; ++l)
+      for (int c = 0; c < kNumStress; ++c)
+        if (want[d][c]) w->coarse_offset[(d * 2 + l) * kNumStress + c] = count++ * block;
+  w->coarse_tables.assign(count * block + 16, 0);
+  for (int d = 0; d < D; ++d)
+    for (int l = 0; l < 2; ++l)
+      for (int c = 0; c < kNumStress; ++c) {
+        const long off = w->coarse_offset[(d * 2 + l) * kNumStress + c];
+        if (off < 0) continue;
+        const float* K =
+            kt.At(d, l == 0 ? kLoadShearX : kLoadShearY, static_cast<StressComponent>(c));
+        uint16_t* T = w->coarse_tables.data() + off;
+        for (int py = 0; py < s; ++py)
+          for (int px = 0; px < s; ++px)
+            for (int f = -E; f <= E; ++f) {
+              const int dj = s * f - py;
+              if (dj < -(n - 1) || dj > n - 1) continue;
+              uint16_t* row = T + (static_cast<size_t>(py * s + px) * W + (f + E)) * W;
+              for (int e = -E; e <= E; ++e) {
+                const int di = s * e - px;
+                if (di < -(n - 1) || di > n - 1) continue;
+                row[e + E] = ToBf16(K[static_cast<size_t>(dj + n - 1) * L + (di + n - 1)]);
+              }
+            }
+      }
+  w->coarse_key = &kt;
+  w->coarse_want = want;
+}
+
 }  // namespace
+
+void FoldedSplitStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
+                         const ActiveRuns& runs, const float* pressure, const float* shear_x,
+                         const float* shear_y, double slip_x, double slip_y, int threads,
+                         FoldScratch* w, Stress6* out) {
+  FoldedSums(kt, sites, runs, pressure, true, slip_x, slip_y, kLoadPressure, threads, w, out);
+  if (runs.row.empty() || sites.empty()) return;
+  const double seconds = w->seconds;
+  const auto t0 = std::chrono::steady_clock::now();
+  CoarseShearTables(kt, sites, w);
+  const int s = w->coarse_cells, n = kt.n, E = CoarseReach(n, s), W = 2 * E + 1;
+  // Each cell's weights on the nodes a - 1 .. a + 2 (a = i / s) along one
+  // axis: quadratic Lagrange on the nearest node and its two neighbours
+  // (force and first and second moments kept); separable.
+  double wt[kMaxCoarseCells][4] = {};
+  for (int r = 0; r < s; ++r) {
+    const bool up = 2 * r > s;  // nearest node a + 1
+    const double t = static_cast<double>(r) / s - (up ? 1.0 : 0.0);
+    const int k = up ? 2 : 1;  // the nearest node's slot
+    wt[r][k - 1] = 0.5 * t * (t - 1.0);
+    wt[r][k] = 1.0 - t * t;
+    wt[r][k + 1] = 0.5 * t * (t + 1.0);
+  }
+  int i0 = n, i1 = -1;
+  for (size_t r = 0; r < runs.row.size(); ++r) {
+    i0 = std::min(i0, runs.begin[r]);
+    i1 = std::max(i1, runs.end[r] - 1);
+  }
+  const int j0 = runs.row.front(), j1 = runs.row.back();
+  const int a0 = i0 / s - 1, b0 = j0 / s - 1;
+  const int na = i1 / s + 3 - a0, nb = j1 / s + 3 - b0;
+  const int vs = (na + kSumLanes - 1) / kSumLanes * kSumLanes;
+  // Along x into one row of nodes per cell row, then along y.
+  const size_t rows = static_cast<size_t>(j1 - j0 + 1);
+  w->row_nodes_x.assign(rows * vs, 0.0);
+  w->row_nodes_y.assign(rows * vs, 0.0);
+  const double rx = static_cast<float>(slip_x), ry = static_cast<float>(slip_y);
+  for (size_t r = 0; r < runs.row.size(); ++r) {
+    const int j = runs.row[r];
+    double* ox = w->row_nodes_x.data() + (j - j0) * vs;
+    double* oy = w->row_nodes_y.data() + (j - j0) * vs;
+    for (int i = runs.begin[r]; i < runs.end[r]; ++i) {
+      const size_t k = static_cast<size_t>(j) * n + i;
+      // (the fold's float ratios, so that the two parts add to the field's stress)
+      const double qx = shear_x[k] - rx * pressure[k];
+      const double qy = shear_y[k] - ry * pressure[k];
+      const double* c = wt[i % s];
+      const int a = i / s - 1 - a0;
+      for (int t = 0; t < 4; ++t) {
+        ox[a + t] += c[t] * qx;
+        oy[a + t] += c[t] * qy;
+      }
+    }
+  }
+  w->node_sum_x.assign(static_cast<size_t>(vs) * nb, 0.0);
+  w->node_sum_y.assign(w->node_sum_x.size(), 0.0);
+  for (int j = j0; j <= j1; ++j) {
+    const double* c = wt[j % s];
+    const double* ix = w->row_nodes_x.data() + (j - j0) * vs;
+    const double* iy = w->row_nodes_y.data() + (j - j0) * vs;
+    for (int t = 0; t < 4; ++t) {
+      if (c[t] == 0.0) continue;
+      double* ox = w->node_sum_x.data() + static_cast<size_t>(j / s - 1 + t - b0) * vs;
+      double* oy = w->node_sum_y.data() + static_cast<size_t>(j / s - 1 + t - b0) * vs;
+      for (int a = 0; a < na; ++a) {
+        ox[a] += c[t] * ix[a];
+        oy[a] += c[t] * iy[a];
+      }
+    }
+  }
+  w->node_x.assign(w->node_sum_x.begin(), w->node_sum_x.end());
+  w->node_y.assign(w->node_sum_y.begin(), w->node_sum_y.end());
+  const int chunks =
+      std::max(1, std::min(threads, static_cast<int>(sites.size()) / kSitesPerChunk));
+  ThreadPool::Shared().Run(chunks, threads, [&](int k) {
+    const size_t q0 = sites.size() * k / chunks, q1 = sites.size() * (k + 1) / chunks;
+    for (size_t q = q0; q < q1; ++q) {
+      const StressSite& st = sites[q];
+      const int qi = st.i / s, qj = st.j / s;
+      const int phase = (st.j - qj * s) * s + (st.i - qi * s);
+      // node (a0 + a, b0 + b) at e = a0 + a - qi, f = b0 + b - qj
+      const long first = (static_cast<long>(phase) * W + (b0 - qj + E)) * W + (a0 - qi + E);
+      const uint16_t* tx[kNumStress];
+      const uint16_t* ty[kNumStress];
+      int comp[kNumStress], nc = 0;
+      for (int c = 0; c < kNumStress; ++c) {
+        if (!st.want[c] || !kt.components[c]) continue;
+        const uint16_t* base = w->coarse_tables.data() + first;
+        tx[nc] = base + w->coarse_offset[(st.depth_index * 2 + 0) * kNumStress + c];
+        ty[nc] = base + w->coarse_offset[(st.depth_index * 2 + 1) * kNumStress + c];
+        comp[nc++] = c;
+      }
+      double sum[kNumStress];
+      CoarseDots(tx, ty, nc, W, w->node_x.data(), w->node_y.data(), vs, nb, vs, sum);
+      for (int c = 0; c < nc; ++c) out[q][comp[c]] += sum[c];
+    }
+  });
+  w->seconds =
+      seconds + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
                           const ActiveRuns& runs, const float* pressure, bool shear, double slip_x,
                           double slip_y, int threads, FoldScratch* w, Stress6* out) {
   FoldedSums(kt, sites, runs, pressure, shear, slip_x, slip_y, kLoadPressure, threads, w, out);
-}
-
-void FoldedGeneralStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
-                           const ActiveRuns& runs, const float* pressure, const float* shear_x,
-                           const float* shear_y, int threads, FoldScratch* w, Stress6* out) {
-  FoldedSums(kt, sites, runs, pressure, false, 0, 0, kLoadPressure, threads, w, out);
-  double seconds = w->seconds;
-  std::vector<Stress6>& part = w->general_part;
-  part.resize(sites.size());
-  const float* fields[2] = {shear_x, shear_y};
-  const SurfaceLoad loads[2] = {kLoadShearX, kLoadShearY};
-  for (int l = 0; l < 2; ++l) {
-    FoldedSums(kt, sites, runs, fields[l], false, 0, 0, loads[l], threads, w, part.data());
-    seconds += w->seconds;
-    for (size_t s = 0; s < sites.size(); ++s)
-      for (int c = 0; c < kNumStress; ++c) out[s][c] += part[s][c];
-  }
-  w->seconds = seconds;
 }
 
 void ReferenceDirectStresses(const KernelTables& kt, const std::vector<StressSite>& sites,

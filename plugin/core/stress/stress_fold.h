@@ -8,6 +8,7 @@
 #define MJTOUCH_STRESS_STRESS_FOLD_H_
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "stress/kernel_tables.h"
@@ -68,7 +69,15 @@ struct FoldScratch {
   // The table loads unaligned (every one splits a cache line) and no rx
   // cache (the same bits): for the benchmark's ratio and the tests.
   bool fold_legacy = false;
-  std::vector<Stress6> general_part;  // FoldedGeneralStresses: one load's sums
+  // FoldedSplitStresses: the shear tables by lattice phase (CoarseShearTables)
+  // and the coarse correction's node fields.
+  std::vector<uint16_t> coarse_tables;  // bfloat16
+  std::vector<long> coarse_offset;      // per (depth, load x / y, component): -1 if not wanted
+  const KernelTables* coarse_key = nullptr;
+  std::vector<std::array<bool, kNumStress>> coarse_want;
+  std::vector<float> node_x, node_y;  // rows of node_stride, zero padded
+  std::vector<double> node_sum_x, node_sum_y, row_nodes_x, row_nodes_y;
+  int coarse_cells = 1;  // the lattice's spacing s, cells
 };
 
 // Stress (Pa) at every site into out[site] (components a site does not want
@@ -79,12 +88,23 @@ void FoldedDirectStresses(const KernelTables& kt, const std::vector<StressSite>&
                           const ActiveRuns& runs, const float* pressure, bool shear, double slip_x,
                           double slip_y, int threads, FoldScratch* w, Stress6* out);
 
-// The same for any shear fields (partial slip): three folded sums, the
-// pressure against Kp, shear x against Kx and shear y against Ky, added in
-// that order (each one fixed sequence of float operations, as above).
-void FoldedGeneralStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
-                           const ActiveRuns& runs, const float* pressure, const float* shear_x,
-                           const float* shear_y, int threads, FoldScratch* w, Stress6* out);
+// The same split into the full-slip part and a correction: the folded sum
+// of the pressure at the ratios (slip_x, slip_y) (FoldedDirectStresses'),
+// plus the stress of the rest dq = q - slip p, which carries no net force
+// (the tractions sum to the friction force either way), from dq moved onto
+// the nodes of a lattice s cells apart by quadratic Lagrange weights
+// (separable, on each cell's nearest node and its two neighbours per axis),
+// which keep each cell's force and first and second moments: the error is
+// the kernels' interpolation error over the node spacing, third order. The
+// spacing s pitch is at most kCoarseSpacingPerDepth of the shallowest
+// site's depth (s = 1: the exact sum; s in [1, kMaxCoarseCells]):
+// examples/bench_partial_slip.py reports the error against the exact sums.
+constexpr double kCoarseSpacingPerDepth = 0.55;
+constexpr int kMaxCoarseCells = 16;
+void FoldedSplitStresses(const KernelTables& kt, const std::vector<StressSite>& sites,
+                         const ActiveRuns& runs, const float* pressure, const float* shear_x,
+                         const float* shear_y, double slip_x, double slip_y, int threads,
+                         FoldScratch* w, Stress6* out);
 
 // The reference direct sum (StressAtReceptor per site and component), with
 // the sites split over threads the same way (bit-identical for any count).

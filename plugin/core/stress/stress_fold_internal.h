@@ -56,6 +56,14 @@ void FoldMirroredRows(const KernelTables& kt, int d, StressComponent comp, int d
                       int x0, int w, float rx, float ry, bool shear, SurfaceLoad single, float* e,
                       int ew);
 
+// The coarse correction's sums of one site's nc components
+// (FoldedSplitStresses): over `rows` node rows, the x and y shear tables'
+// rows (tx[c], ty[c] in bfloat16, tstride apart) against the node fields' (vstride
+// apart) at `cols` columns, a multiple of 16 (the tables readable 15 floats
+// beyond), into result[c].
+void CoarseDots(const uint16_t* const* tx, const uint16_t* const* ty, int nc, long tstride,
+                const float* vx, const float* vy, int vstride, int rows, int cols, double* result);
+
 // Planning (stress_fold_plan.cc).
 // FoldScratch::h for float rx: built on the second consecutive call with the
 // same tables and rx, dropped when rx changes (h_valid says whether it holds).

@@ -405,5 +405,88 @@ MJTOUCH_ISA_COPIES(FoldMirroredRows,
                     int w, float rx, float ry, bool shear, SurfaceLoad single, float* e, int ew),
                    (kt, d, comp, dy0, rows, x0, w, rx, ry, shear, single, e, ew))
 
+// The coarse correction's sums (stress_fold.h FoldedSplitStresses): per
+// component, over the node rows, the x then the y table row against the
+// node fields in chunks of 16 (lane l: node column l mod 16), one fma per
+// term in 16 float lanes, the tables in bfloat16 (half the memory traffic;
+// 2^-9 per entry, on a correction that is a small part of the stress) (a
+// few hundred terms in float cost it ~1e-7 of itself), then the lanes
+// widened and reduced in a fixed order: the same bits on every ISA. The
+// components share the node loads.
+template <int W>
+struct NativeU {
+  typedef uint32_t vu __attribute__((vector_size(W * sizeof(uint32_t))));
+};
+
+// W bfloat16 values (the high halves of floats) as W floats: exact.
+template <int W>
+inline __attribute__((always_inline)) typename Native<W>::vf LoadBf16(const uint16_t* p) {
+  typename NativeU<W>::vu u;
+  for (int l = 0; l < W; ++l) u[l] = static_cast<uint32_t>(p[l]) << 16;
+  typename Native<W>::vf f;
+  std::memcpy(&f, &u, sizeof(f));
+  return f;
+}
+
+template <int W, bool kFma, int NC>
+inline __attribute__((always_inline)) void CoarseDotsN(const uint16_t* const* tx,
+                                                       const uint16_t* const* ty, long tstride,
+                                                       const float* vx, const float* vy,
+                                                       int vstride, int rows, int cols,
+                                                       double* result) {
+  using N = Native<W>;
+  using vf = typename N::vf;
+  vf acc[NC][N::kParts] = {};
+  for (int b = 0; b < rows; ++b) {
+    const float* ux = vx + static_cast<long>(b) * vstride;
+    const float* uy = vy + static_cast<long>(b) * vstride;
+    const long t = b * tstride;
+    for (int a = 0; a < cols; a += kSumLanes)
+      for (int p = 0; p < N::kParts; ++p) {
+        const int o = a + p * W;
+        const vf x = N::Load(ux + o), y = N::Load(uy + o);
+        for (int c = 0; c < NC; ++c) {
+          acc[c][p] = MulAdd<kFma>(LoadBf16<W>(tx[c] + t + o), x, acc[c][p]);
+          acc[c][p] = MulAdd<kFma>(LoadBf16<W>(ty[c] + t + o), y, acc[c][p]);
+        }
+      }
+  }
+  for (int c = 0; c < NC; ++c) {
+    double lanes[kSumLanes];
+    for (int p = 0; p < N::kParts; ++p)
+      for (int l = 0; l < W; ++l) lanes[p * W + l] = acc[c][p][l];
+    double a8[8];
+    for (int i = 0; i < 8; ++i) a8[i] = lanes[i] + lanes[i + 8];
+    result[c] = ((a8[0] + a8[4]) + (a8[2] + a8[6])) + ((a8[1] + a8[5]) + (a8[3] + a8[7]));
+  }
+}
+
+template <int W, bool kFma>
+inline __attribute__((always_inline)) void CoarseDotsBody(const uint16_t* const* tx,
+                                                          const uint16_t* const* ty, int nc,
+                                                          long tstride, const float* vx,
+                                                          const float* vy, int vstride, int rows,
+                                                          int cols, double* result) {
+  for (int c = 0; c < nc;) {
+    const int left = nc - c;
+    if (left >= 3) {
+      CoarseDotsN<W, kFma, 3>(tx + c, ty + c, tstride, vx, vy, vstride, rows, cols, result + c);
+      c += 3;
+    } else if (left == 2) {
+      CoarseDotsN<W, kFma, 2>(tx + c, ty + c, tstride, vx, vy, vstride, rows, cols, result + c);
+      c += 2;
+    } else {
+      CoarseDotsN<W, kFma, 1>(tx + c, ty + c, tstride, vx, vy, vstride, rows, cols, result + c);
+      c += 1;
+    }
+  }
+}
+
+MJTOUCH_ISA_COPIES(CoarseDots,
+                   (const uint16_t* const* tx, const uint16_t* const* ty, int nc, long tstride,
+                    const float* vx, const float* vy, int vstride, int rows, int cols,
+                    double* result),
+                   (tx, ty, nc, tstride, vx, vy, vstride, rows, cols, result))
+
 }  // namespace fold_detail
 }  // namespace mjtouch
