@@ -50,7 +50,7 @@ from mjtouch.envs.base import ObsBlock, TouchEnv
 from mjtouch.envs.texture_explore import env_fingertip
 from mjtouch.scene import scenes
 
-BLOCK_HALF_M = (0.01, 0.015, 0.02)  # the held block's half sizes (x: towards the wall)
+BLOCK_HALF_M = (0.01, 0.015, 0.02)  # the held block's half sizes: towards the wall, across, up
 BLOCK_MASS_KG = 0.02
 GRATING_PERIOD_M = 1e-3  # ridges across the block's face, perpendicular to slip
 PAD_FRICTION = 0.1  # below every block friction, so the block's sets the contact's
@@ -107,25 +107,28 @@ def _cell_indices(nx: int) -> tuple[np.ndarray, np.ndarray]:
     return rows, cols
 
 
-def _euler_deg(element, *angles_deg: float) -> None:
-    element.alt.type = mujoco.mjtOrientation.mjORIENTATION_EULER
-    element.alt.euler = angles_deg
+# The finger's and the block face's frame: pad x along world +z (up), pad y
+# along world -x, pad z along world -y (the skin, pad -z, faces the block at
+# +y). A rotation whose quaternion and matrix are exact (0, +-1, +-0.5): the
+# box's face, the face's texture and the pad then share one frame bit for bit,
+# so the skin renders the face through its aligned-face path and skips the
+# box under the texture (mjtouch.skin's render).
+PAD_QUAT = (0.5, 0.5, -0.5, 0.5)
 
 
 def slip_hold_spec(
     tip: scenes.Fingertip | None = None, timestep_s: float = 1e-3, skin: bool = True
 ) -> mujoco.MjSpec:
-    """A block between the fingertip pad (pressing along +x) and a wall."""
+    """A block between the fingertip pad (pressing along +y) and a wall."""
     tip = tip or env_fingertip()
     tip.validate()
     q = scenes.quantize_all
     a, b, c = tip.semi_axes_m
     bx, by, bz = BLOCK_HALF_M
-    length = 2 * bz + 0.02
-    tex = scenes.Texture(period_m=GRATING_PERIOD_M, length_m=length, resolution_m=5e-5)
+    # the texture spans the face exactly (the render's texture-on-face case)
+    tex = scenes.Texture(period_m=GRATING_PERIOD_M, length_m=2 * bz, resolution_m=5e-5)
     spec = mujoco.MjSpec()
     spec.modelname = "mjtouch_slip_hold"
-    spec.compiler.degree = True
     spec.option.timestep = scenes.quantize(timestep_s)
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
@@ -135,41 +138,40 @@ def slip_hold_spec(
     spec.visual.global_.offwidth, spec.visual.global_.offheight = 640, 480
     scenes.add_grating_hfield(spec, "face", tex, by)
     world = spec.worldbody
-    world.add_light(pos=[0, -0.3, 0.3], dir=[0, 1, -1])
+    world.add_light(pos=[0.3, 0, 0.3], dir=[-1, 0, -1])
     world.add_geom(
         name="wall",
         type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=[0.005, 0.03, 0.04],
-        pos=q(bx + 0.005, 0, 0),
+        size=[0.03, 0.005, 0.04],
+        pos=q(0, bx + 0.005, 0),
         priority=2,
         condim=1,
         rgba=[0.55, 0.6, 0.65, 1],
     )
     block = world.add_body(name="object")
-    block.add_joint(name="object_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0], damping=0.1)
+    # towards the wall
+    block.add_joint(name="object_y", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 1, 0], damping=0.1)
     block.add_joint(name="object_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
     block.add_geom(
         name="object",
         type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=q(bx, by, bz),
+        size=q(by, bx, bz),
         mass=BLOCK_MASS_KG,
         friction=[0.5, 0.005, 0.0001],
         rgba=[0.3, 0.5, 0.8, 1],
     )
-    face = block.add_geom(
+    block.add_geom(
         name="face",
         type=mujoco.mjtGeom.mjGEOM_HFIELD,
         hfieldname="face",
-        pos=q(-bx, 0, 0),
+        pos=q(0, -bx, 0),
+        quat=PAD_QUAT,
         contype=0,
         conaffinity=0,
         group=scenes.TEXTURE_GROUP,
         rgba=[0.25, 0.4, 0.7, 1],
     )
-    _euler_deg(face, 0, -90, 0)
-    # The finger's frame: pad -z (the skin) along world +x, pad x along world +z.
-    finger = world.add_body(name="finger", pos=q(-(bx + c + 3e-4), 0, 0), gravcomp=1)
-    _euler_deg(finger, 0, -90, 0)
+    finger = world.add_body(name="finger", pos=q(0, -(bx + c + 3e-4), 0), quat=PAD_QUAT, gravcomp=1)
     finger.add_joint(
         name="grip", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, -1], damping=GRIP_DAMPING_N_S_M
     )
@@ -423,9 +425,9 @@ class SlipHoldEnv(TouchEnv):
     def _camera(self) -> mujoco.MjvCamera:
         cam = mujoco.MjvCamera()
         cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-        cam.lookat[:] = [-0.006, 0.0, 0.0]
-        # from behind the finger: the skin's drawing above the pad faces -x
-        cam.distance, cam.elevation, cam.azimuth = 0.07, -15.0, 20.0
+        cam.lookat[:] = [0.0, -0.006, 0.0]
+        # from behind the finger: the skin's drawing above the pad faces -y
+        cam.distance, cam.elevation, cam.azimuth = 0.07, -15.0, 110.0
         return cam
 
 

@@ -1,10 +1,11 @@
 """Batched stepping over threads.
 
 :class:`RolloutVectorEnv` holds N environments of one class and steps them
-on ``nthread`` worker threads: each environment advances its control step
-with its own ``mujoco.rollout`` call (the physics, which releases the GIL)
-and runs its task logic (actions to inputs, observations, rewards) in
-Python, so one environment's Python overlaps the others' physics. Each
+on ``nthread`` threads: each environment advances its control step with its
+own ``mujoco.rollout`` call (the physics, which releases the GIL) on a
+thread, and its task logic (actions to inputs, observations, rewards) runs
+in Python in the calling thread, where it overlaps the other threads'
+physics instead of contending with it for the GIL. Each
 environment's results are bit-identical to stepping it alone (it is the same
 code on the same data). It is the registered ``vector_entry_point``, so
 ``gymnasium.make_vec("mjtouch/TextureExplore-v0", num_envs=8)`` returns it;
@@ -61,6 +62,11 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
             nthread = min(num_envs, _usable_cores())
         if not (isinstance(nthread, int) and nthread >= 0):
             raise ValueError(f"nthread = {nthread!r} must be a non-negative integer")
+        if env_cls.step is not TouchEnv.step:
+            raise ValueError(
+                f"{env_cls.__name__} overrides step; RolloutVectorEnv steps TouchEnv's parts "
+                "(_check_action, _inputs, _advance, _finish)"
+            )
         self.envs = [env_cls(**env_kwargs) for _ in range(num_envs)]
         e0 = self.envs[0]
         self.num_envs = num_envs
@@ -120,23 +126,37 @@ class RolloutVectorEnv(gym.vector.VectorEnv):
             else:
                 stepping.append(i)
 
-        for i in stepping:  # every action valid before any environment steps
-            self.envs[i]._check_action(actions[i])
+        # TouchEnv.step split in its parts: every action checked before any
+        # environment steps, then each environment's inputs, its physics (the
+        # rollouts, which release the GIL) on the threads and its task logic
+        # (observation, reward) in this thread, the first share's while the
+        # workers' physics still runs. Each environment runs the same calls
+        # in the same order as stepped alone.
+        checked = {i: self.envs[i]._check_action(actions[i]) for i in stepping}
+        inputs = {i: self.envs[i]._inputs(a) for i, a in checked.items()}
+        physics = [i for i in stepping if inputs[i] is not None]
+        results = [
+            (i, self.envs[i]._finish(None, None, checked[i])) for i in stepping if inputs[i] is None
+        ]
 
-        def step_share(share):
-            return [(i, self.envs[i].step(actions[i])) for i in share]
+        def advance_share(share):
+            return [(i, self.envs[i]._advance(inputs[i])) for i in share]
 
-        if self._pool is None or len(stepping) < 2:
-            results = step_share(stepping)
+        def finish(advanced):
+            for i, (final_state, sensordata) in advanced:
+                results.append((i, self.envs[i]._finish(final_state, sensordata, checked[i])))
+
+        if self._pool is None or len(physics) < 2:
+            finish(advance_share(physics))
         else:
-            shares = [stepping[k :: self.nthread] for k in range(self.nthread)]
-            futures = [self._pool.submit(step_share, s) for s in shares[1:] if s]
+            shares = [physics[k :: self.nthread] for k in range(self.nthread)]
+            futures = [self._pool.submit(advance_share, s) for s in shares[1:] if s]
             try:
-                results = step_share(shares[0])
+                finish(advance_share(shares[0]))
+                for f in futures:
+                    finish(f.result())
             finally:  # no worker still stepping when this returns or raises
                 wait(futures)
-            for f in futures:
-                results += f.result()
         for i, (o, r, term, trunc, info) in sorted(results, key=lambda x: x[0]):
             self._elapsed[i] += 1
             if self.max_episode_steps is not None and self._elapsed[i] >= self.max_episode_steps:

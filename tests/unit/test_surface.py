@@ -235,6 +235,36 @@ def test_stages_1_2_fields_over_lost_and_regained_contact(yaw_deg, pressure):
 
 
 @pytest.mark.parametrize("pressure", ["winkler", "elastic"])
+def test_stages_1_2_texture_shifted_on_a_plate_and_one_parked(pressure):
+    # TextureExplore's scene: a plate wider than the grid, a texture on a
+    # mocap body in the plate's plane but shifted along it (the grating's
+    # phase), covering the contact, and a second texture parked far beside
+    # the pad, in the same plane, whose blocks the render skips (no cell's
+    # footprint overlaps it). Every field stage 3 reads must equal the
+    # reference path's, and the pressure must carry the force.
+    T = 30
+    samples = _samples("grating")
+    surfaces = np.zeros((3, 20))
+    surfaces[0, 0], surfaces[0, 4:13], surfaces[0, 16:18] = 1, np.eye(3).ravel(), (20e-3, 10e-3)
+    for k, y_m in ((1, 0.0), (2, 0.5)):
+        surfaces[k, 0], surfaces[k, 4:13], surfaces[k, 16:18] = 2, np.eye(3).ravel(), (8e-3, 6e-3)
+        surfaces[k, 1:4] = (0.37e-3, y_m, 0.0)
+        surfaces[k, 18] = surfaces[k, 19] = 1e-4
+    pos = np.zeros((T, 3))
+    pos[:, 0] = np.linspace(-0.3e-3, 0.6e-3, T)
+    pos[:, 2] = SEMI[2] + 5e-5
+    mat = np.tile(np.eye(3).ravel(), (T, 1))
+    forces = np.zeros((T, 3))
+    forces[:, 0] = 0.3 + 0.2 * np.sin(np.linspace(0, 3, T))
+    forces[:, 1] = 0.05
+    ref, fast = _reference_and_fast_fields(pressure, pos, mat, forces, surfaces, samples)
+    assert np.all(np.isfinite(ref[2])), "the pad must touch at every step"
+    assert fast[2].tobytes() == ref[2].tobytes()
+    assert fast[3].tobytes() == ref[3].tobytes()
+    assert_allclose(ref[3][:, 0].sum(axis=(1, 2)) * PITCH**2, forces[:, 0], rtol=1e-9)
+
+
+@pytest.mark.parametrize("pressure", ["winkler", "elastic"])
 def test_stages_1_2_fields_when_a_second_body_comes_within_reach(pressure):
     # While the texture alone reaches the skin, the render overwrites its
     # rectangle and clears only the rest of the last result's box; when the

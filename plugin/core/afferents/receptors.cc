@@ -120,6 +120,10 @@ ReceptorStepper::ReceptorStepper(const ReceptorParams& p, double dt_s) : p_(p), 
       const VariantScale& var = ReceptorVariant(cls, v);
       tau_[c][v] = MembraneTau(p, cls, var);
       step_span_[c][v] = PrecomputeSpan(dt_s, tau_[c][v], p.adapt[c]);
+      if (c > 0)  // Finish's sub-step length h = dt / nsub, bit for bit
+        for (int level = 1; level <= kMaxSubLevels; ++level)
+          sub_span_[c - 1][level - 1][v] =
+              PrecomputeSpan(dt_s / (1 << level), tau_[c][v], p.adapt[c]);
       jump_[c][v] = p.adapt[c].jump * var.adapt;
       gain_[c][v] = cls == ReceptorClass::kSA1  ? var.gain
                     : cls == ReceptorClass::kRA ? p.ra.gain_s_per_pa * var.gain
@@ -370,7 +374,8 @@ int ReceptorStepper::Finish(ReceptorClass cls, const Drive& d, double* st, doubl
   const int sk = cls == ReceptorClass::kPC ? 1 : 0;  // sub-step tables
   auto saturate = [sat](double x) { return x * sat / (sat + std::abs(x)); };
   int nsub = 1;
-  double knots[(1 << kMaxSubLevels) + 1];  // node 0's drive at the sub-step ends
+  const MembraneSpan* pre = &step_span_[ci][variant];  // intervals of a whole (sub-)step
+  double knots[(1 << kMaxSubLevels) + 1];              // node 0's drive at the sub-step ends
   if (sat > 0.0) {
     const double dl = l1[0] - l0[0];
     int level = 0;
@@ -379,6 +384,7 @@ int ReceptorStepper::Finish(ReceptorClass cls, const Drive& d, double* st, doubl
            dl * dl / sub_error_den_[sk][level] > 1e-4)
       ++level;
     nsub = 1 << level;
+    if (level > 0) pre = &sub_span_[sk][level - 1][variant];
     knots[0] = saturate(l0[0]);
     knots[nsub] = saturate(l1[0]);
     if (nsub > 1) {
@@ -446,7 +452,7 @@ int ReceptorStepper::Finish(ReceptorClass cls, const Drive& d, double* st, doubl
       }
       sink.offset = ta;
       spikes += LinearDriveLIF(nodes, st + kU0, a, b, span, tau, refractory, st + kRefractory,
-                               adapt, st + kAdapt, OnSpike, &sink, &step_span_[ci][variant]);
+                               adapt, st + kAdapt, OnSpike, &sink, pre);
     }
   }
   st[kRate] = st[kRate] * rate_decay_ + sink.rate_sum / p_.rate_tau_s;

@@ -241,8 +241,10 @@ class ReceptorStepper {
   double saturation_[kNumClasses];           // drive saturation (SA1: 0, none)
   double sub_error_den_[2][kMaxSubLevels];   // RA, PC sub-steps: 4 s 4^k
   double sub_error_skip_[2][kMaxSubLevels];  // 0.99e-4 of it
-  // Membrane exponentials over a whole step, per class and variant.
+  // Membrane exponentials over a whole step, per class and variant, and
+  // over the RA (0) and PC (1) sub-steps dt / 2^k (Finish), per variant.
   MembraneSpan step_span_[kNumClasses][kNumVariants];
+  MembraneSpan sub_span_[2][kMaxSubLevels][kNumVariants];
   // Per class and variant, as Advance evaluated them per receptor: the
   // membrane tau (s), the adaptation jump, the drive gain (RA, PC: of the
   // filter output; SA1: the variant's gain) and the SA1 heminodes' M_k gain.

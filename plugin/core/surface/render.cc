@@ -100,6 +100,25 @@ inline __attribute__((always_inline)) void ForBlockCells(const TaxelGrid& grid,
   }
 }
 
+// Whether no cell of a block (centres u0..u1 x v0..v1, heights zmin..zmax)
+// has a footprint overlapping a bounded face's extent along the face's axis
+// `axis` (0: x, half extent `half`): its cells' coverage is then 0 and
+// they take nothing (a parked texture beside the pad). The range of the
+// footprint's centre widened by its half extent and kOffFaceMarginM, far
+// above the rounding of the per-cell coordinates.
+constexpr double kOffFaceMarginM = 1e-9;
+
+bool OffFace(const SurfaceFrame& F, int axis, double half, double u0, double u1, double v0,
+             double v1, double zmin, double zmax) {
+  const double* r = F.R + 3 * axis;
+  const double lo = F.t[axis] + std::min(r[0] * u0, r[0] * u1) + std::min(r[1] * v0, r[1] * v1) +
+                    std::min(r[2] * zmin, r[2] * zmax);
+  const double hi = F.t[axis] + std::max(r[0] * u0, r[0] * u1) + std::max(r[1] * v0, r[1] * v1) +
+                    std::max(r[2] * zmin, r[2] * zmax);
+  const double reach = (axis == 0 ? F.hx : F.hy) + kOffFaceMarginM;
+  return hi + reach <= -half || lo - reach >= half;
+}
+
 // Per surface k and block b, a lower bound of the block's cells' lower
 // bounds (block_lb[k * nb^2 + b]; +inf: no skin cell or out of reach), so
 // that whole blocks out of reach are skipped.
@@ -112,6 +131,8 @@ void BlockLowerBounds(const TaxelGrid& grid, const SkinBlocks& blocks,
   for (size_t k = 0; k < surfaces.size(); ++k) {
     const SurfaceFrame& F = frames[k];
     const bool line = IsLineType(surfaces[k].type);
+    const bool bounded = surfaces[k].type == CounterSurface::Type::kRectangle ||
+                         surfaces[k].type == CounterSurface::Type::kHeightField;
     for (int bj = 0; bj < nb; ++bj)
       for (int bi = 0; bi < nb; ++bi) {
         const size_t b = static_cast<size_t>(bj) * nb + bi;
@@ -129,6 +150,8 @@ void BlockLowerBounds(const TaxelGrid& grid, const SkinBlocks& blocks,
         } else {
           lb = F.t[2] + std::min(F.R[6] * u0, F.R[6] * u1) + std::min(F.R[7] * v0, F.R[7] * v1) +
                (F.R[8] >= 0.0 ? F.R[8] * zmin : F.R[8] * zmax) - surfaces[k].max_height_m;
+          if (bounded && OffFace(F, 0, surfaces[k].half_x_m, u0, u1, v0, v1, zmin, zmax)) lb = kInf;
+          if (bounded && OffFace(F, 1, surfaces[k].half_y_m, u0, u1, v0, v1, zmin, zmax)) lb = kInf;
         }
         (*block_lb)[k * nb * nb + b] = lb;
       }
